@@ -1,0 +1,69 @@
+// Terrain in and rasters out through GDAL (offline tools only: the console
+// never links GDAL).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fields/heightfield.hpp"
+#include "rt/base/status.hpp"
+
+namespace visvol::fields {
+
+struct DemInfo {
+  std::string driver;        // GDAL driver short name ("GTiff", "USGSDEM", ...)
+  int nx = 0, ny = 0;
+  double geotransform[6] = {0, 1, 0, 0, 0, -1};
+  std::string crs_wkt;       // empty when the file has none
+  std::string crs_name;
+  bool geographic = false;   // degrees: must be projected before use
+  double linear_unit_m = 1;  // metres per horizontal CRS unit
+  std::string vertical_unit; // band unit as GDAL reports it ("m", "ft", "")
+  double vertical_to_m = 1;  // factor applied to heights
+  bool has_nodata = false;
+  double nodata = 0;
+};
+
+// Reads the header of a raster.
+Result<DemInfo> read_dem_info(const std::string& path);
+
+enum class NodataPolicy {
+  refuse,  // a nodata or NaN post is an error naming the first one
+  fill,    // fill holes by inverse-distance interpolation from their edges (GDALFillNodata)
+};
+
+struct DemReadOptions {
+  NodataPolicy nodata = NodataPolicy::refuse;
+};
+
+// Reads band 1 of a raster as a heightfield in metres. Refuses, naming the
+// file and the problem: geographic CRSs (or a raster with no CRS whose extent
+// and pixel size look like degrees), rotated or non-square pixels, nodata or
+// NaN posts (unless filled).
+Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptions& options = {});
+
+// Reads band 1 of a raster as floats that must cover exactly `like`'s grid
+// (same size); used for observer weights.
+Result<std::vector<float>> read_raster_like(const std::string& path, const Heightfield& like);
+
+// Band 1 as it is: values and which of them are data (not nodata or NaN).
+struct RasterBand {
+  int nx = 0, ny = 0;
+  std::vector<double> value;
+  std::vector<std::uint8_t> valid;  // 1 data, 0 nodata or NaN
+};
+Result<RasterBand> read_band(const std::string& path);
+
+// The short name of a CRS given as WKT ("NAD27 / UTM zone 10N"), or
+// "local metres" for an empty WKT.
+std::string crs_name(const std::string& wkt);
+
+// Writes a one-band raster on `like`'s grid as a GeoTIFF, through a temporary
+// file renamed into place (a crash never leaves a torn file).
+Status write_geotiff_u8(const std::string& path, const Heightfield& like,
+                        const std::vector<std::uint8_t>& values, int nodata);
+Status write_geotiff_f32(const std::string& path, const Heightfield& like,
+                         const std::vector<float>& values, double nodata);
+
+}  // namespace visvol::fields

@@ -1,0 +1,404 @@
+#include "fields/hull_kernel.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace visvol::fields {
+
+namespace {
+
+// Padding heights sit this far below the lowest post: they never block.
+constexpr float kPaddingDepthM = 1.0e6f;
+// Span of a sphere range outside the sphere: puts both bounds beyond the grid.
+constexpr float kOutsideSpan = -1.0e30f;
+
+double curvature_drop_m(double coeff, double d_m) {
+  return coeff * d_m * d_m / (2.0 * kEarthRadiusM);
+}
+
+// Vertical half extent of a sphere of radius range_m at horizontal distance d_m:
+// kOutsideSpan outside (so every level test fails), unused by other shapes.
+float sphere_span_m(RangeShape shape, double range_m, double d_m) {
+  if (shape != RangeShape::sphere) return std::numeric_limits<float>::max();
+  if (d_m > range_m) return kOutsideSpan;
+  return static_cast<float>(std::sqrt(range_m * range_m - d_m * d_m));
+}
+
+}  // namespace
+
+int ring_index(int dx, int dy, int m) {
+  if (dy == -m) return dx + m;
+  if (dy == m) return (2 * m + 1) + 2 * (2 * m - 1) + (dx + m);
+  return 2 * m + 1 + 2 * (dy + m - 1) + (dx == -m ? 0 : 1);
+}
+
+void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape,
+                         double range_m, int stride, std::vector<HullEntry>& out) {
+  const std::size_t first = out.size();
+  out.resize(first + static_cast<std::size_t>(ring_size(m)));
+  for (int dy = -m; dy <= m; ++dy) {
+    for (int dx = -m; dx <= m; ++dx) {
+      if (std::max(std::abs(dx), std::abs(dy)) != m) continue;
+      HullEntry e;
+      e.dx = static_cast<std::int16_t>(dx);
+      e.dy = static_cast<std::int16_t>(dy);
+      const double d_posts = std::hypot(static_cast<double>(dx), static_cast<double>(dy));
+      const double d = d_posts * spacing_m;
+      e.d_m = static_cast<float>(d);
+      e.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
+      e.span_m = sphere_span_m(shape, range_m, d);
+
+      // Work in (major, minor) axes: the major axis is the one where |offset| = m.
+      const bool x_major = std::abs(dx) == m;
+      const int major_sign = x_major ? (dx > 0 ? 1 : -1) : (dy > 0 ? 1 : -1);
+      const double minor = x_major ? dy : dx;
+      auto to_dxdy = [&](int major, int minor_posts, int& ox, int& oy) {
+        ox = x_major ? major : minor_posts;
+        oy = x_major ? minor_posts : major;
+      };
+      auto terrain_offset = [&](int major, int minor_posts) {
+        int ox = 0, oy = 0;
+        to_dxdy(major, minor_posts, ox, oy);
+        return static_cast<std::int32_t>(oy * stride + ox);
+      };
+      auto prev_index = [&](int major, int minor_posts) {
+        int ox = 0, oy = 0;
+        to_dxdy(major, minor_posts, ox, oy);
+        return static_cast<std::uint16_t>(ring_index(ox, oy, m - 1));
+      };
+
+      // Crossing of ring m-1's grid line (major = +-(m-1)).
+      const int major_prev = major_sign * (m - 1);
+      const double minor_at_prev = minor * (m - 1) / m;
+      const double lo = std::floor(minor_at_prev);
+      const double t = minor_at_prev - lo;
+      const int i0 = static_cast<int>(lo);
+      const int i1 = t > 0 ? i0 + 1 : i0;
+      e.a = prev_index(major_prev, i0);
+      e.b = prev_index(major_prev, i1);
+      e.t = static_cast<float>(t);
+      e.ta = terrain_offset(major_prev, i0);
+      e.tb = terrain_offset(major_prev, i1);
+      const double d1 = d * (m - 1) / m;
+      e.inv_d1 = static_cast<float>(1.0 / d1);
+      e.drop1_m = static_cast<float>(curvature_drop_m(curvature_coeff, d1));
+
+      // A grid line of the minor axis strictly between ring m-1 and ring m: the
+      // sight line's minor coordinate passes an integer k there.
+      const double seg_lo = std::min(minor_at_prev, minor);
+      const double seg_hi = std::max(minor_at_prev, minor);
+      double k = std::ceil(seg_hi) - 1.0;
+      if (k > seg_lo && k < seg_hi) {
+        const double major_abs = m * k / minor;  // |major coordinate| at minor = k
+        const double f = std::floor(major_abs);
+        const int kk = static_cast<int>(k);
+        e.tc = terrain_offset(major_sign * static_cast<int>(f), kk);
+        e.td = terrain_offset(major_sign * (static_cast<int>(f) + 1), kk);
+        e.t2 = static_cast<float>(major_abs - f);
+        const double d2 = d * k / minor;
+        e.inv_d2 = static_cast<float>(1.0 / d2);
+        e.drop2_m = static_cast<float>(curvature_drop_m(curvature_coeff, d2));
+      } else {
+        // No second crossing: repeat the first (max() makes it harmless).
+        e.tc = e.ta;
+        e.td = e.tb;
+        e.t2 = e.t;
+        e.inv_d2 = e.inv_d1;
+        e.drop2_m = e.drop1_m;
+      }
+      out[first + static_cast<std::size_t>(ring_index(dx, dy, m))] = e;
+    }
+  }
+}
+
+HullTable::HullTable(int radius, int exact_rings, double spacing_m, double curvature_coeff,
+                     RangeShape shape, double range_m, int stride)
+    : radius_(radius), exact_rings_(std::min(exact_rings, radius)) {
+  const std::size_t side = 2 * static_cast<std::size_t>(radius) + 1;
+  entries_.reserve(side * side);
+  ring_start_.assign(static_cast<std::size_t>(radius) + 2, 0);
+  for (int m = 2; m <= radius; ++m) {
+    ring_start_[static_cast<std::size_t>(m)] = entries_.size();
+    append_ring_entries(m, spacing_m, curvature_coeff, shape, range_m, stride, entries_);
+    if (m > exact_rings_) continue;
+    for (std::size_t n = ring_start_[static_cast<std::size_t>(m)]; n < entries_.size(); ++n) {
+      crossing_start_.push_back(crossings_.size());
+      append_crossings(entries_[n].dx, entries_[n].dy, spacing_m, curvature_coeff, stride,
+                       crossings_);
+    }
+  }
+  crossing_start_.push_back(crossings_.size());
+  ring_start_[static_cast<std::size_t>(radius) + 1] = entries_.size();
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      HullEntry e;
+      e.dx = static_cast<std::int16_t>(dx);
+      e.dy = static_cast<std::int16_t>(dy);
+      const double d = std::hypot(static_cast<double>(dx), static_cast<double>(dy)) * spacing_m;
+      e.d_m = static_cast<float>(d);
+      e.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
+      e.span_m = sphere_span_m(shape, range_m, d);
+      inner_[static_cast<std::size_t>((dy + 1) * 3 + dx + 1)] = e;
+    }
+  }
+}
+
+std::size_t HullTable::estimate_bytes(int radius, int exact_rings) {
+  const std::size_t side = 2 * static_cast<std::size_t>(radius) + 1;
+  const std::size_t m = static_cast<std::size_t>(std::min(radius, exact_rings));
+  // About 8m cells of up to 2m crossings per exact ring.
+  return side * side * sizeof(HullEntry) + 16 * m * m * m / 3 * sizeof(Crossing);
+}
+
+void append_crossings(int dx, int dy, double spacing_m, double curvature_coeff, int stride,
+                      std::vector<Crossing>& out) {
+  const double d_total = std::hypot(double(dx), double(dy)) * spacing_m;
+  // Lines x = k (vertical_line) or y = k strictly between the observer and target.
+  auto add_lines = [&](bool vertical_line) {
+    const int main_offset = vertical_line ? dx : dy;
+    const int other_offset = vertical_line ? dy : dx;
+    const int step = main_offset > 0 ? 1 : -1;
+    for (int k = step; k != main_offset && main_offset != 0; k += step) {
+      const double f = double(k) / main_offset;
+      const double along = f * other_offset;
+      const double lo = std::floor(along);
+      Crossing c;
+      const int a = static_cast<int>(lo);
+      const int b = along > lo ? a + 1 : a;
+      c.ta = vertical_line ? a * stride + k : k * stride + a;
+      c.tb = vertical_line ? b * stride + k : k * stride + b;
+      c.t = static_cast<float>(along - lo);
+      const double d = f * d_total;
+      c.inv_d = static_cast<float>(1.0 / d);
+      c.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
+      out.push_back(c);
+    }
+  };
+  add_lines(true);
+  add_lines(false);
+}
+
+PaddedTerrain pad_terrain(const Heightfield& hf, const VolumeGeometry& g, int radius) {
+  PaddedTerrain t;
+  t.nx = hf.nx;
+  t.ny = hf.ny;
+  t.pad = radius + kLanes + 2;
+  t.stride = hf.nx + 2 * t.pad;
+  const std::size_t rows = static_cast<std::size_t>(hf.ny) + 2 * static_cast<std::size_t>(t.pad);
+  const float low = height_range(hf).min_m - kPaddingDepthM;
+  t.height_m.assign(rows * static_cast<std::size_t>(t.stride), low);
+  t.ground_level.assign(rows * static_cast<std::size_t>(t.stride), g.nz);
+  for (int j = 0; j < hf.ny; ++j) {
+    for (int i = 0; i < hf.nx; ++i) {
+      const double h = hf.at(i, j);
+      t.height_m[t.index(i, j)] = hf.at(i, j);
+      const double level = std::ceil((h - g.z0_m) / g.dz_m);
+      t.ground_level[t.index(i, j)] =
+          static_cast<std::int32_t>(std::clamp(level, 0.0, static_cast<double>(g.nz)));
+    }
+  }
+  return t;
+}
+
+std::size_t padded_terrain_bytes(int nx, int ny, int radius) {
+  const std::size_t pad = static_cast<std::size_t>(radius) + kLanes + 2;
+  return (static_cast<std::size_t>(nx) + 2 * pad) * (static_cast<std::size_t>(ny) + 2 * pad) *
+         (sizeof(float) + sizeof(std::int32_t));
+}
+
+LevelRowLayout::LevelRowLayout(int nx_, int ny_, int radius_)
+    : nx(nx_), ny(ny_), radius(radius_) {
+  chunks = (nx + kLanes - 1) / kLanes;
+  rows = std::min(2 * radius + 1, ny);
+  slots = std::min(2 * radius + 1, nx + kLanes - 1);
+}
+
+namespace {
+
+// Vectors of kLanes values (GCC/Clang vector extensions; the compiler maps them
+// to AVX-512, AVX2 or SSE registers per target clone).
+typedef float VecF __attribute__((vector_size(kLanes * sizeof(float))));
+typedef std::int32_t VecI __attribute__((vector_size(kLanes * sizeof(std::int32_t))));
+
+inline __attribute__((always_inline)) VecF load_f(const float* p) {
+  VecF v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline __attribute__((always_inline)) VecI load_i(const std::int32_t* p) {
+  VecI v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline __attribute__((always_inline)) VecF splat(float x) { return VecF{} + x; }
+inline __attribute__((always_inline)) VecF vmax(VecF a, VecF b) { return a > b ? a : b; }
+inline __attribute__((always_inline)) VecI vmax(VecI a, VecI b) { return a > b ? a : b; }
+inline __attribute__((always_inline)) VecI vmin(VecI a, VecI b) { return a < b ? a : b; }
+inline __attribute__((always_inline)) VecF clamp_f(VecF q, float lo, float hi) {
+  q = q < splat(lo) ? splat(lo) : q;
+  return q > splat(hi) ? splat(hi) : q;
+}
+// floor(q) for q >= -4 (truncation of a positive number is its floor).
+inline __attribute__((always_inline)) VecI floor_i(VecF q) {
+  return __builtin_convertvector(q + 4.0f, VecI) - 4;
+}
+
+// First level strictly above each hull height (visibility needs z > hull).
+inline __attribute__((always_inline)) VecI level_above(VecF hull_m, const LevelMap& lv) {
+  const VecF q = clamp_f((hull_m - lv.z0_m) * lv.inv_dz, -2.0f, static_cast<float>(lv.nz - 1));
+  return floor_i(q) + 1;
+}
+
+// First level at or above a height (for the sphere's lower bound):
+// ceil(q) = floor(q) + (floor(q) < q); comparisons give -1 for true.
+inline __attribute__((always_inline)) VecI level_at_or_above(VecF z_m, const LevelMap& lv) {
+  const VecF q = clamp_f((z_m - lv.z0_m) * lv.inv_dz, -2.0f, static_cast<float>(lv.nz));
+  const VecI below = floor_i(q);
+  return below - (__builtin_convertvector(below, VecF) < q);
+}
+
+inline __attribute__((always_inline)) void store_levels(VecI k, std::uint8_t* dst) {
+  for (int l = 0; l < kLanes; ++l) dst[l] = static_cast<std::uint8_t>(k[l]);
+}
+
+}  // namespace
+
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
+                       const LevelRowLayout& layout, const LevelMap& levels, RangeShape shape,
+                       const ObserverChunk& chunk, float* ring_a, float* ring_b,
+                       std::uint8_t* out) {
+  const int px0 = chunk.px0;
+  const int py = chunk.py;
+  const int ci = px0 / kLanes;
+  const int dx_first = layout.first_dx(px0);
+  const int dx_last = layout.last_dx(px0);
+  const int stride = terrain.stride;
+  const float* t0 = terrain.height_m.data() + terrain.index(px0, py);
+  const std::int32_t* g0 = terrain.ground_level.data() + terrain.index(px0, py);
+  const VecF eye = load_f(chunk.eye_m);
+  const VecI floor_level = load_i(chunk.floor_level);
+  const VecI nz_v = VecI{} + levels.nz;
+  const bool sphere = shape == RangeShape::sphere;
+
+  // The lowest level a target may take: on or above its ground, inside the
+  // observer's range.
+  auto lowest_level = [&](const HullEntry& e) {
+    VecI k = vmax(load_i(g0 + e.dy * stride + e.dx), floor_level);
+    if (sphere) k = vmax(k, level_at_or_above(eye - e.span_m, levels));
+    return k;
+  };
+  auto write = [&](const HullEntry& e, VecI k) {
+    const int y = py + e.dy;
+    if (y < 0 || y >= layout.ny || e.dx < dx_first || e.dx > dx_last) return;
+    store_levels(vmin(k, nz_v), out + layout.offset(py, y, ci, e.dx - dx_first));
+  };
+
+  // Rings 0 and 1: no crossing, visible from the ground up.
+  for (const HullEntry& e : table.inner()) write(e, lowest_level(e));
+
+  // Only rings that reach a target inside the grid matter (RangeShape::none).
+  const int reach = std::max({px0 + kLanes - 1, layout.nx - 1 - px0, py, layout.ny - 1 - py});
+  const int last_ring = std::min(table.radius(), reach);
+
+  float* prev = ring_a;
+  float* cur = ring_b;
+  // Ring 1 passes on the slope to its own terrain (it has no crossings).
+  for (const HullEntry& e : table.inner()) {
+    if (e.dx == 0 && e.dy == 0) continue;
+    const VecF own = (load_f(t0 + e.dy * stride + e.dx) - e.drop_m - eye) / e.d_m;
+    std::memcpy(prev + ring_index(e.dx, e.dy, 1) * kLanes, &own, sizeof own);
+  }
+  for (int m = 2; m <= last_ring; ++m) {
+    const HullEntry* ring = table.ring(m);
+    const int count = ring_size(m);
+    const bool exact = m <= table.exact_rings();
+    for (int n = 0; n < count; ++n) {
+      const HullEntry& e = ring[n];
+      VecF h;
+      if (exact) {
+        // Every crossing of the sight line.
+        h = splat(kNoHorizon);
+        for (const Crossing* c = table.crossings_begin(m, n); c != table.crossings_end(m, n); ++c) {
+          const VecF ta = load_f(t0 + c->ta), tb = load_f(t0 + c->tb);
+          h = vmax(h, (ta + c->t * (tb - ta) - c->drop_m - eye) * c->inv_d);
+        }
+      } else {
+        // Horizon over the far crossings, interpolated between the stencil cells,
+        // and exact slopes at the two nearest crossings.
+        const VecF ha = load_f(prev + e.a * kLanes);
+        const VecF hb = load_f(prev + e.b * kLanes);
+        const VecF h_far = ha + e.t * (hb - ha);
+        const VecF ta = load_f(t0 + e.ta), tb = load_f(t0 + e.tb);
+        const VecF tc = load_f(t0 + e.tc), td = load_f(t0 + e.td);
+        const VecF s1 = (ta + e.t * (tb - ta) - e.drop1_m - eye) * e.inv_d1;
+        const VecF s2 = (tc + e.t2 * (td - tc) - e.drop2_m - eye) * e.inv_d2;
+        h = vmax(h_far, vmax(s1, s2));
+      }
+      // Rays beyond pass next to this cell: its own terrain is part of their horizon.
+      const VecF own = (load_f(t0 + e.dy * stride + e.dx) - e.drop_m - eye) / e.d_m;
+      const VecF h_next = vmax(h, own);
+      std::memcpy(cur + n * kLanes, &h_next, sizeof h_next);
+      // Lowest visible height over the target.
+      const VecF hull = eye + e.d_m * h + e.drop_m;
+      write(e, vmax(level_above(hull, levels), lowest_level(e)));
+    }
+    std::swap(prev, cur);
+  }
+}
+
+void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
+                      double spacing_m, double curvature_coeff, int pi, int pj,
+                      double eye_z_m, std::vector<float>& horizon) {
+  const int side = 2 * radius + 1;
+  horizon.assign(static_cast<std::size_t>(side) * static_cast<std::size_t>(side), kNoHorizon);
+  const float* t0 = terrain.height_m.data() + terrain.index(pi, pj);
+  const double eye = eye_z_m;
+  // Ring 1 passes on the slope to its own terrain (it has no crossings).
+  std::vector<float> prev(static_cast<std::size_t>(ring_size(1)), kNoHorizon);
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      const double d = std::hypot(double(dx), double(dy)) * spacing_m;
+      prev[static_cast<std::size_t>(ring_index(dx, dy, 1))] = static_cast<float>(
+          (t0[dy * terrain.stride + dx] - curvature_drop_m(curvature_coeff, d) - eye) / d);
+    }
+  }
+  std::vector<float> cur;
+  std::vector<HullEntry> ring;
+  std::vector<Crossing> crossings;
+  auto lerp_terrain = [&](std::int32_t a, std::int32_t b, double t) {
+    return t0[a] + t * (static_cast<double>(t0[b]) - t0[a]);
+  };
+  for (int m = 2; m <= radius; ++m) {
+    ring.clear();
+    append_ring_entries(m, spacing_m, curvature_coeff, RangeShape::none, 0.0, terrain.stride,
+                        ring);
+    cur.assign(ring.size(), kNoHorizon);
+    for (std::size_t n = 0; n < ring.size(); ++n) {
+      const HullEntry& e = ring[n];
+      double h = kNoHorizon;
+      if (m <= exact_rings) {
+        crossings.clear();
+        append_crossings(e.dx, e.dy, spacing_m, curvature_coeff, terrain.stride, crossings);
+        for (const Crossing& c : crossings) {
+          h = std::max(h, (lerp_terrain(c.ta, c.tb, c.t) - c.drop_m - eye) * c.inv_d);
+        }
+      } else {
+        const double ha = prev[e.a], hb = prev[e.b];
+        const double s1 = (lerp_terrain(e.ta, e.tb, e.t) - e.drop1_m - eye) * e.inv_d1;
+        const double s2 = (lerp_terrain(e.tc, e.td, e.t2) - e.drop2_m - eye) * e.inv_d2;
+        h = std::max(ha + e.t * (hb - ha), std::max(s1, s2));
+      }
+      const double own = (t0[e.dy * terrain.stride + e.dx] - e.drop_m - eye) / e.d_m;
+      cur[n] = static_cast<float>(std::max(h, own));
+      horizon[static_cast<std::size_t>(e.dy + radius) * static_cast<std::size_t>(side) +
+              static_cast<std::size_t>(e.dx + radius)] = static_cast<float>(h);
+    }
+    prev.swap(cur);
+  }
+}
+
+}  // namespace visvol::fields

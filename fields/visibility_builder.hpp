@@ -1,0 +1,86 @@
+// The visibility field F_p (paper, section 3) by visibility hulls.
+//
+//   F_p(Q) = sum over posts P of S_P(Q) A(P) W(P) / sum over posts of A(P)
+//
+// Visibility is symmetric, so voxel Q above column c sees observer P exactly
+// when Q lies above P's hull over c. Each observer's hull level over each target
+// column is computed once (phase 1, vectorised over kLanes neighbouring
+// observers), then scattered as +A*W at that level (and -A*W where the range
+// ends) into per-row histograms and prefix-summed up each column (phase 2).
+//
+// Results are identical whatever the thread count: weights are fixed-point
+// integers, so the sums do not depend on their order.
+//
+// Memory: a rolling window of 2r+B target rows of (nz+1) x nx int32 plus the
+// hull levels of B observer rows; finished rows stream to a sink, so a field
+// larger than memory can be written tile by tile.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "fields/field_params.hpp"
+#include "fields/heightfield.hpp"
+#include "fields/volume.hpp"
+#include "rt/base/status.hpp"
+
+namespace visvol::fields {
+
+// Receives finished rows of the field in increasing j, from one thread.
+class VolumeRowSink {
+ public:
+  virtual ~VolumeRowSink() = default;
+  // Row j: nz * nx values of F_p in [0, 1], level-major (values[k * nx + i]).
+  virtual Status write_row(int j, const float* values) = 0;
+};
+
+struct BuildPlan {
+  int radius_posts = 0;            // hull radius actually used
+  int batch_rows = 0;              // observer rows per batch
+  std::size_t table_bytes = 0;
+  std::size_t terrain_bytes = 0;
+  std::size_t level_bytes = 0;     // hull levels of one batch
+  std::size_t window_bytes = 0;    // rolling histogram window
+  std::size_t total_bytes() const {
+    return table_bytes + terrain_bytes + level_bytes + window_bytes;
+  }
+};
+
+// Sizes the working memory of a build; refuses (Errc::resource) when it would
+// exceed params.max_memory_mib, naming the sizes.
+Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams& params);
+
+struct BuildStats {
+  double wall_s = 0;
+  double hull_s = 0;     // phase 1: hull levels
+  double scatter_s = 0;  // phase 2: scatter, prefix sums, hand-off
+  int threads = 0;
+  BuildPlan plan;
+  std::uint64_t hull_cells = 0;  // (observer, target column) pairs evaluated
+  double cells_per_s_per_core() const {
+    return wall_s > 0 && threads > 0 ? static_cast<double>(hull_cells) / wall_s / threads : 0;
+  }
+};
+
+// Called from the building thread with the fraction of rows done.
+using ProgressFn = std::function<void(double fraction)>;
+
+// Builds F_p for one level of detail, streaming rows to `sink`.
+Status build_visibility(const Heightfield& hf, const FieldParams& params, VolumeRowSink& sink,
+                        const ProgressFn& progress = {}, BuildStats* stats = nullptr);
+
+// Builds F_p into memory.
+Result<DenseVolume> build_visibility_dense(const Heightfield& hf, const FieldParams& params,
+                                           const ProgressFn& progress = {},
+                                           BuildStats* stats = nullptr);
+
+// Fixed-point observer weights: round(A * W * scale). F_p = count * norm.
+struct ObserverWeights {
+  std::vector<std::int32_t> weight;  // per post
+  double norm = 0;                   // 1 / (scale * sum of A)
+};
+ObserverWeights observer_weights(const Heightfield& hf, const std::vector<float>& area,
+                                 const std::vector<float>& w);
+
+}  // namespace visvol::fields

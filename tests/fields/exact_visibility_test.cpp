@@ -1,0 +1,65 @@
+#include "fields/exact_visibility.hpp"
+
+#include <gtest/gtest.h>
+
+#include "terrains.hpp"
+
+namespace visvol::fields {
+namespace {
+
+using namespace visvol::fields::testing;
+
+TEST(ExactVisibility, FlatGroundSeesEverythingAboveIt) {
+  const Heightfield hf = flat(20);
+  EXPECT_TRUE(r3_visible(hf, 2, 2, 102, 17, 11, 100.0, 0.0));
+  EXPECT_TRUE(r3_visible(hf, 2, 2, 100.5, 17, 11, 100.5, 0.0));
+  // A sight line lying on the ground is not strictly above it.
+  EXPECT_FALSE(r3_visible(hf, 2, 2, 100, 17, 11, 100, 0.0));
+}
+
+TEST(ExactVisibility, WallHidesTheFarSide) {
+  const Heightfield hf = wall(20, 10, 30.0f);
+  EXPECT_FALSE(r3_visible(hf, 2, 5, 102, 18, 5, 100, 0.0));
+  EXPECT_TRUE(r3_visible(hf, 2, 5, 102, 18, 5, 200, 0.0));
+  // The wall's top is 130 m midway: the line must pass above it.
+  EXPECT_FALSE(r3_visible(hf, 0, 5, 130, 20 - 1, 5, 130, 0.0));
+  EXPECT_TRUE(r3_visible(hf, 0, 5, 130.5, 19, 5, 130.5, 0.0));
+}
+
+TEST(ExactVisibility, InterpolatesAlongGridLines) {
+  // Posts 0 and 10 m high on the crossed grid line x = 1; the sight line
+  // crosses it halfway between them, where the terrain is 5 m.
+  Heightfield hf = blank(3, 3, 1.0, 0.0f);
+  hf.at(1, 0) = 0.0f;
+  hf.at(1, 1) = 10.0f;
+  EXPECT_TRUE(r3_visible(hf, 0, 0, 5.1, 2, 1, 5.1, 0.0));
+  EXPECT_FALSE(r3_visible(hf, 0, 0, 4.9, 2, 1, 4.9, 0.0));
+}
+
+TEST(ExactVisibility, CurvatureHidesDistantLowTargets) {
+  // 100 km apart over the sea: the drop at the far end is about 670 m.
+  const Heightfield hf = blank(101, 3, 1000.0, 0.0f);
+  EXPECT_TRUE(r3_visible(hf, 0, 1, 10, 100, 1, 10, 0.0));
+  EXPECT_FALSE(r3_visible(hf, 0, 1, 10, 100, 1, 10, 0.85714));
+  EXPECT_TRUE(r3_visible(hf, 0, 1, 10, 100, 1, 1000, 0.85714));
+}
+
+TEST(ExactVisibility, FieldValueCountsVisibleObserversByArea) {
+  const Heightfield hf = wall(9, 4, 50.0f);
+  const std::vector<float> area = area_factor(hf);
+  FieldParams p;
+  p.range_shape = RangeShape::none;
+  p.eye_height_m = 0;
+  // Above the wall's top everything is visible; just above the ground east of
+  // the wall, the western observers are hidden.
+  double total = 0;
+  for (float a : area) total += a;
+  EXPECT_NEAR(exact_visibility(hf, area, p, 7, 4, 1000.0), 1.0, 1e-12);
+  const double low = exact_visibility(hf, area, p, 7, 4, 100.5);
+  EXPECT_GT(low, 0.0);
+  EXPECT_LT(low, 0.6);
+  EXPECT_EQ(exact_visibility(hf, area, p, 7, 4, 99.0), 0.0);  // below the ground
+}
+
+}  // namespace
+}  // namespace visvol::fields

@@ -1,0 +1,116 @@
+#include "fields/gdal/dem_io.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+#include "../terrains.hpp"
+
+namespace visvol::fields {
+namespace {
+
+using namespace visvol::fields::testing;
+
+std::string temp_name(const std::string& stem) {
+  return ::testing::TempDir() + "/" + stem + "_" + std::to_string(::getpid()) + ".tif";
+}
+
+TEST(DemIo, RefusesNodataByDefaultCountingThePosts) {
+  const Result<Heightfield> hf = read_heightfield(test_data("sf_north_utm10_30m.tif"));
+  ASSERT_FALSE(hf.ok());
+  EXPECT_NE(hf.status().message().find("2863 posts are nodata"), std::string::npos)
+      << hf.status().message();
+}
+
+TEST(DemIo, ReadsSanFranciscoNorthWithPixelCentres) {
+  const Result<Heightfield> hf =
+      read_heightfield(test_data("sf_north_utm10_30m.tif"), {NodataPolicy::fill});
+  ASSERT_TRUE(hf.ok()) << hf.status().message();
+  EXPECT_EQ(hf->nx, 370);
+  EXPECT_EQ(hf->ny, 466);
+  EXPECT_DOUBLE_EQ(hf->spacing_m, 30.0);
+  // The GeoTIFF's corner is (543975, 4191945): the first post is half a pixel in.
+  EXPECT_DOUBLE_EQ(hf->origin_x, 543990.0);
+  EXPECT_DOUBLE_EQ(hf->origin_y, 4191930.0);
+  const HeightRange r = height_range(*hf);
+  EXPECT_FLOAT_EQ(r.min_m, 0.0f);
+  EXPECT_FLOAT_EQ(r.max_m, 343.0f);
+  EXPECT_NE(hf->crs_wkt.find("UTM zone 10N"), std::string::npos);
+}
+
+TEST(DemIo, RefusesGeographicDemsSayingToProjectThem) {
+  const std::string path = std::string(VISVOL_SHARED_DATA) + "/dem/boulder_srtm3_404x404.asc";
+  if (access(path.c_str(), R_OK) != 0) GTEST_SKIP() << path << " not found";
+  // It has no CRS at all: the extent and pixel size give the degrees away.
+  const Result<Heightfield> hf = read_heightfield(path);
+  ASSERT_FALSE(hf.ok());
+  EXPECT_NE(hf.status().message().find("degrees"), std::string::npos) << hf.status().message();
+  EXPECT_NE(hf.status().message().find("projected"), std::string::npos);
+}
+
+TEST(DemIo, MissingFileIsAnIoErrorNamingIt) {
+  const Result<Heightfield> hf = read_heightfield("/nonexistent/dem.tif");
+  ASSERT_FALSE(hf.ok());
+  EXPECT_EQ(hf.status().code(), Errc::io);
+  EXPECT_NE(hf.status().message().find("/nonexistent/dem.tif"), std::string::npos);
+}
+
+TEST(DemIo, GeoTiffRoundTripKeepsGridAndValues) {
+  Heightfield hf = fractal(20, 3);
+  hf.crs_wkt.clear();
+  const std::string path = temp_name("roundtrip");
+  ASSERT_TRUE(write_geotiff_f32(path, hf, hf.height_m, -9999.0).ok());
+  const Result<Heightfield> back = read_heightfield(path);
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->nx, 20);
+  EXPECT_DOUBLE_EQ(back->origin_x, hf.origin_x);
+  EXPECT_DOUBLE_EQ(back->origin_y, hf.origin_y);
+  EXPECT_DOUBLE_EQ(back->spacing_m, hf.spacing_m);
+  EXPECT_EQ(back->height_m, hf.height_m);
+  std::remove(path.c_str());
+}
+
+TEST(DemIo, RefusesNodataPostsNamingTheFirst) {
+  Heightfield hf = flat(12);
+  hf.at(5, 7) = -9999.0f;
+  hf.at(6, 7) = -9999.0f;
+  const std::string path = temp_name("nodata");
+  ASSERT_TRUE(write_geotiff_f32(path, hf, hf.height_m, -9999.0).ok());
+  const Result<Heightfield> back = read_heightfield(path);
+  ASSERT_FALSE(back.ok());
+  EXPECT_NE(back.status().message().find("2 posts"), std::string::npos) << back.status().message();
+  EXPECT_NE(back.status().message().find("(5, 7)"), std::string::npos);
+  std::remove(path.c_str());
+}
+
+TEST(DemIo, FillsNodataHolesWhenAsked) {
+  Heightfield hf = flat(12);
+  hf.at(5, 7) = -9999.0f;
+  const std::string path = temp_name("fill");
+  ASSERT_TRUE(write_geotiff_f32(path, hf, hf.height_m, -9999.0).ok());
+  const Result<Heightfield> back = read_heightfield(path, {NodataPolicy::fill});
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_NEAR(back->at(5, 7), 100.0f, 1e-3f);  // surrounded by 100 m posts
+  std::remove(path.c_str());
+}
+
+TEST(DemIo, WeightsRasterMustMatchTheGrid) {
+  const Heightfield hf = flat(12);
+  const std::string path = temp_name("weights");
+  const Heightfield small = flat(8);
+  ASSERT_TRUE(write_geotiff_f32(path, small, std::vector<float>(small.size(), 0.5f), -1).ok());
+  const Result<std::vector<float>> w = read_raster_like(path, hf);
+  ASSERT_FALSE(w.ok());
+  EXPECT_NE(w.status().message().find("8 x 8"), std::string::npos);
+  std::remove(path.c_str());
+}
+
+TEST(DemIo, FailedWriteLeavesNoFile) {
+  const Heightfield hf = flat(4);
+  const Status st = write_geotiff_u8("/nonexistent-dir/out.tif", hf, std::vector<std::uint8_t>(16, 1), 255);
+  EXPECT_FALSE(st.ok());
+}
+
+}  // namespace
+}  // namespace visvol::fields

@@ -1,0 +1,152 @@
+#include "fields/hull_kernel.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "fields/exact_visibility.hpp"
+#include "terrains.hpp"
+
+namespace visvol::fields {
+namespace {
+
+using namespace visvol::fields::testing;
+
+TEST(HullKernel, RingIndexIsABijectionOntoEachRing) {
+  for (int m = 1; m <= 9; ++m) {
+    std::set<int> seen;
+    for (int dy = -m; dy <= m; ++dy)
+      for (int dx = -m; dx <= m; ++dx)
+        if (std::max(std::abs(dx), std::abs(dy)) == m) seen.insert(ring_index(dx, dy, m));
+    EXPECT_EQ(static_cast<int>(seen.size()), ring_size(m));
+    EXPECT_EQ(*seen.begin(), 0);
+    EXPECT_EQ(*seen.rbegin(), ring_size(m) - 1);
+  }
+}
+
+TEST(HullKernel, StencilCellsLieOnThePreviousRingAroundTheSightLine) {
+  const int stride = 1000;
+  for (int m = 2; m <= 12; ++m) {
+    std::vector<HullEntry> ring;
+    append_ring_entries(m, 10.0, 0.0, RangeShape::none, 0.0, stride, ring);
+    ASSERT_EQ(static_cast<int>(ring.size()), ring_size(m));
+    for (const HullEntry& e : ring) {
+      EXPECT_LT(e.a, ring_size(m - 1));
+      EXPECT_LT(e.b, ring_size(m - 1));
+      EXPECT_GE(e.t, 0.0f);
+      EXPECT_LT(e.t, 1.0f);
+      EXPECT_NEAR(e.d_m, 10.0 * std::hypot(double(e.dx), double(e.dy)), 1e-3);
+      // The ring m-1 crossing is (m-1)/m of the way to the target.
+      EXPECT_NEAR(1.0 / e.inv_d1, e.d_m * (m - 1.0) / m, 1e-3);
+      // Its posts are the two cells of ring m-1 on either side of the sight line.
+      auto decode = [&](std::int32_t off, int& ox, int& oy) {
+        oy = static_cast<int>(std::lround(double(off) / stride));
+        ox = off - oy * stride;
+      };
+      int ax, ay, bx, by;
+      decode(e.ta, ax, ay);
+      decode(e.tb, bx, by);
+      EXPECT_EQ(std::max(std::abs(ax), std::abs(ay)), m - 1);
+      EXPECT_EQ(std::max(std::abs(bx), std::abs(by)), m - 1);
+      EXPECT_EQ(ring_index(ax, ay, m - 1), e.a);
+      EXPECT_EQ(ring_index(bx, by, m - 1), e.b);
+    }
+  }
+}
+
+// Checks that the horizon gives R3's answer just above and below the hull for
+// every target within `rings`.
+void expect_horizon_is_exact(const Heightfield& hf, int radius, int exact_rings, int rings,
+                             double curvature) {
+  VolumeGeometry g;
+  g.nz = 10;
+  g.dz_m = 10;
+  const PaddedTerrain t = pad_terrain(hf, g, radius);
+  const int pi = hf.nx / 2, pj = hf.ny / 2;
+  const double eye = hf.at(pi, pj) + 2.0;
+  std::vector<float> horizon;
+  observer_horizon(t, radius, exact_rings, hf.spacing_m, curvature, pi, pj, eye, horizon);
+  const int side = 2 * radius + 1;
+  for (int dy = -rings; dy <= rings; ++dy) {
+    for (int dx = -rings; dx <= rings; ++dx) {
+      if (std::max(std::abs(dx), std::abs(dy)) < 2) continue;
+      const double h = horizon[static_cast<std::size_t>((dy + radius) * side + dx + radius)];
+      const double d = std::hypot(double(dx), double(dy)) * hf.spacing_m;
+      const double hull = eye + d * h + curvature * d * d / (2 * kEarthRadiusM);
+      EXPECT_TRUE(r3_visible(hf, pi, pj, eye, pi + dx, pj + dy, hull + 0.01, curvature)) << dx << "," << dy;
+      EXPECT_FALSE(r3_visible(hf, pi, pj, eye, pi + dx, pj + dy, hull - 0.01, curvature)) << dx << "," << dy;
+    }
+  }
+}
+
+TEST(HullKernel, ExactRingsMatchR3EverywhereInside) {
+  expect_horizon_is_exact(fractal(33, 7), 16, 16, 16, 0.0);
+  expect_horizon_is_exact(two_prisms(33), 16, 12, 12, 0.0);
+  expect_horizon_is_exact(fractal(33, 8, 400.0), 16, 16, 16, 0.85714);
+}
+
+TEST(HullKernel, VectorLevelsMatchTheScalarHorizon) {
+  // The vectorised kernel and the scalar horizon implement the same recursion.
+  const Heightfield hf = fractal(48, 9);
+  const int r = 12;
+  VolumeGeometry g;
+  g.nz = 100;
+  g.z0_m = height_range(hf).min_m;
+  g.dz_m = (height_range(hf).max_m - g.z0_m + 50.0) / (g.nz - 1);
+  const PaddedTerrain t = pad_terrain(hf, g, r);
+  const int exact_rings = 5;  // both the exact rings and the recursion
+  const HullTable table(r, exact_rings, hf.spacing_m, 0.0, RangeShape::none, 0.0, t.stride);
+  const LevelRowLayout layout(hf.nx, hf.ny, r);
+  const LevelMap levels{static_cast<float>(g.z0_m), static_cast<float>(1.0 / g.dz_m), g.nz};
+  std::vector<std::uint8_t> out(layout.bytes_per_observer_row(), 0);
+  std::vector<float> ra(static_cast<std::size_t>(ring_size(r)) * kLanes);
+  std::vector<float> rb(ra.size());
+  const int py = 20;
+  ObserverChunk chunk;
+  chunk.px0 = 16;
+  chunk.py = py;
+  for (int l = 0; l < kLanes; ++l) chunk.eye_m[l] = hf.at(chunk.px0 + l, py) + 2.0f;
+  hull_levels_chunk(table, t, layout, levels, RangeShape::none, chunk, ra.data(), rb.data(), out.data());
+
+  int compared = 0, equal = 0;
+  std::vector<float> horizon;
+  for (int l = 0; l < kLanes; ++l) {
+    const int px = chunk.px0 + l;
+    observer_horizon(t, r, exact_rings, hf.spacing_m, 0.0, px, py, chunk.eye_m[l], horizon);
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) {
+        const int x = px + dx, y = py + dy;
+        if (x < 0 || y < 0 || x >= hf.nx || y >= hf.ny) continue;
+        const double h = horizon[static_cast<std::size_t>((dy + r) * (2 * r + 1) + dx + r)];
+        const double d = std::hypot(double(dx), double(dy)) * hf.spacing_m;
+        const double hull = h <= kNoHorizon ? -1e30 : chunk.eye_m[l] + d * h;
+        int expected = static_cast<int>(std::floor((hull - g.z0_m) / g.dz_m)) + 1;
+        expected = std::max(expected, t.ground_level[t.index(x, y)]);
+        expected = std::clamp(expected, 0, g.nz);
+        const int got = out[layout.offset(py, y, chunk.px0 / kLanes, dx - layout.first_dx(chunk.px0)) +
+                            static_cast<std::size_t>(l)];
+        ++compared;
+        if (got == expected) ++equal;
+        ASSERT_LE(std::abs(got - expected), 1) << "observer " << px << " target " << x << "," << y;
+      }
+    }
+  }
+  // Float against double rounding may move a hull across a level boundary rarely.
+  EXPECT_GE(equal, compared - compared / 500) << equal << " of " << compared;
+}
+
+TEST(HullKernel, PaddingNeverBlocksAndGroundLevelsAreClamped) {
+  const Heightfield hf = flat(8);
+  VolumeGeometry g;
+  g.nz = 5;
+  g.z0_m = 50;
+  g.dz_m = 20;
+  const PaddedTerrain t = pad_terrain(hf, g, 4);
+  EXPECT_EQ(t.ground_level[t.index(0, 0)], 3);  // ceil((100 - 50) / 20)
+  EXPECT_EQ(t.ground_level[t.index(-1, 0)], 5);  // padding: never a target
+  EXPECT_LT(t.height_m[t.index(-3, -3)], -1.0e5f);
+}
+
+}  // namespace
+}  // namespace visvol::fields

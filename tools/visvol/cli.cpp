@@ -1,0 +1,69 @@
+#include "cli.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <fstream>
+
+#include "rt/base/atomic_file.hpp"
+
+namespace visvol::cli {
+
+int fail(const std::string& command, const Status& status) {
+  std::fprintf(stderr, "visvol %s: %s\n", command.c_str(), status.message().c_str());
+  const bool input = status.code() == Errc::invalid_argument || status.code() == Errc::io ||
+                     status.code() == Errc::corrupt || status.code() == Errc::unsupported;
+  return input ? kExitUsage : kExitFailure;
+}
+
+Status write_text_file(const std::string& path, const std::string& text) {
+  const std::string temp = temp_path_for(path);
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) {
+      discard_file(temp);
+      return io_error(path + ": cannot write");
+    }
+  }
+  return commit_file(temp, path);
+}
+
+Progress::Progress(std::string label)
+    : label_(std::move(label)), tty_(::isatty(STDERR_FILENO) != 0),
+      start_(std::chrono::steady_clock::now()) {}
+
+Progress::~Progress() {
+  if (tty_ && last_width_ >= 0 && !finished_) std::fputc('\n', stderr);
+}
+
+void Progress::update(double fraction) {
+  fraction = std::clamp(fraction, 0.0, 1.0);
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (tty_) {
+    constexpr int kBar = 30;
+    const int width = static_cast<int>(fraction * kBar + 0.5);
+    if (width == last_width_ && fraction < 1.0) return;
+    last_width_ = width;
+    std::fprintf(stderr, "\r%s [%s%s] %3.0f%% %6.1f s", label_.c_str(),
+                 std::string(static_cast<std::size_t>(width), '#').c_str(),
+                 std::string(static_cast<std::size_t>(kBar - width), ' ').c_str(),
+                 100.0 * fraction, elapsed);
+    std::fflush(stderr);
+    return;
+  }
+  const int decile = static_cast<int>(fraction * 10.0);
+  if (decile == last_decile_) return;
+  last_decile_ = decile;
+  std::fprintf(stderr, "%s: %3d%% (%.1f s)\n", label_.c_str(), decile * 10, elapsed);
+}
+
+void Progress::finish() {
+  update(1.0);
+  if (tty_ && !finished_) std::fputc('\n', stderr);
+  finished_ = true;
+}
+
+}  // namespace visvol::cli

@@ -1,0 +1,42 @@
+// Shared pieces of the visvol command: progress display and failure exits.
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include "rt/base/status.hpp"
+
+namespace visvol::cli {
+
+// Exit statuses: 0 success, 1 a failure while working, 2 bad arguments or input.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitUsage = 2;
+
+// Prints "visvol <command>: <message>" on stderr and returns the exit status for
+// the status: 2 for bad arguments or input, 1 otherwise.
+int fail(const std::string& command, const Status& status);
+
+// Writes a small text file whole or not at all (temporary file, fsync, rename).
+Status write_text_file(const std::string& path, const std::string& text);
+
+// Progress on stderr: a redrawn bar on a terminal, a plain line every 10%
+// otherwise (logs stay readable). Call update() from one thread.
+class Progress {
+ public:
+  explicit Progress(std::string label);
+  ~Progress();
+  void update(double fraction);
+  void finish();
+
+ private:
+  std::string label_;
+  bool tty_;
+  int last_decile_ = -1;
+  int last_width_ = -1;
+  bool finished_ = false;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace visvol::cli

@@ -1,0 +1,266 @@
+// visvol build DEM: the visibility field and its levels of detail, with a summary.
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "cli.hpp"
+#include "commands.hpp"
+#include "fields/gdal/dem_io.hpp"
+#include "fields/pyramid.hpp"
+#include "fields/sampler.hpp"
+
+namespace visvol::cli {
+
+namespace {
+
+using fields::FieldParams;
+using fields::Heightfield;
+using fields::LodLevel;
+
+struct BuildOptions {
+  std::string dem;
+  int levels = 128;
+  double ceiling_m = 300.0;
+  double eye_m = 2.0;
+  std::string range_shape = "cube";
+  int range_posts = 64;
+  double curvature = 0.0;
+  std::string weights;
+  int lod = 1;
+  int threads = 0;
+  int exact_rings = 16;
+  bool fill_nodata = false;
+  double max_memory_mib = 8192.0;
+  bool json = false;
+  std::string json_file;
+};
+
+struct LevelSummary {
+  double min_f = 1, max_f = 0, mean_f = 0;  // over voxels at or above the terrain
+};
+
+LevelSummary summarise(const LodLevel& level) {
+  LevelSummary s;
+  const fields::VolumeGeometry& g = level.field.geometry;
+  double sum = 0;
+  std::size_t n = 0;
+  for (int k = 0; k < g.nz; ++k) {
+    for (int j = 0; j < g.ny; ++j) {
+      for (int i = 0; i < g.nx; ++i) {
+        if (g.z_of(k) < level.terrain.at(i, j)) continue;
+        const double v = level.field.at(i, j, k);
+        s.min_f = std::min(s.min_f, v);
+        s.max_f = std::max(s.max_f, v);
+        sum += v;
+        ++n;
+      }
+    }
+  }
+  s.mean_f = n ? sum / static_cast<double>(n) : 0.0;
+  return s;
+}
+
+struct Sample {
+  std::string where;
+  double x, y, z, height_above_ground_m, f;
+  Eigen::Vector3d gradient;
+};
+
+// F_p at a few telling places of level 0: over the highest post, the lowest
+// post and the centre, at three heights above the ground.
+std::vector<Sample> samples(const LodLevel& level) {
+  const Heightfield& t = level.terrain;
+  int hi = 0, lo = 0;
+  for (std::size_t n = 1; n < t.size(); ++n) {
+    if (t.height_m[n] > t.height_m[static_cast<std::size_t>(hi)]) hi = static_cast<int>(n);
+    if (t.height_m[n] < t.height_m[static_cast<std::size_t>(lo)]) lo = static_cast<int>(n);
+  }
+  const fields::FieldSampler<fields::DenseLevelView> sampler(
+      fields::DenseLevelView(level.terrain, level.field));
+  std::vector<Sample> out;
+  const struct {
+    const char* name;
+    int i, j;
+  } places[] = {{"highest post", hi % t.nx, hi / t.nx},
+                {"lowest post", lo % t.nx, lo / t.nx},
+                {"grid centre", t.nx / 2, t.ny / 2}};
+  for (const auto& p : places) {
+    for (double above : {30.0, 150.0, 400.0}) {
+      const double x = t.x_of(p.i), y = t.y_of(p.j), z = t.at(p.i, p.j) + above;
+      out.push_back({p.name, x, y, z, above, sampler.visibility(x, y, z), sampler.gradient(x, y, z)});
+    }
+  }
+  return out;
+}
+
+Result<FieldParams> make_params(const BuildOptions& o, const Heightfield& hf) {
+  FieldParams p;
+  p.nz = o.levels;
+  p.ceiling_m = o.ceiling_m;
+  p.eye_height_m = o.eye_m;
+  Result<fields::RangeShape> shape = fields::parse_range_shape(o.range_shape);
+  if (!shape.ok()) return shape.status();
+  p.range_shape = *shape;
+  p.range_posts = o.range_posts;
+  p.curvature_coeff = o.curvature;
+  p.threads = o.threads;
+  p.exact_rings = o.exact_rings;
+  p.max_memory_mib = o.max_memory_mib;
+  if (!o.weights.empty()) {
+    Result<std::vector<float>> w = fields::read_raster_like(o.weights, hf);
+    if (!w.ok()) return w.status();
+    p.weights = std::move(*w);
+  }
+  VISVOL_RETURN_IF_ERROR(fields::validate(p, hf));
+  return p;
+}
+
+void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
+                const std::vector<LodLevel>& levels, const std::vector<fields::BuildStats>& stats,
+                double wall_s) {
+  const fields::HeightRange hr = fields::height_range(hf);
+  const fields::VolumeGeometry& g = levels[0].field.geometry;
+  std::printf("DEM        %s\n", o.dem.c_str());
+  std::printf("           %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx,
+              hf.ny, hf.spacing_m, fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
+  std::printf("field      %d levels from %.1f m every %.2f m (top %.1f m), eye %.2f m,\n", g.nz,
+              g.z0_m, g.dz_m, g.top_m(), p.eye_height_m);
+  std::printf("           range %s %d posts, curvature %.5f, %d exact rings\n",
+              fields::to_string(p.range_shape), p.range_posts, p.curvature_coeff, p.exact_rings);
+  std::printf("\nlevel  grid              spacing  range      time    hull cells  Mcells/s/core  F_p min..max (mean)\n");
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const fields::VolumeGeometry& lg = levels[l].field.geometry;
+    const LevelSummary s = summarise(levels[l]);
+    char grid[64];
+    std::snprintf(grid, sizeof grid, "%dx%dx%d", lg.nx, lg.ny, lg.nz);
+    std::printf("%5zu  %-16s %6.0f m  %7.0f m  %6.2f s  %10.3g  %13.1f  %.4f..%.4f (%.4f)\n", l,
+                grid, lg.spacing_m, p.range_posts * lg.spacing_m, stats[l].wall_s,
+                static_cast<double>(stats[l].hull_cells), stats[l].cells_per_s_per_core() / 1e6,
+                s.min_f, s.max_f, s.mean_f);
+  }
+  std::printf("\nsamples of level 0 (world x, y, z in the DEM's CRS, metres):\n");
+  for (const Sample& s : samples(levels[0])) {
+    std::printf("  %-13s %+6.0f m  (%.1f, %.1f, %.1f)  F_p %.4f  grad (%.2e, %.2e, %.2e) /m\n",
+                s.where.c_str(), s.height_above_ground_m, s.x, s.y, s.z, s.f, s.gradient.x(),
+                s.gradient.y(), s.gradient.z());
+  }
+  std::printf("\ntotal %.2f s on %d threads\n", wall_s, stats[0].threads);
+}
+
+std::string summary_json(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
+                         const std::vector<LodLevel>& levels,
+                         const std::vector<fields::BuildStats>& stats, double wall_s) {
+  using nlohmann::json;
+  const fields::HeightRange hr = fields::height_range(hf);
+  json j;
+  j["dem"] = o.dem;
+  j["nx"] = hf.nx;
+  j["ny"] = hf.ny;
+  j["cell_size_m"] = hf.spacing_m;
+  j["origin_x"] = hf.origin_x;
+  j["origin_y"] = hf.origin_y;
+  j["crs"] = fields::crs_name(hf.crs_wkt);
+  j["height_min_m"] = hr.min_m;
+  j["height_max_m"] = hr.max_m;
+  const fields::VolumeGeometry& g = levels[0].field.geometry;
+  j["nz"] = g.nz;
+  j["z0_m"] = g.z0_m;
+  j["dz_m"] = g.dz_m;
+  j["eye_height_m"] = p.eye_height_m;
+  j["range_shape"] = fields::to_string(p.range_shape);
+  j["range_posts"] = p.range_posts;
+  j["curvature_coeff"] = p.curvature_coeff;
+  j["exact_rings"] = p.exact_rings;
+  j["threads"] = stats[0].threads;
+  j["wall_s"] = wall_s;
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const fields::VolumeGeometry& lg = levels[l].field.geometry;
+    const LevelSummary s = summarise(levels[l]);
+    j["levels_of_detail"].push_back({{"nx", lg.nx},
+                                     {"ny", lg.ny},
+                                     {"spacing_m", lg.spacing_m},
+                                     {"range_m", p.range_posts * lg.spacing_m},
+                                     {"wall_s", stats[l].wall_s},
+                                     {"hull_cells", stats[l].hull_cells},
+                                     {"cells_per_s_per_core", stats[l].cells_per_s_per_core()},
+                                     {"f_min", s.min_f},
+                                     {"f_max", s.max_f},
+                                     {"f_mean", s.mean_f}});
+  }
+  for (const Sample& s : samples(levels[0])) {
+    j["samples"].push_back({{"where", s.where},
+                            {"x", s.x},
+                            {"y", s.y},
+                            {"z", s.z},
+                            {"above_ground_m", s.height_above_ground_m},
+                            {"f", s.f},
+                            {"gradient_per_m", {s.gradient.x(), s.gradient.y(), s.gradient.z()}}});
+  }
+  return j.dump(2) + "\n";
+}
+
+int run_build(const BuildOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Result<Heightfield> hf = fields::read_heightfield(
+      o.dem, {o.fill_nodata ? fields::NodataPolicy::fill : fields::NodataPolicy::refuse});
+  if (!hf.ok()) return fail("build", hf.status());
+  Result<FieldParams> params = make_params(o, *hf);
+  if (!params.ok()) return fail("build", params.status());
+  std::vector<fields::BuildStats> stats;
+  Result<std::vector<LodLevel>> levels = [&] {
+    Progress progress("building F_p");
+    auto r = fields::build_pyramid_dense(*hf, *params, o.lod,
+                                         [&](double f) { progress.update(f); }, &stats);
+    if (r.ok()) progress.finish();
+    return r;
+  }();
+  if (!levels.ok()) return fail("build", levels.status());
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (o.json) {
+    std::printf("%s", summary_json(o, *hf, *params, *levels, stats, wall_s).c_str());
+  } else {
+    print_text(o, *hf, *params, *levels, stats, wall_s);
+  }
+  if (!o.json_file.empty()) {
+    const Status st = write_text_file(o.json_file, summary_json(o, *hf, *params, *levels, stats, wall_s));
+    if (!st.ok()) return fail("build", st);
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Runner add_build_command(CLI::App& app) {
+  auto o = std::make_shared<BuildOptions>();
+  CLI::App* c = app.add_subcommand(
+      "build", "Build the visibility field F_p of a DEM and its levels of detail, and print a summary");
+  c->add_option("DEM", o->dem, "Terrain raster in a metric CRS (GeoTIFF, USGS DEM, ESRI/GRASS ASCII, ...)")
+      ->required();
+  c->add_option("--levels", o->levels, "Voxel levels in height (2..255)")->capture_default_str();
+  c->add_option("--ceiling", o->ceiling_m, "Height of the top level above the highest post, m")
+      ->capture_default_str();
+  c->add_option("--eye-height", o->eye_m, "Observer eye above its post, m")->capture_default_str();
+  c->add_option("--range", o->range_posts, "Range in posts: cube half-side or sphere radius")
+      ->capture_default_str();
+  c->add_option("--range-shape", o->range_shape, "none, cube (the paper's) or sphere")
+      ->capture_default_str();
+  c->add_option("--curvature", o->curvature,
+                "Earth curvature and refraction coefficient, 0 off (0.85714 is usual)")
+      ->capture_default_str();
+  c->add_option("--weights", o->weights, "Observer likelihood raster in [0, 1] on the DEM's grid");
+  c->add_option("--lod", o->lod, "Levels of detail (each halves the grid)")->capture_default_str();
+  c->add_option("--threads", o->threads, "Worker threads, 0 for all cores")->capture_default_str();
+  c->add_option("--exact-rings", o->exact_rings, "Rings around each observer evaluated exactly")
+      ->capture_default_str();
+  c->add_flag("--fill-nodata", o->fill_nodata, "Fill nodata holes instead of refusing the DEM");
+  c->add_option("--max-memory", o->max_memory_mib, "Refuse builds needing more working memory, MiB")
+      ->capture_default_str();
+  c->add_flag("--json", o->json, "Print the summary as one JSON object");
+  c->add_option("--json-file", o->json_file, "Also write the JSON summary to this file");
+  return [o] { return run_build(*o); };
+}
+
+}  // namespace visvol::cli

@@ -1,0 +1,15 @@
+// The subcommands of visvol. Each registers its options on the CLI11 app and
+// returns the function that runs it once the arguments are parsed.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace visvol::cli {
+
+using Runner = std::function<int()>;
+
+Runner add_build_command(CLI::App& app);
+Runner add_viewshed_command(CLI::App& app);
+
+}  // namespace visvol::cli

@@ -1,0 +1,44 @@
+// visvol: visibility volumes for flight-path planning.
+//
+//   visvol build DEM [options]         build F_p and its levels of detail
+//   visvol viewshed DEM --observer X Y -o OUT.tif
+//
+// Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "cli.hpp"
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  using namespace visvol::cli;
+  CLI::App app{
+      "visvol: visibility volumes above terrain (the field F_p of Srikanth et al., "
+      "\"Visibility Volumes for Interactive Path Optimization\")"};
+  app.require_subcommand(1);
+  std::map<std::string, Runner> runners;
+  runners["build"] = add_build_command(app);
+  runners["viewshed"] = add_viewshed_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::printf("%s", app.help().c_str());
+    return kExitOk;
+  } catch (const CLI::CallForAllHelp&) {
+    std::printf("%s", app.help("", CLI::AppFormatMode::All).c_str());
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    // Subcommand help arrives as CallForHelp raised inside the subcommand.
+    if (e.get_exit_code() == 0) {
+      for (CLI::App* sub : app.get_subcommands()) std::printf("%s", sub->help().c_str());
+      if (app.get_subcommands().empty()) std::printf("%s", app.help().c_str());
+      return kExitOk;
+    }
+    std::fprintf(stderr, "visvol: %s (try --help)\n", e.what());
+    return kExitUsage;
+  }
+  for (CLI::App* sub : app.get_subcommands()) return runners.at(sub->get_name())();
+  return kExitUsage;
+}

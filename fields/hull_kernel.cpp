@@ -222,45 +222,47 @@ namespace {
 typedef float VecF __attribute__((vector_size(kLanes * sizeof(float))));
 typedef std::int32_t VecI __attribute__((vector_size(kLanes * sizeof(std::int32_t))));
 
-inline __attribute__((always_inline)) VecF load_f(const float* p) {
-  VecF v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-inline __attribute__((always_inline)) VecI load_i(const std::int32_t* p) {
-  VecI v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-inline __attribute__((always_inline)) VecF splat(float x) { return VecF{} + x; }
-inline __attribute__((always_inline)) VecF vmax(VecF a, VecF b) { return a > b ? a : b; }
-inline __attribute__((always_inline)) VecI vmax(VecI a, VecI b) { return a > b ? a : b; }
-inline __attribute__((always_inline)) VecI vmin(VecI a, VecI b) { return a < b ? a : b; }
-inline __attribute__((always_inline)) VecF clamp_f(VecF q, float lo, float hi) {
-  q = q < splat(lo) ? splat(lo) : q;
-  return q > splat(hi) ? splat(hi) : q;
-}
+// Helpers pass vectors by reference: a vector wider than the baseline
+// registers must not cross a function boundary by value (it would change the
+// ABI, which clang refuses and GCC warns about).
+#define VISVOL_INLINE inline __attribute__((always_inline))
+
+VISVOL_INLINE void load(VecF& v, const float* p) { std::memcpy(&v, p, sizeof v); }
+VISVOL_INLINE void load(VecI& v, const std::int32_t* p) { std::memcpy(&v, p, sizeof v); }
+VISVOL_INLINE void max_into(VecF& a, const VecF& b) { a = a > b ? a : b; }
+VISVOL_INLINE void max_into(VecI& a, const VecI& b) { a = a > b ? a : b; }
+
 // floor(q) for q >= -4 (truncation of a positive number is its floor).
-inline __attribute__((always_inline)) VecI floor_i(VecF q) {
-  return __builtin_convertvector(q + 4.0f, VecI) - 4;
+VISVOL_INLINE void floor_into(VecI& out, const VecF& q) {
+  out = __builtin_convertvector(q + 4.0f, VecI) - 4;
+}
+// (z - z0) / dz clamped to [-2, hi].
+VISVOL_INLINE void level_coordinate(VecF& q, const VecF& z_m, const LevelMap& lv, float hi) {
+  q = (z_m - lv.z0_m) * lv.inv_dz;
+  q = q < -2.0f ? VecF{} - 2.0f : q;
+  q = q > hi ? VecF{} + hi : q;
 }
 
 // First level strictly above each hull height (visibility needs z > hull).
-inline __attribute__((always_inline)) VecI level_above(VecF hull_m, const LevelMap& lv) {
-  const VecF q = clamp_f((hull_m - lv.z0_m) * lv.inv_dz, -2.0f, static_cast<float>(lv.nz - 1));
-  return floor_i(q) + 1;
+VISVOL_INLINE void level_above(VecI& out, const VecF& hull_m, const LevelMap& lv) {
+  VecF q;
+  level_coordinate(q, hull_m, lv, static_cast<float>(lv.nz - 1));
+  floor_into(out, q);
+  out += 1;
 }
 
 // First level at or above a height (for the sphere's lower bound):
 // ceil(q) = floor(q) + (floor(q) < q); comparisons give -1 for true.
-inline __attribute__((always_inline)) VecI level_at_or_above(VecF z_m, const LevelMap& lv) {
-  const VecF q = clamp_f((z_m - lv.z0_m) * lv.inv_dz, -2.0f, static_cast<float>(lv.nz));
-  const VecI below = floor_i(q);
-  return below - (__builtin_convertvector(below, VecF) < q);
+VISVOL_INLINE void level_at_or_above(VecI& out, const VecF& z_m, const LevelMap& lv) {
+  VecF q;
+  level_coordinate(q, z_m, lv, static_cast<float>(lv.nz));
+  floor_into(out, q);
+  out -= __builtin_convertvector(out, VecF) < q;
 }
 
-inline __attribute__((always_inline)) void store_levels(VecI k, std::uint8_t* dst) {
-  for (int l = 0; l < kLanes; ++l) dst[l] = static_cast<std::uint8_t>(k[l]);
+VISVOL_INLINE void store_levels(const VecI& k, int nz, std::uint8_t* dst) {
+  const VecI clamped = k < nz ? k : VecI{} + nz;
+  for (int l = 0; l < kLanes; ++l) dst[l] = static_cast<std::uint8_t>(clamped[l]);
 }
 
 }  // namespace
@@ -278,26 +280,40 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
   const int stride = terrain.stride;
   const float* t0 = terrain.height_m.data() + terrain.index(px0, py);
   const std::int32_t* g0 = terrain.ground_level.data() + terrain.index(px0, py);
-  const VecF eye = load_f(chunk.eye_m);
-  const VecI floor_level = load_i(chunk.floor_level);
-  const VecI nz_v = VecI{} + levels.nz;
+  VecF eye;
+  load(eye, chunk.eye_m);
+  VecI floor_level;
+  load(floor_level, chunk.floor_level);
   const bool sphere = shape == RangeShape::sphere;
 
   // The lowest level a target may take: on or above its ground, inside the
   // observer's range.
-  auto lowest_level = [&](const HullEntry& e) {
-    VecI k = vmax(load_i(g0 + e.dy * stride + e.dx), floor_level);
-    if (sphere) k = vmax(k, level_at_or_above(eye - e.span_m, levels));
-    return k;
+  auto lowest_level = [&](VecI& k, const HullEntry& e) {
+    VecI bound;
+    load(k, g0 + e.dy * stride + e.dx);
+    max_into(k, floor_level);
+    if (sphere) {
+      level_at_or_above(bound, eye - e.span_m, levels);
+      max_into(k, bound);
+    }
   };
-  auto write = [&](const HullEntry& e, VecI k) {
+  auto write = [&](const HullEntry& e, const VecI& k) {
     const int y = py + e.dy;
     if (y < 0 || y >= layout.ny || e.dx < dx_first || e.dx > dx_last) return;
-    store_levels(vmin(k, nz_v), out + layout.offset(py, y, ci, e.dx - dx_first));
+    store_levels(k, levels.nz, out + layout.offset(py, y, ci, e.dx - dx_first));
+  };
+  // The slope from the eye to the target's own terrain.
+  auto own_slope = [&](VecF& s, const HullEntry& e) {
+    load(s, t0 + e.dy * stride + e.dx);
+    s = (s - e.drop_m - eye) / e.d_m;
   };
 
   // Rings 0 and 1: no crossing, visible from the ground up.
-  for (const HullEntry& e : table.inner()) write(e, lowest_level(e));
+  for (const HullEntry& e : table.inner()) {
+    VecI k;
+    lowest_level(k, e);
+    write(e, k);
+  }
 
   // Only rings that reach a target inside the grid matter (RangeShape::none).
   const int reach = std::max({px0 + kLanes - 1, layout.nx - 1 - px0, py, layout.ny - 1 - py});
@@ -308,7 +324,8 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
   // Ring 1 passes on the slope to its own terrain (it has no crossings).
   for (const HullEntry& e : table.inner()) {
     if (e.dx == 0 && e.dy == 0) continue;
-    const VecF own = (load_f(t0 + e.dy * stride + e.dx) - e.drop_m - eye) / e.d_m;
+    VecF own;
+    own_slope(own, e);
     std::memcpy(prev + ring_index(e.dx, e.dy, 1) * kLanes, &own, sizeof own);
   }
   for (int m = 2; m <= last_ring; ++m) {
@@ -317,33 +334,40 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
     const bool exact = m <= table.exact_rings();
     for (int n = 0; n < count; ++n) {
       const HullEntry& e = ring[n];
-      VecF h;
+      VecF h = VecF{} + kNoHorizon;
+      VecF ta, tb;
       if (exact) {
         // Every crossing of the sight line.
-        h = splat(kNoHorizon);
         for (const Crossing* c = table.crossings_begin(m, n); c != table.crossings_end(m, n); ++c) {
-          const VecF ta = load_f(t0 + c->ta), tb = load_f(t0 + c->tb);
-          h = vmax(h, (ta + c->t * (tb - ta) - c->drop_m - eye) * c->inv_d);
+          load(ta, t0 + c->ta);
+          load(tb, t0 + c->tb);
+          max_into(h, (ta + c->t * (tb - ta) - c->drop_m - eye) * c->inv_d);
         }
       } else {
         // Horizon over the far crossings, interpolated between the stencil cells,
         // and exact slopes at the two nearest crossings.
-        const VecF ha = load_f(prev + e.a * kLanes);
-        const VecF hb = load_f(prev + e.b * kLanes);
-        const VecF h_far = ha + e.t * (hb - ha);
-        const VecF ta = load_f(t0 + e.ta), tb = load_f(t0 + e.tb);
-        const VecF tc = load_f(t0 + e.tc), td = load_f(t0 + e.td);
-        const VecF s1 = (ta + e.t * (tb - ta) - e.drop1_m - eye) * e.inv_d1;
-        const VecF s2 = (tc + e.t2 * (td - tc) - e.drop2_m - eye) * e.inv_d2;
-        h = vmax(h_far, vmax(s1, s2));
+        VecF ha, hb;
+        load(ha, prev + e.a * kLanes);
+        load(hb, prev + e.b * kLanes);
+        h = ha + e.t * (hb - ha);
+        load(ta, t0 + e.ta);
+        load(tb, t0 + e.tb);
+        max_into(h, (ta + e.t * (tb - ta) - e.drop1_m - eye) * e.inv_d1);
+        load(ta, t0 + e.tc);
+        load(tb, t0 + e.td);
+        max_into(h, (ta + e.t2 * (tb - ta) - e.drop2_m - eye) * e.inv_d2);
       }
       // Rays beyond pass next to this cell: its own terrain is part of their horizon.
-      const VecF own = (load_f(t0 + e.dy * stride + e.dx) - e.drop_m - eye) / e.d_m;
-      const VecF h_next = vmax(h, own);
-      std::memcpy(cur + n * kLanes, &h_next, sizeof h_next);
+      VecF next;
+      own_slope(next, e);
+      max_into(next, h);
+      std::memcpy(cur + n * kLanes, &next, sizeof next);
       // Lowest visible height over the target.
-      const VecF hull = eye + e.d_m * h + e.drop_m;
-      write(e, vmax(level_above(hull, levels), lowest_level(e)));
+      VecI k, lowest;
+      level_above(k, eye + e.d_m * h + e.drop_m, levels);
+      lowest_level(lowest, e);
+      max_into(k, lowest);
+      write(e, k);
     }
     std::swap(prev, cur);
   }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages a visvol command needs: only the missing ones,
 # quietly, and nothing at all when everything is present.
-#   tools/deps.sh build   compilers, libraries and test frameworks
+#   tools/deps.sh SET...   with SET one of: build storage dds render hil fuzz rt all
 set -euo pipefail
 
 build_packages=(
@@ -14,10 +14,31 @@ build_packages=(
   libbenchmark-dev       # micro-benchmarks
 )
 
-case "${1:-build}" in
-  build) wanted=("${build_packages[@]}") ;;
-  *) echo "tools/deps.sh: unknown package set '$1' (known: build)" >&2; exit 2 ;;
-esac
+storage_packages=(libisal-dev)                      # CRC32C of pack tiles
+dds_packages=(cyclonedds-dev cyclonedds-tools)      # DDS participants, idlc
+render_packages=(libosmesa6-dev libpng-dev)         # offscreen GL, PNG thumbnails
+hil_packages=(qemu-system-x86 linux-image-amd64 busybox-static can-utils cpio)  # vcan in a VM
+fuzz_packages=(clang libclang-rt-14-dev)            # libFuzzer targets
+rt_packages=(rt-tests)                              # cyclictest, beside the executive benchmark
+
+wanted=()
+for set in "${@:-build}"; do
+  case "$set" in
+    build) wanted+=("${build_packages[@]}") ;;
+    storage) wanted+=("${storage_packages[@]}") ;;
+    dds) wanted+=("${dds_packages[@]}") ;;
+    render) wanted+=("${render_packages[@]}") ;;
+    hil) wanted+=("${hil_packages[@]}") ;;
+    fuzz) wanted+=("${fuzz_packages[@]}") ;;
+    rt) wanted+=("${rt_packages[@]}") ;;
+    all) wanted+=("${build_packages[@]}" "${storage_packages[@]}" "${dds_packages[@]}"
+                  "${render_packages[@]}" "${hil_packages[@]}" "${fuzz_packages[@]}"
+                  "${rt_packages[@]}") ;;
+    *) echo "tools/deps.sh: unknown package set '$set'" \
+            "(known: build storage dds render hil fuzz rt all)" >&2
+       exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${wanted[@]}"; do

@@ -20,4 +20,5 @@ run_suite() {  # run_suite BUILD_DIR [cmake options...]
 run_suite build
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   run_suite build-asan -DVISVOL_SANITIZE=ON
-echo "== all tests passed (optimised and ASan+UBSan)"
+tools/fuzz.sh
+echo "== all tests passed (optimised, ASan+UBSan, fuzzing)"

@@ -16,6 +16,7 @@
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <type_traits>
 
 #include "rt/base/atomic_file.hpp"
 
@@ -42,15 +43,20 @@ struct DatasetCloser {
 };
 using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
 
-Result<DatasetPtr> open_raster(const std::string& path) {
+Result<DatasetPtr> open_raster(const std::string& path,
+                               const std::vector<std::string>& drivers = {}) {
   register_gdal();
   // GDAL also opens /vsi paths and URLs-like names; only plain paths get the OS's reason.
   if (path.rfind("/vsi", 0) != 0 && ::access(path.c_str(), R_OK) != 0) {
     return io_error(path + ": " + std::strerror(errno));
   }
   CPLErrorReset();
+  std::vector<const char*> allowed;
+  for (const std::string& d : drivers) allowed.push_back(d.c_str());
+  allowed.push_back(nullptr);
   GDALDataset* ds = GDALDataset::Open(path.c_str(),
-                                      GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR);
+                                      GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
+                                      drivers.empty() ? nullptr : allowed.data());
   if (!ds) return io_error(path + ": cannot open as a raster: " + last_gdal_error());
   DatasetPtr owned(ds);
   if (ds->GetRasterCount() < 1) return invalid_argument(path + ": raster has no bands");
@@ -66,12 +72,15 @@ double vertical_factor(std::string unit) {
   return 1.0;
 }
 
-Status read_band_values(GDALDataset& ds, const std::string& path, std::vector<double>& out) {
+template <typename T>
+Status read_band_values(GDALDataset& ds, const std::string& path, std::vector<T>& out) {
+  static_assert(std::is_same_v<T, float> || std::is_same_v<T, double>);
   GDALRasterBand* band = ds.GetRasterBand(1);
   const int nx = ds.GetRasterXSize(), ny = ds.GetRasterYSize();
   out.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
   CPLErrorReset();
-  if (band->RasterIO(GF_Read, 0, 0, nx, ny, out.data(), nx, ny, GDT_Float64, 0, 0) != CE_None) {
+  const GDALDataType type = std::is_same_v<T, float> ? GDT_Float32 : GDT_Float64;
+  if (band->RasterIO(GF_Read, 0, 0, nx, ny, out.data(), nx, ny, type, 0, 0) != CE_None) {
     return io_error(path + ": cannot read band 1: " + last_gdal_error());
   }
   return Status::ok_status();
@@ -79,8 +88,10 @@ Status read_band_values(GDALDataset& ds, const std::string& path, std::vector<do
 
 }  // namespace
 
-Result<DemInfo> read_dem_info(const std::string& path) {
-  Result<DatasetPtr> opened = open_raster(path);
+Result<DemInfo> read_dem_info(const std::string& path) { return read_dem_info(path, {}); }
+
+Result<DemInfo> read_dem_info(const std::string& path, const std::vector<std::string>& drivers) {
+  Result<DatasetPtr> opened = open_raster(path, drivers);
   if (!opened.ok()) return opened.status();
   GDALDataset& ds = **opened;
   DemInfo info;
@@ -122,25 +133,29 @@ bool looks_like_degrees(const DemInfo& info) {
          within(y1, 90);
 }
 
+constexpr int kMaxFillDistancePosts = 128;
+
 // Fills nodata posts in `raw` (in place) with GDALFillNodata on an in-memory copy.
 Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
-                   std::vector<double>& raw) {
+                   std::vector<float>& raw) {
   GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
   if (!mem) return Status(Errc::unsupported, "GDAL has no MEM driver");
-  DatasetPtr ds(mem->Create("", nx, ny, 1, GDT_Float64, nullptr));
+  DatasetPtr ds(mem->Create("", nx, ny, 1, GDT_Float32, nullptr));
   if (!ds) return io_error(path + ": cannot create a work raster: " + last_gdal_error());
   GDALRasterBand* band = ds->GetRasterBand(1);
-  for (double& v : raw) {
-    if (!std::isfinite(v)) v = nodata;
+  for (float& v : raw) {
+    if (!std::isfinite(v)) v = static_cast<float>(nodata);
   }
   if (band->SetNoDataValue(nodata) != CE_None ||
-      band->RasterIO(GF_Write, 0, 0, nx, ny, raw.data(), nx, ny, GDT_Float64, 0, 0) != CE_None) {
+      band->RasterIO(GF_Write, 0, 0, nx, ny, raw.data(), nx, ny, GDT_Float32, 0, 0) != CE_None) {
     return io_error(path + ": cannot stage nodata filling: " + last_gdal_error());
   }
-  const double search = std::max(nx, ny);
+  // Holes are filled from their edges up to this far; wider ones stay and are
+  // reported (and a far search over a sparse raster would take hours).
+  const double search = std::min(std::max(nx, ny), kMaxFillDistancePosts);
   if (GDALFillNodata(GDALRasterBand::ToHandle(band), nullptr, search, 0, 0, nullptr, nullptr,
                      nullptr) != CE_None ||
-      band->RasterIO(GF_Read, 0, 0, nx, ny, raw.data(), nx, ny, GDT_Float64, 0, 0) != CE_None) {
+      band->RasterIO(GF_Read, 0, 0, nx, ny, raw.data(), nx, ny, GDT_Float32, 0, 0) != CE_None) {
     return io_error(path + ": filling nodata failed: " + last_gdal_error());
   }
   return Status::ok_status();
@@ -149,7 +164,7 @@ Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
 }  // namespace
 
 Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptions& options) {
-  Result<DemInfo> info_r = read_dem_info(path);
+  Result<DemInfo> info_r = read_dem_info(path, options.drivers);
   if (!info_r.ok()) return info_r.status();
   const DemInfo& info = *info_r;
   const double* gt = info.geotransform;
@@ -192,9 +207,14 @@ Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptio
     return invalid_argument(msg.str());
   }
 
-  Result<DatasetPtr> opened = open_raster(path);
+  if (static_cast<std::size_t>(info.nx) * static_cast<std::size_t>(info.ny) > options.max_posts) {
+    msg << path << ": " << info.nx << " x " << info.ny << " posts is more than the "
+        << options.max_posts << " this read allows; crop or resample it";
+    return invalid_argument(msg.str());
+  }
+  Result<DatasetPtr> opened = open_raster(path, options.drivers);
   if (!opened.ok()) return opened.status();
-  std::vector<double> raw;
+  std::vector<float> raw;
   VISVOL_RETURN_IF_ERROR(read_band_values(**opened, path, raw));
   GDALRasterBand* band = (*opened)->GetRasterBand(1);
   int has_scale = 0, has_offset = 0;
@@ -202,7 +222,15 @@ Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptio
   const double offset = band->GetOffset(&has_offset);
 
   if (options.nodata == NodataPolicy::fill && info.has_nodata) {
-    VISVOL_RETURN_IF_ERROR(fill_nodata(path, info.nx, info.ny, info.nodata, raw));
+    const float nd = static_cast<float>(info.nodata);
+    const std::size_t holes = static_cast<std::size_t>(std::count_if(
+        raw.begin(), raw.end(), [&](float v) { return !std::isfinite(v) || v == nd; }));
+    if (holes * 2 > raw.size()) {
+      msg << path << ": " << holes << " of " << raw.size()
+          << " posts are nodata; too few to fill from, crop the DEM to its data";
+      return invalid_argument(msg.str());
+    }
+    if (holes > 0) VISVOL_RETURN_IF_ERROR(fill_nodata(path, info.nx, info.ny, info.nodata, raw));
   }
   Heightfield hf;
   hf.nx = info.nx;
@@ -213,9 +241,11 @@ Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptio
   hf.crs_wkt = info.crs_wkt;
   hf.height_m.resize(raw.size());
   std::size_t bad = 0, first_bad = 0;
+  // Nodata compares in the type the band was read in.
+  const float nodata = static_cast<float>(info.nodata);
   for (std::size_t n = 0; n < raw.size(); ++n) {
     const double v = raw[n];
-    if (!std::isfinite(v) || (info.has_nodata && v == info.nodata)) {
+    if (!std::isfinite(v) || (info.has_nodata && raw[n] == nodata)) {
       if (bad++ == 0) first_bad = n;
       continue;
     }
@@ -226,7 +256,9 @@ Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptio
     msg << path << ": " << bad << " posts are nodata or NaN, the first at ("
         << first_bad % static_cast<std::size_t>(hf.nx) << ", "
         << first_bad / static_cast<std::size_t>(hf.nx) << ")"
-        << (options.nodata == NodataPolicy::fill ? " and could not be filled" : "; fill them or crop the DEM");
+        << (options.nodata == NodataPolicy::fill
+                ? " and lie more than 128 posts from data, too far to fill; crop the DEM"
+                : "; fill them or crop the DEM");
     return invalid_argument(msg.str());
   }
   VISVOL_RETURN_IF_ERROR(validate(hf, path));

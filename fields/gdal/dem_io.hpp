@@ -25,16 +25,31 @@ struct DemInfo {
   double nodata = 0;
 };
 
-// Reads the header of a raster.
+// Reads the header of a raster (any GDAL raster driver, or only `drivers`).
 Result<DemInfo> read_dem_info(const std::string& path);
+Result<DemInfo> read_dem_info(const std::string& path, const std::vector<std::string>& drivers);
 
 enum class NodataPolicy {
   refuse,  // a nodata or NaN post is an error naming the first one
   fill,    // fill holes by inverse-distance interpolation from their edges (GDALFillNodata)
 };
 
+// The formats visvol reads terrain from (GDAL short names).
+inline const std::vector<std::string>& dem_drivers() {
+  static const std::vector<std::string> names{"GTiff",   "AAIGrid", "GRASSASCIIGrid",
+                                              "USGSDEM", "SRTMHGT", "DTED"};
+  return names;
+}
+
 struct DemReadOptions {
+  DemReadOptions() = default;
+  DemReadOptions(NodataPolicy policy) : nodata(policy) {}  // NOLINT: {NodataPolicy::fill} reads well
+
   NodataPolicy nodata = NodataPolicy::refuse;
+  // GDAL drivers allowed to open the file; empty: any raster driver.
+  std::vector<std::string> drivers;
+  // Rasters with more posts than this are refused before reading (1 GiB of float).
+  std::size_t max_posts = std::size_t{1} << 28;
 };
 
 // Reads band 1 of a raster as a heightfield in metres. Refuses, naming the

@@ -206,13 +206,22 @@ bool run_grass(const std::string& dem, double x, double y, const ViewshedParams&
                         << "'\n"
                         << "r.out.gdal input=vs output='" << out_tif
                         << "' format=GTiff type=Float32 --quiet -c\n";
-  const std::string cmd = "grass --tmp-location '" + dem + "' --exec bash '" + script +
-                          "' >/dev/null 2>&1";
+  const std::string log = std::string(dir) + "/grass.log";
+  const std::string cmd = "grass --tmp-location '" + dem + "' --exec bash '" + script + "' >'" +
+                          log + "' 2>&1";
   const bool ok = std::system(cmd.c_str()) == 0;
   if (ok) std::ifstream(timing) >> seconds;
-  for (const std::string& f : {script, timing}) std::remove(f.c_str());
+  if (!ok) {
+    // Keep the last line GRASS printed: it says why.
+    std::ifstream in(log);
+    std::string line, last;
+    while (std::getline(in, line)) {
+      if (!line.empty()) last = line;
+    }
+    note = "r.viewshed failed: " + last;
+  }
+  for (const std::string& f : {script, timing, log}) std::remove(f.c_str());
   rmdir(dir);
-  if (!ok) note = "r.viewshed failed";
   return ok && seconds >= 0;
 }
 

@@ -95,6 +95,34 @@ TEST(DemIo, FillsNodataHolesWhenAsked) {
   std::remove(path.c_str());
 }
 
+TEST(DemIo, RefusesToFillAMostlyEmptyRaster) {
+  // A fuzzer found that filling a sparse raster searched for hours.
+  Heightfield hf = flat(12);
+  for (std::size_t n = 0; n < hf.size() * 3 / 4; ++n) hf.height_m[n] = -9999.0f;
+  const std::string path = temp_name("sparse");
+  ASSERT_TRUE(write_geotiff_f32(path, hf, hf.height_m, -9999.0).ok());
+  const Result<Heightfield> back = read_heightfield(path, {NodataPolicy::fill});
+  ASSERT_FALSE(back.ok());
+  EXPECT_NE(back.status().message().find("too few to fill"), std::string::npos) << back.status().message();
+  std::remove(path.c_str());
+}
+
+TEST(DemIo, RefusesRastersOverThePostLimitBeforeReading) {
+  DemReadOptions options;
+  options.max_posts = 1000;
+  const Result<Heightfield> hf = read_heightfield(test_data("sf_north_utm10_30m.tif"), options);
+  ASSERT_FALSE(hf.ok());
+  EXPECT_NE(hf.status().message().find("more than the 1000"), std::string::npos);
+}
+
+TEST(DemIo, OnlyAllowedDriversOpen) {
+  DemReadOptions options;
+  options.drivers = {"AAIGrid"};
+  const Result<Heightfield> hf = read_heightfield(test_data("sf_north_utm10_30m.tif"), options);
+  ASSERT_FALSE(hf.ok());
+  EXPECT_EQ(hf.status().code(), Errc::io);
+}
+
 TEST(DemIo, WeightsRasterMustMatchTheGrid) {
   const Heightfield hf = flat(12);
   const std::string path = temp_name("weights");

@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
-tools/deps.sh build
+tools/deps.sh build storage dds render hil fuzz
 
 run_suite() {  # run_suite BUILD_DIR [cmake options...]
   local dir=$1

@@ -11,6 +11,9 @@
 //   const VolumeGeometry& geometry() const;
 //   float post(int i, int j) const;          // terrain height, m
 //   float voxel(int i, int j, int k) const;  // F_p
+// and, for terrain_force() only:
+//   TffSample tff(int i, int j, int b) const;
+//   const TffParams& tff_params() const;
 //
 // Real-time safe: no allocation, no locks; cost O(1) (about 60 reads for a
 // gradient). Thread-safe for concurrent reads.
@@ -21,6 +24,7 @@
 #include <cmath>
 
 #include "fields/heightfield.hpp"
+#include "fields/terrain_force.hpp"
 #include "fields/volume.hpp"
 
 namespace visvol::fields {
@@ -90,6 +94,35 @@ class FieldSampler {
       }
     }
     return sum;
+  }
+
+  // The terrain force field sample at (x, y, z): trilinear over the four
+  // surrounding columns, each at its own band coordinate (the band follows
+  // the terrain). Below the band it is the band's lowest sample, above it the
+  // highest (signed distances there are -offset and +offset or beyond).
+  TffSample terrain_force(double x, double y, double z) const {
+    const TffParams& p = level_.tff_params();
+    const Cell c = cell_xy(x, y);
+    const double step = p.step_m();
+    TffSample out;
+    for (int dj = 0; dj < 2; ++dj) {
+      for (int di = 0; di < 2; ++di) {
+        const double w = (di ? c.fi : 1 - c.fi) * (dj ? c.fj : 1 - c.fj);
+        if (w == 0) continue;
+        const int i = c.i + di, j = c.j + dj;
+        const double b = std::clamp((z - post(i, j) + p.band_offset_m) / step, 0.0,
+                                    static_cast<double>(p.band_levels - 1));
+        const int b0 = std::min(static_cast<int>(b), p.band_levels - 2);
+        const double fb = b - b0;
+        const TffSample lo = level_.tff(i, j, b0), hi = level_.tff(i, j, b0 + 1);
+        auto mix = [&](float a0, float a1) { return static_cast<float>(w * (a0 + fb * (a1 - a0))); };
+        out.dx_m += mix(lo.dx_m, hi.dx_m);
+        out.dy_m += mix(lo.dy_m, hi.dy_m);
+        out.dz_m += mix(lo.dz_m, hi.dz_m);
+        out.signed_distance_m += mix(lo.signed_distance_m, hi.signed_distance_m);
+      }
+    }
+    return out;
   }
 
   // The gradient at voxel (i, j, k), per metre in world axes.

@@ -1,22 +1,36 @@
 #!/usr/bin/env bash
-# The main job on the bundled default: builds the visibility field of the San
-# Francisco North DEM (three levels of detail), prints its summary and writes
-# the outputs to out/ (or $VISVOL_OUT).
+# The main job on the bundled default: imports the San Francisco North DEM,
+# builds its field pack (visibility field F_p with three levels of detail and
+# the terrain force field), checks it, samples it, exports it, and writes a
+# viewshed. Outputs go to out/ (or $VISVOL_OUT).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${VISVOL_OUT:-out}
 
-tools/deps.sh build
+tools/deps.sh build storage
 cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build -j "$(nproc)" --target visvol
 
 mkdir -p "$out"
 dem=tests/data/sf_north_utm10_30m.tif
+pack=$out/sf_north.vvp
 visvol=build/tools/visvol/visvol
 
-echo "== visibility field of $dem"
-"$visvol" build "$dem" --fill-nodata --lod 3 --json-file "$out/field_summary.json" \
-  | tee "$out/field_summary.txt"
+echo "== field pack of $dem"
+"$visvol" build "$dem" --fill-nodata -o "$pack" | tee "$out/build.txt"
+
+echo "== what the pack holds"
+"$visvol" info "$pack" | tee "$out/info.txt"
+"$visvol" info "$pack" --json > "$out/info.json"
+"$visvol" verify "$pack"
+
+echo "== F_p above the Presidio, the city and the Golden Gate (x y z in UTM 10N metres)"
+printf '%s\n' "545500 4185500 150" "550500 4183000 150" "546000 4189500 150" "546000 4189500 600" \
+  | tee "$out/points.txt" \
+  | "$visvol" sample "$pack" --layer visibility | tee "$out/samples.txt"
+
+echo "== export for ParaView / 3D Slicer / VolView"
+"$visvol" export "$pack" --layer visibility --lod 1 --format vti -o "$out/visibility_lod1.vti"
 
 echo "== viewshed of an observer 2 m above the highest post"
 "$visvol" viewshed "$dem" --fill-nodata --observer 544200 4189200 --observer-height 2 \

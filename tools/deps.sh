@@ -14,7 +14,7 @@ build_packages=(
   libbenchmark-dev       # micro-benchmarks
 )
 
-storage_packages=(libisal-dev)                      # CRC32C of pack tiles
+storage_packages=(libisal-dev libssl-dev)           # CRC32C of pack tiles, SHA-256 of sources
 dds_packages=(cyclonedds-dev cyclonedds-tools)      # DDS participants, idlc
 render_packages=(libosmesa6-dev libpng-dev)         # offscreen GL, PNG thumbnails
 hil_packages=(qemu-system-x86 linux-image-amd64 busybox-static can-utils cpio)  # vcan in a VM

@@ -5,29 +5,31 @@
 #include <gdal_alg.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
-
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <sstream>
 #include <type_traits>
 
+#include "fields/gdal/gdal_dataset.hpp"
 #include "rt/base/atomic_file.hpp"
 
 namespace visvol::fields {
 
-namespace {
+namespace gdal {
 
 void register_gdal() {
   static std::once_flag once;
   std::call_once(once, [] {
     GDALAllRegister();
+    // Never write .aux.xml side files next to the user's data.
+    CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
     // Errors come back through CPLGetLastErrorMsg; keep stderr for our messages.
     CPLSetErrorHandler(CPLQuietErrorHandler);
   });
@@ -38,22 +40,16 @@ std::string last_gdal_error() {
   return (msg && *msg) ? std::string(msg) : std::string("no details from GDAL");
 }
 
-struct DatasetCloser {
-  void operator()(GDALDataset* ds) const { GDALClose(GDALDataset::ToHandle(ds)); }
-};
-using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
-
-Result<DatasetPtr> open_raster(const std::string& path,
-                               const std::vector<std::string>& drivers = {}) {
+Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::string>& drivers) {
   register_gdal();
-  // GDAL also opens /vsi paths and URLs-like names; only plain paths get the OS's reason.
+  // GDAL also opens /vsi paths; only plain paths get the OS's reason.
   if (path.rfind("/vsi", 0) != 0 && ::access(path.c_str(), R_OK) != 0) {
     return io_error(path + ": " + std::strerror(errno));
   }
-  CPLErrorReset();
   std::vector<const char*> allowed;
   for (const std::string& d : drivers) allowed.push_back(d.c_str());
   allowed.push_back(nullptr);
+  CPLErrorReset();
   GDALDataset* ds = GDALDataset::Open(path.c_str(),
                                       GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
                                       drivers.empty() ? nullptr : allowed.data());
@@ -63,7 +59,6 @@ Result<DatasetPtr> open_raster(const std::string& path,
   return owned;
 }
 
-// Metres per unit for the vertical units GDAL reports.
 double vertical_factor(std::string unit) {
   std::transform(unit.begin(), unit.end(), unit.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -72,34 +67,13 @@ double vertical_factor(std::string unit) {
   return 1.0;
 }
 
-template <typename T>
-Status read_band_values(GDALDataset& ds, const std::string& path, std::vector<T>& out) {
-  static_assert(std::is_same_v<T, float> || std::is_same_v<T, double>);
-  GDALRasterBand* band = ds.GetRasterBand(1);
-  const int nx = ds.GetRasterXSize(), ny = ds.GetRasterYSize();
-  out.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
-  CPLErrorReset();
-  const GDALDataType type = std::is_same_v<T, float> ? GDT_Float32 : GDT_Float64;
-  if (band->RasterIO(GF_Read, 0, 0, nx, ny, out.data(), nx, ny, type, 0, 0) != CE_None) {
-    return io_error(path + ": cannot read band 1: " + last_gdal_error());
-  }
-  return Status::ok_status();
-}
-
-}  // namespace
-
-Result<DemInfo> read_dem_info(const std::string& path) { return read_dem_info(path, {}); }
-
-Result<DemInfo> read_dem_info(const std::string& path, const std::vector<std::string>& drivers) {
-  Result<DatasetPtr> opened = open_raster(path, drivers);
-  if (!opened.ok()) return opened.status();
-  GDALDataset& ds = **opened;
+Result<DemInfo> info_of(GDALDataset& ds, const std::string& name) {
   DemInfo info;
   info.driver = ds.GetDriver() ? ds.GetDriver()->GetDescription() : "";
   info.nx = ds.GetRasterXSize();
   info.ny = ds.GetRasterYSize();
   if (ds.GetGeoTransform(info.geotransform) != CE_None) {
-    return invalid_argument(path + ": has no georeference (geotransform); post spacing is unknown");
+    return invalid_argument(name + ": has no georeference (geotransform); post spacing is unknown");
   }
   if (const OGRSpatialReference* srs = ds.GetSpatialRef()) {
     char* wkt = nullptr;
@@ -120,6 +94,20 @@ Result<DemInfo> read_dem_info(const std::string& path, const std::vector<std::st
 }
 
 namespace {
+
+template <typename T>
+Status read_band_values(GDALDataset& ds, const std::string& path, std::vector<T>& out) {
+  static_assert(std::is_same_v<T, float> || std::is_same_v<T, double>);
+  GDALRasterBand* band = ds.GetRasterBand(1);
+  const int nx = ds.GetRasterXSize(), ny = ds.GetRasterYSize();
+  out.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  CPLErrorReset();
+  const GDALDataType type = std::is_same_v<T, float> ? GDT_Float32 : GDT_Float64;
+  if (band->RasterIO(GF_Read, 0, 0, nx, ny, out.data(), nx, ny, type, 0, 0) != CE_None) {
+    return io_error(path + ": cannot read band 1: " + last_gdal_error());
+  }
+  return Status::ok_status();
+}
 
 // A raster with no CRS whose whole extent fits longitude and latitude and
 // whose pixels are finer than 0.1 units is almost surely in degrees.
@@ -163,106 +151,134 @@ Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
 
 }  // namespace
 
-Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptions& options) {
-  Result<DemInfo> info_r = read_dem_info(path, options.drivers);
-  if (!info_r.ok()) return info_r.status();
-  const DemInfo& info = *info_r;
+Status check_metric_grid(const DemInfo& info, const std::string& name, std::size_t max_posts) {
   const double* gt = info.geotransform;
   std::ostringstream msg;
+  msg << name << ": ";
   if (info.geographic) {
-    msg << path << ": CRS '" << info.crs_name
-        << "' is geographic (degrees); project it to a metric CRS first "
-           "(for example gdalwarp -t_srs EPSG:326<zone> -r bilinear)";
+    msg << "CRS '" << info.crs_name
+        << "' is geographic (degrees); import projects it (visvol build and info do, to its UTM "
+           "zone or --t-srs), or project it first (gdalwarp -t_srs EPSG:326<zone>)";
     return invalid_argument(msg.str());
   }
   if (looks_like_degrees(info)) {
-    msg << path << ": has no CRS, and its extent and pixel size (" << gt[1]
-        << ") look like degrees; assign its CRS first "
-           "(for example gdal_translate -a_srs EPSG:4326) so it can be projected";
+    msg << "has no CRS, and its extent and pixel size (" << gt[1]
+        << ") look like degrees; give its CRS (--assume-srs EPSG:4326) so it can be projected";
     return invalid_argument(msg.str());
   }
   if (std::fabs(info.linear_unit_m - 1.0) > 1e-9) {
-    msg << path << ": CRS unit is " << info.linear_unit_m
-        << " m, not metres; reproject to a metric CRS";
+    msg << "CRS unit is " << info.linear_unit_m << " m, not metres; reproject it (--t-srs)";
     return invalid_argument(msg.str());
   }
   if (gt[2] != 0 || gt[4] != 0) {
-    msg << path << ": rotated geotransform; warp it north-up first (gdalwarp)";
+    msg << "rotated geotransform; warp it north-up (--t-srs)";
     return invalid_argument(msg.str());
   }
   if (!(gt[1] > 0 && gt[5] < 0)) {
-    msg << path << ": pixel size " << gt[1] << " x " << gt[5]
-        << " is not north-up (x > 0, y < 0); warp it first (gdalwarp)";
+    msg << "pixel size " << gt[1] << " x " << gt[5] << " is not north-up (x > 0, y < 0); warp it first";
     return invalid_argument(msg.str());
   }
   const double sx = gt[1], sy = -gt[5];
   if (std::fabs(sx - sy) > 1e-3 * std::max(sx, sy)) {
-    msg << path << ": pixels are " << sx << " x " << sy
-        << " m; resample to square pixels first (gdalwarp -tr S S)";
+    msg << "pixels are " << sx << " x " << sy << " m; resample to square pixels (--spacing)";
     return invalid_argument(msg.str());
   }
   if (info.nx > kMaxPostsPerSide || info.ny > kMaxPostsPerSide || info.nx < 2 || info.ny < 2) {
-    msg << path << ": grid is " << info.nx << " x " << info.ny << " posts; supported sizes are 2.."
+    msg << "grid is " << info.nx << " x " << info.ny << " posts; supported sizes are 2.."
         << kMaxPostsPerSide << " a side";
     return invalid_argument(msg.str());
   }
-
-  if (static_cast<std::size_t>(info.nx) * static_cast<std::size_t>(info.ny) > options.max_posts) {
-    msg << path << ": " << info.nx << " x " << info.ny << " posts is more than the "
-        << options.max_posts << " this read allows; crop or resample it";
+  if (static_cast<std::size_t>(info.nx) * static_cast<std::size_t>(info.ny) > max_posts) {
+    msg << info.nx << " x " << info.ny << " posts is more than the " << max_posts
+        << " this read allows; crop or resample it";
     return invalid_argument(msg.str());
   }
-  Result<DatasetPtr> opened = open_raster(path, options.drivers);
-  if (!opened.ok()) return opened.status();
+  return Status::ok_status();
+}
+
+Result<Heightfield> to_heightfield(GDALDataset& ds, const DemInfo& info, const std::string& name,
+                                   const DemReadOptions& options, double vertical_to_m) {
   std::vector<float> raw;
-  VISVOL_RETURN_IF_ERROR(read_band_values(**opened, path, raw));
-  GDALRasterBand* band = (*opened)->GetRasterBand(1);
+  VISVOL_RETURN_IF_ERROR(read_band_values(ds, name, raw));
+  GDALRasterBand* band = ds.GetRasterBand(1);
   int has_scale = 0, has_offset = 0;
   const double scale = band->GetScale(&has_scale);
   const double offset = band->GetOffset(&has_offset);
-
-  if (options.nodata == NodataPolicy::fill && info.has_nodata) {
-    const float nd = static_cast<float>(info.nodata);
-    const std::size_t holes = static_cast<std::size_t>(std::count_if(
-        raw.begin(), raw.end(), [&](float v) { return !std::isfinite(v) || v == nd; }));
+  std::ostringstream msg;
+  // Nodata compares in the type the band was read in.
+  const float nodata = static_cast<float>(info.nodata);
+  auto is_hole = [&](float v) { return !std::isfinite(v) || (info.has_nodata && v == nodata); };
+  if (options.nodata == NodataPolicy::fill) {
+    const std::size_t holes = static_cast<std::size_t>(std::count_if(raw.begin(), raw.end(), is_hole));
     if (holes * 2 > raw.size()) {
-      msg << path << ": " << holes << " of " << raw.size()
+      msg << name << ": " << holes << " of " << raw.size()
           << " posts are nodata; too few to fill from, crop the DEM to its data";
       return invalid_argument(msg.str());
     }
-    if (holes > 0) VISVOL_RETURN_IF_ERROR(fill_nodata(path, info.nx, info.ny, info.nodata, raw));
+    if (holes > 0) {
+      const double fill_value = info.has_nodata ? info.nodata : -3.0e38;
+      VISVOL_RETURN_IF_ERROR(fill_nodata(name, info.nx, info.ny, fill_value, raw));
+    }
   }
+  const double* gt = info.geotransform;
+  const double sx = gt[1], sy = -gt[5];
   Heightfield hf;
   hf.nx = info.nx;
   hf.ny = info.ny;
-  hf.spacing_m = std::sqrt(sx * sy);  // equal within 0.1%, checked above
+  hf.spacing_m = std::sqrt(sx * sy);  // equal within 0.1%, checked by check_metric_grid
   hf.origin_x = gt[0] + 0.5 * sx;     // pixel centre of the north-west pixel
   hf.origin_y = gt[3] - 0.5 * sy;
   hf.crs_wkt = info.crs_wkt;
   hf.height_m.resize(raw.size());
   std::size_t bad = 0, first_bad = 0;
-  // Nodata compares in the type the band was read in.
-  const float nodata = static_cast<float>(info.nodata);
   for (std::size_t n = 0; n < raw.size(); ++n) {
-    const double v = raw[n];
-    if (!std::isfinite(v) || (info.has_nodata && raw[n] == nodata)) {
+    if (is_hole(raw[n])) {
       if (bad++ == 0) first_bad = n;
       continue;
     }
-    const double metres = (v * (has_scale ? scale : 1.0) + (has_offset ? offset : 0.0)) * info.vertical_to_m;
+    const double v = raw[n];
+    const double metres = (v * (has_scale ? scale : 1.0) + (has_offset ? offset : 0.0)) * vertical_to_m;
     hf.height_m[n] = static_cast<float>(metres);
   }
   if (bad > 0) {
-    msg << path << ": " << bad << " posts are nodata or NaN, the first at ("
+    msg << name << ": " << bad << " posts are nodata or NaN, the first at ("
         << first_bad % static_cast<std::size_t>(hf.nx) << ", "
         << first_bad / static_cast<std::size_t>(hf.nx) << ")"
         << (options.nodata == NodataPolicy::fill
                 ? " and lie more than 128 posts from data, too far to fill; crop the DEM"
-                : "; fill them or crop the DEM");
+                : "; fill them (--fill-nodata) or crop the DEM");
     return invalid_argument(msg.str());
   }
-  VISVOL_RETURN_IF_ERROR(validate(hf, path));
+  VISVOL_RETURN_IF_ERROR(validate(hf, name));
   return hf;
+}
+
+Status read_band_values_double(GDALDataset& ds, const std::string& path, std::vector<double>& out) {
+  return read_band_values(ds, path, out);
+}
+
+}  // namespace gdal
+
+using gdal::DatasetPtr;
+using gdal::last_gdal_error;
+using gdal::open_raster;
+using gdal::register_gdal;
+
+Result<DemInfo> read_dem_info(const std::string& path) { return read_dem_info(path, {}); }
+
+Result<DemInfo> read_dem_info(const std::string& path, const std::vector<std::string>& drivers) {
+  Result<DatasetPtr> opened = open_raster(path, drivers);
+  if (!opened.ok()) return opened.status();
+  return gdal::info_of(**opened, path);
+}
+
+Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptions& options) {
+  Result<DatasetPtr> opened = open_raster(path, options.drivers);
+  if (!opened.ok()) return opened.status();
+  Result<DemInfo> info = gdal::info_of(**opened, path);
+  if (!info.ok()) return info.status();
+  VISVOL_RETURN_IF_ERROR(gdal::check_metric_grid(*info, path, options.max_posts));
+  return gdal::to_heightfield(**opened, *info, path, options, info->vertical_to_m);
 }
 
 Result<std::vector<float>> read_raster_like(const std::string& path, const Heightfield& like) {
@@ -276,7 +292,7 @@ Result<std::vector<float>> read_raster_like(const std::string& path, const Heigh
     return invalid_argument(msg.str());
   }
   std::vector<double> raw;
-  VISVOL_RETURN_IF_ERROR(read_band_values(ds, path, raw));
+  VISVOL_RETURN_IF_ERROR(gdal::read_band_values_double(ds, path, raw));
   int has_nodata = 0;
   const double nodata = ds.GetRasterBand(1)->GetNoDataValue(&has_nodata);
   std::vector<float> out(raw.size());
@@ -299,7 +315,7 @@ Result<RasterBand> read_band(const std::string& path) {
   RasterBand band;
   band.nx = ds.GetRasterXSize();
   band.ny = ds.GetRasterYSize();
-  VISVOL_RETURN_IF_ERROR(read_band_values(ds, path, band.value));
+  VISVOL_RETURN_IF_ERROR(gdal::read_band_values_double(ds, path, band.value));
   int has_nodata = 0;
   const double nodata = ds.GetRasterBand(1)->GetNoDataValue(&has_nodata);
   band.valid.resize(band.value.size());

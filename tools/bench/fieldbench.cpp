@@ -22,7 +22,9 @@
 #include <vector>
 
 #include "fields/exact_visibility.hpp"
+#include "fields/gdal/dem_import.hpp"
 #include "fields/gdal/dem_io.hpp"
+#include "storage/pack_build.hpp"
 #include "fields/viewshed.hpp"
 #include "fields/visibility_builder.hpp"
 
@@ -276,6 +278,74 @@ ViewshedFigures bench_viewshed(const std::string& dem_path, const Heightfield& h
   return v;
 }
 
+struct StreamFigures {
+  bool ok = false;
+  int n = 0;
+  double wall_s = 0, rss_mib = 0, pack_mib = 0;
+  std::string error;
+};
+
+// A pack build of a grid far larger than the field's working window: the
+// Taunus DEM resampled to 22.5 m is 2048 x 2048 posts; 128 levels, range 64,
+// three levels of detail. Run in a child so the peak RSS is the build's own.
+StreamFigures bench_stream(const std::string& dem, int threads) {
+  StreamFigures f;
+  int fds[2];
+  if (pipe(fds) != 0) return f;
+  const std::string out = "/tmp/visvol-stream-" + std::to_string(getpid()) + ".vvp";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    struct Result {
+      int ok, n;
+      double wall_s, pack_mib;
+      char error[256];
+    } r{};
+    ImportOptions io;
+    io.spacing_m = 22.5;
+    io.nodata = NodataPolicy::fill;
+    auto hf = import_dem(dem, io);
+    if (!hf.ok()) {
+      std::snprintf(r.error, sizeof r.error, "%s", hf.status().message().c_str());
+    } else {
+      r.n = hf->nx;
+      storage::PackBuildParams p;
+      p.field.nz = 128;
+      p.field.range_posts = 64;
+      p.field.threads = threads;
+      p.lod_levels = 3;
+      storage::PackBuildReport report;
+      const Status st = storage::build_pack(*hf, p, "{}", out, {}, &report);
+      r.ok = st.ok();
+      r.wall_s = report.wall_s;
+      r.pack_mib = static_cast<double>(report.file_bytes) / (1024.0 * 1024.0);
+      if (!st.ok()) std::snprintf(r.error, sizeof r.error, "%s", st.message().c_str());
+    }
+    std::remove(out.c_str());
+    if (write(fds[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(3);
+    _exit(0);
+  }
+  close(fds[1]);
+  struct {
+    int ok, n;
+    double wall_s, pack_mib;
+    char error[256];
+  } r{};
+  const ssize_t got = read(fds[0], &r, sizeof r);
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  f.ok = got == static_cast<ssize_t>(sizeof r) && r.ok;
+  f.n = r.n;
+  f.wall_s = r.wall_s;
+  f.pack_mib = r.pack_mib;
+  f.error = r.error;
+  f.rss_mib = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  std::remove(out.c_str());
+  return f;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -286,6 +356,7 @@ int main(int argc, char** argv) {
   bool json = false;
   bool no_grass = false;
   bool no_exact = false;
+  bool stream = false;
   std::vector<int> ranges{32, 64, 128};
   app.add_option("--dem", dem, "DEM in a metric CRS (512 x 512 for the target)")->capture_default_str();
   app.add_option("--repeat", repeat, "Runs per figure (the median is printed)")->capture_default_str();
@@ -294,6 +365,9 @@ int main(int argc, char** argv) {
   app.add_flag("--json", json, "Print one JSON object");
   app.add_flag("--no-grass", no_grass, "Skip the r.viewshed comparison");
   app.add_flag("--no-exact", no_exact, "Skip the exact-reference timing");
+  app.add_flag("--stream", stream,
+               "Also build a 2048 x 2048 x 128 pack (the DEM resampled to 22.5 m) and report its "
+               "peak RSS (a minute or two)");
   CLI11_PARSE(app, argc, argv);
   if (repeat < 1 || repeat > 100) {
     std::fprintf(stderr, "visvol-fieldbench: --repeat %d is outside 1..100\n", repeat);
@@ -312,6 +386,12 @@ int main(int argc, char** argv) {
   const ExactFigures exact = no_exact ? ExactFigures{} : bench_exact(*hf);
   const int vs_range = 64;
   const ViewshedFigures vs = bench_viewshed(dem, *hf, vs_range, repeat, !no_grass);
+
+  StreamFigures streamed;
+  if (stream) {
+    if (!json) std::fprintf(stderr, "building a 2048 x 2048 x 128 pack...\n");
+    streamed = bench_stream(dem, threads);
+  }
 
   const RangeFigures* r64 = nullptr;
   for (const RangeFigures& f : figures) if (f.range == 64) r64 = &f;
@@ -334,6 +414,11 @@ int main(int argc, char** argv) {
                               {"fast_s", exact.fast_s}, {"exact_s", exact.exact_s},
                               {"ratio", exact.fast_s > 0 ? exact.exact_s / exact.fast_s : 0},
                               {"within_fraction", exact.within}};
+    }
+    if (stream) {
+      j["stream_build"] = {{"ok", streamed.ok}, {"posts", streamed.n}, {"wall_s", streamed.wall_s},
+                           {"peak_rss_mib", streamed.rss_mib}, {"pack_mib", streamed.pack_mib},
+                           {"error", streamed.error}};
     }
     j["viewshed"] = {{"radius_m", vs_range * hf->spacing_m}, {"visvol_s", vs.ours_s},
                      {"rviewshed_s", vs.grass_s}, {"agreement", vs.agreement},
@@ -360,6 +445,16 @@ int main(int argc, char** argv) {
                 "ratio %.0fx; %.2f%% of voxels within the accuracy bracket\n",
                 exact.n, exact.n, exact.nz, exact.range, exact.fast_s, exact.exact_s,
                 exact.fast_s > 0 ? exact.exact_s / exact.fast_s : 0.0, 100.0 * exact.within);
+  }
+  if (stream) {
+    if (streamed.ok) {
+      std::printf("\nstreamed pack build %d x %d x 128, range 64, 3 levels of detail: %.1f s, "
+                  "peak RSS %.0f MiB (target under 1536 MiB: %s), pack %.0f MiB\n",
+                  streamed.n, streamed.n, streamed.wall_s, streamed.rss_mib,
+                  streamed.rss_mib < 1536.0 ? "met" : "NOT met", streamed.pack_mib);
+    } else {
+      std::printf("\nstreamed pack build failed: %s\n", streamed.error.c_str());
+    }
   }
   std::printf("\nviewshed, observer at the grid centre 2 m up, target 0 m, radius %.0f m:\n",
               vs_range * hf->spacing_m);

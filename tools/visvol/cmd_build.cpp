@@ -10,6 +10,8 @@
 #include "fields/gdal/dem_io.hpp"
 #include "fields/pyramid.hpp"
 #include "fields/sampler.hpp"
+#include "import_cli.hpp"
+#include "storage/pack_build.hpp"
 
 namespace visvol::cli {
 
@@ -21,6 +23,11 @@ using fields::LodLevel;
 
 struct BuildOptions {
   std::string dem;
+  std::string out;
+  ImportCli import;
+  std::string encoding = "uint16";
+  double tff_offset_m = 100.0;
+  int tff_levels = 24;
   int levels = 128;
   double ceiling_m = 300.0;
   double eye_m = 2.0;
@@ -28,10 +35,9 @@ struct BuildOptions {
   int range_posts = 64;
   double curvature = 0.0;
   std::string weights;
-  int lod = 1;
+  int lod = 3;
   int threads = 0;
   int exact_rings = 16;
-  bool fill_nodata = false;
   double max_memory_mib = 8192.0;
   bool json = false;
   std::string json_file;
@@ -201,13 +207,60 @@ std::string summary_json(const BuildOptions& o, const Heightfield& hf, const Fie
   return j.dump(2) + "\n";
 }
 
+void print_pack_summary(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
+                        const fields::ImportReport& imported,
+                        const storage::PackBuildReport& report) {
+  const fields::HeightRange hr = fields::height_range(hf);
+  std::printf("DEM        %s (%s, %d x %d)\n", o.dem.c_str(), imported.source.driver.c_str(),
+              imported.source.nx, imported.source.ny);
+  if (!imported.steps.empty()) std::printf("import     %s\n", imported.steps.c_str());
+  std::printf("terrain    %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx, hf.ny,
+              hf.spacing_m, fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
+  std::printf("field      %d levels, range %s %d posts, eye %.2f m, curvature %.5f, %d exact rings\n",
+              p.nz, fields::to_string(p.range_shape), p.range_posts, p.eye_height_m,
+              p.curvature_coeff, p.exact_rings);
+  std::printf("\nlevel  grid         spacing  range      F_p time  Mcells/s/core\n");
+  for (std::size_t l = 0; l < report.levels.size(); ++l) {
+    const double spacing = hf.spacing_m * static_cast<double>(1 << l);
+    char grid[32];
+    std::snprintf(grid, sizeof grid, "%dx%d", hf.nx >> l, hf.ny >> l);
+    std::printf("%5zu  %-11s %6.0f m  %7.0f m  %6.2f s  %13.1f\n", l, grid, spacing,
+                p.range_posts * spacing, report.levels[l].wall_s,
+                report.levels[l].cells_per_s_per_core() / 1e6);
+  }
+  std::printf("\nterrain force field %.2f s (band +-%.0f m, %d levels)\n", report.tff_s,
+              o.tff_offset_m, o.tff_levels);
+  std::printf("pack       %s, %.1f MiB, written in %.2f s\n", o.out.c_str(),
+              static_cast<double>(report.file_bytes) / (1024.0 * 1024.0), report.wall_s);
+}
+
 int run_build(const BuildOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  Result<Heightfield> hf = fields::read_heightfield(
-      o.dem, {o.fill_nodata ? fields::NodataPolicy::fill : fields::NodataPolicy::refuse});
+  fields::ImportReport imported;
+  Result<Heightfield> hf = import(o.dem, o.import, &imported);
   if (!hf.ok()) return fail("build", hf.status());
   Result<FieldParams> params = make_params(o, *hf);
   if (!params.ok()) return fail("build", params.status());
+
+  if (!o.out.empty()) {
+    storage::PackBuildParams pp;
+    pp.field = *params;
+    pp.lod_levels = o.lod;
+    pp.encoding = o.encoding == "float32" ? storage::VisibilityEncoding::float32
+                                          : storage::VisibilityEncoding::uint16;
+    pp.tff.band_offset_m = o.tff_offset_m;
+    pp.tff.band_levels = o.tff_levels;
+    pp.crs_name = fields::crs_name(hf->crs_wkt);
+    storage::PackBuildReport report;
+    Progress progress("building " + o.out);
+    const Status st = storage::build_pack(*hf, pp, source_json(o.dem, o.import, imported), o.out,
+                                          [&](double f) { progress.update(f); }, &report);
+    if (!st.ok()) return fail("build", st);
+    progress.finish();
+    print_pack_summary(o, *hf, *params, imported, report);
+    return kExitOk;
+  }
+
   std::vector<fields::BuildStats> stats;
   Result<std::vector<LodLevel>> levels = [&] {
     Progress progress("building F_p");
@@ -236,9 +289,13 @@ int run_build(const BuildOptions& o) {
 Runner add_build_command(CLI::App& app) {
   auto o = std::make_shared<BuildOptions>();
   CLI::App* c = app.add_subcommand(
-      "build", "Build the visibility field F_p of a DEM and its levels of detail, and print a summary");
-  c->add_option("DEM", o->dem, "Terrain raster in a metric CRS (GeoTIFF, USGS DEM, ESRI/GRASS ASCII, ...)")
+      "build",
+      "Build the visibility field F_p of a DEM, its levels of detail and the terrain force field "
+      "into a field pack (-o), or in memory with a summary only");
+  c->add_option("DEM", o->dem,
+                "Terrain: GeoTIFF, SRTM .hgt, USGS .dem, ESRI or GRASS ASCII grid, DTED")
       ->required();
+  c->add_option("-o,--output", o->out, "Field pack to write (written whole or not at all)");
   c->add_option("--levels", o->levels, "Voxel levels in height (2..255)")->capture_default_str();
   c->add_option("--ceiling", o->ceiling_m, "Height of the top level above the highest post, m")
       ->capture_default_str();
@@ -255,7 +312,15 @@ Runner add_build_command(CLI::App& app) {
   c->add_option("--threads", o->threads, "Worker threads, 0 for all cores")->capture_default_str();
   c->add_option("--exact-rings", o->exact_rings, "Rings around each observer evaluated exactly")
       ->capture_default_str();
-  c->add_flag("--fill-nodata", o->fill_nodata, "Fill nodata holes instead of refusing the DEM");
+  c->add_option("--encoding", o->encoding, "F_p in the pack: uint16 (quantised) or float32")
+      ->check(CLI::IsMember({"uint16", "float32"}))
+      ->capture_default_str();
+  c->add_option("--tff-offset", o->tff_offset_m,
+                "Terrain force field band: this far below and above the terrain, m")
+      ->capture_default_str();
+  c->add_option("--tff-levels", o->tff_levels, "Terrain force field samples per column")
+      ->capture_default_str();
+  add_import_options(c, o->import);
   c->add_option("--max-memory", o->max_memory_mib, "Refuse builds needing more working memory, MiB")
       ->capture_default_str();
   c->add_flag("--json", o->json, "Print the summary as one JSON object");

@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/viewshed.hpp"
+#include "import_cli.hpp"
 
 namespace visvol::cli {
 
@@ -18,13 +19,13 @@ struct ViewshedOptions {
   std::string out;
   std::vector<double> observer;
   fields::ViewshedParams params;
-  bool fill_nodata = false;
+  ImportCli import;
 };
 
 int run_viewshed(ViewshedOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  Result<fields::Heightfield> hf = fields::read_heightfield(
-      o.dem, {o.fill_nodata ? fields::NodataPolicy::fill : fields::NodataPolicy::refuse});
+  fields::ImportReport imported;
+  Result<fields::Heightfield> hf = import(o.dem, o.import, &imported);
   if (!hf.ok()) return fail("viewshed", hf.status());
   o.params.observer_x = o.observer[0];
   o.params.observer_y = o.observer[1];
@@ -56,8 +57,10 @@ Runner add_viewshed_command(CLI::App& app) {
   auto o = std::make_shared<ViewshedOptions>();
   CLI::App* c = app.add_subcommand(
       "viewshed", "Write the viewshed of one observer as a GeoTIFF (same hull as the field)");
-  c->add_option("DEM", o->dem, "Terrain raster in a metric CRS")->required();
-  c->add_option("--observer", o->observer, "Observer position X Y in the DEM's CRS, m")
+  c->add_option("DEM", o->dem, "Terrain: GeoTIFF, SRTM .hgt, USGS .dem, ESRI or GRASS ASCII grid, DTED")
+      ->required();
+  c->add_option("--observer", o->observer,
+                "Observer position X Y in the output CRS (the DEM's, or --t-srs, or its UTM zone), m")
       ->expected(2)
       ->required();
   c->add_option("-o,--output", o->out, "Output GeoTIFF")->required();
@@ -72,7 +75,7 @@ Runner add_viewshed_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--exact-rings", o->params.exact_rings, "Rings evaluated exactly")
       ->capture_default_str();
-  c->add_flag("--fill-nodata", o->fill_nodata, "Fill nodata holes instead of refusing the DEM");
+  add_import_options(c, o->import);
   return [o] { return run_viewshed(*o); };
 }
 

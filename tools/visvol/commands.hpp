@@ -11,5 +11,9 @@ using Runner = std::function<int()>;
 
 Runner add_build_command(CLI::App& app);
 Runner add_viewshed_command(CLI::App& app);
+Runner add_info_command(CLI::App& app);
+Runner add_verify_command(CLI::App& app);
+Runner add_sample_command(CLI::App& app);
+Runner add_export_command(CLI::App& app);
 
 }  // namespace visvol::cli

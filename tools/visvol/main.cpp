@@ -1,7 +1,11 @@
 // visvol: visibility volumes for flight-path planning.
 //
-//   visvol build DEM [options]         build F_p and its levels of detail
+//   visvol build DEM -o PACK [options]  field pack: F_p, levels of detail, terrain force field
+//   visvol info PACK|DEM [--json]
+//   visvol verify PACK
+//   visvol sample PACK [--layer L] [--lod K] < points
 //   visvol viewshed DEM --observer X Y -o OUT.tif
+//   visvol export PACK --layer L --format mhd|vti -o FILE
 //
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
 #include <CLI/CLI.hpp>
@@ -20,7 +24,11 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::map<std::string, Runner> runners;
   runners["build"] = add_build_command(app);
+  runners["info"] = add_info_command(app);
+  runners["verify"] = add_verify_command(app);
+  runners["sample"] = add_sample_command(app);
   runners["viewshed"] = add_viewshed_command(app);
+  runners["export"] = add_export_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

@@ -1,0 +1,51 @@
+// Terrain import: any DEM visvol reads (GeoTIFF, SRTM .hgt, USGS .dem, ESRI
+// and GRASS ASCII grids, DTED) to a heightfield in metres on a square grid in a
+// projected CRS.
+//
+// Geographic DEMs are projected to the UTM zone of their centre (or to the CRS
+// the user gives); non-square pixels and a requested spacing are resampled
+// (bilinear by default); a crop keeps a bounding box; the vertical unit of the
+// source band is honoured (feet become metres); nodata is refused or filled.
+// All through GDAL (gdalwarp and gdal_translate as a library).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "fields/gdal/dem_io.hpp"
+#include "fields/heightfield.hpp"
+#include "rt/base/status.hpp"
+
+namespace visvol::fields {
+
+struct BoundingBox {
+  double xmin, ymin, xmax, ymax;  // in the output CRS, metres
+};
+
+struct ImportOptions {
+  NodataPolicy nodata = NodataPolicy::refuse;
+  std::string target_srs;   // "EPSG:32632", WKT or PROJ; empty: keep a projected CRS, UTM for degrees
+  std::string assume_srs;   // CRS of a file that has none (e.g. an ESRI grid without .prj)
+  double spacing_m = 0;     // output post spacing; 0: keep (or GDAL's choice when projecting)
+  std::optional<BoundingBox> crop;
+  std::string resampling = "bilinear";  // near, bilinear, cubic, average
+  std::size_t max_posts = std::size_t{1} << 28;
+};
+
+Status validate(const ImportOptions& options);
+
+struct ImportReport {
+  DemInfo source;             // the file as it is
+  std::string output_crs;     // name of the output CRS
+  bool warped = false;        // reprojected or resampled
+  bool cropped = false;
+  std::string steps;          // what was done, for people ("projected to WGS 84 / UTM zone 32N ...")
+};
+
+// The UTM zone CRS ("EPSG:326zz" or "EPSG:327zz") for a longitude and latitude.
+std::string utm_srs_for(double lon_deg, double lat_deg);
+
+Result<Heightfield> import_dem(const std::string& path, const ImportOptions& options,
+                               ImportReport* report = nullptr);
+
+}  // namespace visvol::fields

@@ -1,0 +1,152 @@
+#include "fields/terrain_force.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "fields/worker_pool.hpp"
+
+namespace visvol::fields {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+struct Nearest {
+  Vec3 point;
+  double distance2 = std::numeric_limits<double>::infinity();
+};
+
+// Searches the cells whose squares come within `search_m` of q (local frame),
+// nearest cells first, skipping any cell that cannot hold a closer point: its
+// distance is at least the horizontal distance to its square and the vertical
+// gap to its height range.
+Nearest nearest_local(const Heightfield& hf, const Vec3& q, double search_m) {
+  const double s = hf.spacing_m;
+  const int i_lo = std::max(0, static_cast<int>(std::floor((q.x() - search_m) / s)));
+  const int i_hi = std::min(hf.nx - 2, static_cast<int>(std::floor((q.x() + search_m) / s)));
+  const int j_lo = std::max(0, static_cast<int>(std::floor((q.y() - search_m) / s)));
+  const int j_hi = std::min(hf.ny - 2, static_cast<int>(std::floor((q.y() + search_m) / s)));
+  const int ci = std::clamp(static_cast<int>(std::floor(q.x() / s)), i_lo, std::max(i_lo, i_hi));
+  const int cj = std::clamp(static_cast<int>(std::floor(q.y() / s)), j_lo, std::max(j_lo, j_hi));
+  Nearest best;
+  auto visit = [&](int i, int j) {
+    const double gap_x = std::max({0.0, i * s - q.x(), q.x() - (i + 1) * s});
+    const double gap_y = std::max({0.0, j * s - q.y(), q.y() - (j + 1) * s});
+    const double h00 = hf.at(i, j), h10 = hf.at(i + 1, j), h01 = hf.at(i, j + 1), h11 = hf.at(i + 1, j + 1);
+    const double hmax = std::max({h00, h10, h01, h11}), hmin = std::min({h00, h10, h01, h11});
+    const double gap_z = std::max({0.0, q.z() - hmax, hmin - q.z()});
+    if (gap_x * gap_x + gap_y * gap_y + gap_z * gap_z >= best.distance2) return;
+    const Vec3 a{i * s, j * s, h00}, b{(i + 1) * s, j * s, h10};
+    const Vec3 c{(i + 1) * s, (j + 1) * s, h11}, d{i * s, (j + 1) * s, h01};
+    for (const Vec3& p : {closest_on_triangle(q, a, b, c), closest_on_triangle(q, a, c, d)}) {
+      const double d2 = (p - q).squaredNorm();
+      if (d2 < best.distance2) best = {p, d2};
+    }
+  };
+  // Rings of cells around the one under q.
+  const int rings = std::max({ci - i_lo, i_hi - ci, cj - j_lo, j_hi - cj});
+  for (int r = 0; r <= rings; ++r) {
+    // A ring's nearest cell is at least (r - 1) cells away horizontally.
+    const double ring_gap = std::max(0, r - 1) * s;
+    if (ring_gap * ring_gap >= best.distance2) break;
+    for (int j = cj - r; j <= cj + r; ++j) {
+      if (j < j_lo || j > j_hi) continue;
+      const bool edge_row = j == cj - r || j == cj + r;
+      for (int i = ci - r; i <= ci + r; i += edge_row ? 1 : 2 * r) {
+        if (i >= i_lo && i <= i_hi) visit(i, j);
+        if (r == 0) break;
+      }
+    }
+  }
+  return best;
+}
+
+TffSample band_sample(const Heightfield& hf, const TffParams& params, int i, int j, int b) {
+  const double ground = hf.at(i, j);
+  const double z = ground - params.band_offset_m + b * params.step_m();
+  const Vec3 q{i * hf.spacing_m, j * hf.spacing_m, z};
+  // The post below (or above) q is on the surface: the nearest point is no farther.
+  const double bound = std::fabs(z - ground);
+  const Nearest n = nearest_local(hf, q, bound + 1e-9);
+  const bool inside = z < ground;
+  Vec3 e = inside ? Vec3(n.point - q) : Vec3(q - n.point);  // outward, local axes
+  TffSample out;
+  out.dx_m = static_cast<float>(e.x());
+  out.dy_m = static_cast<float>(-e.y());  // local v is south; world y is north
+  out.dz_m = static_cast<float>(e.z());
+  const double dist = std::sqrt(n.distance2);
+  out.signed_distance_m = static_cast<float>(inside ? -dist : dist);
+  return out;
+}
+
+}  // namespace
+
+Status validate(const TffParams& p) {
+  std::ostringstream msg;
+  if (!std::isfinite(p.band_offset_m) || p.band_offset_m <= 0 || p.band_offset_m > 300.0) {
+    msg << "terrain force band offset: " << p.band_offset_m << " m is outside (0, 300] m";
+    return invalid_argument(msg.str());
+  }
+  if (p.band_levels < 2 || p.band_levels > 64) {
+    msg << "terrain force band levels: " << p.band_levels << " is outside 2..64";
+    return invalid_argument(msg.str());
+  }
+  return Status::ok_status();
+}
+
+NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m,
+                                          double search_m) {
+  // World to local: u = x - origin_x, v = origin_y - y.
+  const Vec3 q{q_m.x() - hf.origin_x, hf.origin_y - q_m.y(), q_m.z()};
+  const Nearest n = nearest_local(hf, q, search_m);
+  NearestTerrainPoint out;
+  out.point_m = {n.point.x() + hf.origin_x, hf.origin_y - n.point.y(), n.point.z()};
+  out.distance_m = std::sqrt(n.distance2);
+  return out;
+}
+
+void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
+                        TffSample* out, WorkerPool* pool) {
+  const std::size_t nx = static_cast<std::size_t>(hf.nx);
+  const std::size_t levels = static_cast<std::size_t>(params.band_levels);
+  auto row = [&](int item, int) {
+    const int j = j_begin + item;
+    for (int b = 0; b < params.band_levels; ++b) {
+      TffSample* dst = out + (static_cast<std::size_t>(j - j_begin) * levels + static_cast<std::size_t>(b)) * nx;
+      for (int i = 0; i < hf.nx; ++i) dst[i] = band_sample(hf, params, i, j, b);
+    }
+  };
+  if (pool) {
+    pool->run(j_end - j_begin, row);
+  } else {
+    for (int j = j_begin; j < j_end; ++j) row(j - j_begin, 0);
+  }
+}
+
+}  // namespace visvol::fields

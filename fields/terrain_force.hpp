@@ -1,0 +1,56 @@
+// The terrain force field (paper, Fig. 5): what keeps the rope off the ground.
+//
+// In a band of fixed offset around the terrain, every sample stores its
+// outward displacement from the nearest point of the triangulated terrain
+// (each grid cell split into two triangles along its north-west to south-east
+// diagonal) and its signed distance (negative inside the terrain). The rope
+// turns that into a repulsion along the displacement, strong inside.
+//
+// Band sample b of column (i, j) is at height
+//   post(i, j) - band_offset_m + b * step,  step = 2 * band_offset_m / (band_levels - 1),
+// so the band follows the terrain. Units: metres; displacement in world axes
+// (x east, y north, z up).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "fields/heightfield.hpp"
+#include "rt/base/status.hpp"
+
+namespace visvol::fields {
+
+class WorkerPool;
+
+struct TffParams {
+  double band_offset_m = 100.0;  // band from terrain - offset to terrain + offset
+  int band_levels = 24;          // samples per column (even: no sample sits on a post)
+  double step_m() const { return 2.0 * band_offset_m / (band_levels - 1); }
+};
+
+Status validate(const TffParams& params);
+
+struct TffSample {
+  float dx_m = 0, dy_m = 0, dz_m = 0;  // outward displacement from the nearest terrain point
+  float signed_distance_m = 0;         // |displacement|, negative inside the terrain
+};
+
+struct NearestTerrainPoint {
+  Eigen::Vector3d point_m;  // world x, y and height
+  double distance_m = 0;
+};
+
+// The nearest point of the triangulated terrain to a world point, searching
+// every triangle within `search_m` horizontally (a search radius of at least
+// the true distance gives the exact answer). For tests, pass a radius that
+// covers the grid.
+NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m,
+                                          double search_m);
+
+// The band samples of rows [j_begin, j_end): out[((j - j_begin) * band_levels + b) * nx + i].
+// Each search is bounded by the sample's vertical distance to its own post,
+// which the nearest point can never exceed, so the result is exact.
+void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
+                        TffSample* out, WorkerPool* pool);
+
+}  // namespace visvol::fields

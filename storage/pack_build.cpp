@@ -1,0 +1,267 @@
+#include "storage/pack_build.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <nlohmann/json.hpp>
+
+#include "fields/pyramid.hpp"
+#include "fields/worker_pool.hpp"
+#include "storage/pack_writer.hpp"
+
+#ifndef VISVOL_VERSION
+#define VISVOL_VERSION "unknown"
+#endif
+
+namespace visvol::storage {
+
+namespace {
+
+using fields::Heightfield;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Height or area tiles of one level.
+Status write_2d(PackWriter& w, int level, Layer layer, const Heightfield& hf,
+                const std::vector<float>& values) {
+  const TileGrid g = tile_grid(layer, hf.nx, hf.ny);
+  std::vector<float> tile(static_cast<std::size_t>(kTile2dPosts * kTile2dPosts));
+  for (int ty = 0; ty < g.tiles_y; ++ty) {
+    for (int tx = 0; tx < g.tiles_x; ++tx) {
+      std::fill(tile.begin(), tile.end(), 0.0f);
+      for (int y = 0; y < kTile2dPosts; ++y) {
+        const int j = ty * kTile2dPosts + y;
+        if (j >= hf.ny) break;
+        for (int x = 0; x < kTile2dPosts; ++x) {
+          const int i = tx * kTile2dPosts + x;
+          if (i >= hf.nx) break;
+          tile[static_cast<std::size_t>(y * kTile2dPosts + x)] =
+              values[static_cast<std::size_t>(j) * static_cast<std::size_t>(hf.nx) + static_cast<std::size_t>(i)];
+        }
+      }
+      VISVOL_RETURN_IF_ERROR(w.write_tile(level, layer, tx, ty, tile.data(), tile.size() * sizeof(float)));
+    }
+  }
+  return Status::ok_status();
+}
+
+// Collects field rows into bands of kBrickPosts rows and writes each band's
+// bricks as soon as it is complete.
+class BrickSink final : public fields::VolumeRowSink {
+ public:
+  BrickSink(PackWriter& w, int level, int nx, int ny, int nz, VisibilityEncoding enc)
+      : w_(w), level_(level), nx_(nx), ny_(ny), nz_(nz), enc_(enc),
+        band_(static_cast<std::size_t>(kBrickPosts) * static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx), 0.0f),
+        brick_(w.payload_bytes(level, Layer::visibility)) {}
+
+  Status write_row(int j, const float* values) override {
+    const int y = j % kBrickPosts;
+    for (int k = 0; k < nz_; ++k) {
+      std::memcpy(&band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) * static_cast<std::size_t>(nx_)],
+                  values + static_cast<std::size_t>(k) * static_cast<std::size_t>(nx_),
+                  static_cast<std::size_t>(nx_) * sizeof(float));
+    }
+    if (y == kBrickPosts - 1 || j == ny_ - 1) return flush(j / kBrickPosts, y + 1);
+    return Status::ok_status();
+  }
+
+ private:
+  Status flush(int ty, int rows) {
+    const int tiles_x = tile_grid(Layer::visibility, nx_, ny_).tiles_x;
+    for (int tx = 0; tx < tiles_x; ++tx) {
+      std::fill(brick_.begin(), brick_.end(), std::uint8_t{0});
+      for (int k = 0; k < nz_; ++k) {
+        for (int y = 0; y < rows; ++y) {
+          for (int x = 0; x < kBrickPosts; ++x) {
+            const int i = tx * kBrickPosts + x;
+            if (i >= nx_) break;
+            const float f = band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
+            const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + y) * kBrickPosts + x);
+            if (enc_ == VisibilityEncoding::uint16) {
+              const std::uint16_t q = quantise_visibility(f);
+              std::memcpy(&brick_[index * sizeof q], &q, sizeof q);
+            } else {
+              std::memcpy(&brick_[index * sizeof f], &f, sizeof f);
+            }
+          }
+        }
+      }
+      VISVOL_RETURN_IF_ERROR(w_.write_tile(level_, Layer::visibility, tx, ty, brick_.data(), brick_.size()));
+    }
+    return Status::ok_status();
+  }
+
+  PackWriter& w_;
+  int level_, nx_, ny_, nz_;
+  VisibilityEncoding enc_;
+  std::vector<float> band_;          // kBrickPosts rows of nz x nx values
+  std::vector<std::uint8_t> brick_;  // one encoded brick
+};
+
+std::int16_t to_centimetres(float metres) {
+  const double cm = std::round(static_cast<double>(metres) / kTffUnitM);
+  return static_cast<std::int16_t>(std::clamp(cm, -32767.0, 32767.0));
+}
+
+// Terrain force field bricks of one level, band by band.
+Status write_tff(PackWriter& w, int level, const Heightfield& hf, const fields::TffParams& p,
+                 fields::WorkerPool& pool) {
+  const TileGrid g = tile_grid(Layer::tff, hf.nx, hf.ny);
+  const std::size_t nx = static_cast<std::size_t>(hf.nx);
+  const std::size_t levels = static_cast<std::size_t>(p.band_levels);
+  std::vector<fields::TffSample> band(static_cast<std::size_t>(kBrickPosts) * levels * nx);
+  std::vector<std::int16_t> brick(w.payload_bytes(level, Layer::tff) / sizeof(std::int16_t));
+  for (int ty = 0; ty < g.tiles_y; ++ty) {
+    const int j0 = ty * kBrickPosts, j1 = std::min(hf.ny, j0 + kBrickPosts);
+    fields::terrain_force_rows(hf, p, j0, j1, band.data(), &pool);
+    for (int tx = 0; tx < g.tiles_x; ++tx) {
+      std::fill(brick.begin(), brick.end(), std::int16_t{0});
+      for (int b = 0; b < p.band_levels; ++b) {
+        for (int y = 0; y < j1 - j0; ++y) {
+          for (int x = 0; x < kBrickPosts; ++x) {
+            const int i = tx * kBrickPosts + x;
+            if (i >= hf.nx) break;
+            const fields::TffSample& s = band[(static_cast<std::size_t>(y) * levels + static_cast<std::size_t>(b)) * nx + static_cast<std::size_t>(i)];
+            std::int16_t* dst = &brick[static_cast<std::size_t>(((b * kBrickPosts + y) * kBrickPosts + x) * 4)];
+            dst[0] = to_centimetres(s.dx_m);
+            dst[1] = to_centimetres(s.dy_m);
+            dst[2] = to_centimetres(s.dz_m);
+            dst[3] = to_centimetres(s.signed_distance_m);
+          }
+        }
+      }
+      VISVOL_RETURN_IF_ERROR(w.write_tile(level, Layer::tff, tx, ty, brick.data(), brick.size() * sizeof(std::int16_t)));
+    }
+  }
+  return Status::ok_status();
+}
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std::string& source_json,
+                     const std::vector<fields::LodInput>& inputs, const std::string& crs_name) {
+  nlohmann::json j;
+  j["format"] = "visvol field pack";
+  j["version"] = kPackVersion;
+  j["tool"] = std::string("visvol ") + tool_version();
+  j["created_utc"] = utc_now();
+  j["crs_wkt"] = hf.crs_wkt;
+  j["crs_name"] = crs_name;
+  // GDAL geotransform of level 0's pixels (post (0, 0) is the first pixel's centre).
+  j["geotransform"] = {hf.origin_x - 0.5 * hf.spacing_m, hf.spacing_m, 0.0,
+                       hf.origin_y + 0.5 * hf.spacing_m, 0.0, -hf.spacing_m};
+  j["vertical_unit"] = "metre";
+  j["source"] = source_json.empty() ? nlohmann::json::object() : nlohmann::json::parse(source_json);
+  const fields::FieldParams& f = p.field;
+  j["build"] = {{"nz", f.nz},
+                {"ceiling_m", f.ceiling_m},
+                {"eye_height_m", f.eye_height_m},
+                {"range_shape", fields::to_string(f.range_shape)},
+                {"range_posts", f.range_posts},
+                {"curvature_coeff", f.curvature_coeff},
+                {"exact_rings", f.exact_rings},
+                {"weights", !f.weights.empty()},
+                {"levels_of_detail", p.lod_levels},
+                {"visibility_encoding", p.encoding == VisibilityEncoding::uint16 ? "uint16" : "float32"},
+                {"tff_band_offset_m", p.tff.band_offset_m},
+                {"tff_band_levels", p.tff.band_levels}};
+  for (const fields::LodInput& in : inputs) {
+    j["levels"].push_back({{"nx", in.terrain.nx},
+                           {"ny", in.terrain.ny},
+                           {"spacing_m", in.terrain.spacing_m},
+                           {"range_m", f.range_posts * in.terrain.spacing_m}});
+  }
+  return j.dump(2);
+}
+
+}  // namespace
+
+const char* tool_version() { return VISVOL_VERSION; }
+
+Status build_pack(const Heightfield& hf, const PackBuildParams& params,
+                  const std::string& source_json, const std::string& out_path,
+                  const fields::ProgressFn& progress, PackBuildReport* report) {
+  const auto t0 = Clock::now();
+  VISVOL_RETURN_IF_ERROR(fields::validate(params.tff));
+  if (params.lod_levels < 1 || params.lod_levels > kMaxLevels) {
+    return invalid_argument("levels of detail: " + std::to_string(params.lod_levels) + " is outside 1.." +
+                            std::to_string(kMaxLevels));
+  }
+  if (!source_json.empty() && !nlohmann::json::accept(source_json)) {
+    return invalid_argument("pack source description is not valid JSON");
+  }
+  Result<std::vector<fields::LodInput>> inputs = fields::lod_inputs(hf, params.field, params.lod_levels);
+  if (!inputs.ok()) return inputs.status();
+  // Check every level's memory plan before writing anything.
+  for (const fields::LodInput& in : *inputs) {
+    Result<fields::BuildPlan> plan = fields::plan_visibility_build(in.terrain, in.params);
+    if (!plan.ok()) return plan.status();
+  }
+  PackLayout layout;
+  layout.encoding = params.encoding;
+  layout.band_levels = params.tff.band_levels;
+  layout.band_offset_m = params.tff.band_offset_m;
+  for (const fields::LodInput& in : *inputs) {
+    const fields::VolumeGeometry g = fields::volume_geometry(in.terrain, in.params);
+    LevelEntry e{};
+    e.nx = g.nx;
+    e.ny = g.ny;
+    e.nz = g.nz;
+    e.range_posts = in.params.range_shape == fields::RangeShape::none ? 0 : in.params.range_posts;
+    e.spacing_m = g.spacing_m;
+    e.origin_x = g.origin_x;
+    e.origin_y = g.origin_y;
+    e.z0_m = g.z0_m;
+    e.dz_m = g.dz_m;
+    layout.levels.push_back(e);
+  }
+  Result<std::unique_ptr<PackWriter>> writer = PackWriter::create(out_path, layout);
+  if (!writer.ok()) return writer.status();
+  PackWriter& w = **writer;
+
+  // Progress: the field is most of the work; the terrain force field the rest.
+  double total = 0, done = 0;
+  for (const fields::LodInput& in : *inputs) total += static_cast<double>(in.terrain.size());
+  fields::WorkerPool pool(params.field.threads);
+  PackBuildReport local;
+  for (std::size_t l = 0; l < inputs->size(); ++l) {
+    const fields::LodInput& in = (*inputs)[l];
+    const int level = static_cast<int>(l);
+    const double share = static_cast<double>(in.terrain.size()) / total;
+    VISVOL_RETURN_IF_ERROR(write_2d(w, level, Layer::height, in.terrain, in.terrain.height_m));
+    VISVOL_RETURN_IF_ERROR(write_2d(w, level, Layer::area, in.terrain, fields::area_factor(in.terrain)));
+    BrickSink sink(w, level, in.terrain.nx, in.terrain.ny, in.params.nz, params.encoding);
+    fields::BuildStats stats;
+    Status st = fields::build_visibility(in.terrain, in.params, sink,
+                                         [&](double f) {
+                                           if (progress) progress(done + share * 0.9 * f);
+                                         },
+                                         &stats);
+    if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
+    local.levels.push_back(stats);
+    const auto t_tff = Clock::now();
+    VISVOL_RETURN_IF_ERROR(write_tff(w, level, in.terrain, params.tff, pool));
+    local.tff_s += seconds_since(t_tff);
+    done += share;
+    if (progress) progress(done);
+  }
+  VISVOL_RETURN_IF_ERROR(w.finish(metadata(hf, params, source_json, *inputs, params.crs_name)));
+  local.file_bytes = w.file_bytes();
+  local.wall_s = seconds_since(t0);
+  if (report) *report = local;
+  return Status::ok_status();
+}
+
+}  // namespace visvol::storage

@@ -1,0 +1,302 @@
+#include "storage/pack_reader.hpp"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "storage/crc32c.hpp"
+
+namespace visvol::storage {
+
+namespace {
+
+bool within(std::uint64_t offset, std::uint64_t bytes, std::uint64_t size) {
+  return offset <= size && bytes <= size - offset;
+}
+
+}  // namespace
+
+Pack::~Pack() {
+  if (base_) ::munmap(const_cast<std::uint8_t*>(base_), static_cast<std::size_t>(size_));
+}
+
+std::string Pack::describe(const TileEntry& t) {
+  const char* layer = t.layer < kLayerCount ? to_string(static_cast<Layer>(t.layer)) : "unknown-layer";
+  std::ostringstream s;
+  s << layer << " tile (" << t.tx << ", " << t.ty << ") of level " << t.level;
+  return s.str();
+}
+
+Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path) {
+  std::shared_ptr<Pack> pack(new Pack());
+  pack->path_ = path;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return io_error(path + ": " + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int e = errno;
+    ::close(fd);
+    return io_error(path + ": " + std::strerror(e));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return io_error(path + ": not a regular file");
+  }
+  pack->size_ = static_cast<std::uint64_t>(st.st_size);
+  if (pack->size_ < sizeof(PackHeader)) {
+    ::close(fd);
+    return corrupt(path + ": " + std::to_string(pack->size_) +
+                   " bytes, smaller than a pack header; not a visvol pack or truncated");
+  }
+  void* map = ::mmap(nullptr, static_cast<std::size_t>(pack->size_), PROT_READ, MAP_SHARED, fd, 0);
+  ::close(fd);  // the mapping keeps the file
+  if (map == MAP_FAILED) return io_error(path + ": cannot map: " + std::strerror(errno));
+  pack->base_ = static_cast<const std::uint8_t*>(map);
+  VISVOL_RETURN_IF_ERROR(pack->validate_structure());
+  VISVOL_RETURN_IF_ERROR(pack->parse_metadata());
+  return std::shared_ptr<const Pack>(std::move(pack));
+}
+
+Status Pack::validate_structure() {
+  header_ = reinterpret_cast<const PackHeader*>(base_);
+  const PackHeader& h = *header_;
+  std::ostringstream msg;
+  msg << path_ << ": ";
+  auto bad = [&](const std::string& what) { return corrupt(msg.str() + what); };
+  if (std::memcmp(h.magic, kPackMagic, sizeof h.magic) != 0) return bad("not a visvol pack (bad magic)");
+  if (h.version != kPackVersion) {
+    return Status(Errc::unsupported, msg.str() + "pack version " + std::to_string(h.version) +
+                                         ", this build reads version " + std::to_string(kPackVersion));
+  }
+  if (crc32c(&h, offsetof(PackHeader, header_crc32c)) != h.header_crc32c) {
+    return bad("header checksum mismatch");
+  }
+  if (h.file_bytes != size_) {
+    return bad(h.file_bytes > size_ ? "truncated: " + std::to_string(size_) + " bytes, the header says " +
+                                          std::to_string(h.file_bytes)
+                                    : "file is " + std::to_string(size_) + " bytes, the header says " +
+                                          std::to_string(h.file_bytes));
+  }
+  if (h.header_bytes != sizeof(PackHeader) || h.page_bytes != kPageBytes ||
+      h.level_entry_bytes != sizeof(LevelEntry) || h.tile_entry_bytes != sizeof(TileEntry) ||
+      h.tile2d_posts != static_cast<std::uint32_t>(kTile2dPosts) ||
+      h.brick_posts != static_cast<std::uint32_t>(kBrickPosts)) {
+    return bad("header sizes (header, page, entry, tile) do not match this format");
+  }
+  if (h.level_count < 1 || h.level_count > static_cast<std::uint32_t>(kMaxLevels)) {
+    return bad("level_count " + std::to_string(h.level_count) + " is outside 1.." + std::to_string(kMaxLevels));
+  }
+  if (h.visibility_encoding > 1) return bad("visibility_encoding " + std::to_string(h.visibility_encoding) + " is unknown");
+  if (h.band_levels < 2 || h.band_levels > static_cast<std::uint32_t>(kMaxBandLevels) ||
+      !(h.band_offset_m > 0 && h.band_offset_m <= kMaxBandOffsetM)) {
+    return bad("terrain force band (" + std::to_string(h.band_levels) + " levels, offset " +
+               std::to_string(h.band_offset_m) + " m) is out of range");
+  }
+  const std::uint64_t level_bytes = std::uint64_t{h.level_count} * sizeof(LevelEntry);
+  if (h.level_table_offset % 8 != 0 || !within(h.level_table_offset, level_bytes, size_)) {
+    return bad("level table (offset " + std::to_string(h.level_table_offset) + ") is outside the file");
+  }
+  if (h.tile_count > size_ / sizeof(TileEntry) || h.tile_table_offset % 8 != 0 ||
+      h.tile_table_offset != h.level_table_offset + level_bytes ||
+      !within(h.tile_table_offset, h.tile_count * sizeof(TileEntry), size_)) {
+    return bad("tile table (offset " + std::to_string(h.tile_table_offset) + ", " +
+               std::to_string(h.tile_count) + " tiles) is outside the file");
+  }
+  if (h.metadata_offset != h.tile_table_offset + h.tile_count * sizeof(TileEntry) ||
+      !within(h.metadata_offset, h.metadata_bytes, size_) ||
+      h.metadata_offset + h.metadata_bytes != size_) {
+    return bad("metadata (offset " + std::to_string(h.metadata_offset) + ", " +
+               std::to_string(h.metadata_bytes) + " bytes) is outside the file");
+  }
+  if (crc32c(base_ + h.level_table_offset, size_ - h.level_table_offset) != h.tables_crc32c) {
+    return bad("table or metadata checksum mismatch");
+  }
+  levels_ = reinterpret_cast<const LevelEntry*>(base_ + h.level_table_offset);
+  tiles_ = reinterpret_cast<const TileEntry*>(base_ + h.tile_table_offset);
+
+  std::uint64_t expected_first = 0;
+  for (std::uint32_t l = 0; l < h.level_count; ++l) {
+    const LevelEntry& e = levels_[l];
+    const std::string name = "level " + std::to_string(l) + ": ";
+    if (e.nx < 2 || e.ny < 2 || e.nx > 32768 || e.ny > 32768 || e.nz < 2 || e.nz > kMaxVoxelLevels) {
+      return bad(name + "grid " + std::to_string(e.nx) + " x " + std::to_string(e.ny) + " x " +
+                 std::to_string(e.nz) + " is out of range");
+    }
+    if (!(e.spacing_m > 0) || !std::isfinite(e.spacing_m) || !(e.dz_m > 0) || !std::isfinite(e.dz_m) ||
+        !std::isfinite(e.z0_m) || !std::isfinite(e.origin_x) || !std::isfinite(e.origin_y)) {
+      return bad(name + "spacing, origin or level heights are not finite positive numbers");
+    }
+    if (e.first_tile != expected_first) {
+      return bad(name + "first_tile " + std::to_string(e.first_tile) + ", expected " + std::to_string(expected_first));
+    }
+    expected_first += tiles_in_level(e.nx, e.ny);
+  }
+  if (expected_first != h.tile_count) {
+    return bad("tile_count " + std::to_string(h.tile_count) + ", the levels need " + std::to_string(expected_first));
+  }
+  // every tile entry: identity, alignment, size, inside the tile area
+  std::uint64_t n = 0;
+  for (std::uint32_t l = 0; l < h.level_count; ++l) {
+    const LevelEntry& e = levels_[l];
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const TileGrid g = tile_grid(static_cast<Layer>(layer), e.nx, e.ny);
+      const std::uint64_t bytes = round_up_to_page(
+          tile_payload_bytes(static_cast<Layer>(layer), e.nz, encoding(), static_cast<int>(h.band_levels)));
+      for (int ty = 0; ty < g.tiles_y; ++ty) {
+        for (int tx = 0; tx < g.tiles_x; ++tx, ++n) {
+          const TileEntry& t = tiles_[n];
+          if (t.level != l || t.layer != layer || t.tx != tx || t.ty != ty) {
+            return bad("tile entry " + std::to_string(n) + " is " + describe(t) + ", expected " +
+                       to_string(static_cast<Layer>(layer)) + " tile (" + std::to_string(tx) + ", " +
+                       std::to_string(ty) + ") of level " + std::to_string(l));
+          }
+          if (t.bytes != bytes || t.offset % kPageBytes != 0 || t.offset < kPageBytes ||
+              !within(t.offset, t.bytes, h.level_table_offset)) {
+            return bad(describe(t) + ": offset " + std::to_string(t.offset) + " or size " +
+                       std::to_string(t.bytes) + " is invalid");
+          }
+        }
+      }
+    }
+  }
+  return Status::ok_status();
+}
+
+Status Pack::parse_metadata() {
+  const char* text = reinterpret_cast<const char*>(base_ + header_->metadata_offset);
+  metadata_.json.assign(text, static_cast<std::size_t>(header_->metadata_bytes));
+  try {
+    const nlohmann::json j = nlohmann::json::parse(metadata_.json);
+    if (!j.is_object()) return corrupt(path_ + ": metadata is not a JSON object");
+    auto str = [&](const char* key) {
+      return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
+    };
+    metadata_.crs_wkt = str("crs_wkt");
+    metadata_.crs_name = str("crs_name");
+    metadata_.tool = str("tool");
+    if (j.contains("source") && j["source"].is_object()) {
+      const nlohmann::json& s = j["source"];
+      if (s.contains("path") && s["path"].is_string()) metadata_.source_path = s["path"];
+      if (s.contains("sha256") && s["sha256"].is_string()) metadata_.source_sha256 = s["sha256"];
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return corrupt(path_ + ": metadata is not valid JSON: " + e.what());
+  }
+  return Status::ok_status();
+}
+
+fields::VolumeGeometry Pack::geometry(int level) const {
+  const LevelEntry& e = levels_[level];
+  fields::VolumeGeometry g;
+  g.nx = e.nx;
+  g.ny = e.ny;
+  g.nz = e.nz;
+  g.spacing_m = e.spacing_m;
+  g.origin_x = e.origin_x;
+  g.origin_y = e.origin_y;
+  g.z0_m = e.z0_m;
+  g.dz_m = e.dz_m;
+  return g;
+}
+
+const TileEntry& Pack::tile(int level, Layer layer, int tx, int ty) const {
+  const LevelEntry& e = levels_[level];
+  return tiles_[e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny)];
+}
+
+Status Pack::verify_tile(const TileEntry& t) const {
+  if (crc32c(base_ + t.offset, t.bytes) != t.crc32c) {
+    return corrupt(path_ + ": " + describe(t) + ": checksum mismatch");
+  }
+  return Status::ok_status();
+}
+
+Status Pack::verify_level(int level) const {
+  const LevelEntry& e = levels_[level];
+  const std::uint64_t end = e.first_tile + tiles_in_level(e.nx, e.ny);
+  for (std::uint64_t n = e.first_tile; n < end; ++n) VISVOL_RETURN_IF_ERROR(verify_tile(tiles_[n]));
+  return Status::ok_status();
+}
+
+Status Pack::verify(const std::function<void(double)>& progress) const {
+  const std::uint64_t count = header_->tile_count;
+  for (std::uint64_t n = 0; n < count; ++n) {
+    VISVOL_RETURN_IF_ERROR(verify_tile(tiles_[n]));
+    if (progress && (n % 64 == 0 || n + 1 == count)) progress(double(n + 1) / double(count));
+  }
+  return Status::ok_status();
+}
+
+Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level) {
+  if (level < 0 || level >= pack->level_count()) {
+    return invalid_argument(pack->path() + ": no level of detail " + std::to_string(level) + " (it has " +
+                            std::to_string(pack->level_count()) + ")");
+  }
+  VISVOL_RETURN_IF_ERROR(pack->verify_level(level));
+  PackLevel v;
+  v.pack_ = pack;
+  v.level_ = level;
+  v.geometry_ = pack->geometry(level);
+  v.tff_ = pack->tff_params();
+  v.quantised_ = pack->encoding() == VisibilityEncoding::uint16;
+  const LevelEntry& e = pack->level(level);
+  auto collect = [&](Layer layer, std::vector<const std::uint8_t*>& out, int& tiles_x) {
+    const TileGrid g = tile_grid(layer, e.nx, e.ny);
+    tiles_x = g.tiles_x;
+    out.resize(static_cast<std::size_t>(g.count()));
+    for (int ty = 0; ty < g.tiles_y; ++ty)
+      for (int tx = 0; tx < g.tiles_x; ++tx)
+        out[static_cast<std::size_t>(ty * g.tiles_x + tx)] = pack->tile_data(pack->tile(level, layer, tx, ty));
+  };
+  int unused = 0;
+  collect(Layer::height, v.height_, v.tiles2d_x_);
+  collect(Layer::area, v.area_, unused);
+  collect(Layer::visibility, v.visibility_, v.bricks_x_);
+  collect(Layer::tff, v.tff_tiles_, unused);
+  return v;
+}
+
+namespace {
+template <typename T>
+T read_at(const std::uint8_t* tile, std::size_t index) {
+  T v;
+  std::memcpy(&v, tile + index * sizeof(T), sizeof(T));
+  return v;
+}
+}  // namespace
+
+float PackLevel::post(int i, int j) const {
+  const std::uint8_t* t = height_[static_cast<std::size_t>((j / kTile2dPosts) * tiles2d_x_ + i / kTile2dPosts)];
+  return read_at<float>(t, static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
+}
+
+float PackLevel::area(int i, int j) const {
+  const std::uint8_t* t = area_[static_cast<std::size_t>((j / kTile2dPosts) * tiles2d_x_ + i / kTile2dPosts)];
+  return read_at<float>(t, static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
+}
+
+float PackLevel::voxel(int i, int j, int k) const {
+  const std::uint8_t* t = visibility_[static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts)];
+  const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts);
+  return quantised_ ? dequantise_visibility(read_at<std::uint16_t>(t, index)) : read_at<float>(t, index);
+}
+
+fields::TffSample PackLevel::tff(int i, int j, int b) const {
+  const std::uint8_t* t = tff_tiles_[static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts)];
+  const std::size_t index = static_cast<std::size_t>(((b * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts) * 4);
+  fields::TffSample s;
+  s.dx_m = static_cast<float>(read_at<std::int16_t>(t, index) * kTffUnitM);
+  s.dy_m = static_cast<float>(read_at<std::int16_t>(t, index + 1) * kTffUnitM);
+  s.dz_m = static_cast<float>(read_at<std::int16_t>(t, index + 2) * kTffUnitM);
+  s.signed_distance_m = static_cast<float>(read_at<std::int16_t>(t, index + 3) * kTffUnitM);
+  return s;
+}
+
+}  // namespace visvol::storage

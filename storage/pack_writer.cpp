@@ -1,0 +1,220 @@
+#include "storage/pack_writer.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "rt/base/atomic_file.hpp"
+#include "storage/crc32c.hpp"
+
+namespace visvol::storage {
+
+const char* to_string(Layer layer) {
+  switch (layer) {
+    case Layer::height: return "height";
+    case Layer::area: return "area";
+    case Layer::visibility: return "visibility";
+    case Layer::tff: return "tff";
+  }
+  return "unknown";
+}
+
+Status validate(const PackLayout& layout) {
+  std::ostringstream msg;
+  if (layout.levels.empty() || layout.levels.size() > static_cast<std::size_t>(kMaxLevels)) {
+    msg << "pack: " << layout.levels.size() << " levels of detail, 1.." << kMaxLevels << " allowed";
+    return invalid_argument(msg.str());
+  }
+  if (layout.band_levels < 2 || layout.band_levels > kMaxBandLevels ||
+      !(layout.band_offset_m > 0 && layout.band_offset_m <= kMaxBandOffsetM)) {
+    msg << "pack: terrain force band of " << layout.band_levels << " levels over +-"
+        << layout.band_offset_m << " m is outside 2.." << kMaxBandLevels << " levels, (0, "
+        << kMaxBandOffsetM << "] m";
+    return invalid_argument(msg.str());
+  }
+  for (std::size_t l = 0; l < layout.levels.size(); ++l) {
+    const LevelEntry& e = layout.levels[l];
+    if (e.nx < 2 || e.ny < 2 || e.nx > 32768 || e.ny > 32768 || e.nz < 2 ||
+        e.nz > kMaxVoxelLevels || !(e.spacing_m > 0) || !std::isfinite(e.spacing_m) ||
+        !(e.dz_m > 0) || !std::isfinite(e.dz_m) || !std::isfinite(e.z0_m) ||
+        !std::isfinite(e.origin_x) || !std::isfinite(e.origin_y)) {
+      msg << "pack: level " << l << " has an invalid grid (" << e.nx << " x " << e.ny << " x "
+          << e.nz << ", spacing " << e.spacing_m << " m, dz " << e.dz_m << " m)";
+      return invalid_argument(msg.str());
+    }
+  }
+  return Status::ok_status();
+}
+
+PackWriter::PackWriter(std::string path, std::string temp, int fd, PackLayout layout)
+    : path_(std::move(path)), temp_(std::move(temp)), fd_(fd), layout_(std::move(layout)) {}
+
+PackWriter::~PackWriter() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!finished_) discard_file(temp_);
+}
+
+Status PackWriter::fail(Status status) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  discard_file(temp_);
+  return status;
+}
+
+std::size_t PackWriter::payload_bytes(int level, Layer layer) const {
+  return tile_payload_bytes(layer, layout_.levels[static_cast<std::size_t>(level)].nz,
+                            layout_.encoding, layout_.band_levels);
+}
+
+Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout) {
+  VISVOL_RETURN_IF_ERROR(validate(layout));
+  const std::string temp = temp_path_for(path);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return io_error(path + ": cannot create " + temp + ": " + std::strerror(errno));
+  std::unique_ptr<PackWriter> w(new PackWriter(path, temp, fd, std::move(layout)));
+  // Every tile's place: level, layer, ty, tx order, each on its own pages.
+  std::uint64_t offset = kPageBytes;  // after the header
+  for (std::size_t l = 0; l < w->layout_.levels.size(); ++l) {
+    LevelEntry& level = w->layout_.levels[l];
+    level.first_tile = w->tiles_.size();
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const TileGrid g = tile_grid(static_cast<Layer>(layer), level.nx, level.ny);
+      const std::size_t bytes = round_up_to_page(w->payload_bytes(static_cast<int>(l), static_cast<Layer>(layer)));
+      for (int ty = 0; ty < g.tiles_y; ++ty) {
+        for (int tx = 0; tx < g.tiles_x; ++tx) {
+          TileEntry t{};
+          t.offset = offset;
+          t.bytes = static_cast<std::uint32_t>(bytes);
+          t.level = static_cast<std::uint16_t>(l);
+          t.layer = static_cast<std::uint16_t>(layer);
+          t.tx = static_cast<std::uint16_t>(tx);
+          t.ty = static_cast<std::uint16_t>(ty);
+          w->tiles_.push_back(t);
+          offset += bytes;
+        }
+      }
+    }
+  }
+  w->written_.assign(w->tiles_.size(), 0);
+  w->tables_offset_ = offset;
+  return w;
+}
+
+namespace {
+
+Status pwrite_all(int fd, const void* data, std::size_t bytes, std::uint64_t offset,
+                  const std::string& path) {
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::pwrite(fd, p, bytes, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return io_error(path + ": write failed: " + std::strerror(errno));
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+    offset += static_cast<std::uint64_t>(n);
+  }
+  return Status::ok_status();
+}
+
+}  // namespace
+
+Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void* payload,
+                              std::size_t bytes) {
+  if (fd_ < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
+  if (level < 0 || level >= static_cast<int>(layout_.levels.size())) {
+    return invalid_argument(path_ + ": no level " + std::to_string(level));
+  }
+  const LevelEntry& e = layout_.levels[static_cast<std::size_t>(level)];
+  const TileGrid g = tile_grid(layer, e.nx, e.ny);
+  if (tx < 0 || ty < 0 || tx >= g.tiles_x || ty >= g.tiles_y) {
+    return invalid_argument(path_ + ": no " + to_string(layer) + " tile (" + std::to_string(tx) +
+                            ", " + std::to_string(ty) + ") at level " + std::to_string(level));
+  }
+  if (bytes != payload_bytes(level, layer)) {
+    return invalid_argument(path_ + ": " + to_string(layer) + " tile of " + std::to_string(bytes) +
+                            " bytes, expected " + std::to_string(payload_bytes(level, layer)));
+  }
+  const std::size_t index = static_cast<std::size_t>(e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny));
+  TileEntry& t = tiles_[index];
+  // The page padding is zeros: checksum the whole tile as stored.
+  std::uint32_t crc = crc32c(payload, bytes);
+  const std::size_t pad = t.bytes - bytes;
+  if (pad > 0) {
+    static const std::uint8_t zeros[kPageBytes] = {};
+    crc = crc32c(zeros, pad, crc);
+    Status st = pwrite_all(fd_, zeros, pad, t.offset + bytes, temp_);
+    if (!st.ok()) return fail(st);
+  }
+  Status st = pwrite_all(fd_, payload, bytes, t.offset, temp_);
+  if (!st.ok()) return fail(st);
+  t.crc32c = crc;
+  written_[index] = 1;
+  return Status::ok_status();
+}
+
+Status PackWriter::finish(const std::string& metadata_json) {
+  if (fd_ < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
+  for (std::size_t n = 0; n < tiles_.size(); ++n) {
+    if (!written_[n]) {
+      const TileEntry& t = tiles_[n];
+      return fail(Status(Errc::state, path_ + ": " + to_string(static_cast<Layer>(t.layer)) +
+                                          " tile (" + std::to_string(t.tx) + ", " +
+                                          std::to_string(t.ty) + ") of level " +
+                                          std::to_string(t.level) + " was never written"));
+    }
+  }
+  // tables and metadata, contiguous after the tiles
+  std::vector<std::uint8_t> tables;
+  auto append = [&](const void* p, std::size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    tables.insert(tables.end(), b, b + n);
+  };
+  append(layout_.levels.data(), layout_.levels.size() * sizeof(LevelEntry));
+  append(tiles_.data(), tiles_.size() * sizeof(TileEntry));
+  append(metadata_json.data(), metadata_json.size());
+  Status st = pwrite_all(fd_, tables.data(), tables.size(), tables_offset_, temp_);
+  if (!st.ok()) return fail(st);
+
+  PackHeader h{};
+  std::memcpy(h.magic, kPackMagic, sizeof h.magic);
+  h.version = kPackVersion;
+  h.header_bytes = sizeof(PackHeader);
+  h.page_bytes = kPageBytes;
+  h.level_count = static_cast<std::uint32_t>(layout_.levels.size());
+  h.level_table_offset = tables_offset_;
+  h.level_entry_bytes = sizeof(LevelEntry);
+  h.tile_entry_bytes = sizeof(TileEntry);
+  h.tile_table_offset = tables_offset_ + layout_.levels.size() * sizeof(LevelEntry);
+  h.tile_count = tiles_.size();
+  h.metadata_offset = h.tile_table_offset + tiles_.size() * sizeof(TileEntry);
+  h.metadata_bytes = metadata_json.size();
+  h.file_bytes = h.metadata_offset + h.metadata_bytes;
+  h.tile2d_posts = kTile2dPosts;
+  h.brick_posts = kBrickPosts;
+  h.visibility_encoding = static_cast<std::uint32_t>(layout_.encoding);
+  h.band_levels = static_cast<std::uint32_t>(layout_.band_levels);
+  h.band_offset_m = layout_.band_offset_m;
+  h.tables_crc32c = crc32c(tables.data(), tables.size());
+  h.header_crc32c = crc32c(&h, offsetof(PackHeader, header_crc32c));
+  st = pwrite_all(fd_, &h, sizeof h, 0, temp_);
+  if (!st.ok()) return fail(st);
+  if (::ftruncate(fd_, static_cast<off_t>(h.file_bytes)) != 0) {
+    return fail(io_error(temp_ + ": cannot set size: " + std::strerror(errno)));
+  }
+  file_bytes_ = h.file_bytes;
+  if (::close(fd_) != 0) {
+    fd_ = -1;
+    return fail(io_error(temp_ + ": close failed: " + std::strerror(errno)));
+  }
+  fd_ = -1;
+  st = commit_file(temp_, path_);
+  if (!st.ok()) return st;
+  finished_ = true;
+  return Status::ok_status();
+}
+
+}  // namespace visvol::storage

@@ -1,0 +1,185 @@
+// The visvol command as users run it: exit statuses, messages, outputs.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace {
+
+struct Outcome {
+  int status = -1;
+  std::string out, err;
+};
+
+// Runs visvol with `args` (shell words), optional stdin text.
+Outcome visvol(const std::string& args, const std::string& input = "") {
+  const std::string dir = ::testing::TempDir();
+  const std::string tag = std::to_string(getpid());
+  const std::string in = dir + "/cli_in_" + tag, out = dir + "/cli_out_" + tag, err = dir + "/cli_err_" + tag;
+  std::ofstream(in) << input;
+  const std::string cmd = std::string(VISVOL_BIN) + " " + args + " <" + in + " >" + out + " 2>" + err;
+  const int rc = std::system(cmd.c_str());
+  Outcome r;
+  r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  std::ifstream o(out), e(err);
+  std::stringstream so, se;
+  so << o.rdbuf();
+  se << e.rdbuf();
+  r.out = so.str();
+  r.err = se.str();
+  for (const std::string& f : {in, out, err}) std::remove(f.c_str());
+  return r;
+}
+
+const std::string kDem = std::string(VISVOL_TEST_DATA) + "/sf_north_utm10_30m.tif";
+// A hilly 40 x 40 window of it (pixel edges on the 30 m grid).
+const std::string kCrop = "--crop 549975 4181565 551175 4182765";
+
+class Cli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    pack_ = new std::string(::testing::TempDir() + "/cli_" + std::to_string(getpid()) + ".vvp");
+    const Outcome r = visvol("build " + kDem + " " + kCrop +
+                         " --levels 16 --range 8 --lod 2 --tff-offset 60 --tff-levels 6 -o " + *pack_);
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  static void TearDownTestSuite() {
+    std::remove(pack_->c_str());
+    delete pack_;
+  }
+  static std::string* pack_;
+};
+std::string* Cli::pack_ = nullptr;
+
+TEST(CliUsage, HelpListsCommandsAndExitsZero) {
+  const Outcome r = visvol("--help");
+  EXPECT_EQ(r.status, 0);
+  for (const char* c : {"build", "info", "verify", "sample", "viewshed", "export"}) {
+    EXPECT_NE(r.out.find(c), std::string::npos) << c;
+  }
+  for (const char* c : {"build", "info", "verify", "sample", "viewshed", "export"}) {
+    const Outcome h = visvol(std::string(c) + " --help");
+    EXPECT_EQ(h.status, 0) << c;
+    EXPECT_NE(h.out.find("Usage"), std::string::npos) << c;
+  }
+}
+
+TEST(CliUsage, BadArgumentsExitTwoWithOneLine) {
+  for (const char* args : {"", "build", "frobnicate", "build x.tif --levels abc", "sample"}) {
+    const Outcome r = visvol(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
+  }
+}
+
+TEST(CliUsage, BadInputNamesTheFile) {
+  const Outcome r = visvol("build /nonexistent/dem.tif -o /tmp/never.vvp");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("/nonexistent/dem.tif"), std::string::npos);
+  const Outcome levels = visvol("build " + kDem + " " + kCrop + " --levels 400 -o /tmp/never.vvp");
+  EXPECT_EQ(levels.status, 2);
+  EXPECT_NE(levels.err.find("levels: 400"), std::string::npos) << levels.err;
+  EXPECT_NE(access("/tmp/never.vvp", F_OK), 0);
+}
+
+TEST_F(Cli, InfoJsonHasTheGeoreference) {
+  const Outcome r = visvol("info " + *pack_ + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["nx"], 40);
+  EXPECT_EQ(j["ny"], 40);
+  EXPECT_EQ(j["nz"], 16);
+  EXPECT_DOUBLE_EQ(j["cell_size_m"].get<double>(), 30.0);
+  EXPECT_DOUBLE_EQ(j["origin_x"].get<double>(), 549990.0);  // centre of the north-west pixel
+  EXPECT_DOUBLE_EQ(j["origin_y"].get<double>(), 4182750.0);
+  EXPECT_EQ(j["levels_of_detail"], 2);
+  EXPECT_NE(j["crs_wkt"].get<std::string>().find("UTM zone 10N"), std::string::npos);
+  EXPECT_EQ(j["build"]["range_posts"], 8);
+  for (const char* key : {"z0_m", "dz_m", "source"}) EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["source"]["sha256"].get<std::string>().size(), 64u);
+}
+
+TEST_F(Cli, InfoDescribesADem) {
+  const Outcome r = visvol("info " + kDem + " --fill-nodata");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("370 x 466 posts, 30.00 m spacing"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("heights 0.0..343.0 m"), std::string::npos);
+}
+
+TEST_F(Cli, VerifyPassesThenNamesTheCorruptTile) {
+  EXPECT_EQ(visvol("verify " + *pack_).status, 0);
+  const std::string bad = *pack_ + ".bad";
+  {
+    std::ifstream in(*pack_, std::ios::binary);
+    std::vector<char> bytes{std::istreambuf_iterator<char>(in), {}};
+    bytes[4096 + 17] ^= 1;  // inside the first tile: level 0's first height tile
+    std::ofstream(bad, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  const Outcome r = visvol("verify " + bad);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("height tile (0, 0) of level 0"), std::string::npos) << r.err;
+  std::remove(bad.c_str());
+}
+
+TEST_F(Cli, SampleAnswersLineByLine) {
+  const std::string points =
+      "550500 4182000 200\n"
+      "550500 4182000 5000\n"
+      "not a point\n"
+      "1 2 3\n";
+  const Outcome r = visvol("sample " + *pack_, points);
+  EXPECT_EQ(r.status, 2);  // two bad lines
+  std::istringstream lines(r.out);
+  std::string a, b, c, d;
+  ASSERT_TRUE(std::getline(lines, a) && std::getline(lines, b) && std::getline(lines, c) &&
+              std::getline(lines, d));
+  EXPECT_GT(std::stod(b), 0.0);  // high above everything sees a lot
+  EXPECT_GE(std::stod(b), std::stod(a));
+  EXPECT_EQ(c, "nan");
+  EXPECT_EQ(d, "nan");
+  EXPECT_NE(r.err.find("line 3"), std::string::npos);
+  EXPECT_NE(r.err.find("line 4"), std::string::npos);
+  EXPECT_NE(r.err.find("outside the pack"), std::string::npos);
+  const Outcome g = visvol("sample " + *pack_ + " --layer gradient", "550500 4182000 200\n");
+  EXPECT_EQ(g.status, 0);
+  std::istringstream parts(g.out);
+  double gx, gy, gz;
+  EXPECT_TRUE(parts >> gx >> gy >> gz);
+  const Outcome h = visvol("sample " + *pack_ + " --layer height --lod 1", "550500 4182000 0\n");
+  EXPECT_EQ(h.status, 0);
+  EXPECT_GT(std::stod(h.out), 0.0);
+  EXPECT_EQ(visvol("sample " + *pack_ + " --layer fp", "").status, 2);
+  EXPECT_EQ(visvol("sample " + *pack_ + " --lod 7", "").status, 2);
+}
+
+TEST_F(Cli, ExportWritesAVolume) {
+  const std::string out = *pack_ + ".mhd";
+  const Outcome r = visvol("export " + *pack_ + " --layer visibility --format mhd -o " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(out);
+  std::string first;
+  std::getline(in, first);
+  EXPECT_EQ(first, "ObjectType = Image");
+  std::remove(out.c_str());
+  EXPECT_EQ(visvol("export " + *pack_ + " --layer visibility --format nrrd -o " + out).status, 2);
+}
+
+TEST(CliViewshed, WritesAGeoTiff) {
+  const std::string out = ::testing::TempDir() + "/cli_vs_" + std::to_string(getpid()) + ".tif";
+  const Outcome r = visvol("viewshed " + kDem + " " + kCrop + " --observer 550500 4182000 -o " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("visible"), std::string::npos);
+  EXPECT_EQ(access(out.c_str(), R_OK), 0);
+  std::remove(out.c_str());
+  const Outcome outside = visvol("viewshed " + kDem + " " + kCrop + " --observer 0 0 -o " + out);
+  EXPECT_EQ(outside.status, 2);
+  EXPECT_NE(outside.err.find("outside the DEM"), std::string::npos);
+}
+
+}  // namespace

@@ -187,8 +187,8 @@ TEST_F(PackFile, TruncationHeaderAndTableDamageAreNamed) {
     const char* expect;
   };
   const std::vector<Case> cases = {
-      {"truncated", [](std::vector<char>& b) { b.resize(b.size() - 5000); }, "truncated"},
-      {"tiny", [](std::vector<char>& b) { b.resize(100); }, "smaller than a pack header"},
+      {"truncated", [](std::vector<char>& b) { b.erase(b.end() - 5000, b.end()); }, "truncated"},
+      {"tiny", [](std::vector<char>& b) { b.erase(b.begin() + 100, b.end()); }, "smaller than a pack header"},
       {"magic", [](std::vector<char>& b) { b[0] = 'X'; }, "not a visvol pack"},
       {"header", [](std::vector<char>& b) { b[40] ^= 1; }, "header checksum"},
       {"metadata", [](std::vector<char>& b) { b[b.size() - 3] ^= 1; }, "table or metadata checksum"},

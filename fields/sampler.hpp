@@ -74,22 +74,49 @@ class FieldSampler {
   }
 
   // grad F_p at (x, y, z), per metre; zero at and below the terrain.
+  // The voxel gradients of the cell's eight corners, interpolated; each
+  // column's first level above the terrain is found once for the query.
   Eigen::Vector3d gradient(double x, double y, double z) const {
     const VolumeGeometry& g = level_.geometry();
-    if (z <= height(x, y)) return Eigen::Vector3d::Zero();
+    const Cell c = cell_xy(x, y);
+    const double ground = lerp(lerp(post(c.i, c.j), post(c.i + 1, c.j), c.fi),
+                               lerp(post(c.i, c.j + 1), post(c.i + 1, c.j + 1), c.fi), c.fj);
+    if (z <= ground) return Eigen::Vector3d::Zero();
     const double gk = (z - g.z0_m) / g.dz_m;
     if (gk < 0) return Eigen::Vector3d::Zero();
-    const Cell c = cell_xy(x, y);
     const double kc = std::min(gk, static_cast<double>(g.nz - 1));
     const int k = std::min(static_cast<int>(kc), g.nz - 2);
     const double fk = kc - k;
+    // first level above the terrain for columns i-1..i+2, j-1..j+2 (nz outside)
+    int first_above[4][4];
+    for (int b = 0; b < 4; ++b) {
+      for (int a = 0; a < 4; ++a) {
+        const int i = c.i - 1 + a, j = c.j - 1 + b;
+        first_above[b][a] = (i < 0 || j < 0 || i >= g.nx || j >= g.ny)
+                                ? g.nz
+                                : static_cast<int>(std::floor((post(i, j) - g.z0_m) / g.dz_m)) + 1;
+      }
+    }
+    auto above = [&](int a, int b, int kk) { return kk >= 0 && kk < g.nz && kk >= first_above[b][a]; };
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int dk = 0; dk < 2; ++dk) {
       for (int dj = 0; dj < 2; ++dj) {
         for (int di = 0; di < 2; ++di) {
           const double w = (di ? c.fi : 1 - c.fi) * (dj ? c.fj : 1 - c.fj) * (dk ? fk : 1 - fk);
-          if (w == 0) continue;
-          sum += w * voxel_gradient(c.i + di, c.j + dj, k + dk);
+          const int a = 1 + di, b = 1 + dj, kk = k + dk;  // corner in the 4 x 4 block
+          if (w == 0 || !above(a, b, kk)) continue;
+          const int i = c.i + di, j = c.j + dj;
+          const double v = voxel(i, j, kk);
+          auto diff = [&](int ba, int bb, int bk, int fa, int fb, int fkk, int bi, int bj, int fi, int fj,
+                          double step) {
+            if (above(ba, bb, bk)) return (v - voxel(bi, bj, bk)) / step;
+            if (above(fa, fb, fkk)) return (voxel(fi, fj, fkk) - v) / step;
+            return 0.0;
+          };
+          const double gx = diff(a - 1, b, kk, a + 1, b, kk, i - 1, j, i + 1, j, g.spacing_m);
+          const double gy = -diff(a, b - 1, kk, a, b + 1, kk, i, j - 1, i, j + 1, g.spacing_m);
+          const double gz = diff(a, b, kk - 1, a, b, kk + 1, i, j, i, j, g.dz_m);
+          sum += w * Eigen::Vector3d(gx, gy, gz);
         }
       }
     }

@@ -141,8 +141,10 @@ Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
   // Holes are filled from their edges up to this far; wider ones stay and are
   // reported (and a far search over a sparse raster would take hours).
   const double search = std::min(std::max(nx, ny), kMaxFillDistancePosts);
-  if (GDALFillNodata(GDALRasterBand::ToHandle(band), nullptr, search, 0, 0, nullptr, nullptr,
-                     nullptr) != CE_None ||
+  // Its work rasters stay in memory: nothing is written to the working directory.
+  const char* fill_options[] = {"TEMP_FILE_DRIVER=MEM", nullptr};
+  if (GDALFillNodata(GDALRasterBand::ToHandle(band), nullptr, search, 0, 0,
+                     const_cast<char**>(fill_options), nullptr, nullptr) != CE_None ||
       band->RasterIO(GF_Read, 0, 0, nx, ny, raw.data(), nx, ny, GDT_Float32, 0, 0) != CE_None) {
     return io_error(path + ": filling nodata failed: " + last_gdal_error());
   }

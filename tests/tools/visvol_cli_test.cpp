@@ -170,6 +170,55 @@ TEST_F(Cli, ExportWritesAVolume) {
   EXPECT_EQ(visvol("export " + *pack_ + " --layer visibility --format nrrd -o " + out).status, 2);
 }
 
+TEST_F(Cli, PlanWritesThePathInFourFormats) {
+  const std::string base = *pack_ + "_plan";
+  const Outcome r = visvol("plan " + *pack_ +
+                           " --from 550100 4182600 250 --to 551050 4181700 250 --objective hide"
+                           " --init straight --segments 32 --max-seconds 5 --json -o " + base);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json summary = nlohmann::json::parse(r.out);
+  EXPECT_LT(summary["fc_end"].get<double>(), summary["fc_start"].get<double>());
+  EXPECT_GE(summary["min_clearance_m"].get<double>(), 30.0);
+  auto slurp = [](const std::string& f) {
+    std::ifstream in(f);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  const nlohmann::json gj = nlohmann::json::parse(slurp(base + ".geojson"));
+  const nlohmann::json& coords = gj["features"][0]["geometry"]["coordinates"];
+  EXPECT_EQ(gj["features"][0]["geometry"]["type"], "LineString");
+  ASSERT_EQ(coords.size(), 33u);
+  EXPECT_NEAR(coords[0][0].get<double>(), -122.43, 0.1);  // San Francisco, WGS84 longitude
+  EXPECT_NEAR(coords[0][1].get<double>(), 37.79, 0.1);
+  EXPECT_DOUBLE_EQ(coords[0][2].get<double>(), 250.0);
+  const nlohmann::json plan = nlohmann::json::parse(slurp(base + ".plan"));
+  EXPECT_EQ(plan["fileType"], "Plan");
+  EXPECT_EQ(plan["mission"]["items"].size(), 33u);
+  EXPECT_EQ(plan["mission"]["items"][0]["frame"], 0);  // MAV_FRAME_GLOBAL: above mean sea level
+  EXPECT_EQ(plan["mission"]["items"][0]["command"], 16);
+  const std::string kml = slurp(base + ".kml");
+  EXPECT_NE(kml.find("<altitudeMode>absolute</altitudeMode>"), std::string::npos);
+  const std::string csv = slurp(base + ".csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);
+  for (const char* ext : {".geojson", ".csv", ".kml", ".plan"}) std::remove((base + ext).c_str());
+}
+
+TEST_F(Cli, PlanRefusesBadRequests) {
+  const std::string base = *pack_ + "_bad";
+  const std::string ok_ends = " --from 550100 4182600 250 --to 551050 4181700 250";
+  for (const std::string& args :
+       {std::string(" --from 1 2 250 --to 551050 4181700 250 --objective hide"),
+        ok_ends + " --objective sideways", ok_ends + " --objective hide --segments 0",
+        ok_ends + " --objective hide --init /nonexistent/path.txt",
+        std::string(" --from 550100 4182600 -900 --to 551050 4181700 250 --objective hide")}) {
+    const Outcome r = visvol("plan " + *pack_ + args + " -o " + base);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
+  }
+  EXPECT_NE(access((base + ".csv").c_str(), F_OK), 0);
+}
+
 TEST(CliViewshed, WritesAGeoTiff) {
   const std::string out = ::testing::TempDir() + "/cli_vs_" + std::to_string(getpid()) + ".tif";
   const Outcome r = visvol("viewshed " + kDem + " " + kCrop + " --observer 550500 4182000 -o " + out);

@@ -6,6 +6,7 @@
 //   visvol sample PACK [--layer L] [--lod K] < points
 //   visvol viewshed DEM --observer X Y -o OUT.tif
 //   visvol export PACK --layer L --format mhd|vti -o FILE
+//   visvol plan PACK --from X Y Z --to X Y Z --objective hide|show -o OUT
 //
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
 #include <CLI/CLI.hpp>
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   runners["sample"] = add_sample_command(app);
   runners["viewshed"] = add_viewshed_command(app);
   runners["export"] = add_export_command(app);
+  runners["plan"] = add_plan_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

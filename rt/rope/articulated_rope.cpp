@@ -1,0 +1,355 @@
+#include "rt/rope/articulated_rope.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace visvol::rt {
+
+namespace {
+
+Eigen::Matrix3d cross_matrix(const Vec3& r) {
+  Eigen::Matrix3d m;
+  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  return m;
+}
+
+// The unit quaternion of rotation vector w (its exponential map).
+Eigen::Quaterniond exp_map(const Vec3& w) {
+  const double angle = w.norm();
+  if (angle < 1e-12) return Eigen::Quaterniond(1, 0.5 * w.x(), 0.5 * w.y(), 0.5 * w.z()).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle));
+}
+
+// The rotation vector of a unit quaternion, angle in [0, pi].
+Vec3 log_map(Eigen::Quaterniond q) {
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const Vec3 v = q.vec();
+  const double s = v.norm();
+  if (s < 1e-12) return 2.0 * v;
+  return v * (2.0 * std::atan2(s, q.w()) / s);
+}
+
+}  // namespace
+
+ArticulatedRope::ArticulatedRope(const RopeParams& params) : p_(params) {
+  const std::size_t n = static_cast<std::size_t>(p_.max_segments);
+  x_.resize(n);
+  v_.resize(n);
+  w_.resize(n);
+  force_.resize(n);
+  torque_.resize(n);
+  q_.resize(n, Eigen::Quaterniond::Identity());
+  inv_inertia_.resize(n);
+  sample_acc_.resize(2 * n + 1);
+  joints_.resize(n + 1);
+  d_inv_.resize(n + 1);
+  upper_.resize(n + 1);
+  lower_.resize(n + 1);
+  rhs_.resize(n + 1);
+  lambda_.resize(n + 1);
+  vertices_.resize(n + 1);
+}
+
+Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
+  if (segments < 1 || segments > p_.max_segments) {
+    return invalid_argument("rope: " + std::to_string(segments) + " segments is outside 1.." +
+                            std::to_string(p_.max_segments));
+  }
+  VISVOL_RETURN_IF_ERROR(resample_polyline(polyline, points, segments, vertices_.data()));
+  n_ = segments;
+  double total = 0;
+  for (int i = 0; i < n_; ++i) total += (vertices_[static_cast<std::size_t>(i) + 1] - vertices_[static_cast<std::size_t>(i)]).norm();
+  half_m_ = 0.5 * total / n_;
+  if (!(half_m_ > 0)) return invalid_argument("rope: the polyline has no length");
+  const double len = 2 * half_m_, r = p_.capsule_radius_m, m = p_.mass_kg;
+  // A solid cylinder along body z.
+  inertia_body_ = {m * (3 * r * r + len * len) / 12.0, m * (3 * r * r + len * len) / 12.0, m * r * r / 2.0};
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Vec3 a = vertices_[k], b = vertices_[k + 1];
+    x_[k] = 0.5 * (a + b);
+    const Vec3 dir = b - a;
+    q_[k] = dir.norm() > 0 ? Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), dir) : Eigen::Quaterniond::Identity();
+    v_[k] = w_[k] = Vec3::Zero();
+  }
+  ends_.start_m = polyline[0];
+  ends_.end_m = polyline[points - 1];
+  grasp_active_ = false;
+  // Equal capsules on a bent polyline leave small gaps: close them.
+  for (int it = 0; it < 6; ++it) {
+    build_joints();
+    if (joint_count_ == 0) break;
+    factor_chain();
+    for (int k = 0; k < joint_count_; ++k) rhs_[static_cast<std::size_t>(k)] = -joint_error(joints_[static_cast<std::size_t>(k)]);
+    solve_chain();
+    apply_impulses(true);
+  }
+  update_vertices();
+  return Status::ok_status();
+}
+
+Eigen::Matrix3d ArticulatedRope::inverse_inertia_world(int i) const {
+  const Eigen::Matrix3d r = q_[static_cast<std::size_t>(i)].toRotationMatrix();
+  return r * inertia_body_.cwiseInverse().asDiagonal() * r.transpose();
+}
+
+Vec3 ArticulatedRope::attachment_point(const Attachment& at, const Vec3& anchor) const {
+  return at.body < 0 ? anchor : x_[static_cast<std::size_t>(at.body)] + at.r;
+}
+
+Vec3 ArticulatedRope::joint_error(const Joint& j) const {
+  return attachment_point(j.a, j.anchor) - attachment_point(j.b, j.anchor);
+}
+
+Vec3 ArticulatedRope::joint_velocity(const Joint& j) const {
+  auto vel = [&](const Attachment& at) {
+    if (at.body < 0) return Vec3(Vec3::Zero());
+    const std::size_t b = static_cast<std::size_t>(at.body);
+    return Vec3(v_[b] + w_[b].cross(at.r));
+  };
+  return vel(j.a) - vel(j.b);
+}
+
+void ArticulatedRope::refresh_attachments() {
+  for (int k = 0; k < joint_count_; ++k) {
+    Joint& j = joints_[static_cast<std::size_t>(k)];
+    for (Attachment* at : {&j.a, &j.b}) {
+      if (at->body < 0) continue;
+      // The a side of a joint is a capsule's end b, the b side a capsule's end a
+      // (the start anchor's a side is capsule 0's end a).
+      const bool at_end_b = (at == &j.a) && !(ends_.start_fixed && k == 0);
+      const Vec3 end = at_end_b ? end_b(at->body) : end_a(at->body);
+      at->r = end - x_[static_cast<std::size_t>(at->body)];
+    }
+  }
+}
+
+void ArticulatedRope::build_joints() {
+  int k = 0;
+  auto at = [&](int body, const Vec3& point, double sign) {
+    return Attachment{body, point - x_[static_cast<std::size_t>(body)], sign};
+  };
+  if (ends_.start_fixed) joints_[static_cast<std::size_t>(k++)] = Joint{at(0, end_a(0), 1.0), Attachment{-1, Vec3::Zero(), -1.0}, ends_.start_m};
+  for (int i = 0; i + 1 < n_; ++i) {
+    joints_[static_cast<std::size_t>(k++)] = Joint{at(i, end_b(i), 1.0), at(i + 1, end_a(i + 1), -1.0), Vec3::Zero()};
+  }
+  if (ends_.end_fixed) {
+    joints_[static_cast<std::size_t>(k++)] = Joint{at(n_ - 1, end_b(n_ - 1), 1.0), Attachment{-1, Vec3::Zero(), -1.0}, ends_.end_m};
+  }
+  joint_count_ = k;
+  for (int i = 0; i < n_; ++i) inv_inertia_[static_cast<std::size_t>(i)] = inverse_inertia_world(i);
+}
+
+void ArticulatedRope::factor_chain() {
+  const double inv_m = 1.0 / p_.mass_kg;
+  // K(r1, r2) for two attachments on one body: s1 s2 (I/m - [r1]x I^-1 [r2]x).
+  auto coupling = [&](const Attachment& s, const Attachment& t) {
+    const Eigen::Matrix3d& ii = inv_inertia_[static_cast<std::size_t>(s.body)];
+    return Eigen::Matrix3d(s.sign * t.sign * (inv_m * Eigen::Matrix3d::Identity() - cross_matrix(s.r) * ii * cross_matrix(t.r)));
+  };
+  auto diagonal = [&](const Joint& j) {
+    Eigen::Matrix3d d = Eigen::Matrix3d::Zero();
+    if (j.a.body >= 0) d += coupling(j.a, j.a);
+    if (j.b.body >= 0) d += coupling(j.b, j.b);
+    return d;
+  };
+  // Joints k and k + 1 share one body: the b side of k is the a side of k + 1.
+  auto off_diagonal = [&](const Joint& j, const Joint& next) {
+    if (j.b.body >= 0 && j.b.body == next.a.body) return coupling(j.b, next.a);
+    if (j.a.body >= 0 && j.a.body == next.a.body) return coupling(j.a, next.a);  // start anchor, then body 0
+    return Eigen::Matrix3d(Eigen::Matrix3d::Zero());
+  };
+  // block LDU: d_inv_ holds the pivots' inverses, lower_ the multipliers
+  for (int k = 0; k < joint_count_; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    Eigen::Matrix3d d = diagonal(joints_[kk]);
+    if (k > 0) {
+      lower_[kk] = upper_[kk - 1].transpose() * d_inv_[kk - 1];  // A(k, k-1) D(k-1)^-1
+      d -= lower_[kk] * upper_[kk - 1];
+    }
+    d_inv_[kk] = d.inverse();
+    upper_[kk] = k + 1 < joint_count_ ? off_diagonal(joints_[kk], joints_[kk + 1]) : Eigen::Matrix3d::Zero();
+  }
+}
+
+void ArticulatedRope::solve_chain() {
+  for (int k = 1; k < joint_count_; ++k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    rhs_[kk] -= lower_[kk] * rhs_[kk - 1];
+  }
+  for (int k = joint_count_ - 1; k >= 0; --k) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    Vec3 y = rhs_[kk];
+    if (k + 1 < joint_count_) y -= upper_[kk] * lambda_[kk + 1];
+    lambda_[kk] = d_inv_[kk] * y;
+  }
+}
+
+void ArticulatedRope::apply_impulses(bool positions) {
+  const double inv_m = 1.0 / p_.mass_kg;
+  for (int k = 0; k < joint_count_; ++k) {
+    const Joint& j = joints_[static_cast<std::size_t>(k)];
+    const Vec3& l = lambda_[static_cast<std::size_t>(k)];
+    for (const Attachment* at : {&j.a, &j.b}) {
+      if (at->body < 0) continue;
+      const std::size_t b = static_cast<std::size_t>(at->body);
+      const Vec3 impulse = at->sign * l;
+      const Vec3 spin = inv_inertia_[b] * at->r.cross(impulse);
+      if (positions) {
+        x_[b] += inv_m * impulse;
+        q_[b] = (exp_map(spin) * q_[b]).normalized();
+      } else {
+        v_[b] += inv_m * impulse;
+        w_[b] += spin;
+      }
+    }
+  }
+}
+
+void ArticulatedRope::accumulate_forces(const RopeEnvironment& env) {
+  // the field at the capsule ends and middles (ends are shared)
+  for (int i = 0; i < n_; ++i) {
+    sample_acc_[2 * static_cast<std::size_t>(i)] = env.acceleration(end_a(i));
+    sample_acc_[2 * static_cast<std::size_t>(i) + 1] = env.acceleration(x_[static_cast<std::size_t>(i)]);
+  }
+  sample_acc_[2 * static_cast<std::size_t>(n_)] = env.acceleration(end_b(n_ - 1));
+  const double m = p_.mass_kg;
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Vec3& acc_a = sample_acc_[2 * k];
+    const Vec3& acc_m = sample_acc_[2 * k + 1];
+    const Vec3& acc_b = sample_acc_[2 * k + 2];
+    // Simpson's rule: the average over the capsule and the moment about its centre.
+    force_[k] = m * (acc_a + 4.0 * acc_m + acc_b) / 6.0;
+    torque_[k] = m * half_m_ / 6.0 * axis(i).cross(acc_b - acc_a);
+  }
+  if (grasp_active_) {
+    const std::size_t g = static_cast<std::size_t>(grasp_segment_);
+    const Vec3 p = point(grasp_segment_, grasp_fraction_);
+    force_[g] += grasp_force_n_;
+    torque_[g] += (p - x_[g]).cross(grasp_force_n_);
+  }
+}
+
+void ArticulatedRope::add_joint_springs() {
+  for (int i = 0; i + 1 < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    // relative rotation of capsule i + 1 seen from capsule i
+    const Vec3 theta = log_map(q_[k].conjugate() * q_[k + 1]);
+    const Vec3 twist = theta.z() * Vec3::UnitZ();
+    const Vec3 swing = theta - twist;
+    const Vec3 spring = q_[k] * (-(p_.bend_stiffness_nm * swing + p_.twist_stiffness_nm * twist));
+    // Damping of the relative spin, split like the springs: the axial inertia
+    // is far smaller than the bending one and needs its own, smaller, damping.
+    const Vec3 rel = w_[k + 1] - w_[k];
+    const Vec3 ax = axis(i);
+    const Vec3 rel_twist = rel.dot(ax) * ax;
+    const Vec3 damping = -p_.joint_damping_nms * (rel - rel_twist) - p_.twist_damping_nms * rel_twist;
+    torque_[k + 1] += spring + damping;
+    torque_[k] -= spring + damping;
+  }
+}
+
+void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
+  if (n_ == 0) return;
+  accumulate_forces(env);
+  add_joint_springs();
+  // velocities: semi-implicit Euler with implicit viscous damping
+  const double lin = 1.0 / (1.0 + p_.linear_damping_per_s * dt);
+  const double ang = 1.0 / (1.0 + p_.angular_damping_per_s * dt);
+  build_joints();
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    v_[k] = (v_[k] + dt / p_.mass_kg * force_[k]) * lin;
+    w_[k] = (w_[k] + dt * (inv_inertia_[k] * torque_[k])) * ang;
+  }
+  // joint impulses: relative velocity at every joint to -beta * gap / dt
+  constexpr double kBaumgarte = 0.2;
+  if (joint_count_ > 0) {
+    factor_chain();  // reused by the projections below: the configuration barely moves in a step
+    for (int k = 0; k < joint_count_; ++k) {
+      const Joint& j = joints_[static_cast<std::size_t>(k)];
+      rhs_[static_cast<std::size_t>(k)] = -joint_velocity(j) - (kBaumgarte / dt) * joint_error(j);
+    }
+    solve_chain();
+    apply_impulses(false);
+  }
+  // positions and orientations
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    x_[k] += dt * v_[k];
+    q_[k] = (exp_map(dt * w_[k]) * q_[k]).normalized();
+  }
+  // project away what the linearisation left open (with this step's factors)
+  for (int it = 0; it < p_.projection_iterations && joint_count_ > 0; ++it) {
+    refresh_attachments();
+    for (int k = 0; k < joint_count_; ++k) rhs_[static_cast<std::size_t>(k)] = -joint_error(joints_[static_cast<std::size_t>(k)]);
+    solve_chain();
+    apply_impulses(true);
+  }
+  update_vertices();
+}
+
+void ArticulatedRope::update_vertices() {
+  for (int i = 0; i < n_; ++i) vertices_[static_cast<std::size_t>(i)] = end_a(i);
+  vertices_[static_cast<std::size_t>(n_)] = end_b(n_ - 1);
+}
+
+double ArticulatedRope::kinetic_energy_j() const {
+  double e = 0;
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Eigen::Matrix3d r = q_[k].toRotationMatrix();
+    const Vec3 wb = r.transpose() * w_[k];
+    e += 0.5 * p_.mass_kg * v_[k].squaredNorm() + 0.5 * wb.dot(inertia_body_.cwiseProduct(wb));
+  }
+  return e;
+}
+
+Vec3 ArticulatedRope::point(int segment, double fraction) const {
+  segment = std::clamp(segment, 0, n_ - 1);
+  return x_[static_cast<std::size_t>(segment)] + (2.0 * fraction - 1.0) * half_m_ * axis(segment);
+}
+
+Vec3 ArticulatedRope::point_velocity(int segment, double fraction) const {
+  segment = std::clamp(segment, 0, n_ - 1);
+  const std::size_t k = static_cast<std::size_t>(segment);
+  return v_[k] + w_[k].cross(point(segment, fraction) - x_[k]);
+}
+
+void ArticulatedRope::set_point_force(int segment, double fraction, const Vec3& force_n) {
+  grasp_active_ = true;
+  grasp_segment_ = std::clamp(segment, 0, std::max(n_ - 1, 0));
+  grasp_fraction_ = std::clamp(fraction, 0.0, 1.0);
+  grasp_force_n_ = force_n;
+}
+
+bool ArticulatedRope::pay_out_at_start() {
+  if (n_ == 0 || n_ >= p_.max_segments) return false;
+  // The new capsule leaves the spool along the first capsule; the rest moves on.
+  const Vec3 dir = axis(0);
+  const Vec3 shift = 2.0 * half_m_ * dir;
+  for (int i = n_; i > 0; --i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    x_[k] = x_[k - 1] + shift;
+    q_[k] = q_[k - 1];
+    v_[k] = v_[k - 1];
+    w_[k] = w_[k - 1];
+  }
+  x_[0] = ends_.start_m + half_m_ * dir;
+  v_[0] = w_[0] = Vec3::Zero();
+  ++n_;
+  if (grasp_active_) ++grasp_segment_;
+  update_vertices();
+  return true;
+}
+
+double ArticulatedRope::max_joint_gap_m() const {
+  double gap = 0;
+  for (int i = 0; i + 1 < n_; ++i) gap = std::max(gap, (end_b(i) - end_a(i + 1)).norm());
+  if (n_ > 0 && ends_.start_fixed) gap = std::max(gap, (end_a(0) - ends_.start_m).norm());
+  if (n_ > 0 && ends_.end_fixed) gap = std::max(gap, (end_b(n_ - 1) - ends_.end_m).norm());
+  return gap;
+}
+
+}  // namespace visvol::rt

@@ -1,0 +1,230 @@
+// The force field on the rope (paper, equation 1), from one level of detail:
+//
+//   G = k1 grad F_p + k2 TFF + clearance + hidden-from + visible-to (+ the
+//       operator's grasp force, applied to the rope directly)
+//
+// Accelerations are in m/s^2, scaled so that gains near 1 move a rope across
+// the terrain in seconds whatever the terrain: the field gradient is divided
+// by a reference gradient of the level (its 90th percentile above the ground,
+// saturating at three times that) and everything is multiplied by a reference
+// acceleration (spacing / 0.1 s^2).
+// k1 < 0 hides, k1 > 0 shows.
+//
+// Terrain force field: inside the terrain a strong push out along the
+// outward displacement; in the band above it (1 - d / offset)^2 along it;
+// nothing beyond the band.
+// Clearance: within a margin (a fifth of it, at least 1 m) above
+// `clearance_m`, a push up ramping to k_c times the saturated visibility pull
+// half way down the margin and up to eight times that below, so a hiding rope
+// settles above it. It outranks the hidden-from push, which fades out within
+// the margin.
+// Hidden from / visible to a point: the point's visibility hull (the lowest
+// visible height over every column, like a viewshed) is computed once; the
+// rope is pushed down where it is above the hull of a point it must stay
+// hidden from, up where it is below the hull of a point it must stay visible
+// to, ramping in over `hull_margin_m`.
+//
+// `Level` is a sampler level (DenseLevelView, storage::PackLevel, or the
+// executive's resident tiles). acceleration(), visibility() and
+// terrain_height_m() are real-time safe; building the hulls is not.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "fields/hull_kernel.hpp"
+#include "fields/sampler.hpp"
+#include "rt/rope/path_metrics.hpp"
+#include "rt/rope/rope.hpp"
+
+namespace visvol::rt {
+
+struct ForceGains {
+  double k1_visibility = -1.0;   // < 0 hides, > 0 shows
+  double k2_terrain = 1.0;
+  double k_clearance = 1.0;
+  double k_hull = 1.0;           // hidden-from and visible-to constraints
+  double clearance_m = 30.0;
+  double hull_margin_m = 20.0;
+};
+
+// The lowest visible height over every post of a level from one point: the
+// constraint surface of "stay hidden from" and "stay visible to".
+struct PointHull {
+  int nx = 0, ny = 0;
+  double origin_x = 0, origin_y = 0, spacing_m = 1;
+  std::vector<float> height_m;  // ny rows of nx
+  double at(double x, double y) const;  // bilinear, clamped to the grid
+};
+
+// Builds the hull of point p (world metres) over a level's terrain: every
+// column's lowest height that sees p (the point's own column and its
+// neighbours see it from the ground up). Refuses a point outside the grid or
+// below the terrain, naming it.
+template <class Level>
+Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name);
+
+template <class Level>
+class FieldForces final : public RopeEnvironment, public PathField {
+ public:
+  static constexpr double kSaturation = 3.0;
+
+  FieldForces(const Level& level, const ForceGains& gains)
+      : sampler_(level), gains_(gains) {
+    const fields::VolumeGeometry& g = level.geometry();
+    accel_ref_ = g.spacing_m / (0.1 * 0.1);
+    gradient_ref_ = measure_reference_gradient();
+  }
+
+  void set_gains(const ForceGains& g) { gains_ = g; }
+  const ForceGains& gains() const { return gains_; }
+  void set_hidden_from(const PointHull* hull) { hidden_from_ = hull; }
+  void set_visible_to(const PointHull* hull) { visible_to_ = hull; }
+  double reference_acceleration() const { return accel_ref_; }
+  double reference_gradient() const { return gradient_ref_; }
+  const fields::FieldSampler<Level>& sampler() const { return sampler_; }
+
+  Vec3 acceleration(const Vec3& p) const override {
+    Vec3 a = Vec3::Zero();
+    if (gains_.k1_visibility != 0 && gradient_ref_ > 0) {
+      // Saturated at kSaturation reference gradients: F_p changes abruptly at
+      // the terrain, and an unbounded pull there would throw the rope through it.
+      const Vec3 g = sampler_.gradient(p.x(), p.y(), p.z()) / gradient_ref_;
+      const double n = g.norm();
+      a += (gains_.k1_visibility * accel_ref_ / std::max(1.0, n / kSaturation)) * g;
+    }
+    if (gains_.k2_terrain != 0) a += gains_.k2_terrain * accel_ref_ * terrain_push(p);
+    const double ground = sampler_.height(p.x(), p.y());
+    const double h = p.z() - ground;
+    // Clearance: a push ramping up over a margin above the clearance, as strong
+    // as the saturated visibility pull half way down the margin, stronger below.
+    const double margin = std::max(0.2 * gains_.clearance_m, 1.0);
+    const double depth = gains_.clearance_m + margin - h;
+    if (gains_.clearance_m > 0 && depth > 0) {
+      a.z() += gains_.k_clearance * accel_ref_ * kSaturation * std::min(2.0 * depth / margin, 8.0);
+    }
+    const double hull_margin = std::max(gains_.hull_margin_m, 1e-3);
+    if (hidden_from_) {
+      // Safety first: the push down fades out within the clearance margin.
+      const double room = gains_.clearance_m > 0 ? std::clamp((h - gains_.clearance_m) / margin, 0.0, 1.0) : 1.0;
+      const double over = p.z() - hidden_from_->at(p.x(), p.y()) + hull_margin;
+      if (over > 0) a.z() -= room * gains_.k_hull * accel_ref_ * kSaturation * std::min(over / hull_margin, 4.0);
+    }
+    if (visible_to_) {
+      const double under = visible_to_->at(p.x(), p.y()) + hull_margin - p.z();
+      if (under > 0) a.z() += gains_.k_hull * accel_ref_ * kSaturation * std::min(under / hull_margin, 4.0);
+    }
+    return a;
+  }
+
+  double visibility(const Vec3& p) const override { return sampler_.visibility(p.x(), p.y(), p.z()); }
+  double terrain_height_m(double x, double y) const override { return sampler_.height(x, y); }
+
+ private:
+  // The terrain force field's direction and profile (dimensionless).
+  Vec3 terrain_push(const Vec3& p) const {
+    const fields::TffSample s = sampler_.terrain_force(p.x(), p.y(), p.z());
+    const double offset = sampler_.level().tff_params().band_offset_m;
+    const double d = s.signed_distance_m;
+    if (d >= offset) return Vec3::Zero();
+    Vec3 e{s.dx_m, s.dy_m, s.dz_m};
+    const double len = e.norm();
+    e = len > 1e-6 ? Vec3(e / len) : Vec3(Vec3::UnitZ());
+    if (d < 0) return (2.0 + std::min(-d / offset, 4.0)) * e;  // inside: out, hard
+    const double f = 1.0 - d / offset;
+    return f * f * e;
+  }
+
+  // The 90th percentile of |grad F_p| over a grid of columns, one to eight
+  // levels above the ground: what "a strong gradient" means on this level.
+  double measure_reference_gradient() const {
+    const fields::VolumeGeometry& g = sampler_.level().geometry();
+    std::vector<double> mags;
+    const int steps = 16;
+    for (int a = 0; a < steps; ++a) {
+      for (int b = 0; b < steps; ++b) {
+        const double x = g.origin_x + (a + 0.5) / steps * (g.nx - 1) * g.spacing_m;
+        const double y = g.origin_y - (b + 0.5) / steps * (g.ny - 1) * g.spacing_m;
+        const double ground = sampler_.height(x, y);
+        for (double up : {1.5, 3.0, 6.0}) {
+          const double m = sampler_.gradient(x, y, ground + up * g.dz_m).norm();
+          if (m > 0) mags.push_back(m);
+        }
+      }
+    }
+    if (mags.empty()) return 0.0;
+    std::nth_element(mags.begin(), mags.begin() + static_cast<std::ptrdiff_t>(mags.size() * 9 / 10), mags.end());
+    return mags[mags.size() * 9 / 10];
+  }
+
+  fields::FieldSampler<Level> sampler_;
+  ForceGains gains_;
+  double accel_ref_ = 1.0;
+  double gradient_ref_ = 1.0;
+  const PointHull* hidden_from_ = nullptr;
+  const PointHull* visible_to_ = nullptr;
+};
+
+// ---- implementation of the templates ------------------------------------------
+
+inline double PointHull::at(double x, double y) const {
+  const double gi = std::clamp((x - origin_x) / spacing_m, 0.0, double(nx - 1));
+  const double gj = std::clamp((origin_y - y) / spacing_m, 0.0, double(ny - 1));
+  const int i = std::min(static_cast<int>(gi), nx - 2), j = std::min(static_cast<int>(gj), ny - 2);
+  const double fi = gi - i, fj = gj - j;
+  auto h = [&](int a, int b) {
+    return static_cast<double>(height_m[static_cast<std::size_t>(b) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(a)]);
+  };
+  return (1 - fj) * ((1 - fi) * h(i, j) + fi * h(i + 1, j)) + fj * ((1 - fi) * h(i, j + 1) + fi * h(i + 1, j + 1));
+}
+
+template <class Level>
+Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name) {
+  const fields::VolumeGeometry& g = level.geometry();
+  fields::Heightfield hf;
+  hf.nx = g.nx;
+  hf.ny = g.ny;
+  hf.spacing_m = g.spacing_m;
+  hf.origin_x = g.origin_x;
+  hf.origin_y = g.origin_y;
+  hf.height_m.resize(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) hf.at(i, j) = level.post(i, j);
+  const double fi = std::floor(hf.i_of(p.x()) + 0.5), fj = std::floor(hf.j_of(p.y()) + 0.5);
+  if (!p.allFinite() || fi < 0 || fj < 0 || fi >= g.nx || fj >= g.ny) {
+    return invalid_argument(std::string(name) + ": point is outside the pack");
+  }
+  const int pi = static_cast<int>(fi), pj = static_cast<int>(fj);
+  if (p.z() < hf.at(pi, pj)) {
+    return invalid_argument(std::string(name) + ": point is " + std::to_string(hf.at(pi, pj) - p.z()) +
+                            " m below the terrain");
+  }
+  const int radius = std::max(g.nx, g.ny) - 1;
+  fields::VolumeGeometry pad_geom = g;
+  const fields::PaddedTerrain t = fields::pad_terrain(hf, pad_geom, radius);
+  std::vector<float> horizon;
+  fields::observer_horizon(t, radius, 64, g.spacing_m, 0.0, pi, pj, p.z(), horizon);
+  PointHull hull;
+  hull.nx = g.nx;
+  hull.ny = g.ny;
+  hull.origin_x = g.origin_x;
+  hull.origin_y = g.origin_y;
+  hull.spacing_m = g.spacing_m;
+  hull.height_m.resize(hf.height_m.size());
+  const int side = 2 * radius + 1;
+  for (int j = 0; j < g.ny; ++j) {
+    for (int i = 0; i < g.nx; ++i) {
+      const double h = horizon[static_cast<std::size_t>(j - pj + radius) * static_cast<std::size_t>(side) +
+                               static_cast<std::size_t>(i - pi + radius)];
+      const double d = std::hypot(double(i - pi), double(j - pj)) * g.spacing_m;
+      const double ground = hf.at(i, j);
+      const double lowest = h <= fields::kNoHorizon ? ground : std::max(ground, p.z() + d * h);
+      hull.height_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(g.nx) + static_cast<std::size_t>(i)] =
+          static_cast<float>(lowest);
+    }
+  }
+  return hull;
+}
+
+}  // namespace visvol::rt

@@ -1,0 +1,103 @@
+#include "rt/rope/planner.hpp"
+
+#include <sstream>
+
+namespace visvol::rt {
+
+const char* to_string(Objective objective) { return objective == Objective::hide ? "hide" : "show"; }
+
+Status validate(const PlanRequest& r) {
+  std::ostringstream msg;
+  if (!r.from.allFinite() || !r.to.allFinite()) return invalid_argument("plan: endpoints must be finite");
+  if ((r.from - r.to).norm() < 1e-6) return invalid_argument("plan: --from and --to are the same point");
+  if (r.segments < 2 || r.segments > 100000) {
+    msg << "plan: " << r.segments << " segments is outside 2..100000";
+    return invalid_argument(msg.str());
+  }
+  const struct {
+    double v;
+    const char* name;
+    double lo, hi;
+  } ranges[] = {{r.clearance_m, "clearance", 0.0, 1.0e4},       {r.visibility_gain, "visibility gain", 0.0, 1.0e3},
+                {r.terrain_gain, "terrain gain", 0.0, 1.0e3},     {r.stiffness, "stiffness", 1.0e-3, 1.0e3},
+                {r.slack < 0 ? 0.0 : r.slack, "slack", 0.0, 10.0},                    {r.length_weight, "length weight", 0.0, 1.0e3},
+                {r.dt_s, "time step", 1.0e-5, 0.01},              {r.max_seconds_per_level, "seconds per level", 1.0e-3, 1.0e5}};
+  for (const auto& c : ranges) {
+    if (!(std::isfinite(c.v) && c.v >= c.lo && c.v <= c.hi)) {
+      msg << "plan: " << c.name << " " << c.v << " is outside " << c.lo << ".." << c.hi;
+      return invalid_argument(msg.str());
+    }
+  }
+  if (r.fc_samples < 2 || r.fc_samples > 1000000) return invalid_argument("plan: F_c samples must be 2..1000000");
+  if (r.init == InitialPath::polyline) {
+    if (r.polyline.size() < 2) return invalid_argument("plan: an initial path needs at least 2 points");
+    for (std::size_t i = 0; i < r.polyline.size(); ++i) {
+      if (!r.polyline[i].allFinite()) {
+        msg << "plan: initial path point " << i << " is not finite";
+        return invalid_argument(msg.str());
+      }
+    }
+  }
+  for (const auto* p : {&r.hidden_from, &r.visible_to}) {
+    if (*p && !(*p)->allFinite()) return invalid_argument("plan: constraint points must be finite");
+  }
+  return Status::ok_status();
+}
+
+RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness,
+                              double accel_ref) {
+  RopeParams p;
+  p.model = model;
+  p.max_segments = std::max(segments, 2);
+  p.mass_kg = 1.0;
+  p.linear_damping_per_s = 6.0;
+  p.angular_damping_per_s = 6.0;
+  const double l = std::max(segment_m, 1e-3);
+  // Springs sized against the field: at stiffness 1, a full-strength force bends
+  // a joint by about a radian, or stretches a spring of an 8-segment rope by
+  // half its length.
+  // A fat capsule keeps the axial (twist) inertia within a factor of a few of
+  // the bending one, so one time step suits both.
+  p.capsule_radius_m = 0.25 * l;
+  const double r = p.capsule_radius_m;
+  const double i_perp = p.mass_kg * (3 * r * r + l * l) / 12.0;
+  const double i_axial = p.mass_kg * r * r / 2.0;
+  p.bend_stiffness_nm = stiffness * 0.3 * p.mass_kg * accel_ref * l;
+  p.twist_stiffness_nm = 0.1 * p.bend_stiffness_nm;
+  p.joint_damping_nms = 0.6 * std::sqrt(p.bend_stiffness_nm * i_perp);
+  p.twist_damping_nms = 0.6 * std::sqrt(p.twist_stiffness_nm * i_axial);
+  // Tension accumulates along the chain: a pull on the whole rope loads the
+  // end springs about segments / 2 times more than one segment's force.
+  p.stretch_stiffness_npm = stiffness * 2.0 * p.mass_kg * accel_ref / l * std::max(1.0, segments / 8.0);
+  p.stretch_damping_nspm = 0.6 * std::sqrt(p.stretch_stiffness_npm * p.mass_kg);
+  p.bend_spring_npm = 0.2 * p.stretch_stiffness_npm;
+  p.verlet_damping = 0.0;
+  return p;
+}
+
+std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m) {
+  constexpr int kSegments = 64;
+  std::vector<Vec3> base(kSegments + 1);
+  if (!resample_polyline(polyline.data(), static_cast<int>(polyline.size()), kSegments, base.data()).ok()) {
+    return polyline;
+  }
+  auto lifted = [&](double amplitude) {
+    std::vector<Vec3> out = base;
+    for (int i = 0; i <= kSegments; ++i) out[static_cast<std::size_t>(i)].z() += amplitude * std::sin(M_PI * i / kSegments);
+    return out;
+  };
+  auto length = [](const std::vector<Vec3>& p) {
+    double l = 0;
+    for (std::size_t i = 1; i < p.size(); ++i) l += (p[i] - p[i - 1]).norm();
+    return l;
+  };
+  if (length(base) >= length_m) return base;
+  double lo = 0, hi = length_m;  // a bulge as high as the rope is long is always enough
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (length(lifted(mid)) < length_m ? lo : hi) = mid;
+  }
+  return lifted(hi);
+}
+
+}  // namespace visvol::rt

@@ -1,0 +1,106 @@
+#include "rt/rope/rope.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <sstream>
+
+#include "rt/rope/articulated_rope.hpp"
+#include "rt/rope/spring_mass_rope.hpp"
+
+namespace visvol::rt {
+
+const char* to_string(RopeModel model) {
+  return model == RopeModel::spring ? "spring" : "articulated";
+}
+
+Result<RopeModel> parse_rope_model(const char* text) {
+  if (std::strcmp(text, "spring") == 0) return RopeModel::spring;
+  if (std::strcmp(text, "articulated") == 0) return RopeModel::articulated;
+  return invalid_argument(std::string("rope model '") + text + "' is not one of spring, articulated");
+}
+
+Status validate(const RopeParams& p) {
+  std::ostringstream msg;
+  auto positive = [&](double v, const char* name) {
+    if (!(std::isfinite(v) && v > 0)) {
+      msg << "rope: " << name << " " << v << " must be a positive finite number";
+      return false;
+    }
+    return true;
+  };
+  auto non_negative = [&](double v, const char* name) {
+    if (!(std::isfinite(v) && v >= 0)) {
+      msg << "rope: " << name << " " << v << " must be a finite number >= 0";
+      return false;
+    }
+    return true;
+  };
+  if (p.max_segments < 2 || p.max_segments > 100000) {
+    msg << "rope: capacity " << p.max_segments << " segments is outside 2..100000";
+    return invalid_argument(msg.str());
+  }
+  if (!positive(p.mass_kg, "mass") || !non_negative(p.linear_damping_per_s, "linear damping") ||
+      !non_negative(p.angular_damping_per_s, "angular damping") ||
+      !non_negative(p.bend_stiffness_nm, "bend stiffness") ||
+      !non_negative(p.twist_stiffness_nm, "twist stiffness") ||
+      !non_negative(p.joint_damping_nms, "joint damping") ||
+      !non_negative(p.twist_damping_nms, "twist damping") ||
+      !positive(p.capsule_radius_m, "capsule radius") ||
+      !non_negative(p.stretch_stiffness_npm, "stretch stiffness") ||
+      !non_negative(p.stretch_damping_nspm, "stretch damping") ||
+      !non_negative(p.bend_spring_npm, "bending spring") ||
+      !positive(p.rest_length_factor, "rest length factor")) {
+    return invalid_argument(msg.str());
+  }
+  if (!(p.verlet_damping >= 0 && p.verlet_damping <= 1)) {
+    msg << "rope: Verlet damping " << p.verlet_damping << " is outside [0, 1]";
+    return invalid_argument(msg.str());
+  }
+  if (p.projection_iterations < 0 || p.projection_iterations > 10) {
+    msg << "rope: " << p.projection_iterations << " projection iterations is outside 0..10";
+    return invalid_argument(msg.str());
+  }
+  return Status::ok_status();
+}
+
+Result<std::unique_ptr<Rope>> make_rope(const RopeParams& params) {
+  VISVOL_RETURN_IF_ERROR(validate(params));
+  std::unique_ptr<Rope> rope;
+  if (params.model == RopeModel::articulated) {
+    rope = std::make_unique<ArticulatedRope>(params);
+  } else {
+    rope = std::make_unique<SpringMassRope>(params);
+  }
+  return rope;
+}
+
+Status resample_polyline(const Vec3* polyline, int points, int segments, Vec3* out) {
+  if (points < 2) return invalid_argument("rope: a path needs at least 2 points");
+  double total = 0;
+  for (int i = 0; i < points; ++i) {
+    if (!polyline[i].allFinite()) {
+      return invalid_argument("rope: path point " + std::to_string(i) + " is not finite");
+    }
+    if (i > 0) total += (polyline[i] - polyline[i - 1]).norm();
+  }
+  if (!(total > 0)) return invalid_argument("rope: the path has no length");
+  const double step = total / segments;
+  out[0] = polyline[0];
+  int seg = 0;
+  double seg_start = 0;  // arc length at polyline[seg]
+  for (int k = 1; k < segments; ++k) {
+    const double target = k * step;
+    while (seg + 1 < points - 1 && seg_start + (polyline[seg + 1] - polyline[seg]).norm() < target) {
+      seg_start += (polyline[seg + 1] - polyline[seg]).norm();
+      ++seg;
+    }
+    const double len = (polyline[seg + 1] - polyline[seg]).norm();
+    const double f = len > 0 ? std::clamp((target - seg_start) / len, 0.0, 1.0) : 0.0;
+    out[k] = polyline[seg] + f * (polyline[seg + 1] - polyline[seg]);
+  }
+  out[segments] = polyline[points - 1];
+  return Status::ok_status();
+}
+
+}  // namespace visvol::rt

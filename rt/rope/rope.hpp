@@ -1,0 +1,118 @@
+// The force-directed rope (paper, section 4): a mechanical rope the visibility
+// field pushes towards hidden (k1 < 0) or exposed (k1 > 0) ground, refined by
+// an operator pulling a grasped point.
+//
+// Two models share this interface: SpringMassRope (the paper's modified Verlet
+// chain of particles, extensible) and ArticulatedRope (rigid capsules joined by
+// spherical joints with bending and twisting springs, inextensible).
+//
+// Units: positions in metres of the pack's CRS (world x east, y north, z up),
+// time in seconds, forces in newtons, masses in kilograms.
+//
+// Real-time contract: everything is sized at construction for max_segments;
+// reset(), step(), the accessors and the interaction calls never allocate,
+// lock or log. One thread at a time.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+
+#include "rt/base/status.hpp"
+
+namespace visvol::rt {
+
+using Vec3 = Eigen::Vector3d;
+
+enum class RopeModel : std::uint8_t { spring = 0, articulated = 1 };
+const char* to_string(RopeModel model);
+Result<RopeModel> parse_rope_model(const char* text);
+
+// What the world does to the rope: an acceleration (m/s^2) at a point, the sum
+// of the weighted field forces (k1 grad F_p, k2 terrain force field,
+// constraint forces). Implementations must be real-time safe.
+class RopeEnvironment {
+ public:
+  virtual ~RopeEnvironment() = default;
+  virtual Vec3 acceleration(const Vec3& p_m) const = 0;
+};
+
+struct RopeParams {
+  RopeModel model = RopeModel::articulated;
+  int max_segments = 512;              // capacity reserved at construction
+  double mass_kg = 1.0;                // per segment (capsule) or per particle
+  double linear_damping_per_s = 6.0;   // viscous drag: dv/dt = -c v
+  double angular_damping_per_s = 6.0;
+  // Articulated: joint springs per radian of relative rotation, and joint damping.
+  double bend_stiffness_nm = 400.0;
+  double twist_stiffness_nm = 40.0;
+  double joint_damping_nms = 2.0;      // of the relative bending spin
+  double twist_damping_nms = 0.2;      // of the relative twisting spin
+  double capsule_radius_m = 1.0;       // for the inertia only
+  int projection_iterations = 2;       // position projections after each step
+  // Spring-mass (paper): stretch springs K_S, K_V, bending springs between i and
+  // i + 2, and the Verlet damping factor d in [0, 1].
+  double stretch_stiffness_npm = 4000.0;
+  double stretch_damping_nspm = 20.0;
+  double bend_spring_npm = 400.0;
+  double verlet_damping = 0.004;
+  double rest_length_factor = 1.0;     // spring rest length / initial segment length
+};
+
+// Checks ranges (finite, positive, capacity) before a rope is made.
+Status validate(const RopeParams& params);
+
+// Where the rope is held.
+struct RopeEnds {
+  bool start_fixed = true;
+  bool end_fixed = true;
+  Vec3 start_m = Vec3::Zero();  // used when fixed
+  Vec3 end_m = Vec3::Zero();
+};
+
+class Rope {
+ public:
+  virtual ~Rope() = default;
+
+  // Lays the rope along a polyline, resampled by arc length into `segments`
+  // equal segments (1..max_segments), at rest. The polyline's ends become the
+  // rope's ends. Errors (Errc::invalid_argument) for too few points, non-finite
+  // points, a zero-length polyline or too many segments; the rope is unchanged.
+  virtual Status reset(const Vec3* polyline, int points, int segments) = 0;
+
+  virtual void set_ends(const RopeEnds& ends) = 0;
+  virtual const RopeEnds& ends() const = 0;
+
+  // One time step of dt_s seconds in the environment.
+  virtual void step(double dt_s, const RopeEnvironment& env) = 0;
+
+  // The rope as a polyline of segments + 1 vertices.
+  virtual int segments() const = 0;
+  virtual const Vec3* vertices() const = 0;
+  virtual double kinetic_energy_j() const = 0;
+  virtual double length_m() const = 0;
+
+  // A point of the rope, by segment and fraction along it (0..1), its velocity,
+  // and an external force on it for the next steps (the grasp coupling).
+  virtual Vec3 point(int segment, double fraction) const = 0;
+  virtual Vec3 point_velocity(int segment, double fraction) const = 0;
+  virtual void set_point_force(int segment, double fraction, const Vec3& force_n) = 0;
+  virtual void clear_point_force() = 0;
+
+  // Mode B: pays out one more segment at the start end (its length is the
+  // current segment length), keeping the rest in place. False at capacity.
+  virtual bool pay_out_at_start() = 0;
+
+  virtual RopeModel model() const = 0;
+  virtual const RopeParams& params() const = 0;
+};
+
+// A rope of the given model with capacity params.max_segments (validated).
+Result<std::unique_ptr<Rope>> make_rope(const RopeParams& params);
+
+// Lays `segments` + 1 points along `polyline` at equal arc-length spacing into
+// `out` (capacity segments + 1). Real-time safe.
+Status resample_polyline(const Vec3* polyline, int points, int segments, Vec3* out);
+
+}  // namespace visvol::rt

@@ -1,0 +1,223 @@
+#include "rt/rope/rope.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+
+#include "rt/rope/articulated_rope.hpp"
+#include "rt/rope/planner.hpp"
+#include "rt/rope/spring_mass_rope.hpp"
+
+// Counts heap allocations while `g_counting` is set: the rope's step must make none.
+static std::atomic<bool> g_counting{false};
+static std::atomic<long> g_allocations{0};
+void* operator new(std::size_t n) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace visvol::rt {
+namespace {
+
+// A field that pushes each point towards a wavy surface, with a swirl: strong,
+// varying along the rope, and not a potential (so it can pump energy if the
+// integrator lets it).
+struct Wavy final : RopeEnvironment {
+  double strength = 800.0;
+  Vec3 acceleration(const Vec3& p) const override {
+    const double target = 120.0 * std::sin(p.x() / 90.0) + 60.0 * std::cos(p.y() / 70.0);
+    return {0.3 * strength * std::sin(p.z() / 50.0), 0.2 * strength * std::cos(p.x() / 40.0),
+            strength * std::tanh((target - p.z()) / 40.0)};
+  }
+};
+struct Uniform final : RopeEnvironment {
+  Vec3 a = Vec3::Zero();
+  Vec3 acceleration(const Vec3&) const override { return a; }
+};
+
+std::unique_ptr<Rope> laid_rope(RopeModel model, int segments, double slack, Vec3 from = {0, 0, 0},
+                                Vec3 to = {1000, 200, 0}) {
+  const double straight = (to - from).norm();
+  RopeParams p = scaled_rope_params(model, segments, (1 + slack) * straight / segments, 1.0, 1000.0);
+  p.max_segments = segments + 16;  // room to pay out
+  auto rope = make_rope(p);
+  EXPECT_TRUE(rope.ok());
+  const std::vector<Vec3> line = with_slack({from, to}, (1 + slack) * straight);
+  RopeEnds ends;
+  ends.start_m = from;
+  ends.end_m = to;
+  (*rope)->set_ends(ends);
+  EXPECT_TRUE((*rope)->reset(line.data(), static_cast<int>(line.size()), segments).ok());
+  (*rope)->set_ends(ends);
+  return std::move(*rope);
+}
+
+TEST(Rope, ParametersAreValidated) {
+  RopeParams p;
+  EXPECT_TRUE(validate(p).ok());
+  p.mass_kg = 0;
+  EXPECT_NE(validate(p).message().find("mass"), std::string::npos);
+  p = RopeParams{};
+  p.verlet_damping = 2;
+  EXPECT_FALSE(validate(p).ok());
+  p = RopeParams{};
+  p.max_segments = 1;
+  EXPECT_FALSE(make_rope(p).ok());
+  EXPECT_TRUE(parse_rope_model("spring").ok());
+  EXPECT_FALSE(parse_rope_model("noodle").ok());
+}
+
+TEST(Rope, ResetRefusesBadPaths) {
+  auto rope = laid_rope(RopeModel::articulated, 8, 0.2);
+  const Vec3 line[2] = {{0, 0, 0}, {100, 0, 0}};
+  EXPECT_FALSE(rope->reset(line, 2, 0).ok());
+  EXPECT_FALSE(rope->reset(line, 2, 100000).ok());  // above the capacity
+  EXPECT_FALSE(rope->reset(line, 1, 4).ok());
+  const Vec3 same[2] = {{5, 5, 5}, {5, 5, 5}};
+  EXPECT_FALSE(rope->reset(same, 2, 4).ok());
+  const Vec3 nan[2] = {{0, 0, 0}, {std::nan(""), 0, 0}};
+  EXPECT_NE(rope->reset(nan, 2, 4).message().find("not finite"), std::string::npos);
+  EXPECT_EQ(rope->segments(), 8);  // unchanged by the refusals
+}
+
+TEST(Rope, ResampleSpacesPointsEquallyAlongThePath) {
+  const Vec3 path[3] = {{0, 0, 0}, {30, 0, 0}, {30, 40, 0}};  // 70 m
+  Vec3 out[8];
+  ASSERT_TRUE(resample_polyline(path, 3, 7, out).ok());
+  EXPECT_EQ(out[0], path[0]);
+  EXPECT_EQ(out[7], path[2]);
+  EXPECT_NEAR((out[3] - Vec3(30, 0, 0)).norm(), 0.0, 1e-9);  // 30 m along
+  EXPECT_NEAR((out[5] - Vec3(30, 20, 0)).norm(), 0.0, 1e-9);  // 50 m along
+}
+
+TEST(ArticulatedRope, StaysInextensibleUnderStrongForces) {
+  for (int segments : {16, 128}) {
+    auto rope = laid_rope(RopeModel::articulated, segments, 0.3);
+    auto& a = dynamic_cast<ArticulatedRope&>(*rope);
+    const double length = a.length_m();
+    const double segment = length / segments;
+    Wavy field;
+    double worst_gap = 0, worst_length_error = 0;
+    for (int t = 0; t < 10000; ++t) {
+      a.step(0.001, field);
+      worst_gap = std::max(worst_gap, a.max_joint_gap_m());
+      double polyline = 0;
+      for (int i = 0; i < segments; ++i) polyline += (a.vertices()[i + 1] - a.vertices()[i]).norm();
+      worst_length_error = std::max(worst_length_error, std::fabs(polyline - length) / length);
+    }
+    EXPECT_LT(worst_gap, 1e-4 * segment) << segments << " segments";
+    EXPECT_LT(worst_length_error, 1e-3) << segments << " segments";
+    // the fixed ends stay put
+    EXPECT_LT((a.vertices()[0] - a.ends().start_m).norm(), 1e-4 * segment);
+    EXPECT_LT((a.vertices()[segments] - a.ends().end_m).norm(), 1e-4 * segment);
+  }
+}
+
+TEST(Rope, EnergyStaysBoundedForAMinuteAtOneMillisecond) {
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto rope = laid_rope(model, 64, 0.3);
+    Wavy field;
+    double max_energy = 0, late_energy = 0;
+    for (int t = 0; t < 60000; ++t) {
+      rope->step(0.001, field);
+      const double e = rope->kinetic_energy_j();
+      ASSERT_TRUE(std::isfinite(e)) << to_string(model) << " at step " << t;
+      max_energy = std::max(max_energy, e);
+      if (t >= 50000) late_energy = std::max(late_energy, e);
+    }
+    // Driven by a non-conservative field the rope keeps moving, but damping
+    // holds its energy: no growth after the transient.
+    EXPECT_LE(late_energy, max_energy) << to_string(model);
+    EXPECT_LT(max_energy, 1e9) << to_string(model);
+    for (int i = 0; i <= rope->segments(); ++i) ASSERT_TRUE(rope->vertices()[i].allFinite());
+  }
+}
+
+TEST(Rope, SettlesUnderAUniformPull) {
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto rope = laid_rope(model, 32, 0.3, {0, 0, 0}, {1000, 0, 0});
+    Uniform down;
+    down.a = {0, 0, -1000};
+    for (int t = 0; t < 30000; ++t) rope->step(0.001, down);
+    EXPECT_LT(rope->kinetic_energy_j(), 1e-3) << to_string(model);
+    EXPECT_LT(rope->vertices()[16].z(), -100.0) << to_string(model);  // it sags
+  }
+}
+
+TEST(Rope, StepsAreDeterministic) {
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto a = laid_rope(model, 48, 0.3), b = laid_rope(model, 48, 0.3);
+    Wavy field;
+    for (int t = 0; t < 3000; ++t) {
+      a->step(0.001, field);
+      b->step(0.001, field);
+    }
+    for (int i = 0; i <= 48; ++i) ASSERT_EQ(a->vertices()[i], b->vertices()[i]) << to_string(model);
+  }
+}
+
+TEST(Rope, StepAllocatesNothing) {
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto rope = laid_rope(model, 128, 0.3);
+    Wavy field;
+    rope->step(0.001, field);  // warm up
+    g_allocations = 0;
+    g_counting = true;
+    for (int t = 0; t < 2000; ++t) {
+      rope->step(0.001, field);
+      rope->set_point_force(10, 0.5, Vec3(1, 2, 3));
+      (void)rope->point(10, 0.5);
+      (void)rope->kinetic_energy_j();
+    }
+    g_counting = false;
+    EXPECT_EQ(g_allocations.load(), 0) << to_string(model);
+  }
+}
+
+TEST(Rope, AGraspForcePullsTheRopeItsWay) {
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto rope = laid_rope(model, 32, 0.3, {0, 0, 0}, {1000, 0, 0});
+    Uniform none;
+    const double y0 = rope->point(16, 0.5).y();
+    for (int t = 0; t < 3000; ++t) {
+      rope->set_point_force(16, 0.5, Vec3(0, 400, 0));
+      rope->step(0.001, none);
+    }
+    EXPECT_GT(rope->point(16, 0.5).y() - y0, 20.0) << to_string(model);
+    EXPECT_GT(rope->point_velocity(16, 0.5).y(), -1e-6) << to_string(model);
+  }
+}
+
+TEST(Rope, PaysOutLengthAtTheSpool) {
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto rope = laid_rope(model, 8, 0.0, {0, 0, 0}, {100, 0, 0});
+    RopeEnds ends = rope->ends();
+    ends.end_fixed = false;  // mode B: the far end is dragged
+    rope->set_ends(ends);
+    const double before = rope->length_m();
+    ASSERT_TRUE(rope->pay_out_at_start());
+    EXPECT_EQ(rope->segments(), 9);
+    Uniform drag;
+    for (int t = 0; t < 1000; ++t) {
+      rope->set_point_force(rope->segments() - 1, 1.0, Vec3(300, 0, 0));
+      rope->step(0.001, drag);
+    }
+    for (int i = 0; i <= rope->segments(); ++i) ASSERT_TRUE(rope->vertices()[i].allFinite());
+    EXPECT_LT((rope->vertices()[0] - ends.start_m).norm(), 1e-3);  // still held at the spool
+    EXPECT_GT(rope->length_m(), before + 5.0) << to_string(model);  // the paid-out length is used
+  }
+  RopeParams p = scaled_rope_params(RopeModel::articulated, 8, 10.0, 1.0, 1000.0);
+  auto full = make_rope(p);
+  const Vec3 line[2] = {{0, 0, 0}, {80, 0, 0}};
+  ASSERT_TRUE((*full)->reset(line, 2, 8).ok());
+  EXPECT_FALSE((*full)->pay_out_at_start());  // at capacity
+}
+
+}  // namespace
+}  // namespace visvol::rt

@@ -1,0 +1,176 @@
+// visvol plan PACK --from X Y Z --to X Y Z --objective hide|show -o OUT:
+// the offline planner (paper, section 4) on a field pack.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "cli.hpp"
+#include "commands.hpp"
+#include "path_io.hpp"
+#include "rt/rope/planner.hpp"
+#include "storage/pack_reader.hpp"
+
+namespace visvol::cli {
+
+namespace {
+
+using storage::PackLevel;
+
+struct PlanOptions {
+  std::string pack, out;
+  std::vector<double> from, to, hidden_from, visible_to;
+  std::string objective = "hide", model = "articulated", init = "global";
+  int segments = 128;
+  double clearance_m = 30.0;
+  double k1 = 1.0, k2 = 1.0, stiffness = 1.0, slack = -1.0, length_weight = 0.0;
+  double max_seconds = 40.0;
+  bool json = false;
+};
+
+std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
+  if (v.size() != 3) return std::nullopt;
+  return rt::Vec3(v[0], v[1], v[2]);
+}
+
+int run_plan(const PlanOptions& o) {
+  Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(o.pack);
+  if (!pack.ok()) return fail("plan", pack.status());
+  std::vector<PackLevel> levels;
+  for (int l = 0; l < (*pack)->level_count(); ++l) {
+    Result<PackLevel> level = PackLevel::open(*pack, l);
+    if (!level.ok()) return fail("plan", level.status());
+    levels.push_back(std::move(*level));
+  }
+  std::vector<const PackLevel*> pointers;
+  for (const PackLevel& l : levels) pointers.push_back(&l);
+
+  rt::PlanRequest r;
+  r.from = *point_of(o.from);
+  r.to = *point_of(o.to);
+  r.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
+  Result<rt::RopeModel> model = rt::parse_rope_model(o.model.c_str());
+  if (!model.ok()) return fail("plan", model.status());
+  r.model = *model;
+  r.segments = o.segments;
+  r.clearance_m = o.clearance_m;
+  r.visibility_gain = o.k1;
+  r.terrain_gain = o.k2;
+  r.stiffness = o.stiffness;
+  r.slack = o.slack;
+  r.length_weight = o.length_weight;
+  r.max_seconds_per_level = o.max_seconds;
+  if (!o.hidden_from.empty()) r.hidden_from = point_of(o.hidden_from);
+  if (!o.visible_to.empty()) r.visible_to = point_of(o.visible_to);
+  const fields::FieldSampler<PackLevel> finest(levels.front());
+  if (o.init == "straight") {
+    r.init = rt::InitialPath::straight;
+  } else if (o.init == "global") {
+    r.init = rt::InitialPath::global;
+  } else {
+    Result<PathFile> file = read_path_file(o.init);
+    if (!file.ok()) return fail("plan", file.status());
+    r.init = rt::InitialPath::polyline;
+    if (file->has_heights) {
+      r.polyline = file->points;
+    } else {
+      r.polyline = lift_polyline(file->points, o.clearance_m, levels.front().geometry().spacing_m / 2,
+                                 [&](double x, double y) { return finest.height(x, y); });
+    }
+    // The rope runs between --from and --to: they close the traced path.
+    r.polyline.insert(r.polyline.begin(), r.from);
+    r.polyline.push_back(r.to);
+  }
+
+  Progress progress("planning");
+  const double budget = o.max_seconds * static_cast<double>(levels.size());
+  Result<rt::PlanResult> res = rt::plan(pointers, r, [&](const rt::PlanProgress& p) {
+    progress.update(std::min(0.99, p.simulated_s / budget));
+  });
+  if (!res.ok()) return fail("plan", res.status());
+  progress.finish();
+
+  // per-vertex figures on the finest level
+  PathReport report;
+  report.vertices = res->final_path;
+  report.metrics = res->final_metrics;
+  report.objective = rt::to_string(r.objective);
+  report.model = rt::to_string(r.model);
+  report.pack = o.pack;
+  report.crs_wkt = (*pack)->metadata().crs_wkt;
+  for (const rt::Vec3& v : report.vertices) {
+    report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
+  }
+  std::vector<std::string> written;
+  const Status outputs = write_path_outputs(o.out, report, written);
+
+  const rt::PathMetrics& a = res->initial;
+  const rt::PathMetrics& b = res->final_metrics;
+  if (o.json) {
+    nlohmann::json j = {{"objective", report.objective}, {"model", report.model}, {"init", o.init},
+                        {"segments", r.segments}, {"fc_start", a.fc}, {"fc_end", b.fc},
+                        {"length_start_m", a.length_m}, {"length_m", b.length_m},
+                        {"min_clearance_m", b.min_clearance_m}, {"max_climb_deg", b.max_climb_deg},
+                        {"max_descent_deg", b.max_descent_deg},
+                        {"min_turn_radius_m", std::isfinite(b.min_turn_radius_m) ? nlohmann::json(b.min_turn_radius_m) : nlohmann::json()},
+                        {"simulated_s", res->simulated_s}, {"equilibrium_s", res->equilibrium_s},
+                        {"converged", res->converged}, {"wall_s", res->wall_s}, {"outputs", written}};
+    if (res->has_global) j["fc_global_search"] = res->global.fc;
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%s path, %s rope of %d segments, start: %s\n", report.objective.c_str(), report.model.c_str(),
+                r.segments, o.init.c_str());
+    std::printf("F_c        %.5f at the start -> %.5f (%+.1f%%)\n", a.fc, b.fc, a.fc > 0 ? 100.0 * (b.fc / a.fc - 1) : 0.0);
+    if (res->has_global) std::printf("           the global search's path had %.5f\n", res->global.fc);
+    std::printf("length     %.0f m (start %.0f m)\n", b.length_m, a.length_m);
+    std::printf("clearance  %.1f m at the lowest (asked %.1f m)\n", b.min_clearance_m, o.clearance_m);
+    std::printf("climb      %.1f deg at the steepest, descent %.1f deg, tightest turn radius %.0f m\n",
+                b.max_climb_deg, b.max_descent_deg, b.min_turn_radius_m);
+    std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %zu levels), %.2f s wall\n",
+                res->converged ? "at equilibrium" : "NOT at equilibrium (time limit)", res->equilibrium_s,
+                res->simulated_s, levels.size(), res->wall_s);
+    for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
+  }
+  if (!outputs.ok()) return fail("plan", outputs);
+  return kExitOk;
+}
+
+}  // namespace
+
+Runner add_plan_command(CLI::App& app) {
+  auto o = std::make_shared<PlanOptions>();
+  CLI::App* c = app.add_subcommand(
+      "plan", "Settle a force-directed rope from A to B in a pack's field and write the path");
+  c->add_option("PACK", o->pack, "Field pack")->required();
+  c->add_option("--from", o->from, "Start X Y Z (pack CRS, m; Z above the DEM's datum)")->expected(3)->required();
+  c->add_option("--to", o->to, "End X Y Z")->expected(3)->required();
+  c->add_option("--objective", o->objective, "hide (least seen) or show (most seen)")
+      ->check(CLI::IsMember({"hide", "show"}))
+      ->required();
+  c->add_option("--model", o->model, "articulated (inextensible capsules) or spring (spring-mass)")
+      ->check(CLI::IsMember({"articulated", "spring"}))
+      ->capture_default_str();
+  c->add_option("--segments", o->segments, "Rope segments (2..100000)")->capture_default_str();
+  c->add_option("--init", o->init,
+                "straight, global (graph search on the coarsest level), or a file of points "
+                "'x y' (lifted to the clearance) or 'x y z'")
+      ->capture_default_str();
+  c->add_option("--hidden-from", o->hidden_from, "Stay hidden from this point X Y Z")->expected(3);
+  c->add_option("--visible-to", o->visible_to, "Stay visible to this point X Y Z")->expected(3);
+  c->add_option("--clearance", o->clearance_m, "Least height above the terrain, m")->capture_default_str();
+  c->add_option("--k1", o->k1, "Visibility gain (its sign comes from the objective)")->capture_default_str();
+  c->add_option("--k2", o->k2, "Terrain force field gain")->capture_default_str();
+  c->add_option("--stiffness", o->stiffness, "Rope stiffness factor")->capture_default_str();
+  c->add_option("--slack", o->slack,
+                "Articulated rope: extra length over the initial path (default 0.3 straight, 0.05 otherwise)");
+  c->add_option("--length-weight", o->length_weight, "Global search: cost per metre on top of F_p")
+      ->capture_default_str();
+  c->add_option("--max-seconds", o->max_seconds, "Simulated seconds per level of detail at most")
+      ->capture_default_str();
+  c->add_option("-o,--output", o->out, "Output base name: writes BASE.geojson, .csv, .kml, .plan")->required();
+  c->add_flag("--json", o->json, "Print the summary as one JSON object");
+  return [o] { return run_plan(*o); };
+}
+
+}  // namespace visvol::cli

@@ -1,0 +1,404 @@
+#include "drivers/dds/command_codec.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <utility>
+
+#include "drivers/dds/message_codec.hpp"
+
+namespace visvol::dds {
+namespace {
+
+static_assert(static_cast<int>(CommandKind::set_endpoints) ==
+              visvol_msgs_msg_dds__COMMAND_SET_ENDPOINTS);
+static_assert(static_cast<int>(CommandKind::set_objective) ==
+              visvol_msgs_msg_dds__COMMAND_SET_OBJECTIVE);
+static_assert(static_cast<int>(CommandKind::set_weights) ==
+              visvol_msgs_msg_dds__COMMAND_SET_WEIGHTS);
+static_assert(static_cast<int>(CommandKind::set_stiffness) ==
+              visvol_msgs_msg_dds__COMMAND_SET_STIFFNESS);
+static_assert(static_cast<int>(CommandKind::set_model) == visvol_msgs_msg_dds__COMMAND_SET_MODEL);
+static_assert(static_cast<int>(CommandKind::set_segment_count) ==
+              visvol_msgs_msg_dds__COMMAND_SET_SEGMENT_COUNT);
+static_assert(static_cast<int>(CommandKind::set_constraints) ==
+              visvol_msgs_msg_dds__COMMAND_SET_CONSTRAINTS);
+static_assert(static_cast<int>(CommandKind::start) == visvol_msgs_msg_dds__COMMAND_START);
+static_assert(static_cast<int>(CommandKind::stop) == visvol_msgs_msg_dds__COMMAND_STOP);
+static_assert(static_cast<int>(CommandKind::switch_terrain) ==
+              visvol_msgs_msg_dds__COMMAND_SWITCH_TERRAIN);
+static_assert(static_cast<int>(RopeModel::spring_mass) == visvol_msgs_msg_dds__MODEL_SPRING_MASS);
+static_assert(static_cast<int>(RopeModel::articulated) == visvol_msgs_msg_dds__MODEL_ARTICULATED);
+static_assert(static_cast<int>(ConstraintKind::hidden_from) ==
+              visvol_msgs_msg_dds__CONSTRAINT_HIDDEN_FROM);
+static_assert(static_cast<int>(ConstraintKind::visible_to) ==
+              visvol_msgs_msg_dds__CONSTRAINT_VISIBLE_TO);
+static_assert(static_cast<int>(ConstraintKind::clearance) ==
+              visvol_msgs_msg_dds__CONSTRAINT_CLEARANCE);
+static_assert(static_cast<int>(AckResult::accepted) == visvol_msgs_msg_dds__ACK_ACCEPTED);
+static_assert(static_cast<int>(AckResult::rejected) == visvol_msgs_msg_dds__ACK_REJECTED);
+static_assert(static_cast<int>(AckResult::applied) == visvol_msgs_msg_dds__ACK_APPLIED);
+static_assert(static_cast<int>(AckResult::failed) == visvol_msgs_msg_dds__ACK_FAILED);
+
+constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(CommandKind::switch_terrain);
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+Status reject(const std::string& field, const std::string& problem) {
+  return invalid_argument(field + ": " + problem);
+}
+
+// A received string: Cyclone never hands out null, a hand-made message might.
+std::string_view view(const char* s) { return s ? std::string_view(s) : std::string_view(); }
+
+bool printable(std::string_view s) {
+  for (const char c : s) {
+    if (c < 0x20 || c > 0x7e) return false;
+  }
+  return true;
+}
+
+Status check_finite(const std::string& field, double v) {
+  if (!std::isfinite(v)) return reject(field, number(v) + " is not a finite number");
+  return Status();
+}
+
+Status check_range(const std::string& field, double v, double lo, double hi,
+                   const char* unit) {
+  VISVOL_RETURN_IF_ERROR(check_finite(field, v));
+  if (v < lo || v > hi) {
+    return reject(field, number(v) + " is outside [" + number(lo) + ", " + number(hi) + "]" +
+                             unit);
+  }
+  return Status();
+}
+
+Status check_inside(const std::string& field, const WorldPoint& p, const CommandLimits& limits) {
+  VISVOL_RETURN_IF_ERROR(check_finite(field + ".x", p.x_m));
+  VISVOL_RETURN_IF_ERROR(check_finite(field + ".y", p.y_m));
+  VISVOL_RETURN_IF_ERROR(check_finite(field + ".z", p.z_m));
+  const auto outside = [&](const char* axis, double v, double lo, double hi) {
+    return reject(field + "." + axis, number(v) + " m is outside the pack's " + axis + " range [" +
+                                          number(lo) + ", " + number(hi) + "] m");
+  };
+  if (p.x_m < limits.min.x_m || p.x_m > limits.max.x_m) {
+    return outside("x", p.x_m, limits.min.x_m, limits.max.x_m);
+  }
+  if (p.y_m < limits.min.y_m || p.y_m > limits.max.y_m) {
+    return outside("y", p.y_m, limits.min.y_m, limits.max.y_m);
+  }
+  if (p.z_m < limits.min.z_m || p.z_m > limits.max.z_m) {
+    return outside("z", p.z_m, limits.min.z_m, limits.max.z_m);
+  }
+  return Status();
+}
+
+WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return WorldPoint{p.x, p.y, p.z}; }
+
+bool is_pack_char(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+         c == '.' || c == '_' || c == '-';
+}
+
+Status decode_constraints(const visvol_msgs_msg_dds__Command_& msg, Command& out) {
+  const std::uint32_t n = msg.constraints._length;
+  if (n > kMaxConstraints) {
+    return reject("constraints", std::to_string(n) + " given, at most " +
+                                     std::to_string(kMaxConstraints) + " fit");
+  }
+  if (n > 0 && msg.constraints._buffer == nullptr) {
+    return reject("constraints", "malformed sequence (no elements)");
+  }
+  out.constraints.count = n;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const visvol_msgs_msg_dds__Constraint_& c = msg.constraints._buffer[i];
+    const std::string field = "constraints[" + std::to_string(i) + "]";
+    if (c.kind < static_cast<std::uint8_t>(ConstraintKind::hidden_from) ||
+        c.kind > static_cast<std::uint8_t>(ConstraintKind::clearance)) {
+      return reject(field + ".kind", std::to_string(c.kind) +
+                                         " is not a known constraint (1 hidden-from, "
+                                         "2 visible-to, 3 clearance)");
+    }
+    out.constraints.items[i] =
+        Constraint{static_cast<ConstraintKind>(c.kind), to_world(c.position_m), c.clearance_m};
+  }
+  return Status();
+}
+
+}  // namespace
+
+Status check_source(std::string_view source) {
+  if (source.empty()) return reject("source", "empty (name the sender)");
+  if (source.size() >= kSourceCapacity) {
+    return reject("source", std::to_string(source.size()) + " characters, at most " +
+                                std::to_string(kSourceCapacity - 1));
+  }
+  if (!printable(source)) return reject("source", "holds characters outside printable ASCII");
+  return Status();
+}
+
+Status check_pack_id(std::string_view field, std::string_view pack_id) {
+  const std::string f(field);
+  if (pack_id.empty()) return reject(f, "empty");
+  if (pack_id.size() >= kPackIdCapacity) {
+    return reject(f, std::to_string(pack_id.size()) + " characters, at most " +
+                         std::to_string(kPackIdCapacity - 1));
+  }
+  for (const char c : pack_id) {
+    if (!is_pack_char(c)) {
+      return reject(f, "may hold only letters, digits, '.', '_' and '-'");
+    }
+  }
+  return Status();
+}
+
+Status validate_limits(const CommandLimits& l) {
+  const auto bad = [](const std::string& what) {
+    return invalid_argument("command limits: " + what);
+  };
+  const double bounds[6] = {l.min.x_m, l.min.y_m, l.min.z_m, l.max.x_m, l.max.y_m, l.max.z_m};
+  for (const double v : bounds) {
+    if (!std::isfinite(v)) return bad("pack bounds are not finite");
+  }
+  if (!(l.min.x_m < l.max.x_m) || !(l.min.y_m < l.max.y_m) || !(l.min.z_m < l.max.z_m)) {
+    return bad("pack bounds are empty (min must be below max on every axis)");
+  }
+  if (l.min_segments < 1 || l.min_segments > l.max_segments) {
+    return bad("segments: need 1 <= min_segments (" + std::to_string(l.min_segments) +
+               ") <= max_segments (" + std::to_string(l.max_segments) + ")");
+  }
+  if (l.max_segments > kMaxPathVertices - 1) {
+    return bad("max_segments " + std::to_string(l.max_segments) + " above the " +
+               std::to_string(kMaxPathVertices - 1) + " a path sample holds");
+  }
+  if (l.max_constraints > kMaxConstraints) {
+    return bad("max_constraints " + std::to_string(l.max_constraints) + " above the " +
+               std::to_string(kMaxConstraints) + " a command holds");
+  }
+  const double maxima[4] = {l.max_weight, l.max_stretch_stiffness_n_per_m,
+                            l.max_bend_stiffness_n_m_per_rad, l.max_clearance_m};
+  for (const double v : maxima) {
+    if (!std::isfinite(v) || !(v > 0.0)) return bad("every maximum must be finite and > 0");
+  }
+  if (l.pack_count > kMaxKnownPacks) {
+    return bad("pack_count " + std::to_string(l.pack_count) + " above " +
+               std::to_string(kMaxKnownPacks));
+  }
+  for (std::uint32_t i = 0; i < l.pack_count; ++i) {
+    VISVOL_RETURN_IF_ERROR(
+        check_pack_id("packs[" + std::to_string(i) + "]", text_of(l.packs[i]))
+            .with_context("command limits"));
+  }
+  return Status();
+}
+
+Status add_known_pack(CommandLimits& limits, std::string_view pack_id) {
+  VISVOL_RETURN_IF_ERROR(check_pack_id("pack id", pack_id));
+  if (limits.pack_count >= kMaxKnownPacks) {
+    return invalid_argument("command limits: more than " + std::to_string(kMaxKnownPacks) +
+                            " packs");
+  }
+  copy_text(limits.packs[limits.pack_count++], pack_id);
+  return Status();
+}
+
+Status decode_command(const visvol_msgs_msg_dds__Command_& msg, Command& out) {
+  out = Command{};
+  VISVOL_RETURN_IF_ERROR(check_source(view(msg.source)));
+  copy_text(out.source, view(msg.source));
+  out.sequence = msg.sequence_number;
+  if (msg.kind < 1 || msg.kind > kLastKind) {
+    return reject("kind", std::to_string(msg.kind) + " is not a known command (1.." +
+                              std::to_string(kLastKind) + ")");
+  }
+  out.kind = static_cast<CommandKind>(msg.kind);
+  switch (out.kind) {
+    case CommandKind::set_endpoints:
+      out.endpoints = Command::Endpoints{to_world(msg.start_m), to_world(msg.end_m)};
+      return Status();
+    case CommandKind::set_objective:
+      if (msg.objective != static_cast<std::uint8_t>(Objective::hide) &&
+          msg.objective != static_cast<std::uint8_t>(Objective::show)) {
+        return reject("objective",
+                      std::to_string(msg.objective) + " is not known (1 hide, 2 show)");
+      }
+      out.objective = static_cast<Objective>(msg.objective);
+      return Status();
+    case CommandKind::set_weights:
+      out.weights = Weights{msg.k1_visibility, msg.k2_terrain, msg.k3_user, msg.k4_constraint};
+      return Status();
+    case CommandKind::set_stiffness:
+      out.stiffness =
+          Command::Stiffness{msg.stretch_stiffness_n_per_m, msg.bend_stiffness_n_m_per_rad};
+      return Status();
+    case CommandKind::set_model:
+      if (msg.model != static_cast<std::uint8_t>(RopeModel::spring_mass) &&
+          msg.model != static_cast<std::uint8_t>(RopeModel::articulated)) {
+        return reject("model", std::to_string(msg.model) +
+                                   " is not known (1 spring-mass, 2 articulated)");
+      }
+      out.model = static_cast<RopeModel>(msg.model);
+      return Status();
+    case CommandKind::set_segment_count:
+      out.segment_count = msg.segment_count;
+      return Status();
+    case CommandKind::set_constraints:
+      return decode_constraints(msg, out);
+    case CommandKind::start:
+    case CommandKind::stop:
+      return Status();
+    case CommandKind::switch_terrain:
+      VISVOL_RETURN_IF_ERROR(check_pack_id("pack_id", view(msg.pack_id)));
+      copy_text(out.pack_id, view(msg.pack_id));
+      return Status();
+  }
+  return reject("kind", "unhandled");  // unreachable: the range was checked
+}
+
+Status validate_command(const Command& c, const CommandLimits& limits) {
+  switch (c.kind) {
+    case CommandKind::set_endpoints: {
+      VISVOL_RETURN_IF_ERROR(check_inside("start_m", c.endpoints.start, limits));
+      VISVOL_RETURN_IF_ERROR(check_inside("end_m", c.endpoints.end, limits));
+      const WorldPoint& a = c.endpoints.start;
+      const WorldPoint& b = c.endpoints.end;
+      if (a.x_m == b.x_m && a.y_m == b.y_m && a.z_m == b.z_m) {
+        return reject("end_m", "equals start_m (the rope needs two distinct ends)");
+      }
+      return Status();
+    }
+    case CommandKind::set_weights:
+      VISVOL_RETURN_IF_ERROR(check_range("k1_visibility", c.weights.k1_visibility, 0.0,
+                                         limits.max_weight, ""));
+      VISVOL_RETURN_IF_ERROR(
+          check_range("k2_terrain", c.weights.k2_terrain, 0.0, limits.max_weight, ""));
+      VISVOL_RETURN_IF_ERROR(
+          check_range("k3_user", c.weights.k3_user, 0.0, limits.max_weight, ""));
+      return check_range("k4_constraint", c.weights.k4_constraint, 0.0, limits.max_weight, "");
+    case CommandKind::set_stiffness:
+      VISVOL_RETURN_IF_ERROR(check_range("stretch_stiffness_n_per_m", c.stiffness.stretch_n_per_m,
+                                         0.0, limits.max_stretch_stiffness_n_per_m, " N/m"));
+      if (c.stiffness.stretch_n_per_m == 0.0) {
+        return reject("stretch_stiffness_n_per_m", "0 N/m would let the rope fall apart (> 0)");
+      }
+      return check_range("bend_stiffness_n_m_per_rad", c.stiffness.bend_n_m_per_rad, 0.0,
+                         limits.max_bend_stiffness_n_m_per_rad, " N m/rad");
+    case CommandKind::set_segment_count:
+      if (c.segment_count < limits.min_segments || c.segment_count > limits.max_segments) {
+        return reject("segment_count", std::to_string(c.segment_count) + " is outside the " +
+                                           std::to_string(limits.min_segments) + ".." +
+                                           std::to_string(limits.max_segments) +
+                                           " segments reserved");
+      }
+      return Status();
+    case CommandKind::set_constraints:
+      if (c.constraints.count > limits.max_constraints) {
+        return reject("constraints", std::to_string(c.constraints.count) + " given, at most " +
+                                         std::to_string(limits.max_constraints) +
+                                         " reserved");
+      }
+      for (std::uint32_t i = 0; i < c.constraints.count && i < kMaxConstraints; ++i) {
+        const Constraint& k = c.constraints.items[i];
+        const std::string field = "constraints[" + std::to_string(i) + "]";
+        if (k.kind == ConstraintKind::clearance) {
+          VISVOL_RETURN_IF_ERROR(check_range(field + ".clearance_m", k.clearance_m, 0.0,
+                                             limits.max_clearance_m, " m"));
+        } else {
+          VISVOL_RETURN_IF_ERROR(check_inside(field + ".position_m", k.position, limits));
+        }
+      }
+      return Status();
+    case CommandKind::switch_terrain: {
+      const std::string_view id = text_of(c.pack_id);
+      if (limits.pack_count == 0) {
+        return reject("pack_id", "'" + std::string(id) + "': this console has no other packs");
+      }
+      for (std::uint32_t i = 0; i < limits.pack_count && i < kMaxKnownPacks; ++i) {
+        if (text_of(limits.packs[i]) == id) return Status();
+      }
+      return reject("pack_id", "'" + std::string(id) + "' is not a pack on this console");
+    }
+    case CommandKind::set_objective:
+    case CommandKind::set_model:
+    case CommandKind::start:
+    case CommandKind::stop:
+      return Status();  // decode checked their values
+  }
+  return reject("kind", std::to_string(static_cast<int>(c.kind)) + " is not a known command");
+}
+
+Status decode_and_validate(const visvol_msgs_msg_dds__Command_& msg, const CommandLimits& limits,
+                           Command& out) {
+  VISVOL_RETURN_IF_ERROR(decode_command(msg, out));
+  return validate_command(out, limits);
+}
+
+// Sender side ------------------------------------------------------------------
+
+const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const Command& c) {
+  msg_ = visvol_msgs_msg_dds__Command_{};
+  copy_text(source_, text_of(c.source));
+  copy_text(pack_id_, text_of(c.pack_id));
+  msg_.source = source_;
+  msg_.pack_id = pack_id_;
+  msg_.sequence_number = c.sequence;
+  msg_.kind = static_cast<std::uint8_t>(c.kind);
+  msg_.start_m = {c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m};
+  msg_.end_m = {c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m};
+  msg_.objective = static_cast<std::uint8_t>(c.objective);
+  msg_.k1_visibility = c.weights.k1_visibility;
+  msg_.k2_terrain = c.weights.k2_terrain;
+  msg_.k3_user = c.weights.k3_user;
+  msg_.k4_constraint = c.weights.k4_constraint;
+  msg_.stretch_stiffness_n_per_m = c.stiffness.stretch_n_per_m;
+  msg_.bend_stiffness_n_m_per_rad = c.stiffness.bend_n_m_per_rad;
+  msg_.model = static_cast<std::uint8_t>(c.model);
+  msg_.segment_count = c.segment_count;
+  const std::uint32_t n =
+      c.constraints.count < kMaxConstraints ? c.constraints.count
+                                            : static_cast<std::uint32_t>(kMaxConstraints);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const Constraint& k = c.constraints.items[i];
+    constraints_[i] = visvol_msgs_msg_dds__Constraint_{
+        static_cast<std::uint8_t>(k.kind), {k.position.x_m, k.position.y_m, k.position.z_m},
+        k.clearance_m};
+  }
+  msg_.constraints._buffer = constraints_;
+  msg_.constraints._length = n;
+  msg_.constraints._maximum = static_cast<std::uint32_t>(kMaxConstraints);
+  msg_.constraints._release = false;
+  return msg_;
+}
+
+AckMessage::AckMessage(std::string frame_id) : frame_id_(std::move(frame_id)) {
+  msg_.header.frame_id = frame_id_.data();
+  msg_.source = source_;
+  msg_.reason = reason_;
+}
+
+const visvol_msgs_msg_dds__CommandAck_& AckMessage::fill(const CommandAck& ack) {
+  msg_.header.stamp = to_ros_time(now_stamp_ns());
+  copy_text(source_, text_of(ack.source));
+  copy_text(reason_, text_of(ack.reason));
+  msg_.sequence_number = ack.sequence;
+  msg_.kind = ack.kind;
+  msg_.result = static_cast<std::uint8_t>(ack.result);
+  return msg_;
+}
+
+CommandAck decode_ack(const visvol_msgs_msg_dds__CommandAck_& msg) {
+  CommandAck ack{};
+  copy_text(ack.source, view(msg.source));
+  copy_text(ack.reason, view(msg.reason));
+  ack.sequence = msg.sequence_number;
+  ack.kind = msg.kind;
+  ack.result = static_cast<AckResult>(msg.result);
+  return ack;
+}
+
+}  // namespace visvol::dds

@@ -1,0 +1,239 @@
+// Plain samples of the DDS layer: what the executive, the renderer and the
+// console fill and hand off, and what command intake hands back.
+//
+// Every struct here is trivially copyable with a fixed capacity, so it travels
+// through LatestValue / SpscQueue (rt/base/handoff.hpp) with one memcpy and no
+// allocation. Filling one is real-time safe. Conversion to and from the DDS
+// message types happens on the DDS layer's own threads (path_codec.hpp,
+// command_codec.hpp), never on the real-time thread.
+//
+// Units are in the names. Positions are world metres: the terrain pack's
+// projected CRS, published on the terrain topic (see TerrainInfo). Stamps are
+// nanoseconds since the Unix epoch on the system clock (CLOCK_REALTIME, as ROS
+// time), read with clock_gettime, which is real-time safe (vDSO).
+//
+// Strings are fixed char arrays, NUL-terminated; copy_text() fills them.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string_view>
+#include <type_traits>
+
+namespace visvol::dds {
+
+// Capacities reserved at start-up. A sample never holds more; a command asking
+// for more is rejected with a reason.
+inline constexpr std::size_t kMaxPathVertices = 512;
+inline constexpr std::size_t kMaxConstraints = 16;
+inline constexpr std::size_t kMaxThumbnailBytes = 256 * 1024;  // PNG file bytes
+inline constexpr std::size_t kPackIdCapacity = 64;      // bytes with the NUL
+inline constexpr std::size_t kSourceCapacity = 64;
+inline constexpr std::size_t kReasonCapacity = 192;
+inline constexpr std::size_t kDeviceNameCapacity = 32;
+inline constexpr std::size_t kCrsCapacity = 64;         // "EPSG:32610"
+inline constexpr std::size_t kCrsWktCapacity = 4096;    // WKT of a projected CRS
+
+// Values equal the uint8 constants of drivers/dds/idl/visvol_msgs.idl (checked
+// by static_assert in the codecs).
+enum class Objective : std::uint8_t { hide = 1, show = 2 };
+enum class RopeModel : std::uint8_t { spring_mass = 1, articulated = 2 };
+enum class ConstraintKind : std::uint8_t { hidden_from = 1, visible_to = 2, clearance = 3 };
+enum class CommandKind : std::uint8_t {
+  set_endpoints = 1,
+  set_objective = 2,
+  set_weights = 3,
+  set_stiffness = 4,
+  set_model = 5,
+  set_segment_count = 6,
+  set_constraints = 7,
+  start = 8,
+  stop = 9,
+  switch_terrain = 10,
+};
+enum class AckResult : std::uint8_t { accepted = 1, rejected = 2, applied = 3, failed = 4 };
+enum class DeviceState : std::uint8_t {
+  unknown = 0,
+  disconnected = 1,
+  idle = 2,    // connected, forces off
+  active = 3,  // connected, forces on
+  fault = 4,
+};
+
+// Names for messages and the command line ("hide", "set-objective", ...);
+// nullptr for a value outside the enumeration.
+const char* to_string(Objective value);
+const char* to_string(RopeModel value);
+const char* to_string(ConstraintKind value);
+const char* to_string(CommandKind value);
+const char* to_string(AckResult value);
+const char* to_string(DeviceState value);
+
+// Copies text into a fixed array, truncating to fit, always NUL-terminated.
+// Returns false when it had to truncate. Real-time safe.
+template <std::size_t N>
+bool copy_text(char (&dst)[N], std::string_view text) {
+  static_assert(N > 0);
+  const std::size_t n = std::min(text.size(), N - 1);
+  if (n > 0) std::memcpy(dst, text.data(), n);
+  dst[n] = '\0';
+  return n == text.size();
+}
+
+// The text of a fixed array (up to the first NUL, or all of it).
+template <std::size_t N>
+std::string_view text_of(const char (&src)[N]) {
+  const void* nul = std::memchr(src, '\0', N);
+  const std::size_t n =
+      nul ? static_cast<std::size_t>(static_cast<const char*>(nul) - src) : N;
+  return std::string_view(src, n);
+}
+
+struct WorldPoint {
+  double x_m;
+  double y_m;
+  double z_m;
+};
+
+struct PathVertex {
+  WorldPoint position;
+  double visibility;   // F_p at the vertex, dimensionless in [0, 1]
+  double clearance_m;  // height above the terrain
+};
+
+// One path update. Producer: the executive's 1 kHz thread (or the offline
+// planner). Fill back() in place and write only vertex_count vertices; the
+// publisher reads no further.
+struct PathSample {
+  std::uint64_t sequence;     // increases with every update of one planning run
+  std::int64_t stamp_ns;      // when the rope was in this state (Unix epoch)
+  char pack_id[kPackIdCapacity];
+  Objective objective;
+  bool converged;             // the rope has come to rest
+  double f_c;                 // path measure F_c (sum of F_p along the path, weighted)
+  double length_m;
+  double min_clearance_m;
+  std::uint32_t vertex_count;  // 0..kMaxPathVertices
+  PathVertex vertices[kMaxPathVertices];
+};
+
+struct TimingSummary {
+  double min_us;
+  double mean_us;
+  double p99_us;
+  double max_us;
+  std::uint32_t count;  // samples in the report window
+};
+
+// Loop health. Producer: the executive, once per report window. The DDS layer
+// adds its own counters (commands, publish errors) when it publishes.
+struct HealthSample {
+  std::uint64_t sequence;
+  std::int64_t stamp_ns;
+  double period_us;               // configured loop period
+  TimingSummary wakeup_latency;   // actual minus scheduled wake-up
+  TimingSummary compute_time;     // work per tick
+  std::uint64_t overruns;         // ticks whose work ran past the period (total)
+  std::uint64_t misses;           // deadlines missed outright (total)
+  bool safe_state;
+  char safe_state_reason[kReasonCapacity];
+};
+
+// Haptic device and CAN bus status. Producer: the thread that owns the device.
+struct DeviceStatusSample {
+  std::uint64_t sequence;
+  std::int64_t stamp_ns;
+  char device[kDeviceNameCapacity];
+  DeviceState state;
+  std::uint32_t fault_bits;
+  double motor_temperature_c;
+  double last_position_age_ms;
+  std::uint64_t can_rx_frames;
+  std::uint64_t can_tx_frames;
+  std::uint64_t can_errors;
+  std::uint32_t bus_off_count;
+};
+
+// A rendered thumbnail: a whole PNG file (its header gives the size in
+// pixels). Producer: the renderer thread.
+struct ThumbnailSample {
+  std::int64_t stamp_ns;         // the stamp of the path it shows, to pair them
+  std::uint32_t png_size_bytes;  // 1..kMaxThumbnailBytes
+  std::uint8_t png[kMaxThumbnailBytes];
+};
+
+// The terrain and its CRS. Producer: the console, on start-up and after a
+// terrain switch.
+struct TerrainInfo {
+  std::int64_t stamp_ns;
+  char pack_id[kPackIdCapacity];
+  char crs[kCrsCapacity];          // "EPSG:32610"
+  char crs_wkt[kCrsWktCapacity];   // may be empty
+  WorldPoint min;                  // pack bounds
+  WorldPoint max;
+  double post_spacing_m;
+};
+
+// Commands -----------------------------------------------------------------
+
+struct Weights {
+  double k1_visibility;  // magnitude; the objective gives its sign
+  double k2_terrain;
+  double k3_user;
+  double k4_constraint;
+};
+
+struct Constraint {
+  ConstraintKind kind;
+  WorldPoint position;  // observer (hidden_from, visible_to)
+  double clearance_m;   // clearance
+};
+
+// A validated command for the real-time thread: a tag and the parameters of
+// that kind. Only the member named by `kind` carries meaning; the others are
+// zero.
+struct Command {
+  CommandKind kind;
+  std::uint64_t sequence;          // the sender's, for its acknowledgement
+  char source[kSourceCapacity];    // the sender
+  struct Endpoints {
+    WorldPoint start;
+    WorldPoint end;
+  } endpoints;                                   // set_endpoints
+  Objective objective;                           // set_objective
+  Weights weights;                               // set_weights
+  struct Stiffness {
+    double stretch_n_per_m;
+    double bend_n_m_per_rad;
+  } stiffness;                                   // set_stiffness
+  RopeModel model;                               // set_model
+  std::uint32_t segment_count;                   // set_segment_count
+  struct Constraints {
+    std::uint32_t count;
+    Constraint items[kMaxConstraints];
+  } constraints;                                 // set_constraints
+  char pack_id[kPackIdCapacity];                 // switch_terrain
+};
+
+// An acknowledgement. Command intake sends accepted/rejected itself; the
+// executive may push applied/failed ones (AckQueue in command_intake.hpp)
+// once it has acted on a command.
+struct CommandAck {
+  char source[kSourceCapacity];
+  std::uint64_t sequence;
+  std::uint8_t kind;   // as received, possibly not a known CommandKind
+  AckResult result;
+  char reason[kReasonCapacity];
+};
+
+static_assert(std::is_trivially_copyable_v<PathSample>);
+static_assert(std::is_trivially_copyable_v<HealthSample>);
+static_assert(std::is_trivially_copyable_v<DeviceStatusSample>);
+static_assert(std::is_trivially_copyable_v<ThumbnailSample>);
+static_assert(std::is_trivially_copyable_v<TerrainInfo>);
+static_assert(std::is_trivially_copyable_v<Command>);
+static_assert(std::is_trivially_copyable_v<CommandAck>);
+
+}  // namespace visvol::dds

@@ -1,0 +1,318 @@
+// Command decoding and validation, without DDS.
+#include "drivers/dds/command_codec.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace visvol::dds {
+namespace {
+
+const double kNan = std::numeric_limits<double>::quiet_NaN();
+const double kInf = std::numeric_limits<double>::infinity();
+
+CommandLimits limits() {
+  CommandLimits l;
+  l.min = {0.0, 0.0, 0.0};
+  l.max = {1000.0, 2000.0, 500.0};
+  l.max_segments = 100;
+  l.max_constraints = 3;
+  l.max_weight = 10.0;
+  l.max_stretch_stiffness_n_per_m = 5000.0;
+  l.max_bend_stiffness_n_m_per_rad = 50.0;
+  l.max_clearance_m = 300.0;
+  EXPECT_TRUE(add_known_pack(l, "sf_north").ok());
+  return l;
+}
+
+// A message as a sender would write it, with its own storage.
+struct Msg {
+  visvol_msgs_msg_dds__Command_ m{};
+  std::string source = "op";
+  std::string pack = "";
+  visvol_msgs_msg_dds__Constraint_ constraints[20] = {};
+  explicit Msg(std::uint8_t kind) {
+    m.kind = kind;
+    m.sequence_number = 42;
+    sync();
+  }
+  void sync() {
+    m.source = source.data();
+    m.pack_id = pack.data();
+    m.constraints._buffer = constraints;
+  }
+};
+
+// The reason decode_and_validate gives, or "" when it accepts.
+std::string verdict(Msg& msg, const CommandLimits& l = limits()) {
+  msg.sync();
+  Command out{};
+  const Status s = decode_and_validate(msg.m, l, out);
+  if (!s.ok()) {
+    EXPECT_EQ(s.code(), Errc::invalid_argument);
+  }
+  return s.ok() ? std::string() : s.message();
+}
+
+constexpr std::uint8_t kind(CommandKind k) { return static_cast<std::uint8_t>(k); }
+
+TEST(DecodeCommand, EachKindDecodesItsFields) {
+  Command out{};
+  Msg e(kind(CommandKind::set_endpoints));
+  e.m.start_m = {1.0, 2.0, 3.0};
+  e.m.end_m = {4.0, 5.0, 6.0};
+  e.m.k1_visibility = 99.0;  // not of this kind: ignored
+  e.sync();
+  ASSERT_TRUE(decode_and_validate(e.m, limits(), out).ok());
+  EXPECT_EQ(out.kind, CommandKind::set_endpoints);
+  EXPECT_EQ(out.sequence, 42u);
+  EXPECT_EQ(text_of(out.source), "op");
+  EXPECT_EQ(out.endpoints.start.y_m, 2.0);
+  EXPECT_EQ(out.endpoints.end.z_m, 6.0);
+  EXPECT_EQ(out.weights.k1_visibility, 0.0);
+
+  Msg w(kind(CommandKind::set_weights));
+  w.m.k1_visibility = 1.0;
+  w.m.k2_terrain = 2.0;
+  w.m.k3_user = 3.0;
+  w.m.k4_constraint = 4.0;
+  w.sync();
+  ASSERT_TRUE(decode_and_validate(w.m, limits(), out).ok());
+  EXPECT_EQ(out.weights.k4_constraint, 4.0);
+
+  Msg s(kind(CommandKind::set_stiffness));
+  s.m.stretch_stiffness_n_per_m = 800.0;
+  s.m.bend_stiffness_n_m_per_rad = 0.0;
+  s.sync();
+  ASSERT_TRUE(decode_and_validate(s.m, limits(), out).ok());
+  EXPECT_EQ(out.stiffness.stretch_n_per_m, 800.0);
+
+  Msg md(kind(CommandKind::set_model));
+  md.m.model = 2;
+  md.sync();
+  ASSERT_TRUE(decode_and_validate(md.m, limits(), out).ok());
+  EXPECT_EQ(out.model, RopeModel::articulated);
+
+  Msg n(kind(CommandKind::set_segment_count));
+  n.m.segment_count = 100;
+  n.sync();
+  ASSERT_TRUE(decode_and_validate(n.m, limits(), out).ok());
+  EXPECT_EQ(out.segment_count, 100u);
+
+  Msg c(kind(CommandKind::set_constraints));
+  c.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
+  c.constraints[1] = {3, {}, 150.0};
+  c.m.constraints._length = 2;
+  c.sync();
+  ASSERT_TRUE(decode_and_validate(c.m, limits(), out).ok());
+  ASSERT_EQ(out.constraints.count, 2u);
+  EXPECT_EQ(out.constraints.items[0].kind, ConstraintKind::hidden_from);
+  EXPECT_EQ(out.constraints.items[0].position.z_m, 30.0);
+  EXPECT_EQ(out.constraints.items[1].clearance_m, 150.0);
+
+  Msg empty(kind(CommandKind::set_constraints));  // clears the set
+  EXPECT_EQ(verdict(empty), "");
+
+  Msg t(kind(CommandKind::switch_terrain));
+  t.pack = "sf_north";
+  t.sync();
+  ASSERT_TRUE(decode_and_validate(t.m, limits(), out).ok());
+  EXPECT_EQ(text_of(out.pack_id), "sf_north");
+
+  for (const CommandKind k : {CommandKind::start, CommandKind::stop}) {
+    Msg m(kind(k));
+    EXPECT_EQ(verdict(m), "");
+  }
+  Msg o(kind(CommandKind::set_objective));
+  o.m.objective = 1;
+  EXPECT_EQ(verdict(o), "");
+}
+
+TEST(DecodeCommand, StructuralProblemsNameTheField) {
+  Msg k(0);
+  EXPECT_EQ(verdict(k), "kind: 0 is not a known command (1..10)");
+  Msg k2(11);
+  EXPECT_EQ(verdict(k2), "kind: 11 is not a known command (1..10)");
+
+  Msg s(kind(CommandKind::start));
+  s.source = "";
+  EXPECT_EQ(verdict(s), "source: empty (name the sender)");
+  s.source = std::string(64, 'a');
+  EXPECT_EQ(verdict(s), "source: 64 characters, at most 63");
+  s.source = "tab\there";
+  EXPECT_EQ(verdict(s), "source: holds characters outside printable ASCII");
+  Msg null_source(kind(CommandKind::start));
+  null_source.m.source = nullptr;  // a hand-made message, not from Cyclone
+  Command out{};
+  EXPECT_FALSE(decode_command(null_source.m, out).ok());
+
+  Msg o(kind(CommandKind::set_objective));
+  o.m.objective = 0;
+  EXPECT_EQ(verdict(o), "objective: 0 is not known (1 hide, 2 show)");
+  Msg md(kind(CommandKind::set_model));
+  md.m.model = 3;
+  EXPECT_EQ(verdict(md), "model: 3 is not known (1 spring-mass, 2 articulated)");
+
+  Msg c(kind(CommandKind::set_constraints));
+  c.m.constraints._length = 17;
+  EXPECT_EQ(verdict(c), "constraints: 17 given, at most 16 fit");
+  c.m.constraints._length = 2;
+  c.constraints[0] = {3, {}, 10.0};
+  c.constraints[1] = {4, {}, 10.0};
+  EXPECT_EQ(verdict(c),
+            "constraints[1].kind: 4 is not a known constraint (1 hidden-from, 2 visible-to, "
+            "3 clearance)");
+  Msg hollow(kind(CommandKind::set_constraints));
+  hollow.sync();
+  hollow.m.constraints._length = 1;
+  hollow.m.constraints._buffer = nullptr;
+  EXPECT_FALSE(decode_command(hollow.m, out).ok());
+
+  Msg t(kind(CommandKind::switch_terrain));
+  t.pack = "";
+  EXPECT_EQ(verdict(t), "pack_id: empty");
+  t.pack = "../etc/passwd";
+  EXPECT_EQ(verdict(t), "pack_id: may hold only letters, digits, '.', '_' and '-'");
+  t.pack = std::string(70, 'p');
+  EXPECT_EQ(verdict(t), "pack_id: 70 characters, at most 63");
+}
+
+TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
+  Msg e(kind(CommandKind::set_endpoints));
+  e.m.start_m = {1.0, 2.0, 3.0};
+  e.m.end_m = {4.0, 5.0, 6.0};
+  e.m.start_m.y = kInf;
+  EXPECT_EQ(verdict(e), "start_m.y: inf is not a finite number");
+  e.m.start_m.y = 2.0;
+  e.m.end_m.z = kNan;
+  EXPECT_EQ(verdict(e), "end_m.z: nan is not a finite number");
+  e.m.end_m.z = 501.0;
+  EXPECT_EQ(verdict(e), "end_m.z: 501 m is outside the pack's z range [0, 500] m");
+  e.m.end_m.z = 6.0;
+  e.m.start_m.x = -0.5;
+  EXPECT_EQ(verdict(e), "start_m.x: -0.5 m is outside the pack's x range [0, 1000] m");
+  e.m.start_m = e.m.end_m;
+  EXPECT_EQ(verdict(e), "end_m: equals start_m (the rope needs two distinct ends)");
+  e.m.start_m = {0.0, 0.0, 0.0};  // the bounds are inclusive
+  e.m.end_m = {1000.0, 2000.0, 500.0};
+  EXPECT_EQ(verdict(e), "");
+
+  Msg w(kind(CommandKind::set_weights));
+  w.m.k3_user = 10.5;
+  EXPECT_EQ(verdict(w), "k3_user: 10.5 is outside [0, 10]");
+  w.m.k3_user = 0.0;
+  w.m.k1_visibility = -kInf;
+  EXPECT_EQ(verdict(w), "k1_visibility: -inf is not a finite number");
+
+  Msg s(kind(CommandKind::set_stiffness));
+  s.m.stretch_stiffness_n_per_m = 0.0;
+  EXPECT_EQ(verdict(s), "stretch_stiffness_n_per_m: 0 N/m would let the rope fall apart (> 0)");
+  s.m.stretch_stiffness_n_per_m = 6000.0;
+  EXPECT_EQ(verdict(s), "stretch_stiffness_n_per_m: 6000 is outside [0, 5000] N/m");
+  s.m.stretch_stiffness_n_per_m = 100.0;
+  s.m.bend_stiffness_n_m_per_rad = -1.0;
+  EXPECT_EQ(verdict(s), "bend_stiffness_n_m_per_rad: -1 is outside [0, 50] N m/rad");
+
+  Msg n(kind(CommandKind::set_segment_count));
+  n.m.segment_count = 1;
+  EXPECT_EQ(verdict(n), "segment_count: 1 is outside the 2..100 segments reserved");
+  n.m.segment_count = 101;
+  EXPECT_EQ(verdict(n), "segment_count: 101 is outside the 2..100 segments reserved");
+
+  Msg c(kind(CommandKind::set_constraints));
+  c.m.constraints._length = 4;
+  for (int i = 0; i < 4; ++i) c.constraints[i] = {3, {}, 10.0};
+  EXPECT_EQ(verdict(c), "constraints: 4 given, at most 3 reserved");
+  c.m.constraints._length = 2;
+  c.constraints[1] = {2, {10.0, 3000.0, 5.0}, 0.0};
+  EXPECT_EQ(verdict(c),
+            "constraints[1].position_m.y: 3000 m is outside the pack's y range [0, 2000] m");
+  c.constraints[1] = {3, {}, 301.0};
+  EXPECT_EQ(verdict(c), "constraints[1].clearance_m: 301 is outside [0, 300] m");
+  c.constraints[1] = {3, {kNan, kNan, kNan}, 20.0};  // clearance ignores position
+  EXPECT_EQ(verdict(c), "");
+
+  Msg t(kind(CommandKind::switch_terrain));
+  t.pack = "taunus";
+  EXPECT_EQ(verdict(t), "pack_id: 'taunus' is not a pack on this console");
+  CommandLimits none = limits();
+  none.pack_count = 0;
+  EXPECT_EQ(verdict(t, none), "pack_id: 'taunus': this console has no other packs");
+}
+
+TEST(CommandLimits, ValidationSaysWhatIsWrong) {
+  EXPECT_TRUE(validate_limits(limits()).ok());
+  CommandLimits l = limits();
+  l.min.z_m = kNan;
+  EXPECT_EQ(validate_limits(l).message(), "command limits: pack bounds are not finite");
+  l = limits();
+  l.max.y_m = l.min.y_m;
+  EXPECT_NE(validate_limits(l).message().find("pack bounds are empty"), std::string::npos);
+  l = limits();
+  l.max_segments = static_cast<std::uint32_t>(kMaxPathVertices);
+  EXPECT_NE(validate_limits(l).message().find("a path sample holds"), std::string::npos);
+  l = limits();
+  l.min_segments = 0;
+  EXPECT_FALSE(validate_limits(l).ok());
+  l = limits();
+  l.max_constraints = kMaxConstraints + 1;
+  EXPECT_FALSE(validate_limits(l).ok());
+  l = limits();
+  l.max_weight = 0.0;
+  EXPECT_FALSE(validate_limits(l).ok());
+  l = limits();
+  l.pack_count = kMaxKnownPacks + 1;
+  EXPECT_FALSE(validate_limits(l).ok());
+  l = limits();
+  copy_text(l.packs[0], "bad pack");
+  EXPECT_NE(validate_limits(l).message().find("packs[0]"), std::string::npos);
+  l = limits();
+  EXPECT_FALSE(add_known_pack(l, "no/slash").ok());
+  for (std::size_t i = l.pack_count; i < kMaxKnownPacks; ++i) {
+    ASSERT_TRUE(add_known_pack(l, "p" + std::to_string(i)).ok());
+  }
+  EXPECT_FALSE(add_known_pack(l, "one_more").ok());
+}
+
+TEST(CommandMessage, EncodeThenDecodeGivesTheCommandBack) {
+  Command c{};
+  c.kind = CommandKind::set_constraints;
+  c.sequence = 77;
+  copy_text(c.source, "planner-2");
+  c.constraints.count = 2;
+  c.constraints.items[0] = {ConstraintKind::visible_to, {1.0, 2.0, 3.0}, 0.0};
+  c.constraints.items[1] = {ConstraintKind::clearance, {}, 40.0};
+  CommandMessage m;
+  Command back{};
+  ASSERT_TRUE(decode_and_validate(m.fill(c), limits(), back).ok());
+  EXPECT_EQ(back.sequence, 77u);
+  EXPECT_EQ(text_of(back.source), "planner-2");
+  ASSERT_EQ(back.constraints.count, 2u);
+  EXPECT_EQ(back.constraints.items[0].kind, ConstraintKind::visible_to);
+  EXPECT_EQ(back.constraints.items[0].position.y_m, 2.0);
+  EXPECT_EQ(back.constraints.items[1].clearance_m, 40.0);
+}
+
+TEST(AckMessage, CarriesSourceSequenceAndReason) {
+  CommandAck ack{};
+  copy_text(ack.source, "op");
+  ack.sequence = 5;
+  ack.kind = 77;
+  ack.result = AckResult::rejected;
+  copy_text(ack.reason, "kind: 77 is not a known command (1..10)");
+  AckMessage m("visvol_world");
+  const visvol_msgs_msg_dds__CommandAck_& msg = m.fill(ack);
+  EXPECT_STREQ(msg.header.frame_id, "visvol_world");
+  EXPECT_GT(msg.header.stamp.sec, 1600000000);
+  const CommandAck back = decode_ack(msg);
+  EXPECT_EQ(text_of(back.source), "op");
+  EXPECT_EQ(back.sequence, 5u);
+  EXPECT_EQ(back.kind, 77);
+  EXPECT_EQ(back.result, AckResult::rejected);
+  EXPECT_STREQ(back.reason, ack.reason);
+}
+
+}  // namespace
+}  // namespace visvol::dds

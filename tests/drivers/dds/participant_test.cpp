@@ -1,0 +1,159 @@
+// Participants, configuration and topic names with real Cyclone participants
+// (domain 211, loopback).
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "drivers/dds/participant.hpp"
+#include "drivers/dds/topics.hpp"
+#include "dds_test_support.hpp"
+#include "test_domains.hpp"
+
+namespace visvol::dds {
+namespace {
+
+using test::loopback;
+using test::make_participant;
+constexpr std::uint32_t kDomain = test::kDomainParticipant;
+
+// Configuration ----------------------------------------------------------------
+
+TEST(ParticipantConfig, ShippedFileIsTheCompiledInConfiguration) {
+  Result<std::string> file = read_cyclone_config(VISVOL_DDS_LOOPBACK_XML);
+  ASSERT_TRUE(file.ok()) << file.status().message();
+  EXPECT_EQ(*file, std::string(loopback_config()));
+  const std::string xml(loopback_config());
+  EXPECT_NE(xml.find("<NetworkInterface name=\"lo\" multicast=\"false\"/>"), std::string::npos);
+  EXPECT_NE(xml.find("<AllowMulticast>false</AllowMulticast>"), std::string::npos);
+  EXPECT_NE(xml.find("<Peer address=\"127.0.0.1\"/>"), std::string::npos);
+}
+
+TEST(ParticipantConfig, RejectsBadValuesWithReasons) {
+  ParticipantConfig c = loopback(kDomain);
+  EXPECT_TRUE(validate(c).ok());
+
+  c.domain_id = 233;
+  Status s = validate(c);
+  EXPECT_EQ(s.code(), Errc::invalid_argument);
+  EXPECT_NE(s.message().find("domain id 233"), std::string::npos) << s.message();
+
+  c = loopback(kDomain);
+  c.cyclone_xml = "  ";
+  EXPECT_NE(validate(c).message().find("empty"), std::string::npos);
+  c.cyclone_xml = "file:///etc/cyclone.xml";
+  EXPECT_NE(validate(c).message().find("not XML"), std::string::npos);
+
+  // Cyclone would silently fall back to its defaults (multicast everywhere).
+  c.cyclone_xml = "<CycloneDDS><Domain Id=\"7\"><General/></Domain></CycloneDDS>";
+  s = validate(c);
+  EXPECT_NE(s.message().find("no <Domain> applies to domain 211 (ids: 7)"), std::string::npos)
+      << s.message();
+  c.cyclone_xml = "<CycloneDDS><Domain><Id>7</Id></Domain></CycloneDDS>";
+  EXPECT_FALSE(validate(c).ok());
+  c.cyclone_xml = "<CycloneDDS><Domain Id=\"7\"/><Domain Id=\"211\"/></CycloneDDS>";
+  EXPECT_TRUE(validate(c).ok());
+  c.cyclone_xml = "<CycloneDDS><!-- <Domain Id=\"7\"> --><Domain><DomainTag/></Domain></CycloneDDS>";
+  EXPECT_TRUE(validate(c).ok());
+
+  c = loopback(kDomain, "bad//ns");
+  EXPECT_NE(validate(c).message().find("empty segment"), std::string::npos);
+  c = loopback(kDomain, "9lives");
+  EXPECT_NE(validate(c).message().find("character 1"), std::string::npos);
+  c = loopback(kDomain, "/console_a/left");
+  EXPECT_TRUE(validate(c).ok());
+}
+
+TEST(ParticipantConfig, ReadErrorsNameTheFile) {
+  Result<std::string> r = read_cyclone_config("/nonexistent/cyclone.xml");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("/nonexistent/cyclone.xml"), std::string::npos);
+  r = read_cyclone_config("/dev/null");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("empty"), std::string::npos);
+}
+
+TEST(Topics, NamesFollowRos2) {
+  EXPECT_EQ(topic_name("", Topic::path), "rt/visvol/path");
+  EXPECT_EQ(topic_name("/console_a", Topic::thumbnail), "rt/console_a/visvol/thumbnail/compressed");
+  EXPECT_STREQ(type_name(Topic::path), "nav_msgs::msg::dds_::Path_");
+  EXPECT_STREQ(type_name(Topic::thumbnail), "sensor_msgs::msg::dds_::CompressedImage_");
+  EXPECT_STREQ(type_name(Topic::command), "visvol_msgs::msg::dds_::Command_");
+}
+
+// Participants -----------------------------------------------------------------
+
+TEST(Participant, IgnoresCycloneddsUriFromTheEnvironment) {
+  // Were Cyclone to read this, creating the domain would fail.
+  ASSERT_EQ(::setenv("CYCLONEDDS_URI", "<CycloneDDS><Broken", 1), 0);
+  auto p = make_participant(loopback(kDomain));
+  ::unsetenv("CYCLONEDDS_URI");
+  ASSERT_NE(p, nullptr);
+  EXPECT_GT(p->handle(), 0);
+}
+
+TEST(Participant, LoopbackConfigurationKeepsEveryAddressOn127) {
+  // Cyclone's own account of what it chose, traced to a file of this test.
+  char path[] = "/tmp/visvol_dds_trace_XXXXXX";
+  const int fd = ::mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ::close(fd);
+  ParticipantConfig c = loopback(kDomain);
+  c.cyclone_xml += std::string("<CycloneDDS><Domain Id=\"any\"><Tracing><Verbosity>config") +
+                   "</Verbosity><OutputFile>" + path + "</OutputFile></Tracing></Domain>" +
+                   "</CycloneDDS>";
+  {
+    auto p = make_participant(c);
+    ASSERT_NE(p, nullptr);
+  }
+  std::stringstream text;
+  text << std::ifstream(path).rdbuf();
+  const std::string trace = text.str();
+  ::unlink(path);
+  ASSERT_FALSE(trace.empty());
+  EXPECT_NE(trace.find("selected interfaces: lo "), std::string::npos) << trace;
+  EXPECT_NE(trace.find("AllowMulticast/#text: false"), std::string::npos);
+  // every peer address Cyclone sends discovery to is 127.0.0.1
+  std::size_t peers = 0;
+  for (std::size_t at = trace.find("add_peer_addresses:"); at != std::string::npos;
+       at = trace.find("add_peer_addresses:", at + 1)) {
+    const std::string line = trace.substr(at, trace.find('\n', at) - at);
+    for (std::size_t u = line.find("udp/"); u != std::string::npos; u = line.find("udp/", u + 1)) {
+      EXPECT_EQ(line.compare(u, 14, "udp/127.0.0.1:"), 0) << line;
+      ++peers;
+    }
+  }
+  EXPECT_GT(peers, 0u) << trace;
+}
+
+TEST(Participant, OneConfigurationPerDomainPerProcess) {
+  auto a = make_participant(loopback(kDomain));
+  ASSERT_NE(a, nullptr);
+  auto b = make_participant(loopback(kDomain));  // same configuration: shares it
+  ASSERT_NE(b, nullptr);
+  ParticipantConfig other = loopback(kDomain);
+  other.cyclone_xml += "<!-- another -->";
+  Result<std::unique_ptr<Participant>> c = Participant::create(other);
+  ASSERT_FALSE(c.ok());
+  EXPECT_EQ(c.status().code(), Errc::state);
+  EXPECT_NE(c.status().message().find("another Cyclone configuration"), std::string::npos);
+}
+
+TEST(Participant, BadXmlFailsCleanly) {
+  ParticipantConfig c = loopback(kDomain);
+  c.cyclone_xml = "<CycloneDDS><Domain Id=\"any\"><General><NoSuchSetting>1</NoSuchSetting>"
+                  "</General></Domain></CycloneDDS>";
+  Result<std::unique_ptr<Participant>> p = Participant::create(c);
+  ASSERT_FALSE(p.ok());
+  EXPECT_NE(p.status().message().find("creating DDS domain 211"), std::string::npos)
+      << p.status().message();
+  // The failure leaves nothing behind: a good configuration works afterwards.
+  EXPECT_NE(make_participant(loopback(kDomain)), nullptr);
+}
+
+}  // namespace
+}  // namespace visvol::dds

@@ -234,12 +234,12 @@ Status Pack::verify(const std::function<void(double)>& progress) const {
   return Status::ok_status();
 }
 
-Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level) {
+Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level, TileCheck check) {
   if (level < 0 || level >= pack->level_count()) {
     return invalid_argument(pack->path() + ": no level of detail " + std::to_string(level) + " (it has " +
                             std::to_string(pack->level_count()) + ")");
   }
-  VISVOL_RETURN_IF_ERROR(pack->verify_level(level));
+  if (check == TileCheck::at_open) VISVOL_RETURN_IF_ERROR(pack->verify_level(level));
   PackLevel v;
   v.pack_ = pack;
   v.level_ = level;

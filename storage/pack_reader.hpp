@@ -43,6 +43,8 @@ class Pack {
 
   const std::string& path() const { return path_; }
   std::uint64_t file_bytes() const { return size_; }
+  // The read-only mapping of the whole file (file_bytes() long).
+  const std::uint8_t* mapping() const { return base_; }
   const PackHeader& header() const { return *header_; }
   const PackMetadata& metadata() const { return metadata_; }
   int level_count() const { return static_cast<int>(header_->level_count); }
@@ -86,10 +88,15 @@ class Pack {
 
 // One level of detail of a pack as the field sampler reads it: heights, F_p
 // and the terrain force field band, through per-tile pointers resolved once.
-// Checks the level's tile checksums when made (open()).
+// open() checks the level's tile checksums first, which reads the whole level;
+// a console whose pack is larger than its memory passes TileCheck::deferred
+// and has the tile pager check each tile as it makes it resident.
+enum class TileCheck : std::uint8_t { at_open, deferred };
+
 class PackLevel {
  public:
-  static Result<PackLevel> open(std::shared_ptr<const Pack> pack, int level);
+  static Result<PackLevel> open(std::shared_ptr<const Pack> pack, int level,
+                                TileCheck check = TileCheck::at_open);
 
   const fields::VolumeGeometry& geometry() const { return geometry_; }
   float post(int i, int j) const;
@@ -98,6 +105,7 @@ class PackLevel {
   fields::TffSample tff(int i, int j, int b) const;
   const fields::TffParams& tff_params() const { return tff_; }
   const Pack& pack() const { return *pack_; }
+  std::shared_ptr<const Pack> shared_pack() const { return pack_; }
   int level() const { return level_; }
 
  private:

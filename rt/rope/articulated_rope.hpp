@@ -44,6 +44,13 @@ class ArticulatedRope final : public Rope {
 
   RopeModel model() const override { return RopeModel::articulated; }
   const RopeParams& params() const override { return p_; }
+  Errc set_params(const RopeParams& params) override {
+    if (params.model != p_.model || params.max_segments != p_.max_segments || !params_valid(params)) {
+      return Errc::invalid_argument;
+    }
+    p_ = params;
+    return Errc::ok;
+  }
 
   // The largest distance between the ends of neighbouring capsules (and
   // between a fixed end and its anchor), metres.

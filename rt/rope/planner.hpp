@@ -19,13 +19,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "rt/rope/equilibrium.hpp"
 #include "rt/rope/field_forces.hpp"
 #include "rt/rope/global_search.hpp"
 #include "rt/rope/path_metrics.hpp"
@@ -183,12 +183,13 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
 
   // coarse to fine
   const int steps_per_check = std::max(1, static_cast<int>(std::lround(0.02 / request.dt_s)));
-  const int window = std::max(2, static_cast<int>(std::lround(0.5 / (steps_per_check * request.dt_s))));
   for (int level = static_cast<int>(levels.size()) - 1; level >= 0; --level) {
     const FieldForces<Level>& env = *envs[static_cast<std::size_t>(level)];
     const double spacing = levels[static_cast<std::size_t>(level)]->geometry().spacing_m;
-    const double v_eq = 0.1 * spacing;
-    std::deque<std::pair<double, double>> recent;  // (rms speed, F_c)
+    EquilibriumCriteria criteria;
+    criteria.check_interval_s = steps_per_check * request.dt_s;
+    criteria.max_rms_speed_mps = 0.1 * spacing;
+    EquilibriumDetector equilibrium(criteria);
     double level_s = 0;
     bool settled = false;
     while (level_s < request.max_seconds_per_level) {
@@ -202,18 +203,10 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
         return Status(Errc::state, "plan: the rope diverged at level " + std::to_string(level) +
                                        " after " + std::to_string(level_s) + " s; lower the gains");
       }
-      recent.emplace_back(rms, fc);
-      if (static_cast<int>(recent.size()) > window) recent.pop_front();
       if (on_progress) on_progress({level, result.simulated_s + level_s, fc, rms, rope.vertices(), rope.segments() + 1});
-      if (static_cast<int>(recent.size()) == window) {
-        double max_rms = 0;
-        for (const auto& r : recent) max_rms = std::max(max_rms, r.first);
-        const double span_s = (recent.size() - 1) * steps_per_check * request.dt_s;
-        const double dfc_per_s = std::fabs(recent.back().second - recent.front().second) / span_s;
-        if (max_rms < v_eq && dfc_per_s < 2e-3 * std::fabs(fc) + 1e-6) {
-          settled = true;
-          break;
-        }
+      if (equilibrium.add(rms, fc)) {
+        settled = true;
+        break;
       }
     }
     result.simulated_s += level_s;

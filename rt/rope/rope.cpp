@@ -64,6 +64,19 @@ Status validate(const RopeParams& p) {
   return Status::ok_status();
 }
 
+bool params_valid(const RopeParams& p) {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0; };
+  return p.max_segments >= 2 && p.max_segments <= 100000 && positive(p.mass_kg) &&
+         non_negative(p.linear_damping_per_s) && non_negative(p.angular_damping_per_s) &&
+         non_negative(p.bend_stiffness_nm) && non_negative(p.twist_stiffness_nm) &&
+         non_negative(p.joint_damping_nms) && non_negative(p.twist_damping_nms) &&
+         positive(p.capsule_radius_m) && non_negative(p.stretch_stiffness_npm) &&
+         non_negative(p.stretch_damping_nspm) && non_negative(p.bend_spring_npm) &&
+         positive(p.rest_length_factor) && p.verlet_damping >= 0 && p.verlet_damping <= 1 &&
+         p.projection_iterations >= 0 && p.projection_iterations <= 10;
+}
+
 Result<std::unique_ptr<Rope>> make_rope(const RopeParams& params) {
   VISVOL_RETURN_IF_ERROR(validate(params));
   std::unique_ptr<Rope> rope;

@@ -62,6 +62,8 @@ struct RopeParams {
 
 // Checks ranges (finite, positive, capacity) before a rope is made.
 Status validate(const RopeParams& params);
+// The same checks without a message: real-time safe.
+bool params_valid(const RopeParams& params);
 
 // Where the rope is held.
 struct RopeEnds {
@@ -106,6 +108,12 @@ class Rope {
 
   virtual RopeModel model() const = 0;
   virtual const RopeParams& params() const = 0;
+  // New springs, dampers and masses for a rope of the same model and capacity
+  // (a console changing stiffness, or resizing segments): springs and dampers
+  // act from the next step, mass and capsule radius from the next reset().
+  // Errc::invalid_argument (the rope unchanged) for another model or capacity
+  // or values validate() refuses. Real-time safe.
+  virtual Errc set_params(const RopeParams& params) = 0;
 };
 
 // A rope of the given model with capacity params.max_segments (validated).

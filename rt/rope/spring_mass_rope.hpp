@@ -35,6 +35,13 @@ class SpringMassRope final : public Rope {
 
   RopeModel model() const override { return RopeModel::spring; }
   const RopeParams& params() const override { return p_; }
+  Errc set_params(const RopeParams& params) override {
+    if (params.model != p_.model || params.max_segments != p_.max_segments || !params_valid(params)) {
+      return Errc::invalid_argument;
+    }
+    p_ = params;
+    return Errc::ok;
+  }
 
  private:
   void pin_ends();

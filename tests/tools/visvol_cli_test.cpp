@@ -1,6 +1,5 @@
 // The visvol command as users run it: exit statuses, messages, outputs.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,43 +9,22 @@
 #include <sstream>
 #include <string>
 
+#include "cli_runner.hpp"
+
 namespace {
 
-struct Outcome {
-  int status = -1;
-  std::string out, err;
-};
-
-// Runs visvol with `args` (shell words), optional stdin text.
-Outcome visvol(const std::string& args, const std::string& input = "") {
-  const std::string dir = ::testing::TempDir();
-  const std::string tag = std::to_string(getpid());
-  const std::string in = dir + "/cli_in_" + tag, out = dir + "/cli_out_" + tag, err = dir + "/cli_err_" + tag;
-  std::ofstream(in) << input;
-  const std::string cmd = std::string(VISVOL_BIN) + " " + args + " <" + in + " >" + out + " 2>" + err;
-  const int rc = std::system(cmd.c_str());
-  Outcome r;
-  r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-  std::ifstream o(out), e(err);
-  std::stringstream so, se;
-  so << o.rdbuf();
-  se << e.rdbuf();
-  r.out = so.str();
-  r.err = se.str();
-  for (const std::string& f : {in, out, err}) std::remove(f.c_str());
-  return r;
-}
-
-const std::string kDem = std::string(VISVOL_TEST_DATA) + "/sf_north_utm10_30m.tif";
-// A hilly 40 x 40 window of it (pixel edges on the 30 m grid).
-const std::string kCrop = "--crop 549975 4181565 551175 4182765";
+using visvol::test::kCrop;
+using visvol::test::kDem;
+using visvol::test::kSmallPackOptions;
+using visvol::test::Outcome;
+using visvol::test::slurp;
+using visvol::test::visvol;
 
 class Cli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     pack_ = new std::string(::testing::TempDir() + "/cli_" + std::to_string(getpid()) + ".vvp");
-    const Outcome r = visvol("build " + kDem + " " + kCrop +
-                         " --levels 16 --range 8 --lod 2 --tff-offset 60 --tff-levels 6 -o " + *pack_);
+    const Outcome r = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + *pack_);
     ASSERT_EQ(r.status, 0) << r.err;
   }
   static void TearDownTestSuite() {
@@ -179,12 +157,6 @@ TEST_F(Cli, PlanWritesThePathInFourFormats) {
   const nlohmann::json summary = nlohmann::json::parse(r.out);
   EXPECT_LT(summary["fc_end"].get<double>(), summary["fc_start"].get<double>());
   EXPECT_GE(summary["min_clearance_m"].get<double>(), 30.0);
-  auto slurp = [](const std::string& f) {
-    std::ifstream in(f);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
   const nlohmann::json gj = nlohmann::json::parse(slurp(base + ".geojson"));
   const nlohmann::json& coords = gj["features"][0]["geometry"]["coordinates"];
   EXPECT_EQ(gj["features"][0]["geometry"]["type"], "LineString");

@@ -9,6 +9,7 @@
 #include "cli.hpp"
 #include "commands.hpp"
 #include "path_io.hpp"
+#include "plan_publish.hpp"
 #include "rt/rope/planner.hpp"
 #include "storage/pack_reader.hpp"
 
@@ -27,7 +28,22 @@ struct PlanOptions {
   double k1 = 1.0, k2 = 1.0, stiffness = 1.0, slack = -1.0, length_weight = 0.0;
   double max_seconds = 40.0;
   bool json = false;
+  bool publish = false;
+  PublishOptions dds;
 };
+
+dds::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack_path) {
+  dds::TerrainInfo t{};
+  t.stamp_ns = dds::now_stamp_ns();
+  dds::copy_text(t.pack_id, pack_id_from_path(pack_path));
+  dds::copy_text(t.crs, epsg_of(pack.metadata().crs_wkt));
+  if (!dds::copy_text(t.crs_wkt, pack.metadata().crs_wkt)) t.crs_wkt[0] = '\0';  // never a torn WKT
+  const fields::VolumeGeometry g = pack.geometry(0);
+  t.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
+  t.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m()};
+  t.post_spacing_m = g.spacing_m;
+  return t;
+}
 
 std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
   if (v.size() != 3) return std::nullopt;
@@ -83,13 +99,29 @@ int run_plan(const PlanOptions& o) {
     r.polyline.push_back(r.to);
   }
 
+  std::unique_ptr<PlanPublisher> publisher;
+  if (o.publish) {
+    const auto probe = [&](const rt::Vec3& v, double& fp, double& clearance_m) {
+      fp = finest.visibility(v.x(), v.y(), v.z());
+      clearance_m = v.z() - finest.height(v.x(), v.y());
+    };
+    Result<std::unique_ptr<PlanPublisher>> p = PlanPublisher::create(
+        o.dds, terrain_info(**pack, o.pack),
+        r.objective == rt::Objective::show ? dds::Objective::show : dds::Objective::hide, probe);
+    if (!p.ok()) return fail("plan", p.status());
+    publisher = std::move(*p);
+  }
+
   Progress progress("planning");
   const double budget = o.max_seconds * static_cast<double>(levels.size());
   Result<rt::PlanResult> res = rt::plan(pointers, r, [&](const rt::PlanProgress& p) {
     progress.update(std::min(0.99, p.simulated_s / budget));
+    if (publisher) publisher->progress(p.vertices, p.vertex_count, p.fc);
   });
   if (!res.ok()) return fail("plan", res.status());
   progress.finish();
+  Status delivery;
+  if (publisher) delivery = publisher->finish(res->final_path, res->final_metrics, res->converged);
 
   // per-vertex figures on the finest level
   PathReport report;
@@ -117,6 +149,11 @@ int run_plan(const PlanOptions& o) {
                         {"simulated_s", res->simulated_s}, {"equilibrium_s", res->equilibrium_s},
                         {"converged", res->converged}, {"wall_s", res->wall_s}, {"outputs", written}};
     if (res->has_global) j["fc_global_search"] = res->global.fc;
+    if (publisher) {
+      j["dds"] = {{"domain", o.dds.domain_id}, {"paths_published", publisher->published()},
+                  {"publish_errors", publisher->errors()}, {"subscribers", publisher->subscribers()},
+                  {"delivered", delivery.ok()}};
+    }
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("%s path, %s rope of %d segments, start: %s\n", report.objective.c_str(), report.model.c_str(),
@@ -131,7 +168,14 @@ int run_plan(const PlanOptions& o) {
                 res->converged ? "at equilibrium" : "NOT at equilibrium (time limit)", res->equilibrium_s,
                 res->simulated_s, levels.size(), res->wall_s);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
+    if (publisher) {
+      std::printf("published  %llu path updates on DDS domain %u (%llu not sent), %u subscriber(s)%s\n",
+                  static_cast<unsigned long long>(publisher->published()), o.dds.domain_id,
+                  static_cast<unsigned long long>(publisher->errors()), publisher->subscribers(),
+                  delivery.ok() ? "" : ", last path not acknowledged");
+    }
   }
+  if (!delivery.ok()) return fail("plan", delivery);
   if (!outputs.ok()) return fail("plan", outputs);
   return kExitOk;
 }
@@ -170,6 +214,20 @@ Runner add_plan_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("-o,--output", o->out, "Output base name: writes BASE.geojson, .csv, .kml, .plan")->required();
   c->add_flag("--json", o->json, "Print the summary as one JSON object");
+  c->add_flag("--publish", o->publish,
+              "Publish the path on DDS (the console's path topics) while it settles and when done");
+  c->add_option("--domain", o->dds.domain_id, "DDS domain id for --publish")
+      ->check(CLI::Range(0u, dds::kMaxDomainId))
+      ->capture_default_str();
+  c->add_option("--dds-config", o->dds.cyclone_config_path,
+                "Cyclone DDS XML configuration for --publish (default: loopback only)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--namespace", o->dds.topic_namespace, "Topic namespace for --publish (ROS style)");
+  c->add_option("--publish-hz", o->dds.rate_hz, "Path updates per second at most while settling")
+      ->capture_default_str();
+  c->add_option("--linger", o->dds.linger_s,
+                "Seconds to wait at the end for subscribers to acknowledge the last path")
+      ->capture_default_str();
   return [o] { return run_plan(*o); };
 }
 

@@ -1,0 +1,340 @@
+#include "storage/resident_pack.hpp"
+
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "fields/sampler.hpp"
+
+namespace visvol::storage {
+
+namespace {
+
+constexpr std::uint8_t kAbsent = 0;
+constexpr std::uint8_t kResident = 1;
+
+double mib(std::uint64_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); }
+
+std::string mib_text(std::uint64_t bytes) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f MiB", mib(bytes));
+  return b;
+}
+
+}  // namespace
+
+Status validate(const ResidentConfig& c) {
+  if (c.budget_bytes == 0) return invalid_argument("tile budget: must be above 0 MiB");
+  if (!(c.margin_m >= 0 && c.margin_m <= 1e6)) {
+    return invalid_argument("tile margin: " + std::to_string(c.margin_m) + " m is outside 0..1000000 m");
+  }
+  if (!(c.poll_interval_s >= 0.001 && c.poll_interval_s <= 10)) {
+    return invalid_argument("pager interval: " + std::to_string(c.poll_interval_s) + " s is outside 0.001..10 s");
+  }
+  return {};
+}
+
+// ---- the real-time view ------------------------------------------------------
+
+bool ResidentLevel::resident(int i, int j) const {
+  if (coarser_ == nullptr) return true;
+  const std::size_t b = static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts);
+  return state_[b].load(std::memory_order_acquire) == kResident;
+}
+
+float ResidentLevel::voxel(int i, int j, int k) const {
+  if (resident(i, j)) return level_->voxel(i, j, k);
+  fallbacks_->fetch_add(1, std::memory_order_relaxed);
+  const fields::VolumeGeometry& g = level_->geometry();
+  const fields::FieldSampler<ResidentLevel> coarse(*coarser_);
+  return static_cast<float>(coarse.visibility(g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, g.z_of(k)));
+}
+
+fields::TffSample ResidentLevel::tff(int i, int j, int b) const {
+  if (resident(i, j)) return level_->tff(i, j, b);
+  fallbacks_->fetch_add(1, std::memory_order_relaxed);
+  // the band sample's world point: band b above this level's own terrain
+  const fields::VolumeGeometry& g = level_->geometry();
+  const fields::TffParams& p = level_->tff_params();
+  const double z = level_->post(i, j) - p.band_offset_m + b * p.step_m();
+  const fields::FieldSampler<ResidentLevel> coarse(*coarser_);
+  return coarse.terrain_force(g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, z);
+}
+
+// ---- the pack ----------------------------------------------------------------
+
+ResidentPack::ResidentPack(std::shared_ptr<const Pack> pack, const ResidentConfig& config)
+    : pack_(std::move(pack)), config_(config) {}
+
+Result<std::unique_ptr<ResidentPack>> ResidentPack::create(std::shared_ptr<const Pack> pack,
+                                                           const ResidentConfig& config) {
+  VISVOL_RETURN_IF_ERROR(validate(config));
+  std::unique_ptr<ResidentPack> r(new ResidentPack(std::move(pack), config));
+  VISVOL_RETURN_IF_ERROR(r->init());
+  return r;
+}
+
+Status ResidentPack::init() {
+  const int n = pack_->level_count();
+  for (int l = 0; l < n; ++l) {
+    Result<PackLevel> level = PackLevel::open(pack_, l, TileCheck::deferred);
+    if (!level.ok()) return level.status();
+    levels_.push_back(std::move(*level));
+  }
+  stats_.budget_bytes = config_.budget_bytes;
+  stats_.pack_bytes = pack_->file_bytes();
+  // the minimum: every level's heights and the coarsest level's bricks
+  std::uint64_t minimum = 0;
+  for (int l = 0; l < n; ++l) {
+    const LevelEntry& e = pack_->level(l);
+    const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
+    for (int ty = 0; ty < hg.tiles_y; ++ty)
+      for (int tx = 0; tx < hg.tiles_x; ++tx) minimum += pack_->tile(l, Layer::height, tx, ty).bytes;
+    auto s = std::make_unique<LevelState>();
+    const TileGrid bg = tile_grid(Layer::visibility, e.nx, e.ny);
+    s->bricks_x = bg.tiles_x;
+    s->bricks_y = bg.tiles_y;
+    s->state = std::make_unique<std::atomic<std::uint8_t>[]>(static_cast<std::size_t>(bg.count()));
+    s->target.assign(static_cast<std::size_t>(bg.count()), 0);
+    for (int by = 0; by < bg.tiles_y; ++by) {
+      for (int bx = 0; bx < bg.tiles_x; ++bx) {
+        const TileEntry* v = &pack_->tile(l, Layer::visibility, bx, by);
+        const TileEntry* t = &pack_->tile(l, Layer::tff, bx, by);
+        s->bricks.push_back({v, t, std::uint64_t{v->bytes} + t->bytes});
+        s->state[s->bricks.size() - 1].store(kAbsent, std::memory_order_relaxed);
+        if (l == n - 1) minimum += s->bricks.back().bytes;
+      }
+    }
+    stats_.brick_counts.push_back(static_cast<std::uint32_t>(bg.count()));
+    stats_.resident_bricks.push_back(0);
+    state_.push_back(std::move(s));
+  }
+  stats_.minimum_bytes = minimum;
+  if (minimum > config_.budget_bytes) {
+    return Status(Errc::resource,
+                  "tile budget " + mib_text(config_.budget_bytes) + " cannot hold the minimum " + mib_text(minimum) +
+                      " of " + pack_->path() +
+                      " (the heights of every level and the coarsest level's field); raise the budget");
+  }
+  // the views: each falls back to the next coarser
+  views_.resize(static_cast<std::size_t>(n));
+  for (int l = n - 1; l >= 0; --l) {
+    ResidentLevel& v = views_[static_cast<std::size_t>(l)];
+    LevelState& s = *state_[static_cast<std::size_t>(l)];
+    v.level_ = &levels_[static_cast<std::size_t>(l)];
+    v.state_ = s.state.get();
+    v.bricks_x_ = s.bricks_x;
+    v.coarser_ = l == n - 1 ? nullptr : &views_[static_cast<std::size_t>(l + 1)];
+    v.fallbacks_ = &s.fallbacks;
+  }
+  // lock the minimum now
+  for (int l = 0; l < n; ++l) {
+    const LevelEntry& e = pack_->level(l);
+    const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
+    for (int ty = 0; ty < hg.tiles_y; ++ty)
+      for (int tx = 0; tx < hg.tiles_x; ++tx) VISVOL_RETURN_IF_ERROR(make_resident(pack_->tile(l, Layer::height, tx, ty)));
+  }
+  LevelState& coarsest = *state_.back();
+  for (std::size_t b = 0; b < coarsest.bricks.size(); ++b) {
+    VISVOL_RETURN_IF_ERROR(make_resident(*coarsest.bricks[b].visibility));
+    VISVOL_RETURN_IF_ERROR(make_resident(*coarsest.bricks[b].tff));
+    coarsest.state[b].store(kResident, std::memory_order_release);
+    coarsest.target[b] = 1;
+  }
+  stats_.resident_bytes = minimum;
+  stats_.resident_bricks.back() = static_cast<std::uint32_t>(coarsest.bricks.size());
+  return {};
+}
+
+ResidentPack::~ResidentPack() {
+  stop_pager();
+  // unlock everything this pack locked (pages stay in the page cache)
+  if (config_.lock) munlock(pack_->mapping(), static_cast<std::size_t>(pack_->file_bytes()));
+}
+
+Status ResidentPack::make_resident(const TileEntry& tile) {
+  const std::uint8_t* data = pack_->tile_data(tile);
+  // the checksum reads every page once: a corrupt tile never becomes resident
+  VISVOL_RETURN_IF_ERROR(pack_->verify_tile(tile));
+  if (config_.lock && mlock(data, tile.bytes) != 0) {
+    const int e = errno;
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.lock_failures;
+    stats_.last_error = Pack::describe(tile) + ": not locked (mlock: " + std::strerror(e) +
+                        "); it stays resident while memory lasts";
+  }
+  return {};
+}
+
+void ResidentPack::release(const TileEntry& tile) {
+  auto* data = const_cast<std::uint8_t*>(pack_->tile_data(tile));
+  if (config_.lock) munlock(data, tile.bytes);
+  // drops this process's mapping of the pages (the page cache may keep them)
+  madvise(data, tile.bytes, MADV_DONTNEED);
+}
+
+bool ResidentPack::wait_for_readers() {
+  const std::uint64_t start = epoch_.load(std::memory_order_acquire);
+  while (reader_active_.load(std::memory_order_acquire) &&
+         epoch_.load(std::memory_order_acquire) < start + 2) {
+    if (stop_.load(std::memory_order_acquire)) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return true;
+}
+
+void ResidentPack::plan(const WorldBox& box, std::uint64_t budget_left) {
+  const int n = level_count();
+  bool short_of_budget = false;
+  struct Candidate {
+    double distance2;
+    std::size_t brick;
+  };
+  std::vector<Candidate> candidates;
+  for (int l = n - 2; l >= 0; --l) {
+    LevelState& s = *state_[static_cast<std::size_t>(l)];
+    std::fill(s.target.begin(), s.target.end(), 0);
+    if (!have_focus_ || short_of_budget) continue;
+    const fields::VolumeGeometry& g = levels_[static_cast<std::size_t>(l)].geometry();
+    const double brick_m = kBrickPosts * g.spacing_m;
+    const double m = config_.margin_m;
+    auto col = [&](double x) { return static_cast<int>(std::floor((x - g.origin_x) / brick_m)); };
+    auto row = [&](double y) { return static_cast<int>(std::floor((g.origin_y - y) / brick_m)); };
+    const int bx0 = std::max(0, col(box.x0_m - m)), bx1 = std::min(s.bricks_x - 1, col(box.x1_m + m));
+    const int by0 = std::max(0, row(box.y1_m + m)), by1 = std::min(s.bricks_y - 1, row(box.y0_m - m));
+    const double cx = 0.5 * (box.x0_m + box.x1_m), cy = 0.5 * (box.y0_m + box.y1_m);
+    candidates.clear();
+    for (int by = by0; by <= by1; ++by) {
+      for (int bx = bx0; bx <= bx1; ++bx) {
+        const double x = g.origin_x + (bx + 0.5) * brick_m, y = g.origin_y - (by + 0.5) * brick_m;
+        candidates.push_back({(x - cx) * (x - cx) + (y - cy) * (y - cy),
+                              static_cast<std::size_t>(by * s.bricks_x + bx)});
+      }
+    }
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.distance2 < b.distance2; });
+    for (const Candidate& c : candidates) {
+      const std::uint64_t cost = s.bricks[c.brick].bytes;
+      if (cost > budget_left) {
+        short_of_budget = true;
+        break;
+      }
+      budget_left -= cost;
+      s.target[c.brick] = 1;
+    }
+  }
+  if (short_of_budget) {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.budget_short;
+  }
+}
+
+Status ResidentPack::update() {
+  std::lock_guard<std::mutex> guard(update_mutex_);
+  if (const WorldBox* box = focus_.take()) {
+    last_focus_ = *box;
+    have_focus_ = true;
+  }
+  std::uint64_t minimum = 0, resident = 0;
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    minimum = stats_.minimum_bytes;
+    resident = stats_.resident_bytes;
+  }
+  plan(last_focus_, config_.budget_bytes - minimum);
+  const int n = level_count();
+  // evict first, so that the budget holds at every moment
+  std::vector<std::pair<int, std::size_t>> evict;
+  for (int l = 0; l < n - 1; ++l) {
+    LevelState& s = *state_[static_cast<std::size_t>(l)];
+    for (std::size_t b = 0; b < s.bricks.size(); ++b) {
+      if (!s.target[b] && s.state[b].load(std::memory_order_relaxed) == kResident) {
+        s.state[b].store(kAbsent, std::memory_order_release);
+        evict.emplace_back(l, b);
+      }
+    }
+  }
+  if (!evict.empty()) {
+    if (!wait_for_readers()) return {};  // stopping: the destructor unlocks
+    for (const auto& [l, b] : evict) {
+      const Brick& brick = state_[static_cast<std::size_t>(l)]->bricks[b];
+      release(*brick.visibility);
+      release(*brick.tff);
+      resident -= brick.bytes;
+    }
+  }
+  std::uint64_t loaded = 0, corrupt = 0;
+  std::string error;
+  for (int l = n - 2; l >= 0; --l) {  // coarser first: the wider fallback comes in soonest
+    LevelState& s = *state_[static_cast<std::size_t>(l)];
+    for (std::size_t b = 0; b < s.bricks.size(); ++b) {
+      if (!s.target[b] || s.state[b].load(std::memory_order_relaxed) == kResident) continue;
+      if (stop_.load(std::memory_order_acquire)) break;
+      const Brick& brick = s.bricks[b];
+      Status st = make_resident(*brick.visibility);
+      if (st.ok()) st = make_resident(*brick.tff);
+      if (!st.ok()) {
+        if (config_.lock) {
+          munlock(pack_->tile_data(*brick.visibility), brick.visibility->bytes);
+          munlock(pack_->tile_data(*brick.tff), brick.tff->bytes);
+        }
+        s.target[b] = 0;
+        ++corrupt;
+        error = st.message();
+        continue;
+      }
+      s.state[b].store(kResident, std::memory_order_release);
+      resident += brick.bytes;
+      ++loaded;
+    }
+  }
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++stats_.passes;
+  stats_.bricks_loaded += loaded;
+  stats_.bricks_evicted += evict.size();
+  stats_.corrupt_bricks += corrupt;
+  if (!error.empty()) stats_.last_error = error;
+  stats_.resident_bytes = resident;
+  for (int l = 0; l < n; ++l) {
+    const LevelState& s = *state_[static_cast<std::size_t>(l)];
+    std::uint32_t count = 0;
+    for (std::size_t b = 0; b < s.bricks.size(); ++b) count += s.state[b].load(std::memory_order_relaxed) == kResident;
+    stats_.resident_bricks[static_cast<std::size_t>(l)] = count;
+  }
+  return {};
+}
+
+void ResidentPack::start_pager() {
+  if (pager_.joinable()) return;
+  stop_.store(false);
+  pager_ = std::thread([this] { pager_loop(); });
+}
+
+void ResidentPack::stop_pager() {
+  stop_.store(true, std::memory_order_release);
+  if (pager_.joinable()) pager_.join();
+}
+
+void ResidentPack::pager_loop() {
+  const auto interval = std::chrono::duration<double>(config_.poll_interval_s);
+  while (!stop_.load(std::memory_order_acquire)) {
+    (void)update();  // problems are counted in stats(); a pass never fails as a whole
+    std::this_thread::sleep_for(interval);
+  }
+}
+
+std::uint64_t ResidentPack::fallbacks() const {
+  std::uint64_t sum = 0;
+  for (const auto& s : state_) sum += s->fallbacks.load(std::memory_order_relaxed);
+  return sum;
+}
+
+ResidentStats ResidentPack::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+}  // namespace visvol::storage

@@ -1,0 +1,151 @@
+// `visvol plan --publish`: the planner's path reaches a DDS subscriber as the
+// console would publish it (domain 218, loopback), and the pieces it is made of.
+#include "tools/visvol/plan_publish.hpp"
+
+#include <gtest/gtest.h>
+#include <ogr_spatialref.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_runner.hpp"
+#include "drivers/dds/participant.hpp"
+
+namespace {
+
+using visvol::cli::epsg_of;
+using visvol::cli::pack_id_from_path;
+using visvol::cli::subsample_indices;
+using visvol::test::Outcome;
+using visvol::test::visvol;
+
+constexpr std::uint32_t kDomain = 218;
+
+TEST(PlanPublish, SubsampleKeepsBothEndsEvenlySpaced) {
+  const std::vector<int> all = subsample_indices(129, 512);
+  ASSERT_EQ(all.size(), 129u);
+  for (int i = 0; i < 129; ++i) EXPECT_EQ(all[static_cast<std::size_t>(i)], i);
+  const std::vector<int> some = subsample_indices(1001, 512);
+  ASSERT_EQ(some.size(), 512u);
+  EXPECT_EQ(some.front(), 0);
+  EXPECT_EQ(some.back(), 1000);
+  for (std::size_t k = 1; k < some.size(); ++k) {
+    const int gap = some[k] - some[k - 1];
+    EXPECT_TRUE(gap == 1 || gap == 2 || gap == 3) << k << ": " << gap;
+  }
+}
+
+TEST(PlanPublish, PackIdIsTheFileStemInSafeCharacters) {
+  EXPECT_EQ(pack_id_from_path("/srv/packs/sf_north.vvp"), "sf_north");
+  EXPECT_EQ(pack_id_from_path("taunus 90m+v2.vvp"), "taunus_90m_v2");
+  EXPECT_EQ(pack_id_from_path("/srv/packs/.vvp"), ".vvp");
+  EXPECT_EQ(pack_id_from_path(std::string(100, 'a') + ".vvp").size(), 63u);
+  EXPECT_EQ(pack_id_from_path("dir/"), "pack");
+}
+
+TEST(PlanPublish, EpsgCodeOfAWkt) {
+  OGRSpatialReference srs;
+  ASSERT_EQ(srs.importFromEPSG(32610), OGRERR_NONE);
+  char* wkt = nullptr;
+  ASSERT_EQ(srs.exportToWkt(&wkt), OGRERR_NONE);
+  EXPECT_EQ(epsg_of(wkt), "EPSG:32610");
+  CPLFree(wkt);
+  EXPECT_EQ(epsg_of(""), "");
+  EXPECT_EQ(epsg_of("not a crs"), "");
+}
+
+class PlanPublishCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    pack_ = new std::string(::testing::TempDir() + "/publish_" + std::to_string(getpid()) + ".vvp");
+    const Outcome r = visvol("build " + visvol::test::kDem + " " + visvol::test::kSmallPackOptions +
+                             " -o " + *pack_);
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  static void TearDownTestSuite() {
+    std::remove(pack_->c_str());
+    delete pack_;
+  }
+  static std::string* pack_;
+};
+std::string* PlanPublishCli::pack_ = nullptr;
+
+TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
+  using namespace visvol::dds;
+  ParticipantConfig config;
+  config.domain_id = kDomain;
+  config.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(config);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto paths = Reader::create(**participant, Topic::path_update);
+  auto terrain = Reader::create(**participant, Topic::terrain);
+  ASSERT_TRUE(paths.ok() && terrain.ok());
+
+  // 600 segments: more vertices than a path sample holds (512)
+  const std::string base = *pack_ + "_pub";
+  const Outcome r = visvol("plan " + *pack_ +
+                           " --from 550100 4182600 250 --to 551050 4181700 250 --objective hide"
+                           " --init straight --model spring --segments 600 --max-seconds 1 --json"
+                           " --publish --domain " + std::to_string(kDomain) + " -o " + base);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json summary = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(summary.contains("dds")) << r.out;
+  EXPECT_GE(summary["dds"]["subscribers"].get<int>(), 1);
+  EXPECT_TRUE(summary["dds"]["delivered"].get<bool>());
+  EXPECT_EQ(summary["dds"]["publish_errors"].get<int>(), 0);
+
+  // the reader keeps the latest (history 1): the final path
+  int received = 0;
+  auto taken = paths->take<visvol_msgs_msg_dds__PathUpdate_>(
+      [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
+        ++received;
+        EXPECT_EQ(m.sequence_number, summary["dds"]["paths_published"].get<std::uint64_t>());
+        EXPECT_EQ(m.converged, summary["converged"].get<bool>());
+        EXPECT_STREQ(m.pack_id, ("publish_" + std::to_string(getpid())).c_str());
+        EXPECT_EQ(m.objective, 1);  // hide
+        EXPECT_NEAR(m.f_c, summary["fc_end"].get<double>(), 1e-9);
+        EXPECT_NEAR(m.length_m, summary["length_m"].get<double>(), 1e-6);
+        EXPECT_NEAR(m.min_clearance_m, summary["min_clearance_m"].get<double>(), 1e-9);
+        ASSERT_EQ(m.positions_m._length, 512u);
+        ASSERT_EQ(m.visibility._length, 512u);
+        ASSERT_EQ(m.clearance_m._length, 512u);
+        EXPECT_NEAR(m.positions_m._buffer[0].x, 550100, 1e-6);
+        EXPECT_NEAR(m.positions_m._buffer[0].y, 4182600, 1e-6);
+        EXPECT_NEAR(m.positions_m._buffer[511].x, 551050, 1e-6);
+        EXPECT_NEAR(m.positions_m._buffer[511].z, 250, 1e-6);
+        for (std::uint32_t i = 0; i < 512; ++i) {
+          EXPECT_GE(m.visibility._buffer[i], 0.0);
+          EXPECT_LE(m.visibility._buffer[i], 1.0);
+          EXPECT_GE(m.clearance_m._buffer[i], m.min_clearance_m - 1.0);
+        }
+      });
+  ASSERT_TRUE(taken.ok());
+  EXPECT_EQ(received, 1);
+
+  int terrains = 0;
+  auto t = terrain->take<visvol_msgs_msg_dds__TerrainInfo_>(
+      [&](const visvol_msgs_msg_dds__TerrainInfo_& m, const dds_sample_info_t&) {
+        ++terrains;
+        EXPECT_STREQ(m.crs, "EPSG:26710");  // the quad is NAD27 / UTM 10N
+        EXPECT_NEAR(m.post_spacing_m, 30.0, 1e-9);
+        EXPECT_LE(m.min_m.x, 550100);
+        EXPECT_GE(m.max_m.x, 551050);
+      });
+  ASSERT_TRUE(t.ok());
+  EXPECT_EQ(terrains, 1);
+  for (const char* ext : {".geojson", ".csv", ".kml", ".plan"}) std::remove((base + ext).c_str());
+}
+
+TEST_F(PlanPublishCli, BadPublishOptionsExitTwoWithOneLine) {
+  const std::string ends = " --from 550100 4182600 250 --to 551050 4181700 250 --objective hide";
+  for (const std::string& extra :
+       {std::string(" --publish --domain 400"), std::string(" --publish --dds-config /nonexistent.xml"),
+        std::string(" --publish --publish-hz 0"), std::string(" --publish --linger -1")}) {
+    const Outcome r = visvol("plan " + *pack_ + ends + extra + " -o " + *pack_ + "_never");
+    EXPECT_EQ(r.status, 2) << extra << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << extra << ": " << r.err;
+  }
+}
+
+}  // namespace

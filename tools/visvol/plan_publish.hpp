@@ -1,0 +1,81 @@
+// `visvol plan --publish`: the offline planner's path on DDS while it settles
+// (throttled) and once more when it is done, so that a console display or
+// `visvol-echo path` shows the rope as it moves. Topics, QoS and message
+// types are the console's (drivers/dds/topics.hpp): subscribers cannot tell
+// a planner from a console.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/dds/participant.hpp"
+#include "drivers/dds/path_publisher.hpp"
+#include "drivers/dds/samples.hpp"
+#include "rt/base/status.hpp"
+#include "rt/rope/path_metrics.hpp"
+
+namespace visvol::cli {
+
+struct PublishOptions {
+  std::uint32_t domain_id = 0;
+  std::string cyclone_config_path;  // empty: the compiled-in loopback configuration
+  std::string topic_namespace;
+  double rate_hz = 10.0;            // path updates while the rope settles, at most
+  double linger_s = 5.0;            // waiting for subscribers to acknowledge the last path
+};
+Status validate(const PublishOptions& options);
+
+// The pack id subscribers see: the pack file's name without directory and
+// extension, characters outside [A-Za-z0-9._-] replaced by '_', at most 63.
+std::string pack_id_from_path(const std::string& pack_path);
+// "EPSG:<code>" when the WKT names an EPSG authority, empty otherwise.
+std::string epsg_of(const std::string& crs_wkt);
+
+// Which of n vertices a sample of at most `max` keeps: evenly spaced, both
+// ends always. n <= max keeps them all.
+std::vector<int> subsample_indices(int n, int max);
+
+// Per-vertex F_p and clearance for a path (the finest level's sampler).
+using VertexProbe = std::function<void(const rt::Vec3& v, double& visibility, double& clearance_m)>;
+
+class PlanPublisher {
+ public:
+  static Result<std::unique_ptr<PlanPublisher>> create(const PublishOptions& options,
+                                                       const dds::TerrainInfo& terrain,
+                                                       dds::Objective objective, VertexProbe probe);
+
+  // A path while the rope settles: published when rate_hz allows, else dropped.
+  // Errors are counted, not returned: publishing never stops planning.
+  void progress(const rt::Vec3* vertices, int count, double f_c);
+  // The final path, then waits (up to linger_s) for matched subscribers to
+  // acknowledge it. An error says what was not delivered.
+  Status finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics,
+                bool converged);
+
+  std::uint64_t published() const { return sequence_; }
+  std::uint64_t errors() const { return errors_; }
+  std::uint32_t subscribers() const { return publisher_->path_update_subscribers(); }
+
+ private:
+  PlanPublisher(const PublishOptions& options, std::unique_ptr<dds::Participant> participant,
+                std::unique_ptr<dds::PathPublisher> publisher, const dds::TerrainInfo& terrain,
+                dds::Objective objective, VertexProbe probe);
+  // min_clearance_m NaN: the lowest of the published vertices.
+  Status publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
+                 double min_clearance_m, bool converged);
+
+  PublishOptions options_;
+  std::unique_ptr<dds::Participant> participant_;
+  std::unique_ptr<dds::PathPublisher> publisher_;
+  std::unique_ptr<dds::PathSample> sample_;  // 20 KiB: on the heap, reused
+  VertexProbe probe_;
+  std::chrono::steady_clock::time_point last_{};
+  std::uint64_t sequence_ = 0;
+  std::uint64_t errors_ = 0;
+};
+
+}  // namespace visvol::cli

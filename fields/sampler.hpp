@@ -46,6 +46,7 @@ class DenseLevelView {
 template <class Level>
 class FieldSampler {
  public:
+  FieldSampler() = default;
   explicit FieldSampler(const Level& level) : level_(level) {}
 
   const Level& level() const { return level_; }

@@ -263,40 +263,4 @@ Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level, T
   return v;
 }
 
-namespace {
-template <typename T>
-T read_at(const std::uint8_t* tile, std::size_t index) {
-  T v;
-  std::memcpy(&v, tile + index * sizeof(T), sizeof(T));
-  return v;
-}
-}  // namespace
-
-float PackLevel::post(int i, int j) const {
-  const std::uint8_t* t = height_[static_cast<std::size_t>((j / kTile2dPosts) * tiles2d_x_ + i / kTile2dPosts)];
-  return read_at<float>(t, static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
-}
-
-float PackLevel::area(int i, int j) const {
-  const std::uint8_t* t = area_[static_cast<std::size_t>((j / kTile2dPosts) * tiles2d_x_ + i / kTile2dPosts)];
-  return read_at<float>(t, static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
-}
-
-float PackLevel::voxel(int i, int j, int k) const {
-  const std::uint8_t* t = visibility_[static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts)];
-  const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts);
-  return quantised_ ? dequantise_visibility(read_at<std::uint16_t>(t, index)) : read_at<float>(t, index);
-}
-
-fields::TffSample PackLevel::tff(int i, int j, int b) const {
-  const std::uint8_t* t = tff_tiles_[static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts)];
-  const std::size_t index = static_cast<std::size_t>(((b * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts) * 4);
-  fields::TffSample s;
-  s.dx_m = static_cast<float>(read_at<std::int16_t>(t, index) * kTffUnitM);
-  s.dy_m = static_cast<float>(read_at<std::int16_t>(t, index + 1) * kTffUnitM);
-  s.dz_m = static_cast<float>(read_at<std::int16_t>(t, index + 2) * kTffUnitM);
-  s.signed_distance_m = static_cast<float>(read_at<std::int16_t>(t, index + 3) * kTffUnitM);
-  return s;
-}
-
 }  // namespace visvol::storage

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -99,16 +100,49 @@ class PackLevel {
                                 TileCheck check = TileCheck::at_open);
 
   const fields::VolumeGeometry& geometry() const { return geometry_; }
-  float post(int i, int j) const;
-  float area(int i, int j) const;
-  float voxel(int i, int j, int k) const;
-  fields::TffSample tff(int i, int j, int b) const;
+  // Inline: the sampler calls these tens of times per query.
+  float post(int i, int j) const {
+    return read_at<float>(height_[tile2d(i, j)], static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
+  }
+  float area(int i, int j) const {
+    return read_at<float>(area_[tile2d(i, j)], static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
+  }
+  float voxel(int i, int j, int k) const {
+    const std::uint8_t* t = visibility_[brick(i, j)];
+    const std::size_t index =
+        static_cast<std::size_t>((k * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts);
+    return quantised_ ? dequantise_visibility(read_at<std::uint16_t>(t, index)) : read_at<float>(t, index);
+  }
+  fields::TffSample tff(int i, int j, int b) const {
+    const std::uint8_t* t = tff_tiles_[brick(i, j)];
+    const std::size_t index =
+        static_cast<std::size_t>(((b * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts) * 4);
+    fields::TffSample s;
+    s.dx_m = static_cast<float>(read_at<std::int16_t>(t, index) * kTffUnitM);
+    s.dy_m = static_cast<float>(read_at<std::int16_t>(t, index + 1) * kTffUnitM);
+    s.dz_m = static_cast<float>(read_at<std::int16_t>(t, index + 2) * kTffUnitM);
+    s.signed_distance_m = static_cast<float>(read_at<std::int16_t>(t, index + 3) * kTffUnitM);
+    return s;
+  }
   const fields::TffParams& tff_params() const { return tff_; }
   const Pack& pack() const { return *pack_; }
   std::shared_ptr<const Pack> shared_pack() const { return pack_; }
   int level() const { return level_; }
 
  private:
+  template <typename T>
+  static T read_at(const std::uint8_t* tile, std::size_t index) {
+    T v;
+    std::memcpy(&v, tile + index * sizeof(T), sizeof(T));
+    return v;
+  }
+  std::size_t tile2d(int i, int j) const {
+    return static_cast<std::size_t>((j / kTile2dPosts) * tiles2d_x_ + i / kTile2dPosts);
+  }
+  std::size_t brick(int i, int j) const {
+    return static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts);
+  }
+
   std::shared_ptr<const Pack> pack_;
   int level_ = 0;
   fields::VolumeGeometry geometry_;

@@ -45,6 +45,18 @@ bool ResidentLevel::resident(int i, int j) const {
   return state_[b].load(std::memory_order_acquire) == kResident;
 }
 
+bool ResidentLevel::resident(int i0, int j0, int i1, int j1) const {
+  if (coarser_ == nullptr) return true;
+  for (int by = j0 / kBrickPosts; by <= j1 / kBrickPosts; ++by) {
+    for (int bx = i0 / kBrickPosts; bx <= i1 / kBrickPosts; ++bx) {
+      if (state_[static_cast<std::size_t>(by * bricks_x_ + bx)].load(std::memory_order_acquire) != kResident) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 float ResidentLevel::voxel(int i, int j, int k) const {
   if (resident(i, j)) return level_->voxel(i, j, k);
   fallbacks_->fetch_add(1, std::memory_order_relaxed);
@@ -62,6 +74,32 @@ fields::TffSample ResidentLevel::tff(int i, int j, int b) const {
   const double z = level_->post(i, j) - p.band_offset_m + b * p.step_m();
   const fields::FieldSampler<ResidentLevel> coarse(*coarser_);
   return coarse.terrain_force(g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, z);
+}
+
+// ---- the real-time sampler -----------------------------------------------------
+
+ResidentSampler::ResidentSampler(const ResidentLevel& level) : level_(&level) {
+  for (const ResidentLevel* l = &level; l != nullptr && count_ < kMaxLevels; l = l->coarser()) {
+    chain_[count_] = l;
+    samplers_[count_] = fields::FieldSampler<PackLevelRef>(PackLevelRef(l->pack_level()));
+    ++count_;
+  }
+}
+
+const fields::FieldSampler<PackLevelRef>& ResidentSampler::pick(double x, double y) const {
+  for (int n = 0; n + 1 < count_; ++n) {
+    const fields::VolumeGeometry& g = chain_[n]->geometry();
+    // the columns a gradient reads: the cell's corners and their neighbours
+    const double gi = std::clamp((x - g.origin_x) / g.spacing_m, 0.0, double(g.nx - 1));
+    const double gj = std::clamp((g.origin_y - y) / g.spacing_m, 0.0, double(g.ny - 1));
+    const int i = std::min(static_cast<int>(gi), g.nx - 2), j = std::min(static_cast<int>(gj), g.ny - 2);
+    if (chain_[n]->resident(std::max(i - 1, 0), std::max(j - 1, 0), std::min(i + 2, g.nx - 1),
+                            std::min(j + 2, g.ny - 1))) {
+      return samplers_[n];
+    }
+    chain_[n]->fallbacks_->fetch_add(1, std::memory_order_relaxed);
+  }
+  return samplers_[count_ - 1];
 }
 
 // ---- the pack ----------------------------------------------------------------

@@ -35,6 +35,7 @@
 #include <thread>
 #include <vector>
 
+#include "fields/sampler.hpp"
 #include "fields/terrain_force.hpp"
 #include "fields/volume.hpp"
 #include "rt/base/handoff.hpp"
@@ -74,6 +75,21 @@ struct ResidentStats {
 
 class ResidentPack;
 
+// A PackLevel by reference: a sampler level that is cheap to copy.
+class PackLevelRef {
+ public:
+  PackLevelRef() = default;
+  explicit PackLevelRef(const PackLevel& level) : level_(&level) {}
+  const fields::VolumeGeometry& geometry() const { return level_->geometry(); }
+  float post(int i, int j) const { return level_->post(i, j); }
+  float voxel(int i, int j, int k) const { return level_->voxel(i, j, k); }
+  fields::TffSample tff(int i, int j, int b) const { return level_->tff(i, j, b); }
+  const fields::TffParams& tff_params() const { return level_->tff_params(); }
+
+ private:
+  const PackLevel* level_ = nullptr;
+};
+
 // One level of detail as the real-time thread samples it (a sampler Level:
 // geometry, post, voxel, tff, tff_params). Copyable view: pointers only.
 class ResidentLevel {
@@ -85,15 +101,44 @@ class ResidentLevel {
   const fields::TffParams& tff_params() const { return level_->tff_params(); }
   // Whether the brick holding column (i, j) is resident.
   bool resident(int i, int j) const;
+  // Whether every brick holding columns [i0, i1] x [j0, j1] is resident.
+  bool resident(int i0, int j0, int i1, int j1) const;
   int level() const { return level_->level(); }
+  const PackLevel& pack_level() const { return *level_; }
+  const ResidentLevel* coarser() const { return coarser_; }
 
  private:
   friend class ResidentPack;
+  friend class ResidentSampler;
   const PackLevel* level_ = nullptr;
   const std::atomic<std::uint8_t>* state_ = nullptr;  // per brick: 1 resident
   int bricks_x_ = 0;
   const ResidentLevel* coarser_ = nullptr;            // null: the coarsest, always resident
   std::atomic<std::uint64_t>* fallbacks_ = nullptr;   // lookups served by a coarser level
+};
+
+// The sampler the real-time thread uses (the interface of
+// fields::FieldSampler): each query is answered by the finest level, from
+// the one given down, whose bricks around the point are all resident, read
+// directly; heights come from the level given (always resident). Cheaper
+// than sampling a ResidentLevel, whose every missing voxel is interpolated
+// from the coarser level. Where residency changes between neighbouring
+// bricks the field steps from one level's values to the next one's.
+class ResidentSampler {
+ public:
+  explicit ResidentSampler(const ResidentLevel& level);
+  const ResidentLevel& level() const { return *level_; }
+  double height(double x, double y) const { return samplers_[0].height(x, y); }
+  double visibility(double x, double y, double z) const { return pick(x, y).visibility(x, y, z); }
+  Eigen::Vector3d gradient(double x, double y, double z) const { return pick(x, y).gradient(x, y, z); }
+  fields::TffSample terrain_force(double x, double y, double z) const { return pick(x, y).terrain_force(x, y, z); }
+
+ private:
+  const fields::FieldSampler<PackLevelRef>& pick(double x, double y) const;
+  const ResidentLevel* level_;
+  const ResidentLevel* chain_[kMaxLevels] = {};
+  fields::FieldSampler<PackLevelRef> samplers_[kMaxLevels];
+  int count_ = 0;
 };
 
 class ResidentPack {

@@ -59,3 +59,20 @@ Status commit_file(const std::string& temp_path, const std::string& path) {
 void discard_file(const std::string& temp_path) { ::unlink(temp_path.c_str()); }
 
 }  // namespace visvol
+
+namespace visvol {
+
+Status write_file_atomically(const std::string& path, const std::string& bytes) {
+  const std::string temp = temp_path_for(path);
+  std::FILE* f = std::fopen(temp.c_str(), "wb");
+  if (f == nullptr) return io_error(path + ": cannot write (" + std::strerror(errno) + ")");
+  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  const bool closed = std::fclose(f) == 0;
+  if (!written || !closed) {
+    discard_file(temp);
+    return io_error(path + ": cannot write (" + std::strerror(errno) + ")");
+  }
+  return commit_file(temp, path);
+}
+
+}  // namespace visvol

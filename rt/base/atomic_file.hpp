@@ -24,4 +24,8 @@ Status commit_file(const std::string& temp_path, const std::string& path);
 // Removes a temporary left by a failed write (errors ignored).
 void discard_file(const std::string& temp_path);
 
+// Writes a whole file that way: `path` holds the old content or `bytes`,
+// never part of them.
+Status write_file_atomically(const std::string& path, const std::string& bytes);
+
 }  // namespace visvol

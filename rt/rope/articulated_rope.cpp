@@ -290,9 +290,13 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
   update_vertices();
 }
 
+// A vertex is the middle of the joint between two capsules; a fixed end is
+// its anchor exactly, so the path starts and ends where the operator said
+// (the joint solver leaves a gap of under 1e-4 of a segment there).
 void ArticulatedRope::update_vertices() {
-  for (int i = 0; i < n_; ++i) vertices_[static_cast<std::size_t>(i)] = end_a(i);
-  vertices_[static_cast<std::size_t>(n_)] = end_b(n_ - 1);
+  vertices_[0] = ends_.start_fixed ? ends_.start_m : end_a(0);
+  for (int i = 1; i < n_; ++i) vertices_[static_cast<std::size_t>(i)] = 0.5 * (end_b(i - 1) + end_a(i));
+  vertices_[static_cast<std::size_t>(n_)] = ends_.end_fixed ? ends_.end_m : end_b(n_ - 1);
 }
 
 double ArticulatedRope::kinetic_energy_j() const {

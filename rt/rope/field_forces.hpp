@@ -65,7 +65,9 @@ struct PointHull {
 template <class Level>
 Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name);
 
-template <class Level>
+// `Sampler` answers the queries (fields::FieldSampler<Level>, or one that
+// picks the level per query, like storage::ResidentSampler).
+template <class Level, class Sampler = fields::FieldSampler<Level>>
 class FieldForces final : public RopeEnvironment, public PathField {
  public:
   static constexpr double kSaturation = 3.0;
@@ -83,7 +85,7 @@ class FieldForces final : public RopeEnvironment, public PathField {
   void set_visible_to(const PointHull* hull) { visible_to_ = hull; }
   double reference_acceleration() const { return accel_ref_; }
   double reference_gradient() const { return gradient_ref_; }
-  const fields::FieldSampler<Level>& sampler() const { return sampler_; }
+  const Sampler& sampler() const { return sampler_; }
 
   Vec3 acceleration(const Vec3& p) const override {
     Vec3 a = Vec3::Zero();
@@ -158,7 +160,7 @@ class FieldForces final : public RopeEnvironment, public PathField {
     return mags[mags.size() * 9 / 10];
   }
 
-  fields::FieldSampler<Level> sampler_;
+  Sampler sampler_;
   ForceGains gains_;
   double accel_ref_ = 1.0;
   double gradient_ref_ = 1.0;

@@ -3,7 +3,6 @@
 #include "tools/visvol/plan_publish.hpp"
 
 #include <gtest/gtest.h>
-#include <ogr_spatialref.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -14,8 +13,6 @@
 
 namespace {
 
-using visvol::cli::epsg_of;
-using visvol::cli::pack_id_from_path;
 using visvol::cli::subsample_indices;
 using visvol::test::Outcome;
 using visvol::test::visvol;
@@ -34,25 +31,6 @@ TEST(PlanPublish, SubsampleKeepsBothEndsEvenlySpaced) {
     const int gap = some[k] - some[k - 1];
     EXPECT_TRUE(gap == 1 || gap == 2 || gap == 3) << k << ": " << gap;
   }
-}
-
-TEST(PlanPublish, PackIdIsTheFileStemInSafeCharacters) {
-  EXPECT_EQ(pack_id_from_path("/srv/packs/sf_north.vvp"), "sf_north");
-  EXPECT_EQ(pack_id_from_path("taunus 90m+v2.vvp"), "taunus_90m_v2");
-  EXPECT_EQ(pack_id_from_path("/srv/packs/.vvp"), ".vvp");
-  EXPECT_EQ(pack_id_from_path(std::string(100, 'a') + ".vvp").size(), 63u);
-  EXPECT_EQ(pack_id_from_path("dir/"), "pack");
-}
-
-TEST(PlanPublish, EpsgCodeOfAWkt) {
-  OGRSpatialReference srs;
-  ASSERT_EQ(srs.importFromEPSG(32610), OGRERR_NONE);
-  char* wkt = nullptr;
-  ASSERT_EQ(srs.exportToWkt(&wkt), OGRERR_NONE);
-  EXPECT_EQ(epsg_of(wkt), "EPSG:32610");
-  CPLFree(wkt);
-  EXPECT_EQ(epsg_of(""), "");
-  EXPECT_EQ(epsg_of("not a crs"), "");
 }
 
 class PlanPublishCli : public ::testing::Test {

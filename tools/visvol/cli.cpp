@@ -17,17 +17,7 @@ int fail(const std::string& command, const Status& status) {
 }
 
 Status write_text_file(const std::string& path, const std::string& text) {
-  const std::string temp = temp_path_for(path);
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      discard_file(temp);
-      return io_error(path + ": cannot write");
-    }
-  }
-  return commit_file(temp, path);
+  return write_file_atomically(path, text);
 }
 
 Progress::Progress(std::string label)

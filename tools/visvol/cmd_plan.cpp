@@ -11,6 +11,7 @@
 #include "path_io.hpp"
 #include "plan_publish.hpp"
 #include "rt/rope/planner.hpp"
+#include "storage/pack_identity.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::cli {
@@ -35,8 +36,8 @@ struct PlanOptions {
 dds::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack_path) {
   dds::TerrainInfo t{};
   t.stamp_ns = dds::now_stamp_ns();
-  dds::copy_text(t.pack_id, pack_id_from_path(pack_path));
-  dds::copy_text(t.crs, epsg_of(pack.metadata().crs_wkt));
+  dds::copy_text(t.pack_id, storage::pack_id_from_path(pack_path));
+  dds::copy_text(t.crs, storage::epsg_from_wkt(pack.metadata().crs_wkt));
   if (!dds::copy_text(t.crs_wkt, pack.metadata().crs_wkt)) t.crs_wkt[0] = '\0';  // never a torn WKT
   const fields::VolumeGeometry g = pack.geometry(0);
   t.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};

@@ -1,7 +1,5 @@
 #include "plan_publish.hpp"
 
-#include <ogr_spatialref.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -23,31 +21,6 @@ Status validate(const PublishOptions& o) {
     return invalid_argument("--linger: must be in [0, 600] s");
   }
   return {};
-}
-
-std::string pack_id_from_path(const std::string& pack_path) {
-  std::string name = pack_path.substr(pack_path.find_last_of('/') + 1);
-  const std::size_t dot = name.find_last_of('.');
-  if (dot != std::string::npos && dot > 0) name.erase(dot);
-  for (char& c : name) {
-    const bool ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
-                    c == '.' || c == '_' || c == '-';
-    if (!ok) c = '_';
-  }
-  if (name.empty()) name = "pack";
-  if (name.size() > dds::kPackIdCapacity - 1) name.resize(dds::kPackIdCapacity - 1);
-  return name;
-}
-
-std::string epsg_of(const std::string& crs_wkt) {
-  if (crs_wkt.empty()) return {};
-  OGRSpatialReference srs;
-  if (srs.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return {};
-  srs.AutoIdentifyEPSG();  // fills the authority of a WKT that omits it (UTM zones)
-  const char* name = srs.GetAuthorityName(nullptr);
-  const char* code = srs.GetAuthorityCode(nullptr);
-  if (name == nullptr || code == nullptr || std::string(name) != "EPSG") return {};
-  return std::string("EPSG:") + code;
 }
 
 std::vector<int> subsample_indices(int n, int max) {

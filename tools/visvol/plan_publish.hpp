@@ -29,12 +29,6 @@ struct PublishOptions {
 };
 Status validate(const PublishOptions& options);
 
-// The pack id subscribers see: the pack file's name without directory and
-// extension, characters outside [A-Za-z0-9._-] replaced by '_', at most 63.
-std::string pack_id_from_path(const std::string& pack_path);
-// "EPSG:<code>" when the WKT names an EPSG authority, empty otherwise.
-std::string epsg_of(const std::string& crs_wkt);
-
 // Which of n vertices a sample of at most `max` keeps: evenly spaced, both
 // ends always. n <= max keeps them all.
 std::vector<int> subsample_indices(int n, int max);

@@ -1,0 +1,421 @@
+#include "app/console.hpp"
+
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "drivers/can/socketcan_bus.hpp"
+#include "drivers/dds/command_intake.hpp"
+#include "drivers/dds/live_publisher.hpp"
+#include "drivers/dds/message_codec.hpp"
+#include "drivers/dds/participant.hpp"
+#include "rt/base/atomic_file.hpp"
+#include "rt/exec/executive.hpp"
+#include "rt/exec/memory_budget.hpp"
+#include "rt/exec/periodic_loop.hpp"
+#include "rt/exec/realtime.hpp"
+#include "rt/exec/simulated_device.hpp"
+#include "storage/pack_identity.hpp"
+#include "storage/resident_pack.hpp"
+
+namespace visvol::app {
+
+namespace {
+
+constexpr std::uint64_t kMiB = 1024 * 1024;
+
+// The simulated operator of the demo: settles, grabs the rope in the middle
+// of the workspace, pulls it north and up, lets go, and does it again later.
+constexpr const char* kBuiltinScript =
+    "2.0 move 0 0 0 0.5\n"
+    "4.0 pull 0 40 -40 1.5\n"
+    "7.0 release\n"
+    "7.5 move 0 0 0 0.5\n"
+    "12.0 pull 30 -30 0 1.0\n"
+    "14.0 release\n"
+    "14.5 move 0 0 0 0.5\n";
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+dds::TimingSummary summary_of(const rt::DurationHistogram& h) {
+  return {h.min_us(), h.mean_us(), h.percentile_us(0.99), h.max_us(), static_cast<std::uint32_t>(h.count())};
+}
+
+const char* device_text(const rt::ExecutiveCounters& c) {
+  if (!c.haptics) return "none";
+  return haptic::state_name(c.device_state);
+}
+
+}  // namespace
+
+struct Console::Impl {
+  ConsoleOptions o;
+  std::shared_ptr<const storage::Pack> pack;
+  std::string pack_id;
+  rt::MemoryBudget budget{0};
+  rt::RealtimeReport realtime;
+  std::unique_ptr<storage::ResidentPack> field;
+  std::unique_ptr<dds::Participant> participant;
+  std::unique_ptr<dds::LivePublisher> publisher;
+  std::unique_ptr<dds::CommandIntake> intake;
+  dds::CommandQueue commands;
+  dds::AckQueue acks;
+  std::unique_ptr<rt::SimulatedDevice> sim;
+  std::unique_ptr<can::SocketCanBus> socket_bus;
+  std::unique_ptr<rt::Executive> exec;
+  std::unique_ptr<rt::PeriodicLoop> loop;
+  rt::LoopConfig loop_config;
+  std::string health_csv;
+  double fc_start = 0;
+  std::uint64_t rss_peak = 0;
+
+  Status start();
+  Status start_dds(const fields::VolumeGeometry& g);
+  Status write_outputs(const rt::LoopRun& run, double wall_s);
+  dds::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
+};
+
+Console::Console(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Console::~Console() {
+  if (impl_ && impl_->loop && impl_->loop->running()) impl_->loop->stop();
+  if (impl_ && impl_->field) impl_->field->stop_pager();
+}
+
+Result<std::unique_ptr<Console>> Console::start(const ConsoleOptions& options) {
+  VISVOL_RETURN_IF_ERROR(validate(options));
+  auto impl = std::make_unique<Impl>();
+  impl->o = options;
+  VISVOL_RETURN_IF_ERROR(impl->start());
+  return std::unique_ptr<Console>(new Console(std::move(impl)));
+}
+
+Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
+  dds::ParticipantConfig pc;
+  pc.domain_id = o.domain;
+  pc.topic_namespace = o.dds_namespace;
+  if (o.dds_config.empty()) {
+    pc.cyclone_xml = std::string(dds::loopback_config());
+  } else {
+    Result<std::string> xml = dds::read_cyclone_config(o.dds_config);
+    if (!xml.ok()) return xml.status();
+    pc.cyclone_xml = std::move(*xml);
+  }
+  auto p = dds::Participant::create(pc);
+  if (!p.ok()) return p.status();
+  participant = std::move(*p);
+  dds::IntakeConfig ic;
+  ic.limits.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
+  ic.limits.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m() + 10000.0};
+  ic.limits.max_segments = static_cast<std::uint32_t>(o.max_segments);
+  VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
+  auto in = dds::CommandIntake::start(*participant, ic, commands, &acks);
+  if (!in.ok()) return in.status();
+  intake = std::move(*in);
+  auto pub = dds::LivePublisher::start(*participant, dds::PublisherConfig(), intake.get());
+  if (!pub.ok()) return pub.status();
+  publisher = std::move(*pub);
+  dds::TerrainInfo& t = publisher->terrain().back();
+  t = dds::TerrainInfo{};
+  t.stamp_ns = dds::now_stamp_ns();
+  dds::copy_text(t.pack_id, pack_id);
+  dds::copy_text(t.crs, storage::epsg_from_wkt(pack->metadata().crs_wkt));
+  if (!dds::copy_text(t.crs_wkt, pack->metadata().crs_wkt)) t.crs_wkt[0] = '\0';
+  t.min = ic.limits.min;
+  t.max = {ic.limits.max.x_m, ic.limits.max.y_m, g.top_m()};
+  t.post_spacing_m = g.spacing_m;
+  publisher->terrain().publish();
+  return {};
+}
+
+Status Console::Impl::start() {
+  // the pack (mapped, nothing read but its tables)
+  auto p = storage::Pack::open(o.pack);
+  if (!p.ok()) return p.status();
+  pack = *p;
+  pack_id = storage::pack_id_from_path(o.pack);
+  if (o.level < 0 || o.level >= pack->level_count()) {
+    return invalid_argument("--level: " + std::to_string(o.level) + " is not in " + o.pack + " (0.." +
+                            std::to_string(pack->level_count() - 1) + ")");
+  }
+  const fields::VolumeGeometry g = pack->geometry(o.level);
+  rt::RealtimeConfig rtc;
+  rtc.priority = o.priority;
+  rtc.cpu = o.cpu;
+  rtc.lock_memory = o.lock_memory;
+  rt::lock_process_memory(rtc, realtime);
+  if (o.dds) VISVOL_RETURN_IF_ERROR(start_dds(pack->geometry(0)));
+
+  // the budget: what runs already, what the loop reserves, the tiles get the rest
+  budget = rt::MemoryBudget(static_cast<std::uint64_t>(o.budget_mib * kMiB));
+  budget.reserve(o.dds ? "process (code, libraries, DDS)" : "process (code, libraries)", rt::resident_bytes());
+  const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
+  budget.reserve("ropes (both models, max segments)", 2 * segments * 1024);
+  budget.reserve("executive (samples, scratch)", sizeof(dds::PathSample) * 2 + segments * 64 + 64 * 1024);
+  budget.reserve("loop (histograms, reports)", sizeof(rt::LoopReport) * 3 + sizeof(rt::LoopRun) * 2);
+  budget.reserve("loop stack (prefaulted)", rtc.stack_prefault_bytes);
+  if (o.device == "sim") budget.reserve("simulated device and bus", 2 * 4096 * sizeof(can::CanFrame) + 64 * 1024);
+  VISVOL_RETURN_IF_ERROR(budget.check(1, "tiles"));
+  storage::ResidentConfig rc;
+  rc.budget_bytes = budget.remaining_bytes();
+  rc.margin_m = o.tile_margin_m;
+  auto f = storage::ResidentPack::create(pack, rc);
+  if (!f.ok()) return Status(f.status().code(), f.status().message() + "\n" + budget.table());
+  field = std::move(*f);
+  budget.reserve("tiles (heights, coarsest level, around the rope)", rc.budget_bytes);
+
+  // the device
+  can::CanBus* bus = nullptr;
+  if (o.device == "sim") {
+    hapticsim::SimConfig sc;
+    sc.node_id = static_cast<std::uint8_t>(o.node);
+    hapticsim::Script script;
+    if (o.script == "builtin") {
+      auto s = hapticsim::parse_script(kBuiltinScript, "built-in script", sc.workspace_half_mm);
+      if (!s.ok()) return s.status();
+      script = std::move(*s);
+    } else if (o.script != "none") {
+      auto s = hapticsim::load_script(o.script, sc.workspace_half_mm);
+      if (!s.ok()) return s.status();
+      script = std::move(*s);
+    }
+    auto s = rt::SimulatedDevice::create(sc, std::move(script), rt::monotonic_ns());
+    if (!s.ok()) return s.status();
+    sim = std::move(*s);
+    bus = &sim->console_bus();
+  } else if (o.device == "socketcan") {
+    can::SocketCanConfig cc;
+    cc.interface = o.can_interface;
+    cc.filters = haptic::DeviceDriver::receive_filters(static_cast<std::uint8_t>(o.node));
+    auto b = can::SocketCanBus::open(cc);
+    if (!b.ok()) return b.status();
+    socket_bus = std::move(*b);
+    bus = socket_bus.get();
+  }
+
+  // the executive
+  rt::ExecutiveConfig ec;
+  auto ground = [&](double x, double y) {
+    return fields::FieldSampler<storage::ResidentLevel>(field->level(o.level)).height(x, y);
+  };
+  const double ymid = g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m;
+  const double xw = g.origin_x + 0.1 * (g.nx - 1) * g.spacing_m, xe = g.origin_x + 0.9 * (g.nx - 1) * g.spacing_m;
+  ec.start_m = o.from.empty() ? rt::Vec3(xw, ymid, ground(xw, ymid) + 150) : rt::Vec3(o.from[0], o.from[1], o.from[2]);
+  ec.end_m = o.to.empty() ? rt::Vec3(xe, ymid, ground(xe, ymid) + 150) : rt::Vec3(o.to[0], o.to[1], o.to[2]);
+  ec.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
+  ec.model = o.model == "spring" ? rt::RopeModel::spring : rt::RopeModel::articulated;
+  ec.segments = o.segments;
+  ec.max_segments = o.max_segments;
+  ec.gains.k1_visibility = o.k1;
+  ec.gains.k2_terrain = o.k2;
+  ec.gains.clearance_m = o.clearance_m;
+  ec.k3_user = o.k3;
+  ec.level = o.level;
+  ec.period_s = o.period_us * 1e-6;
+  ec.driver.node_id = static_cast<std::uint8_t>(o.node);
+  dds::copy_text(ec.pack_id, pack_id);
+  rt::ExecutiveOutputs out;
+  if (publisher) {
+    out.path = &publisher->path();
+    out.device = &publisher->device_status();
+    out.acks = &acks;
+  }
+  auto e = rt::Executive::create(ec, *field, bus, sim.get(), &commands, out);
+  if (!e.ok()) return e.status();
+  exec = std::move(*e);
+  fc_start = exec->counters().fc;
+
+  // the loop and the pager
+  loop_config.period_ns = static_cast<std::int64_t>(std::llround(o.period_us * 1000));
+  loop_config.overrun_limit = o.overrun_limit;
+  loop_config.report_ticks = static_cast<std::uint32_t>(std::max(1.0, std::round(100000.0 / o.period_us)));
+  loop_config.realtime = rtc;
+  field->set_reader_active(true);
+  field->start_pager();
+  loop = std::make_unique<rt::PeriodicLoop>(*exec);
+  return loop->start(loop_config);
+}
+
+dds::HealthSample Console::Impl::health(const rt::LoopReport& r, const rt::ExecutiveCounters& c,
+                                        std::uint64_t seq) const {
+  dds::HealthSample h{};
+  h.sequence = seq;
+  h.stamp_ns = dds::now_stamp_ns();
+  h.period_us = o.period_us;
+  h.wakeup_latency = summary_of(r.wake_latency);
+  h.compute_time = summary_of(r.compute);
+  h.overruns = r.totals.overruns;
+  h.misses = r.totals.misses;
+  h.safe_state = c.servo_reason != servo::SafeReason::none;
+  dds::copy_text(h.safe_state_reason, h.safe_state ? servo::safe_reason_name(c.servo_reason) : "");
+  return h;
+}
+
+Status Console::run(const std::atomic<bool>& stop) {
+  Impl& m = *impl_;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const std::string& w : m.realtime.warnings) std::fprintf(stderr, "visvol-console: warning: %s\n", w.c_str());
+  std::fprintf(stderr, "visvol-console: %s, rope of %d segments, %s, device %s, DDS %s; memory budget:\n%s",
+               m.pack_id.c_str(), m.o.segments, m.o.objective.c_str(), m.o.device.c_str(),
+               m.o.dds ? ("domain " + std::to_string(m.o.domain)).c_str() : "off", m.budget.table().c_str());
+  m.health_csv =
+      "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"
+      "resident_tiles_mib,rss_mib,fallbacks\n";
+  rt::LoopReport last{};
+  rt::ExecutiveCounters counters = m.exec->counters();
+  std::uint64_t health_seq = 0;
+  double next_line_s = 1.0;
+  while (!stop.load() && (m.o.seconds <= 0 || seconds_since(t0) < m.o.seconds)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (const rt::LoopReport* r = m.loop->reports().take()) last = *r;
+    if (const rt::ExecutiveCounters* c = m.exec->snapshot().take()) counters = *c;
+    if (m.publisher && last.sequence > 0) m.publisher->health().write(m.health(last, counters, ++health_seq));
+    const double t = seconds_since(t0);
+    if (t >= next_line_s) {
+      next_line_s += 1.0;
+      const std::uint64_t rss = rt::resident_bytes();
+      m.rss_peak = std::max(m.rss_peak, rss);
+      const storage::ResidentStats ts = m.field->stats();
+      char line[512];
+      std::snprintf(line, sizeof line, "%.1f,%.1f,%.1f,%.1f,%.1f,%llu,%llu,%.6f,%d,%s,%.1f,%.1f,%llu\n", t,
+                    last.wake_latency.percentile_us(0.99), last.wake_latency.max_us(), last.compute.percentile_us(0.99),
+                    last.compute.max_us(), static_cast<unsigned long long>(last.totals.overruns),
+                    static_cast<unsigned long long>(last.totals.misses), counters.fc, counters.converged ? 1 : 0,
+                    device_text(counters), static_cast<double>(ts.resident_bytes) / kMiB,
+                    static_cast<double>(rss) / kMiB, static_cast<unsigned long long>(m.field->fallbacks()));
+      m.health_csv += line;
+      std::fprintf(stderr,
+                   "%6.1f s  F_c %.4f%s  wake p99 %.0f us  compute p99 %.0f us  overruns %llu  device %s  "
+                   "grasps %llu  memory %.0f/%.0f MiB\n",
+                   t, counters.fc, counters.converged ? " (at rest)" : "", last.wake_latency.percentile_us(0.99),
+                   last.compute.percentile_us(0.99), static_cast<unsigned long long>(last.totals.overruns),
+                   device_text(counters), static_cast<unsigned long long>(counters.grasps),
+                   static_cast<double>(rss) / kMiB, m.o.budget_mib);
+    }
+  }
+  const double wall_s = seconds_since(t0);
+  const rt::LoopRun run = m.loop->stop();
+  m.field->set_reader_active(false);
+  m.field->stop_pager();
+  Status delivered;
+  if (m.publisher) delivered = m.publisher->stop();
+  if (m.intake) m.intake->stop();
+  VISVOL_RETURN_IF_ERROR(m.write_outputs(run, wall_s));
+  if (!delivered.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", delivered.message().c_str());
+  return {};
+}
+
+Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
+  ::mkdir(o.out.c_str(), 0755);
+  struct stat st {};
+  if (::stat(o.out.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    return Status(Errc::io, o.out + ": cannot create the output directory");
+  }
+  const rt::Rope& rope = exec->rope();
+  const storage::ResidentSampler& s = exec->forces().sampler();
+  std::string csv = "x_m,y_m,z_m,fp,clearance_m\n";
+  char line[192];
+  double lowest = INFINITY;
+  for (int i = 0; i <= rope.segments(); ++i) {
+    const rt::Vec3& v = rope.vertices()[i];
+    const double clearance = v.z() - s.height(v.x(), v.y());
+    lowest = std::min(lowest, clearance);
+    std::snprintf(line, sizeof line, "%.3f,%.3f,%.3f,%.6f,%.2f\n", v.x(), v.y(), v.z(), s.visibility(v.x(), v.y(), v.z()),
+                  clearance);
+    csv += line;
+  }
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/path.csv", csv));
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/health.csv", health_csv));
+
+  const rt::ExecutiveCounters& c = exec->counters();
+  const storage::ResidentStats ts = field->stats();
+  auto timing = [](const rt::DurationHistogram& h) {
+    return nlohmann::json{{"p50_us", h.percentile_us(0.5)}, {"p99_us", h.percentile_us(0.99)},
+                          {"p999_us", h.percentile_us(0.999)}, {"max_us", h.max_us()}, {"mean_us", h.mean_us()},
+                          {"count", h.count()}};
+  };
+  nlohmann::json budget_items = nlohmann::json::array();
+  for (const rt::MemoryBudget::Item& i : budget.items()) {
+    budget_items.push_back({{"what", i.what}, {"mib", static_cast<double>(i.bytes) / kMiB}});
+  }
+  nlohmann::json j = {
+      {"pack", o.pack},
+      {"pack_id", pack_id},
+      {"wall_s", wall_s},
+      {"loop",
+       {{"period_us", o.period_us},
+        {"ticks", run.totals.ticks},
+        {"wake_latency", timing(run.wake_latency)},
+        {"compute", timing(run.compute)},
+        {"overruns", run.totals.overruns},
+        {"misses", run.totals.misses},
+        {"safe_states", run.totals.safe_states},
+        {"minor_faults_after_settle", run.totals.faults_after_settle.minor},
+        {"major_faults_after_settle", run.totals.faults_after_settle.major},
+        {"sched_fifo", run.realtime.fifo},
+        {"pinned", run.realtime.pinned},
+        {"memory_locked", realtime.memory_locked},
+        {"warnings", realtime.warnings}}},
+      {"path",
+       {{"objective", o.objective},
+        {"model", rt::to_string(rope.model())},
+        {"segments", rope.segments()},
+        {"fc_start", fc_start},
+        {"fc_end", c.fc},
+        {"length_m", rope.length_m()},
+        {"min_clearance_m", lowest},
+        {"converged", c.converged},
+        {"equilibrium_s", c.equilibrium_s},
+        {"runs", c.runs}}},
+      {"device",
+       {{"kind", o.device},
+        {"state", device_text(c)},
+        {"grasps", c.grasps},
+        {"send_failures", c.send_failures}}},
+      {"commands", {{"applied", c.commands_applied}, {"failed", c.commands_failed}}},
+      {"memory",
+       {{"budget_mib", o.budget_mib},
+        {"rss_peak_mib", static_cast<double>(rss_peak) / kMiB},
+        {"rss_end_mib", static_cast<double>(rt::resident_bytes()) / kMiB},
+        {"reserved", budget_items}}},
+      {"tiles",
+       {{"budget_mib", static_cast<double>(ts.budget_bytes) / kMiB},
+        {"resident_mib", static_cast<double>(ts.resident_bytes) / kMiB},
+        {"pack_mib", static_cast<double>(ts.pack_bytes) / kMiB},
+        {"loaded", ts.bricks_loaded},
+        {"evicted", ts.bricks_evicted},
+        {"corrupt", ts.corrupt_bricks},
+        {"lock_failures", ts.lock_failures},
+        {"fallbacks", field->fallbacks()}}}};
+  if (sim) {
+    j["device"]["simulated"] = {{"max_force_n", sim->device().counters().max_force_n},
+                                {"watchdog_trips", sim->device().counters().watchdog_trips}};
+  }
+  if (publisher) {
+    const dds::PublisherStats ps = publisher->stats();
+    j["dds"] = {{"domain", o.domain}, {"paths", ps.paths}, {"health", ps.health}, {"errors", ps.errors}};
+  }
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/summary.json", j.dump(2) + "\n"));
+  std::printf("visvol-console: %.1f s, %llu ticks; wake-up p50 %.0f us p99 %.0f us max %.0f us; compute p50 %.0f us "
+              "p99 %.0f us; overruns %llu; major faults %lld\n",
+              wall_s, static_cast<unsigned long long>(run.totals.ticks), run.wake_latency.percentile_us(0.5),
+              run.wake_latency.percentile_us(0.99), run.wake_latency.max_us(), run.compute.percentile_us(0.5),
+              run.compute.percentile_us(0.99), static_cast<unsigned long long>(run.totals.overruns),
+              static_cast<long long>(run.totals.faults_after_settle.major));
+  std::printf("path: %s, F_c %.4f -> %.4f, %.0f m, lowest clearance %.1f m, %s; device %s, %llu grasp(s)\n",
+              o.objective.c_str(), fc_start, c.fc, rope.length_m(), lowest, c.converged ? "at rest" : "moving",
+              device_text(c), static_cast<unsigned long long>(c.grasps));
+  std::printf("memory: peak RSS %.1f MiB of a %.0f MiB budget; tiles %.1f of %.1f MiB (pack %.1f MiB)\n",
+              static_cast<double>(rss_peak) / kMiB, o.budget_mib, static_cast<double>(ts.resident_bytes) / kMiB,
+              static_cast<double>(ts.budget_bytes) / kMiB, static_cast<double>(ts.pack_bytes) / kMiB);
+  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json\n", o.out.c_str(), o.out.c_str(), o.out.c_str());
+  return {};
+}
+
+}  // namespace visvol::app

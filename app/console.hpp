@@ -1,0 +1,45 @@
+// The planning console: a field pack mapped within a memory budget, the
+// 1 kHz executive (rope, servo, haptic device), DDS publishing and command
+// intake, and a monitor that logs loop health and shows progress.
+//
+//   main thread        start-up, then the monitor (10 Hz): health to DDS and
+//                      to the log, a progress line every second
+//   loop thread        the executive's ticks (SCHED_FIFO when permitted)
+//   pager thread       resident tiles around the rope
+//   DDS threads        publisher, command intake, Cyclone's own
+//
+// Outputs in the output directory (written whole or not at all):
+//   path.csv       the last path: x_m, y_m, z_m (pack CRS), F_p, clearance_m
+//   health.csv     one line a second: loop timing, F_c, device, tiles, memory
+//   summary.json   the run: loop timing percentiles, overruns, faults, memory
+//                  against the budget, tiles, commands, the path's figures
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "app/console_options.hpp"
+#include "rt/base/status.hpp"
+
+namespace visvol::app {
+
+class Console {
+ public:
+  // Everything reserved and started; errors name the input and the problem
+  // (Errc::invalid_argument for bad options or input, others for the system).
+  static Result<std::unique_ptr<Console>> start(const ConsoleOptions& options);
+  ~Console();
+
+  // Monitors until `stop` is set or the configured time has passed, then
+  // stops every thread and writes the outputs. Returns what went wrong
+  // writing them, if anything.
+  Status run(const std::atomic<bool>& stop);
+
+ private:
+  struct Impl;
+  explicit Console(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace visvol::app

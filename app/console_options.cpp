@@ -1,0 +1,67 @@
+#include "app/console_options.hpp"
+
+#include <cmath>
+
+namespace visvol::app {
+
+void add_console_options(CLI::App& app, ConsoleOptions& o) {
+  app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)");
+  app.add_option("--pack", o.pack, "Field pack to plan in (visvol build ... -o PACK)")->required()->check(CLI::ExistingFile);
+  app.add_option("--seconds", o.seconds, "Run this long, s (0: until Ctrl-C or SIGTERM)")->capture_default_str();
+  app.add_option("-o,--out", o.out, "Directory for the path, health log and summary")->capture_default_str();
+  app.add_option("--from", o.from, "Rope start X Y Z (pack CRS, m; default: west edge, 150 m up)")->expected(3);
+  app.add_option("--to", o.to, "Rope end X Y Z (default: east edge, 150 m up)")->expected(3);
+  app.add_option("--objective", o.objective, "hide or show")->check(CLI::IsMember({"hide", "show"}))->capture_default_str();
+  app.add_option("--model", o.model, "articulated or spring")->check(CLI::IsMember({"articulated", "spring"}))->capture_default_str();
+  app.add_option("--segments", o.segments, "Rope segments at start")->capture_default_str();
+  app.add_option("--max-segments", o.max_segments, "Rope segments reserved (set-segments may go up to this)")->capture_default_str();
+  app.add_option("--clearance", o.clearance_m, "Least height above the terrain, m")->capture_default_str();
+  app.add_option("--k1", o.k1, "Visibility gain (sign from the objective)")->capture_default_str();
+  app.add_option("--k2", o.k2, "Terrain force field gain")->capture_default_str();
+  app.add_option("--k3", o.k3, "Operator pull gain")->capture_default_str();
+  app.add_option("--budget-mib", o.budget_mib, "Memory budget of the whole process, MiB; tiles get what is left")->capture_default_str();
+  app.add_option("--period-us", o.period_us, "Loop period, us")->capture_default_str();
+  app.add_option("--priority", o.priority, "SCHED_FIFO priority of the loop (0: none)")->capture_default_str();
+  app.add_option("--cpu", o.cpu, "Pin the loop to this CPU (-1: no pinning)")->capture_default_str();
+  app.add_flag("!--no-lock", o.lock_memory, "Do not lock memory (mlockall)");
+  app.add_option("--overrun-limit", o.overrun_limit, "Overruns in a row before the haptic safe state")->capture_default_str();
+  app.add_option("--level", o.level, "Level of detail the rope runs on (0: finest)")->capture_default_str();
+  app.add_option("--device", o.device, "Haptic device: sim (simulated, in-process bus), socketcan, none")
+      ->check(CLI::IsMember({"sim", "socketcan", "none"}))
+      ->capture_default_str();
+  app.add_option("--can-interface", o.can_interface, "CAN interface for --device socketcan (e.g. can0, vcan0)");
+  app.add_option("--node", o.node, "Device node id, 1..127")->capture_default_str();
+  app.add_option("--script", o.script, "Simulated operator: builtin (grab and pull), none, or a visvol-hapticsim script")
+      ->capture_default_str();
+  app.add_flag("!--no-dds", o.dds, "Do not publish or take commands over DDS");
+  app.add_option("--domain", o.domain, "DDS domain id")->check(CLI::Range(0u, 232u))->capture_default_str();
+  app.add_option("--dds-config", o.dds_config, "Cyclone DDS XML configuration (default: loopback only)")->check(CLI::ExistingFile);
+  app.add_option("--namespace", o.dds_namespace, "DDS topic namespace");
+  app.add_option("--tile-margin", o.tile_margin_m, "Tiles kept resident around the rope, m")->capture_default_str();
+}
+
+Status validate(const ConsoleOptions& o) {
+  auto bad = [](const std::string& what) { return invalid_argument(what); };
+  if (!(o.seconds >= 0 && o.seconds <= 1e7)) return bad("--seconds: must be in 0..1e7 s");
+  if (o.segments < 2 || o.segments > o.max_segments) {
+    return bad("--segments: " + std::to_string(o.segments) + " must be in 2..--max-segments (" +
+               std::to_string(o.max_segments) + ")");
+  }
+  if (o.max_segments < 2 || o.max_segments > 4096) return bad("--max-segments: must be in 2..4096");
+  if (!(o.clearance_m >= 0 && o.clearance_m <= 10000)) return bad("--clearance: must be in 0..10000 m");
+  for (const auto& [name, v] : {std::pair{"--k1", o.k1}, {"--k2", o.k2}, {"--k3", o.k3}}) {
+    if (!(std::isfinite(v) && v >= 0 && v <= 1e6)) return bad(std::string(name) + ": must be in 0..1e6");
+  }
+  if (!(o.budget_mib >= 16 && o.budget_mib <= 1 << 20)) return bad("--budget-mib: must be in 16..1048576 MiB");
+  if (!(o.period_us >= 100 && o.period_us <= 100000)) return bad("--period-us: must be in 100..100000 us");
+  if (o.node < 1 || o.node > 127) return bad("--node: must be in 1..127");
+  if (o.device == "socketcan" && o.can_interface.empty()) {
+    return bad("--device socketcan needs --can-interface (e.g. can0 or vcan0)");
+  }
+  if (!(o.tile_margin_m >= 0 && o.tile_margin_m <= 1e5)) return bad("--tile-margin: must be in 0..100000 m");
+  if (!o.from.empty() && o.from.size() != 3) return bad("--from: needs X Y Z");
+  if (!o.to.empty() && o.to.size() != 3) return bad("--to: needs X Y Z");
+  return {};
+}
+
+}  // namespace visvol::app

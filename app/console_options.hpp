@@ -1,0 +1,53 @@
+// What the console is told to do: command-line options, optionally from a
+// configuration file (INI or TOML, the same names as the long options).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rt/base/status.hpp"
+
+namespace visvol::app {
+
+struct ConsoleOptions {
+  std::string pack;
+  double seconds = 0;                 // 0: until SIGINT or SIGTERM
+  std::string out = "out/console";    // outputs
+  // The planning problem (pack CRS, metres); empty: across the pack west to east.
+  std::vector<double> from, to;
+  std::string objective = "hide";
+  std::string model = "articulated";
+  int segments = 128;
+  int max_segments = 256;
+  double clearance_m = 30;
+  double k1 = 1, k2 = 1, k3 = 1;
+  // Real time.
+  double budget_mib = 256;
+  double period_us = 1000;
+  int priority = 80;
+  int cpu = -1;
+  bool lock_memory = true;
+  int overrun_limit = 5;
+  int level = 0;
+  // Haptic device.
+  std::string device = "sim";         // sim | socketcan | none
+  std::string can_interface;          // socketcan
+  int node = 1;
+  std::string script = "builtin";     // sim: builtin | none | FILE
+  // DDS.
+  bool dds = true;
+  std::uint32_t domain = 0;
+  std::string dds_config;             // empty: the built-in loopback configuration
+  std::string dds_namespace;
+  // Tiles.
+  double tile_margin_m = 1000;
+};
+
+// Registers the options (with --help texts, units and defaults) on `app`.
+void add_console_options(CLI::App& app, ConsoleOptions& o);
+// Checks what CLI11 cannot: combinations and ranges. Names the option.
+Status validate(const ConsoleOptions& o);
+
+}  // namespace visvol::app

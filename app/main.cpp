@@ -1,0 +1,51 @@
+// visvol-console: the planning console. Maps a field pack within a memory
+// budget, runs the rope and the haptic servo at 1 kHz against the haptic
+// device (simulated by default), publishes the path over DDS and takes
+// commands, until the time is up or Ctrl-C.
+//
+// Exit status: 0 success, 1 a failure while running, 2 bad options or input.
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+
+#include "app/console.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop.store(true); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace visvol;
+  CLI::App cli{
+      "visvol-console: interactive path optimisation in a visibility field (Srikanth et al.), with the rope and "
+      "the haptic servo at 1 kHz and the path on DDS.\n"
+      "Example: visvol-console --pack out/sf_north.vvp --seconds 20 --out out/console"};
+  app::ConsoleOptions options;
+  app::add_console_options(cli, options);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) {
+      std::printf("%s", cli.help().c_str());
+      return 0;
+    }
+    std::fprintf(stderr, "visvol-console: %s (try --help)\n", e.what());
+    return 2;
+  }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  auto console = app::Console::start(options);
+  if (!console.ok()) {
+    std::fprintf(stderr, "visvol-console: %s\n", console.status().message().c_str());
+    const Errc c = console.status().code();
+    return c == Errc::invalid_argument || c == Errc::resource || c == Errc::corrupt ? 2 : 1;
+  }
+  const Status s = (*console)->run(g_stop);
+  if (!s.ok()) {
+    std::fprintf(stderr, "visvol-console: %s\n", s.message().c_str());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,575 @@
+#include "rt/exec/executive.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "drivers/dds/message_codec.hpp"
+#include "rt/rope/path_metrics.hpp"
+#include "rt/rope/planner.hpp"
+
+namespace visvol::rt {
+
+namespace {
+
+std::size_t index_of(RopeModel m) { return m == RopeModel::articulated ? 1 : 0; }
+
+double polyline_length(const Vec3* p, int n) {
+  double l = 0;
+  for (int i = 1; i < n; ++i) l += (p[i] - p[i - 1]).norm();
+  return l;
+}
+
+// The straight segment from a to b in n + 1 points, kept `floor_m` above the
+// terrain, bent sideways along a half sine until it is `length_m` long (an
+// inextensible rope needs slack to move). Sideways, not up: above the field's
+// top F_p has no gradient and a rope there would never come down. Bisection
+// on the bend: no allocation.
+template <class Height>
+void lay_with_slack(const Vec3& a, const Vec3& b, double length_m, double floor_m, int n, Vec3* out,
+                    const Height& height) {
+  Vec3 side(-(b.y() - a.y()), b.x() - a.x(), 0.0);
+  side = side.norm() > 0 ? Vec3(side / side.norm()) : Vec3(Vec3::UnitX());
+  auto lay = [&](double amplitude) {
+    for (int i = 0; i <= n; ++i) {
+      const double t = static_cast<double>(i) / n;
+      out[i] = a + t * (b - a) + amplitude * std::sin(M_PI * t) * side;
+      if (i > 0 && i < n) out[i].z() = std::max(out[i].z(), height(out[i].x(), out[i].y()) + floor_m);
+    }
+    return polyline_length(out, n + 1);
+  };
+  if (lay(0.0) >= length_m) return;
+  double lo = 0, hi = length_m;
+  for (int it = 0; it < 50; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (lay(mid) < length_m ? lo : hi) = mid;
+  }
+  lay(hi);
+}
+
+dds::DeviceState device_state_of(haptic::DeviceState s, bool forces) {
+  switch (s) {
+    case haptic::DeviceState::boot: return dds::DeviceState::disconnected;
+    case haptic::DeviceState::pre_operational: return dds::DeviceState::idle;
+    case haptic::DeviceState::operational: return forces ? dds::DeviceState::active : dds::DeviceState::idle;
+    case haptic::DeviceState::fault: return dds::DeviceState::fault;
+  }
+  return dds::DeviceState::unknown;
+}
+
+Status check_point(const char* name, const Vec3& p, const fields::VolumeGeometry& g, double ground_m) {
+  const double x1 = g.origin_x + (g.nx - 1) * g.spacing_m, y0 = g.origin_y - (g.ny - 1) * g.spacing_m;
+  if (!p.allFinite() || p.x() < g.origin_x || p.x() > x1 || p.y() < y0 || p.y() > g.origin_y) {
+    return invalid_argument(std::string(name) + ": (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
+                            ") is outside the pack (x " + std::to_string(g.origin_x) + ".." + std::to_string(x1) +
+                            ", y " + std::to_string(y0) + ".." + std::to_string(g.origin_y) + ")");
+  }
+  if (p.z() < ground_m) {
+    return invalid_argument(std::string(name) + ": " + std::to_string(ground_m - p.z()) + " m below the terrain");
+  }
+  return {};
+}
+
+}  // namespace
+
+Executive::Executive(const ExecutiveConfig& config, storage::ResidentPack& field)
+    : config_(config), field_(field) {}
+
+Executive::~Executive() = default;
+
+Result<std::unique_ptr<Executive>> Executive::create(const ExecutiveConfig& config, storage::ResidentPack& field,
+                                                     can::CanBus* bus, DeviceSimulation* simulation,
+                                                     dds::CommandQueue* commands, const ExecutiveOutputs& outputs) {
+  std::unique_ptr<Executive> e(new Executive(config, field));
+  VISVOL_RETURN_IF_ERROR(e->init(bus, simulation, commands, outputs));
+  return e;
+}
+
+Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::CommandQueue* commands,
+                       const ExecutiveOutputs& outputs) {
+  const ExecutiveConfig& c = config_;
+  if (c.level < 0 || c.level >= field_.level_count()) {
+    return invalid_argument("executive: level " + std::to_string(c.level) + " is not in the pack (0.." +
+                            std::to_string(field_.level_count() - 1) + ")");
+  }
+  if (c.max_segments < 2 || c.max_segments > 100000 || c.max_segments + 1 > static_cast<int>(dds::kMaxPathVertices) * 64) {
+    return invalid_argument("executive: max segments " + std::to_string(c.max_segments) + " is outside 2..100000");
+  }
+  if (c.segments < 2 || c.segments > c.max_segments) {
+    return invalid_argument("executive: segments " + std::to_string(c.segments) + " is outside 2.." +
+                            std::to_string(c.max_segments) + " (the reserved maximum)");
+  }
+  if (!(c.period_s > 0 && c.period_s <= 0.1)) return invalid_argument("executive: period must be in (0, 0.1] s");
+  for (int every : {c.path_every_ticks, c.fc_every_ticks, c.focus_every_ticks, c.device_every_ticks}) {
+    if (every < 1) return invalid_argument("executive: hand-off intervals must be at least one tick");
+  }
+  if (c.fc_samples < 2) return invalid_argument("executive: fc_samples must be at least 2");
+  if (!(std::isfinite(c.stiffness) && c.stiffness > 0)) return invalid_argument("executive: stiffness must be positive");
+  if (!(std::isfinite(c.slack) && c.slack >= 0 && c.slack <= 10)) return invalid_argument("executive: slack must be in [0, 10]");
+  if (!(std::isfinite(c.k3_user) && c.k3_user >= 0)) return invalid_argument("executive: k3 must be >= 0");
+  if (!(c.workspace_half_mm > 1 && c.workspace_half_mm < 1000)) {
+    return invalid_argument("executive: workspace half-size must be in (1, 1000) mm");
+  }
+
+  // the region around the endpoints resident before anything samples it
+  const storage::ResidentLevel& level = field_.level(c.level);
+  const fields::VolumeGeometry& g = level.geometry();
+  storage::WorldBox box{std::min(c.start_m.x(), c.end_m.x()), std::min(c.start_m.y(), c.end_m.y()),
+                        std::max(c.start_m.x(), c.end_m.x()), std::max(c.start_m.y(), c.end_m.y())};
+  field_.set_focus(box);
+  VISVOL_RETURN_IF_ERROR(field_.update());
+  forces_ = std::make_unique<FieldForces<storage::ResidentLevel, storage::ResidentSampler>>(level, c.gains);
+  const storage::ResidentSampler& sampler = forces_->sampler();
+  VISVOL_RETURN_IF_ERROR(check_point("start", c.start_m, g, sampler.height(c.start_m.x(), c.start_m.y())));
+  VISVOL_RETURN_IF_ERROR(check_point("end", c.end_m, g, sampler.height(c.end_m.x(), c.end_m.y())));
+
+  start_m_ = c.start_m;
+  end_m_ = c.end_m;
+  objective_ = c.objective;
+  segments_ = c.segments;
+  stiffness_ = c.stiffness;
+  k1_ = std::fabs(c.gains.k1_visibility);
+  k3_ = c.k3_user;
+  update_gains();
+  EquilibriumCriteria criteria;
+  criteria.check_interval_s = c.fc_every_ticks * c.period_s;
+  criteria.max_rms_speed_mps = 0.1 * g.spacing_m;
+  equilibrium_.configure(criteria);
+
+  for (RopeModel m : {RopeModel::spring, RopeModel::articulated}) {
+    RopeParams p = params_for(m, c.segments, std::max((c.end_m - c.start_m).norm() / c.segments, 1.0));
+    p.max_segments = c.max_segments;
+    Result<std::unique_ptr<Rope>> rope = make_rope(p);
+    if (!rope.ok()) return rope.status().with_context("executive");
+    ropes_[index_of(m)] = std::move(*rope);
+  }
+  rope_ = ropes_[index_of(c.model)].get();
+  scratch_ = std::make_unique<Vec3[]>(static_cast<std::size_t>(c.max_segments) + 1);
+  path_sample_ = std::make_unique<dds::PathSample>();
+  if (start_run() != Errc::ok) return invalid_argument("executive: the rope could not be laid between the endpoints");
+  counters_.running = c.start_running;
+  counters_.fc = path_fc(rope_->vertices(), rope_->segments() + 1, *forces_, c.fc_samples);
+  counters_.length_m = rope_->length_m();
+
+  simulation_ = simulation;
+  commands_ = commands;
+  outputs_ = outputs;
+  if (bus != nullptr) {
+    // the rope's extent onto the device's workspace; the soft joint as the hand feels it
+    const double span_m = std::max((c.end_m - c.start_m).head<2>().norm(), 10.0 * g.spacing_m);
+    servo::ServoConfig sc = c.servo;
+    sc.world_m_per_device_mm = span_m / (2.0 * c.workspace_half_mm);
+    sc.world_offset_m = 0.5 * (c.start_m + c.end_m);
+    const double hand_m_per_world_m = 1.0 / (1000.0 * sc.world_m_per_device_mm);
+    sc.coupling_stiffness_n_per_m = c.hand_stiffness_n_per_m * hand_m_per_world_m / sc.hand_per_rope_force;
+    sc.coupling_damping_n_s_per_m = c.hand_damping_n_s_per_m * hand_m_per_world_m / sc.hand_per_rope_force;
+    const double ref = forces_->reference_gradient();
+    sc.cue_gain_n_m = ref > 0 ? -c.cue_n / ref : 0.0;
+    Result<servo::Servo> servo = servo::Servo::create(sc);
+    if (!servo.ok()) return servo.status().with_context("executive: servo");
+    servo_.emplace(std::move(*servo));
+    Result<haptic::DeviceDriver> driver = haptic::DeviceDriver::create(c.driver, *bus);
+    if (!driver.ok()) return driver.status().with_context("executive: haptic driver");
+    driver_.emplace(std::move(*driver));
+    bus_ = bus;
+    last_proxy_m_ = sc.world_offset_m;
+    // 1 mm of hand travel pulls as hard as the saturated field (k3 = 1); the
+    // pull is capped at ten times that, which the rope's step still takes
+    const double saturated_n = FieldForces<storage::ResidentLevel, storage::ResidentSampler>::kSaturation * rope_->params().mass_kg *
+                               forces_->reference_acceleration();
+    const double pull_at_1mm_n = sc.coupling_stiffness_n_per_m * sc.world_m_per_device_mm;
+    user_force_per_n_ = saturated_n / pull_at_1mm_n;
+    max_user_force_n_ = 10.0 * saturated_n;
+    counters_.haptics = true;
+  }
+  return {};
+}
+
+RopeParams Executive::params_for(RopeModel model, int segments, double segment_m) const {
+  RopeParams p = scaled_rope_params(model, segments, segment_m, stiffness_, forces_->reference_acceleration());
+  p.max_segments = config_.max_segments;
+  if (stretch_override_) {
+    p.stretch_stiffness_npm = *stretch_override_;
+    p.stretch_damping_nspm = 0.6 * std::sqrt(p.stretch_stiffness_npm * p.mass_kg);
+  }
+  if (bend_override_) {
+    p.bend_stiffness_nm = *bend_override_;
+    p.twist_stiffness_nm = 0.1 * p.bend_stiffness_nm;
+    p.bend_spring_npm = *bend_override_ / (segment_m * segment_m);  // the spring model's i..i+2 springs
+  }
+  return p;
+}
+
+void Executive::update_gains() {
+  ForceGains g = forces_ ? forces_->gains() : config_.gains;
+  g.k1_visibility = (objective_ == Objective::hide ? -1.0 : 1.0) * k1_;
+  if (forces_) forces_->set_gains(g);
+}
+
+Errc Executive::start_run() {
+  const int n = segments_;
+  const double straight = (end_m_ - start_m_).norm();
+  const double length = rope_->model() == RopeModel::articulated ? straight * (1.0 + config_.slack) : straight;
+  const storage::ResidentSampler& s = forces_->sampler();
+  lay_with_slack(start_m_, end_m_, length, forces_->gains().clearance_m + 20.0, n, scratch_.get(),
+                 [&](double x, double y) { return s.height(x, y); });
+  const Errc e = rope_->set_params(params_for(rope_->model(), n, std::max(length / n, 1e-3)));
+  if (e != Errc::ok) return e;
+  if (!rope_->reset(scratch_.get(), n + 1, n).ok()) return Errc::invalid_argument;
+  set_ends(start_m_, end_m_);
+  equilibrium_.reset();
+  grasping_ = false;
+  rope_->clear_point_force();
+  counters_.converged = false;
+  counters_.run_s = 0;
+  counters_.equilibrium_s = 0;
+  ++counters_.runs;
+  return Errc::ok;
+}
+
+Errc Executive::restart_rope(const Vec3* polyline, int points, int segments, RopeModel model) {
+  Rope* next = ropes_[index_of(model)].get();
+  const double length = polyline_length(polyline, points);
+  const Errc e = next->set_params(params_for(model, segments, std::max(length / segments, 1e-3)));
+  if (e != Errc::ok) return e;
+  if (!next->reset(polyline, points, segments).ok()) return Errc::invalid_argument;
+  rope_ = next;
+  segments_ = segments;
+  set_ends(start_m_, end_m_);
+  equilibrium_.reset();
+  grasping_ = false;
+  rope_->clear_point_force();
+  counters_.converged = false;
+  return Errc::ok;
+}
+
+void Executive::set_ends(const Vec3& start, const Vec3& end) {
+  RopeEnds ends;
+  ends.start_m = start;
+  ends.end_m = end;
+  rope_->set_ends(ends);
+}
+
+// ---- commands -------------------------------------------------------------
+
+void Executive::apply_commands() {
+  if (commands_ == nullptr) return;
+  dds::Command c;
+  // a bounded number per tick: a burst is spread over ticks, never a long tick
+  for (int n = 0; n < 8 && commands_->try_pop(c); ++n) {
+    const char* reason = "";
+    const Errc e = apply(c, reason);
+    if (e == Errc::ok) {
+      ++counters_.commands_applied;
+    } else {
+      ++counters_.commands_failed;
+    }
+    ack(c, e, reason);
+  }
+}
+
+void Executive::ack(const dds::Command& c, Errc result, const char* reason) {
+  if (outputs_.acks == nullptr) return;
+  dds::CommandAck a{};
+  std::memcpy(a.source, c.source, sizeof a.source);
+  a.sequence = c.sequence;
+  a.kind = static_cast<std::uint8_t>(c.kind);
+  a.result = result == Errc::ok ? dds::AckResult::applied : dds::AckResult::failed;
+  dds::copy_text(a.reason, reason);
+  if (!outputs_.acks->try_push(a)) ++counters_.acks_dropped;
+}
+
+Errc Executive::apply(const dds::Command& c, const char*& reason) {
+  const storage::ResidentSampler& s = forces_->sampler();
+  auto copy_vertices = [&] {
+    const int n = rope_->segments() + 1;
+    std::copy(rope_->vertices(), rope_->vertices() + n, scratch_.get());
+    return n;
+  };
+  switch (c.kind) {
+    case dds::CommandKind::set_endpoints: {
+      const Vec3 a(c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m);
+      const Vec3 b(c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m);
+      if (a.z() < s.height(a.x(), a.y()) || b.z() < s.height(b.x(), b.y())) {
+        reason = "an endpoint is below the terrain";
+        return Errc::invalid_argument;
+      }
+      if ((b - a).norm() < 1.0) {
+        reason = "the endpoints are less than 1 m apart";
+        return Errc::invalid_argument;
+      }
+      start_m_ = a;
+      end_m_ = b;
+      if (start_run() != Errc::ok) {
+        reason = "the rope could not be laid between the endpoints";
+        return Errc::invalid_argument;
+      }
+      return Errc::ok;
+    }
+    case dds::CommandKind::set_objective:
+      objective_ = c.objective == dds::Objective::show ? Objective::show : Objective::hide;
+      update_gains();
+      equilibrium_.reset();
+      return Errc::ok;
+    case dds::CommandKind::set_weights: {
+      k1_ = c.weights.k1_visibility;
+      k3_ = c.weights.k3_user;
+      ForceGains g = forces_->gains();
+      g.k2_terrain = c.weights.k2_terrain;
+      g.k_hull = c.weights.k4_constraint;
+      forces_->set_gains(g);
+      update_gains();
+      equilibrium_.reset();
+      return Errc::ok;
+    }
+    case dds::CommandKind::set_stiffness: {
+      stretch_override_ = c.stiffness.stretch_n_per_m;
+      bend_override_ = c.stiffness.bend_n_m_per_rad;
+      const double segment_m = std::max(rope_->length_m() / rope_->segments(), 1e-3);
+      if (rope_->set_params(params_for(rope_->model(), rope_->segments(), segment_m)) != Errc::ok) {
+        reason = "the rope refused these stiffness values";
+        return Errc::invalid_argument;
+      }
+      equilibrium_.reset();
+      return Errc::ok;
+    }
+    case dds::CommandKind::set_model: {
+      const RopeModel m = c.model == dds::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
+      if (m == rope_->model()) return Errc::ok;
+      const int n = copy_vertices();
+      if (restart_rope(scratch_.get(), n, rope_->segments(), m) != Errc::ok) {
+        reason = "the rope could not be rebuilt in that model";
+        return Errc::invalid_argument;
+      }
+      return Errc::ok;
+    }
+    case dds::CommandKind::set_segment_count: {
+      const int segments = static_cast<int>(c.segment_count);
+      if (segments < 2 || segments > config_.max_segments) {
+        reason = "segment count outside what the console reserved";
+        return Errc::invalid_argument;
+      }
+      const int n = copy_vertices();
+      if (restart_rope(scratch_.get(), n, segments, rope_->model()) != Errc::ok) {
+        reason = "the rope could not be resampled";
+        return Errc::invalid_argument;
+      }
+      return Errc::ok;
+    }
+    case dds::CommandKind::set_constraints: {
+      double clearance = forces_->gains().clearance_m;
+      for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
+        const dds::Constraint& k = c.constraints.items[i];
+        if (k.kind != dds::ConstraintKind::clearance) {
+          reason = "hidden-from and visible-to constraints are not supported by the console yet "
+                   "(visvol plan --hidden-from/--visible-to)";
+          return Errc::unsupported;
+        }
+        clearance = k.clearance_m;
+      }
+      ForceGains g = forces_->gains();
+      g.clearance_m = clearance;
+      forces_->set_gains(g);
+      equilibrium_.reset();
+      return Errc::ok;
+    }
+    case dds::CommandKind::start:
+      if (start_run() != Errc::ok) {
+        reason = "the rope could not be laid between the endpoints";
+        return Errc::invalid_argument;
+      }
+      counters_.running = true;
+      return Errc::ok;
+    case dds::CommandKind::stop:
+      counters_.running = false;
+      rope_->clear_point_force();
+      return Errc::ok;
+    case dds::CommandKind::switch_terrain:
+      reason = "switching terrain needs a console restart with that pack";
+      return Errc::unsupported;
+  }
+  reason = "unknown command";
+  return Errc::invalid_argument;
+}
+
+// ---- the tick ---------------------------------------------------------------
+
+void Executive::warm_up() {
+  // one pass over everything a tick touches: code, the rope's buffers, samples
+  const double fc = path_fc(rope_->vertices(), rope_->segments() + 1, *forces_, config_.fc_samples);
+  counters_.fc = fc;
+  counters_.length_m = rope_->length_m();
+  hand_off_focus();
+}
+
+void Executive::safe_state() {
+  ++counters_.safe_states;
+  if (servo_) servo_->force_safe_state();
+}
+
+int Executive::nearest_point(const Vec3& p, double& fraction) const {
+  const Vec3* v = rope_->vertices();
+  int best = 0;
+  double best_d2 = INFINITY;
+  fraction = 0;
+  for (int i = 0; i < rope_->segments(); ++i) {
+    const Vec3 d = v[i + 1] - v[i];
+    const double len2 = d.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p - v[i]).dot(d) / len2, 0.0, 1.0) : 0.0;
+    const double d2 = (v[i] + t * d - p).squaredNorm();
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = i;
+      fraction = t;
+    }
+  }
+  return best;
+}
+
+void Executive::haptics(std::int64_t now_ns, double t_s) {
+  driver_now_ns_ = now_ns;
+  driver_->poll(now_ns);
+  const haptic::DeviceSample& sample = driver_->sample();
+  servo::ServoInput in;
+  in.time_s = t_s;
+  in.device_pos_mm = Eigen::Vector3d(sample.pos_mm[0], sample.pos_mm[1], sample.pos_mm[2]);
+  in.grasp_button = (sample.buttons & haptic::kButtonGrasp) != 0;
+  in.clutch_button = (sample.buttons & haptic::kButtonClutch) != 0;
+  in.sample_fresh = sample.fresh;
+  in.sample_valid = sample.valid;
+  in.device_operational = driver_->operational();
+  in.point_valid = true;
+  if (!grasping_) {
+    // the point a grasp would take: nearest the proxy of the last tick
+    grasp_segment_ = nearest_point(last_proxy_m_, grasp_fraction_);
+  }
+  in.point_pos_m = rope_->point(grasp_segment_, grasp_fraction_);
+  in.point_vel_m_per_s = rope_->point_velocity(grasp_segment_, grasp_fraction_);
+  const Vec3 grad = forces_->sampler().gradient(in.point_pos_m.x(), in.point_pos_m.y(), in.point_pos_m.z());
+  in.grad_fp_per_m = objective_ == Objective::hide ? grad : Vec3(-grad);
+  out_ = servo_->step(in);
+  last_proxy_m_ = out_.proxy_pos_m;
+  if (out_.grasping && !grasping_) ++counters_.grasps;
+  grasping_ = out_.grasping && counters_.running;
+  if (grasping_) {
+    Vec3 pull = (k3_ * user_force_per_n_) * out_.rope_force_n;
+    const double n = pull.norm();
+    if (n > max_user_force_n_) pull *= max_user_force_n_ / n;
+    rope_->set_point_force(grasp_segment_, grasp_fraction_, pull);
+  } else {
+    rope_->clear_point_force();
+  }
+  counters_.servo_reason = out_.safe_reason;
+  counters_.device_state = driver_->state();
+}
+
+void Executive::tick(const TickTime& time) {
+  const std::int64_t now_ns = time.woke_ns;
+  apply_commands();                                        // 1
+  if (simulation_ != nullptr) simulation_->step(now_ns);  // 2
+  if (driver_) haptics(now_ns, static_cast<double>(now_ns) * 1e-9);  // 3, 4
+  if (counters_.running) {                                 // 5
+    rope_->step(config_.period_s, *forces_);
+    counters_.run_s += config_.period_s;
+  }
+  if (driver_) {                                           // 6
+    const Errc sent = driver_->command({out_.device_force_n.x(), out_.device_force_n.y(), out_.device_force_n.z()},
+                                       out_.device_enable);
+    if (sent != Errc::ok && sent != Errc::state) ++counters_.send_failures;
+  }
+  const std::uint64_t n = ++counters_.ticks;               // 7
+  if (counters_.running && n % static_cast<std::uint64_t>(config_.fc_every_ticks) == 0) measure();
+  const bool path_due = n % static_cast<std::uint64_t>(config_.path_every_ticks) == 0;
+  const bool device_due = n % static_cast<std::uint64_t>(config_.device_every_ticks) == 0;
+  if (path_due || device_due) {
+    const std::int64_t stamp = dds::now_stamp_ns();
+    if (path_due) hand_off_path(stamp);
+    if (device_due) {
+      hand_off_device(stamp);
+      snapshot_.write(counters_);
+    }
+  }
+  if (n % static_cast<std::uint64_t>(config_.focus_every_ticks) == 0) hand_off_focus();
+  field_.tick_done();
+}
+
+void Executive::measure() {
+  const int n = rope_->segments() + 1;
+  const double fc = path_fc(rope_->vertices(), n, *forces_, config_.fc_samples);
+  const double rms = std::sqrt(2.0 * rope_->kinetic_energy_j() / (rope_->params().mass_kg * n));
+  counters_.fc = fc;
+  counters_.length_m = rope_->length_m();
+  const bool at_rest = equilibrium_.add(rms, fc);
+  if (at_rest && !counters_.converged && counters_.equilibrium_s == 0) counters_.equilibrium_s = counters_.run_s;
+  counters_.converged = at_rest;
+}
+
+void Executive::hand_off_path(std::int64_t stamp_ns) {
+  if (outputs_.path == nullptr && outputs_.path_render == nullptr) return;
+  dds::PathSample& p = *path_sample_;
+  const storage::ResidentSampler& s = forces_->sampler();
+  p.sequence = ++path_sequence_;
+  p.stamp_ns = stamp_ns;
+  std::memcpy(p.pack_id, config_.pack_id, sizeof p.pack_id);
+  p.objective = objective_ == Objective::show ? dds::Objective::show : dds::Objective::hide;
+  p.converged = counters_.converged;
+  p.f_c = counters_.fc;
+  p.length_m = rope_->length_m();
+  const int count = rope_->segments() + 1;
+  const int keep = std::min(count, static_cast<int>(dds::kMaxPathVertices));
+  const Vec3* v = rope_->vertices();
+  double lowest = INFINITY;
+  for (int k = 0; k < keep; ++k) {
+    // evenly spaced, both ends kept
+    const int i = keep == count ? k : static_cast<int>(std::lround(static_cast<double>(k) * (count - 1) / (keep - 1)));
+    const Vec3& x = v[i];
+    dds::PathVertex& out = p.vertices[k];
+    out.position = {x.x(), x.y(), x.z()};
+    out.visibility = s.visibility(x.x(), x.y(), x.z());
+    out.clearance_m = x.z() - s.height(x.x(), x.y());
+    lowest = std::min(lowest, out.clearance_m);
+  }
+  p.vertex_count = static_cast<std::uint32_t>(keep);
+  p.min_clearance_m = lowest;
+  for (LatestValue<dds::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
+    if (sink == nullptr) continue;
+    std::memcpy(&sink->back(), &p, sizeof p);
+    sink->publish();
+  }
+  ++counters_.paths;
+}
+
+void Executive::hand_off_device(std::int64_t stamp_ns) {
+  if (outputs_.device == nullptr || !driver_) return;
+  dds::DeviceStatusSample& d = outputs_.device->back();
+  d.sequence = ++device_sequence_;
+  d.stamp_ns = stamp_ns;
+  dds::copy_text(d.device, "haptic");
+  d.state = device_state_of(driver_->state(), out_.forces_enabled);
+  d.fault_bits = driver_->report().fault_bits;
+  d.motor_temperature_c = driver_->report().motor_temperature_c;
+  const haptic::DeviceSample& sample = driver_->sample();
+  d.last_position_age_ms =
+      sample.timestamp_ns > 0 ? static_cast<double>(driver_now_ns_ - sample.timestamp_ns) * 1e-6 : INFINITY;
+  const can::CanCounters& bus = bus_->counters();
+  d.can_rx_frames = bus.received;
+  d.can_tx_frames = bus.sent;
+  d.can_errors = bus.error_frames + bus.send_failed + bus.dropped + bus.malformed;
+  d.bus_off_count = static_cast<std::uint32_t>(bus.bus_off);
+  outputs_.device->publish();
+}
+
+void Executive::hand_off_focus() {
+  const Vec3* v = rope_->vertices();
+  storage::WorldBox b{INFINITY, INFINITY, -INFINITY, -INFINITY};
+  for (int i = 0; i <= rope_->segments(); ++i) {
+    b.x0_m = std::min(b.x0_m, v[i].x());
+    b.y0_m = std::min(b.y0_m, v[i].y());
+    b.x1_m = std::max(b.x1_m, v[i].x());
+    b.y1_m = std::max(b.y1_m, v[i].y());
+  }
+  const double lead = config_.focus_lead_m;
+  field_.set_focus({b.x0_m - lead, b.y0_m - lead, b.x1_m + lead, b.y1_m + lead});
+}
+
+}  // namespace visvol::rt

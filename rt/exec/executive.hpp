@@ -1,0 +1,208 @@
+// The executive: the console's 1 kHz tick, as a PeriodicTask.
+//
+// Each tick, in this order (the stages of DESIGN.md):
+//   1. apply queued commands   (DDS command intake -> CommandQueue; each one
+//                               acknowledged applied or failed on the AckQueue)
+//   2. simulated device        (only with a simulation on the in-process bus)
+//   3. read CAN                (the haptic driver drains the bus)
+//   4. servo                   (proxy, soft joint, force safety)
+//   5. rope step               (field forces of the resident level + the grasp)
+//   6. write CAN               (the device force command)
+//   7. hand off state          (path at path_hz, device status, the rope's box
+//                               to the tile pager, the quiescent point)
+// Commands are applied at the start of a tick, so a tick computes with one
+// consistent set of parameters.
+//
+// Overruns: the loop calls safe_state() after its limit of overruns in a
+// row; the servo then zeroes the device force in the next tick and withholds
+// it until the operator grasps again, while the rope keeps stepping.
+//
+// Operator (the paper's mode A): both ends of the rope are held; the grasp
+// button grabs the rope point nearest the proxy, which then pulls it through
+// the servo's soft joint; the rope side of that force is scaled so that 1 mm
+// of hand travel pulls as hard as k3 times the saturated field (the paper's
+// k3 U1), capped at ten times that.
+//
+// Ownership: borrows the resident pack, the bus and every queue and hand-off
+// (all must outlive it); owns the ropes, the servo and the driver.
+// Thread-safety: tick() and safe_state() on the loop thread; counters() from
+// that thread (snapshot() copies them for others through a LatestValue).
+// Cost: create() allocates everything (ropes at max_segments, scratch); a
+// tick allocates nothing, takes no lock, makes no blocking call.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "drivers/can/can_bus.hpp"
+#include "drivers/dds/command_processor.hpp"
+#include "drivers/dds/samples.hpp"
+#include "drivers/haptic/device_driver.hpp"
+#include "rt/base/handoff.hpp"
+#include "rt/exec/periodic_loop.hpp"
+#include "rt/rope/equilibrium.hpp"
+#include "rt/rope/field_forces.hpp"
+#include "rt/rope/global_search.hpp"
+#include "rt/rope/rope.hpp"
+#include "rt/servo/servo.hpp"
+#include "storage/resident_pack.hpp"
+
+namespace visvol::rt {
+
+// Runs at stage 2 on the loop thread: a simulated device stepping on the
+// in-process bus (real-time safe).
+class DeviceSimulation {
+ public:
+  virtual ~DeviceSimulation() = default;
+  virtual void step(std::int64_t now_ns) = 0;
+};
+
+struct ExecutiveConfig {
+  // The planning problem at start-up (commands change it later).
+  Vec3 start_m = Vec3::Zero();      // world metres of the pack's CRS
+  Vec3 end_m = Vec3::Zero();
+  Objective objective = Objective::hide;
+  RopeModel model = RopeModel::articulated;
+  int segments = 128;
+  int max_segments = 256;           // reserved: set-segments may not exceed it
+  double stiffness = 1.0;           // factor on the rope's scaled springs
+  double slack = 0.05;              // articulated: extra length over the straight start
+  ForceGains gains;                 // k1 magnitude (sign from the objective), k2, clearance
+  double k3_user = 1.0;             // the operator's pull
+  bool start_running = true;        // settle from the start, or wait for a start command
+  int level = 0;                    // the level of detail the rope runs on
+  // Hand-offs, in ticks.
+  int path_every_ticks = 20;        // 50 Hz
+  int fc_every_ticks = 20;          // F_c and the equilibrium check
+  int focus_every_ticks = 50;       // the rope's box to the tile pager
+  int device_every_ticks = 100;     // device status
+  int fc_samples = 128;
+  double focus_lead_m = 0.0;        // added around the rope's box (the pager adds its margin too)
+  // Haptics (absent without a bus).
+  servo::ServoConfig servo;         // mapping and coupling are set from the scene when scale is 0
+  double workspace_half_mm = 100.0; // the rope's extent maps onto +-this much hand travel
+  double hand_stiffness_n_per_m = 300.0;  // the soft joint as the hand feels it
+  double hand_damping_n_s_per_m = 1.0;
+  double cue_n = 0.5;               // visibility cue at one reference gradient, N
+  haptic::DriverConfig driver;
+  char pack_id[dds::kPackIdCapacity] = "pack";
+  double period_s = 0.001;          // the loop's period: the rope's time step
+};
+
+// What the loop thread counts (plain values; copied out through snapshot()).
+struct ExecutiveCounters {
+  std::uint64_t ticks = 0;
+  std::uint64_t commands_applied = 0;
+  std::uint64_t commands_failed = 0;
+  std::uint64_t acks_dropped = 0;       // the ack queue was full
+  std::uint64_t paths = 0;              // path hand-offs
+  std::uint64_t safe_states = 0;        // overrun safe states
+  std::uint64_t grasps = 0;
+  std::uint64_t send_failures = 0;      // device commands the bus refused
+  std::uint64_t runs = 0;               // planning runs started
+  bool running = false;                 // the rope is stepping
+  bool converged = false;
+  double fc = 0.0;
+  double length_m = 0.0;
+  double equilibrium_s = 0.0;           // simulated time of this run when it converged
+  double run_s = 0.0;                   // simulated time of this run
+  haptic::DeviceState device_state = haptic::DeviceState::boot;
+  servo::SafeReason servo_reason = servo::SafeReason::none;
+  bool haptics = false;
+};
+
+// Where the executive's outputs go; every pointer may be null.
+struct ExecutiveOutputs {
+  LatestValue<dds::PathSample>* path = nullptr;            // DDS publisher
+  LatestValue<dds::PathSample>* path_render = nullptr;     // renderer
+  LatestValue<dds::DeviceStatusSample>* device = nullptr;  // DDS publisher
+  dds::AckQueue* acks = nullptr;                           // applied/failed, to command intake
+};
+
+class Executive final : public PeriodicTask {
+ public:
+  // Validates the configuration against the pack (endpoints inside and above
+  // the terrain, segments within capacity) and reserves everything. `bus`
+  // may be null (no haptic device); `simulation` may be null.
+  static Result<std::unique_ptr<Executive>> create(const ExecutiveConfig& config,
+                                                   storage::ResidentPack& field, can::CanBus* bus,
+                                                   DeviceSimulation* simulation,
+                                                   dds::CommandQueue* commands,
+                                                   const ExecutiveOutputs& outputs);
+  ~Executive() override;
+
+  void warm_up() override;
+  void tick(const TickTime& time) override;
+  void safe_state() override;
+
+  const ExecutiveCounters& counters() const { return counters_; }
+  // The counters, handed to another thread every device_every_ticks.
+  LatestValue<ExecutiveCounters>& snapshot() { return snapshot_; }
+  const Rope& rope() const { return *rope_; }
+  const servo::Servo* servo() const { return servo_ ? &*servo_ : nullptr; }
+  const haptic::DeviceDriver* driver() const { return driver_ ? &*driver_ : nullptr; }
+  const FieldForces<storage::ResidentLevel, storage::ResidentSampler>& forces() const { return *forces_; }
+  const ExecutiveConfig& config() const { return config_; }
+  // Where the operator's proxy is (world, m), as of the last tick.
+  const Vec3& proxy_m() const { return last_proxy_m_; }
+
+ private:
+  Executive(const ExecutiveConfig& config, storage::ResidentPack& field);
+  Status init(can::CanBus* bus, DeviceSimulation* simulation, dds::CommandQueue* commands,
+              const ExecutiveOutputs& outputs);
+
+  void apply_commands();
+  Errc apply(const dds::Command& c, const char*& reason);
+  void ack(const dds::Command& c, Errc result, const char* reason);
+  Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
+  Errc start_run();
+  void set_ends(const Vec3& start, const Vec3& end);
+  void update_gains();
+  void haptics(std::int64_t now_ns, double t_s);
+  void step_rope();
+  void measure();
+  void hand_off_path(std::int64_t stamp_ns);
+  void hand_off_device(std::int64_t stamp_ns);
+  void hand_off_focus();
+  int nearest_point(const Vec3& p, double& fraction) const;
+  RopeParams params_for(RopeModel model, int segments, double segment_m) const;
+
+  ExecutiveConfig config_;
+  storage::ResidentPack& field_;
+  std::unique_ptr<FieldForces<storage::ResidentLevel, storage::ResidentSampler>> forces_;
+  std::unique_ptr<Rope> ropes_[2];   // indexed by RopeModel
+  Rope* rope_ = nullptr;
+  std::optional<servo::Servo> servo_;
+  std::optional<haptic::DeviceDriver> driver_;
+  DeviceSimulation* simulation_ = nullptr;
+  dds::CommandQueue* commands_ = nullptr;
+  ExecutiveOutputs outputs_;
+  LatestValue<ExecutiveCounters> snapshot_;
+
+  // Planning state (loop thread).
+  Vec3 start_m_, end_m_;
+  Objective objective_;
+  int segments_;
+  double stiffness_;
+  double k1_, k3_;
+  std::optional<double> stretch_override_, bend_override_;
+  EquilibriumDetector equilibrium_;
+  std::unique_ptr<Vec3[]> scratch_;      // max_segments + 1 points
+  std::unique_ptr<dds::PathSample> path_sample_;  // filled, then copied into each hand-off
+  double user_force_per_n_ = 0.0;        // rope newtons per servo coupling newton
+  double max_user_force_n_ = 0.0;
+  bool grasping_ = false;
+  int grasp_segment_ = 0;
+  double grasp_fraction_ = 0.0;
+  std::uint64_t path_sequence_ = 0;
+  std::uint64_t device_sequence_ = 0;
+  can::CanBus* bus_ = nullptr;
+  servo::ServoOutput out_;              // this tick's servo output
+  Vec3 last_proxy_m_ = Vec3::Zero();    // where a grasp would take the rope
+  std::int64_t driver_now_ns_ = 0;
+  ExecutiveCounters counters_;
+};
+
+}  // namespace visvol::rt

@@ -1,0 +1,164 @@
+// visvol-console as an operator runs it: options, a run with the simulated
+// device, its outputs, and the DDS side (paths, health, a command and its
+// acknowledgements) seen from another participant (domain 223, loopback).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "../tools/cli_runner.hpp"
+#include "drivers/dds/command_codec.hpp"
+#include "drivers/dds/participant.hpp"
+#include "storage/pack_build.hpp"
+#include "../fields/terrains.hpp"
+
+namespace {
+
+using visvol::test::Outcome;
+using visvol::test::slurp;
+
+Outcome console(const std::string& args) {
+  // the runner's binary is visvol; point it at the console instead
+  const std::string dir = ::testing::TempDir();
+  const std::string tag = std::to_string(getpid());
+  const std::string out = dir + "/console_out_" + tag, err = dir + "/console_err_" + tag;
+  const std::string cmd = std::string(VISVOL_CONSOLE) + " " + args + " </dev/null >" + out + " 2>" + err;
+  const int rc = std::system(cmd.c_str());
+  Outcome r;
+  r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  std::remove(out.c_str());
+  std::remove(err.c_str());
+  return r;
+}
+
+class Console : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    pack_ = new std::string(::testing::TempDir() + "/console_" + std::to_string(getpid()) + ".vvp");
+    visvol::storage::PackBuildParams p;
+    p.field.nz = 32;
+    p.field.ceiling_m = 200;
+    p.field.range_posts = 8;
+    p.lod_levels = 2;
+    p.tff.band_offset_m = 60;
+    p.tff.band_levels = 8;
+    ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(97, 5), p, "", *pack_).ok());
+    // grab at 0.5 s, pull, let go at 2 s
+    script_ = new std::string(::testing::TempDir() + "/console_script_" + std::to_string(getpid()) + ".txt");
+    std::ofstream(*script_) << "0.3 move 0 0 0 0.1\n0.5 pull 20 0 -20 1.0\n2.0 release\n";
+  }
+  static void TearDownTestSuite() {
+    std::remove(pack_->c_str());
+    std::remove(script_->c_str());
+    delete pack_;
+    delete script_;
+  }
+  static std::string out_dir(const std::string& name) {
+    return ::testing::TempDir() + "/console_" + name + "_" + std::to_string(getpid());
+  }
+  static std::string* pack_;
+  static std::string* script_;
+};
+std::string* Console::pack_ = nullptr;
+std::string* Console::script_ = nullptr;
+
+TEST_F(Console, HelpAndBadOptions) {
+  const Outcome h = console("--help");
+  EXPECT_EQ(h.status, 0);
+  for (const char* o : {"--pack", "--budget-mib", "--device", "--domain", "--seconds"}) {
+    EXPECT_NE(h.out.find(o), std::string::npos) << o;
+  }
+  for (const std::string& args :
+       {std::string("--pack /nonexistent.vvp"), "--pack " + *pack_ + " --segments 1",
+        "--pack " + *pack_ + " --device socketcan", "--pack " + *pack_ + " --objective sideways",
+        "--pack " + *pack_ + " --from 1 2 3 --no-dds", "--pack " + *pack_ + " --level 7 --no-dds"}) {
+    const Outcome r = console(args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("visvol-console: "), std::string::npos) << args;
+  }
+}
+
+TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
+  const std::string out = out_dir("run");
+  const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 --script " +
+                            *script_ + " --out " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("outputs: "), std::string::npos);
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_GT(s["loop"]["ticks"].get<int>(), 1000);
+  EXPECT_EQ(s["loop"]["major_faults_after_settle"].get<int>(), 0);
+  EXPECT_LE(s["path"]["fc_end"].get<double>(), s["path"]["fc_start"].get<double>());
+  EXPECT_EQ(s["device"]["state"], "operational");
+  EXPECT_EQ(s["device"]["grasps"].get<int>(), 1);
+  EXPECT_LE(s["device"]["simulated"]["max_force_n"].get<double>(), 1.4 + 1e-9);
+  EXPECT_LE(s["memory"]["rss_peak_mib"].get<double>(), s["memory"]["budget_mib"].get<double>());
+  const std::string csv = slurp(out + "/path.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);  // header + 33 vertices
+  const std::string health = slurp(out + "/health.csv");
+  EXPECT_GE(std::count(health.begin(), health.end(), '\n'), 3);  // header + a line a second
+}
+
+TEST_F(Console, PublishesOnDdsAndTakesCommands) {
+  using namespace visvol::dds;
+  ParticipantConfig pc;
+  pc.domain_id = 223;
+  pc.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(pc);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto paths = Reader::create(**participant, Topic::path_update);
+  auto acks = Reader::create(**participant, Topic::command_ack);
+  auto commands = Writer::create(**participant, Topic::command);
+  ASSERT_TRUE(paths.ok() && acks.ok() && commands.ok());
+
+  const std::string out = out_dir("dds");
+  Outcome r;
+  std::thread run([&] {
+    r = console("--pack " + *pack_ + " --seconds 4 --domain 223 --priority 0 --no-lock --segments 32 --script none --out " +
+                out);
+  });
+  ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  Command show{};
+  show.kind = CommandKind::set_objective;
+  show.sequence = 7;
+  show.objective = Objective::show;
+  copy_text(show.source, "console_test");
+  CommandMessage msg;
+  ASSERT_EQ(commands->write(&msg.fill(show)), DDS_RETCODE_OK);
+  run.join();
+  ASSERT_EQ(r.status, 0) << r.err;
+
+  int applied = 0, accepted = 0;
+  auto a = acks->take<visvol_msgs_msg_dds__CommandAck_>(
+      [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
+        const CommandAck ack = decode_ack(m);
+        EXPECT_EQ(ack.sequence, 7u);
+        applied += ack.result == AckResult::applied;
+        accepted += ack.result == AckResult::accepted;
+      },
+      16);
+  ASSERT_TRUE(a.ok());
+  EXPECT_EQ(accepted, 1);
+  EXPECT_EQ(applied, 1);
+  int received = 0;
+  auto p = paths->take<visvol_msgs_msg_dds__PathUpdate_>(
+      [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
+        ++received;
+        EXPECT_EQ(m.positions_m._length, 33u);
+        EXPECT_EQ(m.objective, 2);  // show, after the command
+      },
+      64);
+  ASSERT_TRUE(p.ok());
+  EXPECT_GE(received, 1);
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_GT(s["dds"]["paths"].get<int>(), 50);
+  EXPECT_EQ(s["commands"]["applied"].get<int>(), 1);
+}
+
+}  // namespace

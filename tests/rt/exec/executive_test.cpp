@@ -1,0 +1,406 @@
+// The executive tick by tick in simulated time (deterministic), and once on
+// the real periodic loop across a pack much larger than its tile budget.
+#include "rt/exec/executive.hpp"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "../../fields/terrains.hpp"
+#include "rt/base/alloc_counter.hpp"
+#include "rt/exec/periodic_loop.hpp"
+#include "rt/exec/simulated_device.hpp"
+#include "storage/pack_build.hpp"
+
+namespace visvol::rt {
+namespace {
+
+constexpr std::int64_t kMs = 1'000'000;
+constexpr std::uint64_t kMiB = 1024 * 1024;
+
+std::string pack_path(const std::string& stem) { return stem + "_" + std::to_string(::getpid()) + ".vvp"; }
+
+std::string build(const std::string& stem, int posts, std::uint32_t seed) {
+  const fields::Heightfield hf = fields::testing::fractal(posts, seed);
+  storage::PackBuildParams p;
+  p.field.nz = 32;
+  p.field.ceiling_m = 200;
+  p.field.range_posts = 8;
+  p.lod_levels = 3;
+  p.tff.band_offset_m = 60;
+  p.tff.band_levels = 8;
+  const std::string path = pack_path(stem);
+  EXPECT_TRUE(storage::build_pack(hf, p, "", path).ok());
+  return path;
+}
+
+// World point at fractions of the finest level, `up_m` above the terrain there.
+Vec3 point_at(const storage::ResidentPack& r, double fx, double fy, double up_m) {
+  const fields::VolumeGeometry g = r.level(0).geometry();
+  const double x = g.origin_x + fx * (g.nx - 1) * g.spacing_m, y = g.origin_y - fy * (g.ny - 1) * g.spacing_m;
+  return {x, y, fields::FieldSampler<storage::ResidentLevel>(r.level(0)).height(x, y) + up_m};
+}
+
+class ExecutiveTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { path_ = new std::string(build("executive", 129, 7)); }
+  static void TearDownTestSuite() {
+    std::remove(path_->c_str());
+    delete path_;
+  }
+  void SetUp() override {
+    auto pack = storage::Pack::open(*path_);
+    ASSERT_TRUE(pack.ok());
+    storage::ResidentConfig rc;
+    rc.budget_bytes = 64 * kMiB;  // the whole pack
+    auto r = storage::ResidentPack::create(*pack, rc);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    field_ = std::move(*r);
+    config_.start_m = point_at(*field_, 0.15, 0.2, 150);
+    config_.end_m = point_at(*field_, 0.85, 0.75, 150);
+    config_.segments = 32;
+    config_.max_segments = 64;
+    config_.gains.clearance_m = 30;
+    std::strcpy(config_.pack_id, "fractal");
+  }
+
+  std::unique_ptr<Executive> make(can::CanBus* bus = nullptr, DeviceSimulation* sim = nullptr) {
+    ExecutiveOutputs out;
+    out.path = &paths_;
+    out.device = &device_;
+    out.acks = &acks_;
+    auto e = Executive::create(config_, *field_, bus, sim, &commands_, out);
+    EXPECT_TRUE(e.ok()) << e.status().message();
+    if (e.ok()) (*e)->warm_up();
+    return e.ok() ? std::move(*e) : nullptr;
+  }
+
+  // Runs `ticks` ticks of 1 ms in simulated time.
+  void run(Executive& e, int ticks) {
+    for (int k = 0; k < ticks; ++k) {
+      now_ns_ += kMs;
+      e.tick({tick_++, now_ns_, now_ns_, kMs});
+    }
+  }
+
+  dds::Command command(dds::CommandKind kind, std::uint64_t sequence) {
+    dds::Command c{};
+    c.kind = kind;
+    c.sequence = sequence;
+    dds::copy_text(c.source, "test");
+    return c;
+  }
+  dds::CommandAck next_ack() {
+    dds::CommandAck a{};
+    EXPECT_TRUE(acks_.try_pop(a));
+    return a;
+  }
+
+  static std::string* path_;
+  std::unique_ptr<storage::ResidentPack> field_;
+  ExecutiveConfig config_;
+  dds::CommandQueue commands_;
+  dds::AckQueue acks_;
+  LatestValue<dds::PathSample> paths_;
+  LatestValue<dds::DeviceStatusSample> device_;
+  std::int64_t now_ns_ = 10'000 * kMs;
+  std::uint64_t tick_ = 0;
+};
+std::string* ExecutiveTest::path_ = nullptr;
+
+TEST_F(ExecutiveTest, RefusesEndpointsOutsideThePackAndBadCapacities) {
+  ExecutiveOutputs out;
+  ExecutiveConfig c = config_;
+  c.start_m.x() -= 1e6;
+  auto e = Executive::create(c, *field_, nullptr, nullptr, nullptr, out);
+  ASSERT_FALSE(e.ok());
+  EXPECT_NE(e.status().message().find("start"), std::string::npos) << e.status().message();
+  EXPECT_NE(e.status().message().find("outside the pack"), std::string::npos);
+  c = config_;
+  c.end_m.z() -= 1000;
+  EXPECT_NE(Executive::create(c, *field_, nullptr, nullptr, nullptr, out).status().message().find("below the terrain"),
+            std::string::npos);
+  c = config_;
+  c.segments = 100;  // more than the 64 reserved
+  EXPECT_NE(Executive::create(c, *field_, nullptr, nullptr, nullptr, out).status().message().find("reserved"),
+            std::string::npos);
+}
+
+TEST_F(ExecutiveTest, TheRopeSettlesAndPathsAreHandedOff) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  const double fc0 = e->counters().fc;
+  run(*e, 15000);  // 15 simulated seconds
+  const ExecutiveCounters& c = e->counters();
+  EXPECT_EQ(c.ticks, 15000u);
+  EXPECT_EQ(c.paths, 15000u / 20);
+  EXPECT_LT(c.fc, fc0) << "hiding should lower F_c";
+  const dds::PathSample* p = paths_.take();
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->vertex_count, 33u);
+  EXPECT_STREQ(p->pack_id, "fractal");
+  EXPECT_EQ(p->objective, dds::Objective::hide);
+  EXPECT_NEAR(p->vertices[0].position.x_m, config_.start_m.x(), 1e-6);
+  EXPECT_NEAR(p->vertices[32].position.y_m, config_.end_m.y(), 1e-6);
+  EXPECT_NEAR(p->f_c, c.fc, 1e-12);
+  EXPECT_GT(p->min_clearance_m, 0.0);
+  for (std::uint32_t i = 0; i < p->vertex_count; ++i) {
+    EXPECT_GE(p->vertices[i].visibility, 0.0);
+    EXPECT_LE(p->vertices[i].visibility, 1.0);
+  }
+  if (c.converged) {
+    EXPECT_GT(c.equilibrium_s, 0.0);
+  }
+}
+
+TEST_F(ExecutiveTest, CommandsAreAppliedOrFailWithAReason) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  dds::Command show = command(dds::CommandKind::set_objective, 1);
+  show.objective = dds::Objective::show;
+  dds::Command more = command(dds::CommandKind::set_segment_count, 2);
+  more.segment_count = 48;
+  dds::Command too_many = command(dds::CommandKind::set_segment_count, 3);
+  too_many.segment_count = 65;
+  dds::Command hull = command(dds::CommandKind::set_constraints, 4);
+  hull.constraints.count = 1;
+  hull.constraints.items[0].kind = dds::ConstraintKind::hidden_from;
+  dds::Command clearance = command(dds::CommandKind::set_constraints, 5);
+  clearance.constraints.count = 1;
+  clearance.constraints.items[0].kind = dds::ConstraintKind::clearance;
+  clearance.constraints.items[0].clearance_m = 55;
+  dds::Command spring = command(dds::CommandKind::set_model, 6);
+  spring.model = dds::RopeModel::spring_mass;
+  dds::Command terrain = command(dds::CommandKind::switch_terrain, 7);
+  dds::Command stop = command(dds::CommandKind::stop, 8);
+  for (const dds::Command& c : {show, more, too_many, hull, clearance, spring, terrain, stop}) {
+    ASSERT_TRUE(commands_.try_push(c));
+  }
+  run(*e, 2);  // eight per tick at most
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  dds::CommandAck a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::applied);
+  a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_EQ(a.sequence, 3u);
+  EXPECT_NE(std::string(a.reason).find("reserved"), std::string::npos) << a.reason;
+  a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_NE(std::string(a.reason).find("not supported"), std::string::npos) << a.reason;
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 55.0);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_STREQ(a.source, "test");
+  EXPECT_EQ(a.kind, static_cast<std::uint8_t>(dds::CommandKind::switch_terrain));
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(e->rope().segments(), 48);
+  EXPECT_EQ(e->rope().model(), RopeModel::spring);
+  EXPECT_GT(e->forces().gains().k1_visibility, 0.0);  // show
+  EXPECT_FALSE(e->counters().running);
+  EXPECT_EQ(e->counters().commands_applied, 5u);
+  EXPECT_EQ(e->counters().commands_failed, 3u);
+  // stopped: the rope stays where it is
+  const Vec3 mid = e->rope().vertices()[24];
+  run(*e, 100);
+  EXPECT_EQ(e->rope().vertices()[24], mid);
+  ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::start, 9)));
+  run(*e, 1);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_TRUE(e->counters().running);
+  EXPECT_EQ(e->counters().runs, 2u);
+}
+
+// The hand grabs the rope in the middle of the workspace and pulls east.
+const char* kPullScript =
+    "0.5 move 0 0 0 0.2\n"
+    "1.0 pull 60 0 0 1.0\n"
+    "4.0 release\n";
+
+std::unique_ptr<SimulatedDevice> simulated(const char* script, std::int64_t start_ns) {
+  hapticsim::SimConfig sc;
+  auto s = hapticsim::parse_script(script, "test script", sc.workspace_half_mm);
+  EXPECT_TRUE(s.ok()) << s.status().message();
+  auto sim = SimulatedDevice::create(sc, *s, start_ns);
+  EXPECT_TRUE(sim.ok()) << sim.status().message();
+  return std::move(*sim);
+}
+
+// The distance from p to the nearest point of the rope.
+double distance_to(const Rope& r, const Vec3& p) {
+  double best = INFINITY;
+  for (int i = 0; i < r.segments(); ++i) {
+    const Vec3 a = r.vertices()[i], d = r.vertices()[i + 1] - a;
+    const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (a + t * d - p).norm());
+  }
+  return best;
+}
+
+TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
+  auto still_sim = simulated("", now_ns_);
+  auto still = make(&still_sim->console_bus(), still_sim.get());
+  ASSERT_TRUE(still);
+  const std::int64_t t0 = now_ns_;
+  run(*still, 1500);
+
+  now_ns_ = t0;
+  auto pull_sim = simulated(kPullScript, now_ns_);
+  auto pulled = make(&pull_sim->console_bus(), pull_sim.get());
+  ASSERT_TRUE(pulled);
+  run(*pulled, 1500);  // half way through the pull
+  EXPECT_EQ(pulled->counters().grasps, 1u);
+  EXPECT_EQ(pulled->counters().device_state, haptic::DeviceState::operational);
+  // the grasped point follows the proxy (hundreds of metres away when the
+  // hand grasped): the rope is much nearer to it than the rope nobody touched
+  const Vec3 proxy = pulled->proxy_m();
+  EXPECT_LT(distance_to(pulled->rope(), proxy), 0.5 * distance_to(still->rope(), proxy));
+  run(*pulled, 2000);
+  // the hand felt the rope, within the clamp
+  EXPECT_GT(pull_sim->device().counters().max_force_n, 0.1);
+  EXPECT_LE(pull_sim->device().counters().max_force_n, 1.4 + 1e-9);
+  const dds::DeviceStatusSample* d = device_.take();
+  ASSERT_NE(d, nullptr);
+  EXPECT_STREQ(d->device, "haptic");
+  EXPECT_GT(d->can_rx_frames, 3000u);
+}
+
+TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
+  auto sim = simulated("0.5 move 0 0 0 0.2\n1.0 pull 60 0 0 1.0\n", now_ns_);
+  auto e = make(&sim->console_bus(), sim.get());
+  ASSERT_TRUE(e);
+  run(*e, 1800);  // pulling: force on the hand
+  ASSERT_TRUE(e->servo());
+  ASSERT_GT(sim->device().motor_force_n()[0] * sim->device().motor_force_n()[0] +
+                sim->device().motor_force_n()[2] * sim->device().motor_force_n()[2],
+            1e-4);
+  e->safe_state();
+  run(*e, 1);
+  EXPECT_EQ(e->counters().safe_states, 1u);
+  EXPECT_EQ(e->counters().servo_reason, servo::SafeReason::forced);
+  run(*e, 500);  // still holding the button: no force comes back
+  EXPECT_EQ(e->counters().grasps, 1u);
+  const auto& f = sim->device().motor_force_n();
+  EXPECT_EQ(f[0], 0.0);
+  EXPECT_EQ(f[1], 0.0);
+  EXPECT_EQ(f[2], 0.0);
+  EXPECT_TRUE(e->counters().running) << "the rope keeps stepping in the safe state";
+}
+
+TEST_F(ExecutiveTest, TicksAllocateNothing) {
+  auto sim = simulated(kPullScript, now_ns_);
+  auto e = make(&sim->console_bus(), sim.get());
+  ASSERT_TRUE(e);
+  run(*e, 500);  // warm
+  dds::Command show = command(dds::CommandKind::set_objective, 1);
+  show.objective = dds::Objective::show;
+  ASSERT_TRUE(commands_.try_push(show));
+  const std::uint64_t before = visvol::testing::thread_allocation_count();
+  run(*e, 5000);  // grasp, pull, release, commands, hand-offs
+  EXPECT_EQ(visvol::testing::thread_allocation_count() - before, 0u);
+  EXPECT_EQ(e->counters().grasps, 1u);
+}
+
+// A wrapper that counts what the loop thread allocates while ticking.
+class CountingExecutive final : public PeriodicTask {
+ public:
+  explicit CountingExecutive(Executive& e) : e_(e) {}
+  void warm_up() override {
+    e_.warm_up();
+    (void)visvol::testing::thread_allocation_count();  // its thread-local counter's first touch
+  }
+  void tick(const TickTime& t) override {
+    if (t.index == 200) start_ = visvol::testing::thread_allocation_count();  // after warm-up
+    e_.tick(t);
+    if (t.index >= 200) allocations_.store(visvol::testing::thread_allocation_count() - start_);
+  }
+  void safe_state() override { e_.safe_state(); }
+  std::uint64_t allocations() const { return allocations_.load(); }
+
+ private:
+  Executive& e_;
+  std::uint64_t start_ = 0;
+  std::atomic<std::uint64_t> allocations_{0};
+};
+
+TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations) {
+  const std::string path = build("executive_large", 385, 11);
+  auto pack = storage::Pack::open(path);
+  ASSERT_TRUE(pack.ok());
+  storage::ResidentConfig rc;
+  rc.budget_bytes = 4 * kMiB;
+  rc.margin_m = 200;
+  rc.poll_interval_s = 0.005;
+  auto field = storage::ResidentPack::create(*pack, rc);
+  ASSERT_TRUE(field.ok()) << field.status().message();
+  ASSERT_GT((*field)->stats().pack_bytes, 6 * rc.budget_bytes);
+  // nothing of the pack left in the page cache but what is locked
+  {
+    const int fd = ::open(path.c_str(), O_RDONLY);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::fdatasync(fd), 0);  // dirty pages cannot be dropped
+    ASSERT_EQ(::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED), 0);
+    ::close(fd);
+  }
+  ExecutiveConfig c;
+  c.start_m = point_at(**field, 0.05, 0.05, 150);
+  c.end_m = point_at(**field, 0.2, 0.15, 150);
+  c.segments = 64;
+  c.max_segments = 64;
+  dds::CommandQueue commands;
+  dds::AckQueue acks;
+  LatestValue<dds::PathSample> paths;
+  ExecutiveOutputs out;
+  out.path = &paths;
+  out.acks = &acks;
+  auto sim = simulated(kPullScript, monotonic_ns());
+  auto e = Executive::create(c, **field, &sim->console_bus(), sim.get(), &commands, out);
+  ASSERT_TRUE(e.ok()) << e.status().message();
+
+  (*field)->set_reader_active(true);
+  (*field)->start_pager();
+  CountingExecutive task(**e);
+  PeriodicLoop loop(task);
+  LoopConfig lc;
+  lc.realtime.priority = 0;
+  lc.realtime.lock_memory = false;
+  lc.overrun_limit = 1000;  // a loaded test machine must not trip the safe state here
+  ASSERT_TRUE(loop.start(lc).ok());
+  // move the rope's ends across the pack, diagonal by diagonal
+  for (int step = 1; step <= 12; ++step) {
+    const double f = 0.05 + 0.7 * step / 12.0;
+    dds::Command m{};
+    m.kind = dds::CommandKind::set_endpoints;
+    m.sequence = static_cast<std::uint64_t>(step);
+    const Vec3 a = point_at(**field, f, f, 150), b = point_at(**field, f + 0.15, f + 0.1, 150);
+    m.endpoints.start = {a.x(), a.y(), a.z()};
+    m.endpoints.end = {b.x(), b.y(), b.z()};
+    ASSERT_TRUE(commands.try_push(m));
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  }
+  const LoopRun run = loop.stop();
+  (*field)->set_reader_active(false);
+  (*field)->stop_pager();
+  const storage::ResidentStats s = (*field)->stats();
+  EXPECT_GT(run.totals.ticks, 500u);
+  EXPECT_EQ(run.totals.faults_after_settle.major, 0) << "the loop thread waited on the disk";
+  // not even a minor fault once settled: every page a tick reads is locked and
+  // mapped (a read of a brick that is not resident would fault, from the page
+  // cache at best)
+  EXPECT_EQ(run.totals.faults_after_settle.minor, 0);
+  EXPECT_GT((*field)->fallbacks(), 0u) << "the rope should have outrun the pager somewhere";
+  EXPECT_EQ(task.allocations(), 0u) << "the loop thread allocated";
+  EXPECT_GT(s.bricks_evicted, 0u);
+  EXPECT_LE(s.resident_bytes, s.budget_bytes);
+  EXPECT_EQ((*e)->counters().commands_applied, 12u);
+  field->reset();
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace visvol::rt

@@ -1,0 +1,261 @@
+// Resident tiles: the budget, the pager's choice of bricks, lookups that fall
+// back to coarser levels, corrupt bricks, and a reader thread that moves
+// across a pack eight times the budget without a single major page fault.
+#include "storage/resident_pack.hpp"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include "../fields/terrains.hpp"
+#include "fields/sampler.hpp"
+#include "rt/exec/realtime.hpp"
+#include "storage/pack_build.hpp"
+
+namespace visvol::storage {
+namespace {
+
+using fields::FieldSampler;
+
+// Packs live in the working directory (the build tree, on disk): a tmpfs
+// /tmp would turn every page-in into a minor fault and hide what the fault
+// test looks for.
+std::string pack_path(const std::string& stem) { return stem + "_" + std::to_string(::getpid()) + ".vvp"; }
+
+constexpr std::uint64_t kMiB = 1024 * 1024;
+
+class ResidentPackTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    // 385 x 385 posts at 30 m, three levels: about 27 MiB of field bricks
+    const fields::Heightfield hf = fields::testing::fractal(385, 11);
+    PackBuildParams p;
+    p.field.nz = 32;
+    p.field.ceiling_m = 200;
+    p.field.range_posts = 8;
+    p.lod_levels = 3;
+    p.tff.band_offset_m = 60;
+    p.tff.band_levels = 8;
+    path_ = new std::string(pack_path("resident"));
+    ASSERT_TRUE(build_pack(hf, p, "", *path_).ok());
+    auto pack = Pack::open(*path_);
+    ASSERT_TRUE(pack.ok()) << pack.status().message();
+    pack_ = new std::shared_ptr<const Pack>(*pack);
+  }
+  static void TearDownTestSuite() {
+    delete pack_;
+    std::remove(path_->c_str());
+    delete path_;
+  }
+  static std::unique_ptr<ResidentPack> make(std::uint64_t budget, double margin_m = 0.0) {
+    ResidentConfig c;
+    c.budget_bytes = budget;
+    c.margin_m = margin_m;
+    auto r = ResidentPack::create(*pack_, c);
+    EXPECT_TRUE(r.ok()) << r.status().message();
+    return r.ok() ? std::move(*r) : nullptr;
+  }
+  // A box of `half_m` around the world point at fractions (fx, fy) of level 0.
+  static WorldBox box_at(double fx, double fy, double half_m) {
+    const fields::VolumeGeometry g = (*pack_)->geometry(0);
+    const double x = g.origin_x + fx * (g.nx - 1) * g.spacing_m, y = g.origin_y - fy * (g.ny - 1) * g.spacing_m;
+    return {x - half_m, y - half_m, x + half_m, y + half_m};
+  }
+  static std::string* path_;
+  static std::shared_ptr<const Pack>* pack_;
+};
+std::string* ResidentPackTest::path_ = nullptr;
+std::shared_ptr<const Pack>* ResidentPackTest::pack_ = nullptr;
+
+TEST_F(ResidentPackTest, BudgetBelowTheMinimumIsRefusedWithTheFigures) {
+  ResidentConfig c;
+  c.budget_bytes = 64 * 1024;
+  auto r = ResidentPack::create(*pack_, c);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), Errc::resource);
+  EXPECT_NE(r.status().message().find("cannot hold the minimum"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("MiB"), std::string::npos);
+  c.budget_bytes = 0;
+  EXPECT_FALSE(ResidentPack::create(*pack_, c).ok());
+}
+
+TEST_F(ResidentPackTest, BricksAroundTheFocusBecomeResidentWithinTheBudget) {
+  auto r = make(6 * kMiB);
+  ASSERT_TRUE(r);
+  const ResidentStats before = r->stats();
+  EXPECT_GT(before.pack_bytes, 8 * before.budget_bytes / 2);
+  EXPECT_EQ(before.resident_bricks.back(), before.brick_counts.back());  // the coarsest, always
+  EXPECT_EQ(before.resident_bricks.front(), 0u);
+
+  r->set_focus(box_at(0.5, 0.5, 200));
+  ASSERT_TRUE(r->update().ok());
+  const ResidentStats s = r->stats();
+  EXPECT_GT(s.resident_bricks.front(), 0u);
+  EXPECT_LE(s.resident_bytes, s.budget_bytes);
+  const fields::VolumeGeometry g = r->level(0).geometry();
+  EXPECT_TRUE(r->level(0).resident(g.nx / 2, g.ny / 2));
+  EXPECT_FALSE(r->level(0).resident(0, 0));
+  EXPECT_FALSE(r->level(0).resident(g.nx - 1, g.ny - 1));
+}
+
+TEST_F(ResidentPackTest, LookupsReadTheBrickWhereResidentAndFallBackElsewhere) {
+  auto r = make(6 * kMiB);
+  ASSERT_TRUE(r);
+  r->set_focus(box_at(0.5, 0.5, 200));
+  ASSERT_TRUE(r->update().ok());
+  const ResidentLevel& fine = r->level(0);
+  const PackLevel& direct = r->pack_level(0);
+  const fields::VolumeGeometry g = fine.geometry();
+  // resident: exactly the pack's values
+  for (int k = 0; k < g.nz; k += 5) {
+    EXPECT_EQ(fine.voxel(g.nx / 2, g.ny / 2, k), direct.voxel(g.nx / 2, g.ny / 2, k));
+    const fields::TffSample a = fine.tff(g.nx / 2, g.ny / 2, k % 8), b = direct.tff(g.nx / 2, g.ny / 2, k % 8);
+    EXPECT_EQ(a.signed_distance_m, b.signed_distance_m);
+  }
+  EXPECT_EQ(r->fallbacks(), 0u);
+  // not resident: the next coarser level's view at the same world point
+  const FieldSampler<ResidentLevel> coarser(r->level(1));
+  const FieldSampler<PackLevel> coarsest(r->pack_level(2));
+  for (int k = 1; k < g.nz; k += 3) {
+    const double x = g.origin_x + 3 * g.spacing_m, y = g.origin_y - 5 * g.spacing_m, z = g.z_of(k);
+    const float v = fine.voxel(3, 5, k);
+    EXPECT_FLOAT_EQ(v, static_cast<float>(coarser.visibility(x, y, z)));
+    EXPECT_NEAR(v, coarsest.visibility(x, y, z), 0.2);
+    EXPECT_GE(v, 0.0f);
+    EXPECT_LE(v, 1.0f);
+  }
+  EXPECT_GT(r->fallbacks(), 0u);
+  // the terrain force falls back the same way and keeps its sign convention
+  const fields::TffSample deep = fine.tff(3, 5, 0), high = fine.tff(3, 5, 7);
+  EXPECT_LT(deep.signed_distance_m, high.signed_distance_m);
+}
+
+TEST_F(ResidentPackTest, MovingTheFocusEvictsAndStaysWithinTheBudget) {
+  const std::uint64_t rss_before = rt::resident_bytes();
+  auto r = make(4 * kMiB, 150.0);
+  ASSERT_TRUE(r);
+  for (int step = 0; step <= 20; ++step) {
+    const double f = 0.05 + 0.9 * step / 20.0;
+    r->set_focus(box_at(f, f, 300));
+    ASSERT_TRUE(r->update().ok());
+    const ResidentStats s = r->stats();
+    ASSERT_LE(s.resident_bytes, s.budget_bytes) << "step " << step;
+    const fields::VolumeGeometry g = r->level(0).geometry();
+    EXPECT_TRUE(r->level(0).resident(static_cast<int>(f * (g.nx - 1)), static_cast<int>(f * (g.ny - 1))))
+        << "step " << step;
+  }
+  const ResidentStats s = r->stats();
+  EXPECT_GT(s.bricks_evicted, 0u);
+  EXPECT_GT(s.bricks_loaded, s.bricks_evicted / 2);
+  // what the process keeps mapped grows by the budget at most (plus slack for the test)
+  EXPECT_LT(rt::resident_bytes(), rss_before + s.budget_bytes + 8 * kMiB);
+}
+
+TEST_F(ResidentPackTest, ACorruptBrickStaysOutAndIsNamed) {
+  const std::string bad = pack_path("resident_bad");
+  {
+    std::ifstream in(*path_, std::ios::binary);
+    std::vector<char> bytes{std::istreambuf_iterator<char>(in), {}};
+    const TileEntry& t = (*pack_)->tile(0, Layer::visibility, 12, 12);
+    bytes[t.offset + 100] ^= 0x5a;
+    std::ofstream(bad, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  auto pack = Pack::open(bad);
+  ASSERT_TRUE(pack.ok()) << pack.status().message();
+  ResidentConfig c;
+  c.budget_bytes = 8 * kMiB;
+  c.margin_m = 0;
+  auto r = ResidentPack::create(*pack, c);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  const fields::VolumeGeometry g = (*r)->level(0).geometry();
+  const double x = g.origin_x + (12 * 16 + 8) * g.spacing_m, y = g.origin_y - (12 * 16 + 8) * g.spacing_m;
+  (*r)->set_focus({x - 600, y - 600, x + 600, y + 600});
+  ASSERT_TRUE((*r)->update().ok());
+  const ResidentStats s = (*r)->stats();
+  EXPECT_EQ(s.corrupt_bricks, 1u);
+  EXPECT_NE(s.last_error.find("visibility tile (12, 12) of level 0"), std::string::npos) << s.last_error;
+  EXPECT_FALSE((*r)->level(0).resident(12 * 16 + 8, 12 * 16 + 8));
+  EXPECT_TRUE((*r)->level(0).resident(11 * 16 + 8, 12 * 16 + 8));
+  r->reset();
+  std::remove(bad.c_str());
+}
+
+// Drops the pack's pages that nobody has mapped from the page cache, so that
+// touching one would have to read the disk (a major fault).
+void drop_page_cache(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::fdatasync(fd), 0);
+  ASSERT_EQ(::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED), 0);
+  ::close(fd);
+}
+
+TEST_F(ResidentPackTest, AReaderSweepingThePackNeverTakesAMajorFault) {
+  auto r = make(4 * kMiB, 100.0);  // the pack is about 8 times this
+  ASSERT_TRUE(r);
+  const ResidentStats start = r->stats();
+  ASSERT_GT(start.pack_bytes, 6 * start.budget_bytes);
+
+  // Control: the measurement sees a major fault when a page really is absent.
+  drop_page_cache(*path_);
+  {
+    const rt::ThreadFaults f0 = rt::thread_faults();
+    volatile float sink = r->pack_level(0).voxel(5, 5, 3);
+    (void)sink;
+    const rt::ThreadFaults f1 = rt::thread_faults();
+    if (f1.major == f0.major) GTEST_SKIP() << "this file system serves dropped pages without a major fault";
+  }
+  drop_page_cache(*path_);
+
+  r->set_reader_active(true);
+  r->start_pager();
+  std::atomic<std::int64_t> majors{-1};
+  std::atomic<std::uint64_t> reads{0};
+  std::thread reader([&] {
+    const ResidentLevel fine = r->level(0);  // a copy: pointers only
+    const FieldSampler<ResidentLevel> s(fine);
+    const fields::VolumeGeometry g = fine.geometry();
+    double sum = 0;
+    // warm the code and this thread's stack first
+    for (int i = 0; i < 100; ++i) sum += s.visibility(g.origin_x, g.origin_y, g.z0_m + 50);
+    const rt::ThreadFaults f0 = rt::thread_faults();
+    const auto t0 = std::chrono::steady_clock::now();
+    std::uint64_t n = 0;
+    for (;;) {
+      const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (t > 2.0) break;
+      // the "rope": 600 m wide, moving along the diagonal
+      const double f = 0.05 + 0.9 * t / 2.0;
+      const double cx = g.origin_x + f * (g.nx - 1) * g.spacing_m, cy = g.origin_y - f * (g.ny - 1) * g.spacing_m;
+      r->set_focus({cx - 300, cy - 300, cx + 300, cy + 300});
+      for (int i = 0; i < 200; ++i) {
+        const double x = cx - 300 + 3 * i, y = cy + 300 - 3 * i;
+        sum += s.visibility(x, y, s.height(x, y) + 40) + s.gradient(x, y, s.height(x, y) + 40).norm() +
+               s.terrain_force(x, y, s.height(x, y) + 20).signed_distance_m;
+        ++n;
+      }
+      r->tick_done();
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const rt::ThreadFaults f1 = rt::thread_faults();
+    majors.store(f1.major - f0.major);
+    reads.store(n + (sum > 1e300 ? 1 : 0));
+  });
+  reader.join();
+  r->set_reader_active(false);
+  r->stop_pager();
+  const ResidentStats s = r->stats();
+  EXPECT_EQ(majors.load(), 0) << "the reader touched a page that was not resident";
+  EXPECT_GT(reads.load(), 10000u);
+  EXPECT_GT(s.bricks_evicted, 0u) << "the sweep should have moved the resident set";
+  EXPECT_LE(s.resident_bytes, s.budget_bytes);
+}
+
+}  // namespace
+}  // namespace visvol::storage

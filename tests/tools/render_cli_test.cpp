@@ -1,0 +1,157 @@
+// `visvol render` as users run it: every view from the CSV `visvol plan`
+// writes and from plain "x y z" text, markers, and bad input refused with
+// exit status 2 and a message naming the problem.
+#include <dirent.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli_runner.hpp"
+
+namespace visvol::test {
+namespace {
+
+std::vector<unsigned char> bytes_of(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+// Width and height from a PNG's IHDR, or {0, 0} when it is not a PNG.
+std::pair<int, int> png_size(const std::vector<unsigned char>& b) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (b.size() < 24 || !std::equal(kSignature, kSignature + 8, b.begin())) return {0, 0};
+  const auto be32 = [&](std::size_t o) { return (b[o] << 24) | (b[o + 1] << 16) | (b[o + 2] << 8) | b[o + 3]; };
+  return {be32(16), be32(20)};
+}
+
+// Files in a folder whose names contain `part` (temporaries left behind).
+int files_containing(const std::string& dir, const std::string& part) {
+  int n = 0;
+  if (DIR* d = opendir(dir.c_str())) {
+    while (dirent* e = readdir(d)) n += std::string(e->d_name).find(part) != std::string::npos;
+    closedir(d);
+  }
+  return n;
+}
+
+class RenderCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string(::testing::TempDir() + "/render_cli_" + std::to_string(getpid()));
+    ASSERT_EQ(std::system(("mkdir -p " + *dir_).c_str()), 0);
+    pack_ = new std::string(*dir_ + "/small.vvp");
+    const Outcome build = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + *pack_);
+    ASSERT_EQ(build.status, 0) << build.err;
+    // a short real plan: its CSV is what operators hand to render
+    const Outcome plan = visvol("plan " + *pack_ +
+                                " --from 550100 4182600 200 --to 551100 4181700 200 --objective hide"
+                                " --segments 16 --max-seconds 2 -o " + *dir_ + "/plan");
+    ASSERT_EQ(plan.status, 0) << plan.err;
+    std::ofstream(*dir_ + "/points.txt") << "# x y z\n550200 4182500 180\n550600 4182100 160\n551000 4181800 170\n";
+  }
+  static void TearDownTestSuite() {
+    std::system(("rm -rf " + *dir_).c_str());
+    delete dir_;
+    delete pack_;
+  }
+  static std::string* dir_;
+  static std::string* pack_;
+};
+std::string* RenderCli::dir_ = nullptr;
+std::string* RenderCli::pack_ = nullptr;
+
+TEST_F(RenderCli, EveryViewFromAPlanCsvWritesAPngOfTheAskedSize) {
+  for (const char* view : {"oblique", "top", "volume", "slice"}) {
+    const std::string out = *dir_ + "/" + view + ".png";
+    const Outcome r = visvol("render " + *pack_ + " --path " + *dir_ + "/plan.csv --view " + view +
+                             " --size 200x150 -o " + out);
+    ASSERT_EQ(r.status, 0) << view << ": " << r.err;
+    EXPECT_NE(r.out.find("wrote " + out + ": 200 x 150, " + view + " view"), std::string::npos) << r.out;
+    EXPECT_EQ(png_size(bytes_of(out)), std::make_pair(200, 150)) << view;
+  }
+  EXPECT_EQ(files_containing(*dir_, ".tmp"), 0);
+}
+
+TEST_F(RenderCli, PlainTextPathMarkersAndOptionsChangeThePicture) {
+  const std::string base = "render " + *pack_ + " --path " + *dir_ + "/points.txt --view top --size 160x120 ";
+  const Outcome plain = visvol(base + "-o " + *dir_ + "/plain.png");
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_NE(plain.out.find("the path's mean altitude"), std::string::npos) << plain.out;
+  const Outcome marked = visvol(base + "--hidden-from 550400 4181900 120 --hidden-from 550800 4182300 120 " +
+                                "--visible-to 550300 4181700 250 -o " + *dir_ + "/marked.png");
+  ASSERT_EQ(marked.status, 0) << marked.err;
+  const Outcome height = visvol(base + "--height-above-ground 5 -o " + *dir_ + "/height.png");
+  ASSERT_EQ(height.status, 0) << height.err;
+  EXPECT_NE(height.out.find("F_p 5 m above the ground"), std::string::npos) << height.out;
+  const Outcome stored = visvol(base + "--compression 0 -o " + *dir_ + "/stored.png");
+  ASSERT_EQ(stored.status, 0) << stored.err;
+  const auto a = bytes_of(*dir_ + "/plain.png"), b = bytes_of(*dir_ + "/marked.png");
+  const auto c = bytes_of(*dir_ + "/height.png"), d = bytes_of(*dir_ + "/stored.png");
+  EXPECT_EQ(png_size(a), std::make_pair(160, 120));
+  EXPECT_NE(a, b);  // markers drawn
+  EXPECT_NE(a, c);  // another colouring height
+  EXPECT_GE(d.size(), 160u * 120 * 3);  // level 0: stored, not compressed
+  EXPECT_LT(a.size(), d.size());
+}
+
+TEST_F(RenderCli, TransferFunctionFileIsUsedAndItsErrorsNameFileAndLine) {
+  const std::string good = *dir_ + "/grey.tf", bad = *dir_ + "/bad.tf";
+  std::ofstream(good) << "# grey ramp\ncolour 0 0 0 0\ncolour 1 1 1 1\nopacity 0 0.1\n";
+  std::ofstream(bad) << "colour 0 0 0 0\ncolour 1 1 1.5 1\nopacity 0 0.1\n";
+  const std::string base = "render " + *pack_ + " --view volume --size 120x90 ";
+  const Outcome ok = visvol(base + "--transfer " + good + " -o " + *dir_ + "/grey.png");
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  const Outcome plain = visvol(base + "-o " + *dir_ + "/default.png");
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_NE(bytes_of(*dir_ + "/grey.png"), bytes_of(*dir_ + "/default.png"));
+  const Outcome r = visvol(base + "--transfer " + bad + " -o " + *dir_ + "/bad.png");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find(bad + ": line 2: G 1.5 is outside [0, 1]"), std::string::npos) << r.err;
+  EXPECT_EQ(bytes_of(*dir_ + "/bad.png").size(), 0u);  // nothing written
+}
+
+TEST_F(RenderCli, BadInputIsRefusedWithTheReason) {
+  std::ofstream(*dir_ + "/flat.txt") << "550200 4182500\n550600 4182100\n";
+  std::ofstream(*dir_ + "/far.txt") << "0 0 100\n10 10 100\n";
+  std::ofstream(*dir_ + "/short.csv") << "index,x_m,y_m,z_m,fp\n0,550200,4182500,180,0.1\n1,550600,4182100\n";
+  std::ofstream(*dir_ + "/fp.csv") << "index,x_m,y_m,z_m,fp\n0,550200,4182500,180,0.1\n1,550600,4182100,160,1.2\n";
+  const std::string out = " -o " + *dir_ + "/x.png";
+  const std::string p = "render " + *pack_ + " ";
+  struct Case {
+    std::string args, expected;
+  } cases[] = {
+      {p + "--size 10x10" + out, "each side must be 32..4096 pixels"},
+      {p + "--size 300" + out, "--size '300' is not WIDTHxHEIGHT"},
+      {p + "--size 300x-2" + out, "is not WIDTHxHEIGHT"},
+      {p + "--view sideways" + out, "sideways"},
+      {p + "--view slice" + out, "--view slice needs --path"},
+      {p + "--path " + *dir_ + "/flat.txt" + out, "points have no heights"},
+      {p + "--path " + *dir_ + "/far.txt" + out, "point 1 (0.0, 0.0) is far outside the pack"},
+      {p + "--path " + *dir_ + "/short.csv" + out, "short.csv: line 3: 3 columns, the header has 5"},
+      {p + "--path " + *dir_ + "/fp.csv" + out, "fp.csv: line 3: fp 1.2 is outside [0, 1]"},
+      {p + "--path " + *dir_ + "/missing.txt" + out, "missing.txt"},
+      {p + "--compression 12" + out, "--compression 12 is outside 0..9"},
+      {p + "--height-above-ground -5" + out, "--height-above-ground must be"},
+      {p + "--fp-max 2" + out, "--fp-max must be"},
+      {p + "--visible-to 1 2 3" + out, "--visible-to (1.0, 2.0) is far outside the pack"},
+      {"render " + *dir_ + "/nope.vvp" + out, "nope.vvp"},
+  };
+  for (const Case& c : cases) {
+    const Outcome r = visvol(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << "\ngot: " << r.err;
+  }
+  EXPECT_EQ(bytes_of(*dir_ + "/x.png").size(), 0u);
+  // an output folder that does not exist: a clear failure, no temporary left
+  const Outcome r = visvol(p + "-o " + *dir_ + "/no/such/dir/x.png");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("x.png"), std::string::npos) << r.err;
+  EXPECT_EQ(files_containing(*dir_, ".tmp"), 0);
+}
+
+}  // namespace
+}  // namespace visvol::test

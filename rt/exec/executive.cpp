@@ -7,45 +7,13 @@
 #include "drivers/dds/message_codec.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/planner.hpp"
+#include "rt/rope/slack.hpp"
 
 namespace visvol::rt {
 
 namespace {
 
 std::size_t index_of(RopeModel m) { return m == RopeModel::articulated ? 1 : 0; }
-
-double polyline_length(const Vec3* p, int n) {
-  double l = 0;
-  for (int i = 1; i < n; ++i) l += (p[i] - p[i - 1]).norm();
-  return l;
-}
-
-// The straight segment from a to b in n + 1 points, kept `floor_m` above the
-// terrain, bent sideways along a half sine until it is `length_m` long (an
-// inextensible rope needs slack to move). Sideways, not up: above the field's
-// top F_p has no gradient and a rope there would never come down. Bisection
-// on the bend: no allocation.
-template <class Height>
-void lay_with_slack(const Vec3& a, const Vec3& b, double length_m, double floor_m, int n, Vec3* out,
-                    const Height& height) {
-  Vec3 side(-(b.y() - a.y()), b.x() - a.x(), 0.0);
-  side = side.norm() > 0 ? Vec3(side / side.norm()) : Vec3(Vec3::UnitX());
-  auto lay = [&](double amplitude) {
-    for (int i = 0; i <= n; ++i) {
-      const double t = static_cast<double>(i) / n;
-      out[i] = a + t * (b - a) + amplitude * std::sin(M_PI * t) * side;
-      if (i > 0 && i < n) out[i].z() = std::max(out[i].z(), height(out[i].x(), out[i].y()) + floor_m);
-    }
-    return polyline_length(out, n + 1);
-  };
-  if (lay(0.0) >= length_m) return;
-  double lo = 0, hi = length_m;
-  for (int it = 0; it < 50; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (lay(mid) < length_m ? lo : hi) = mid;
-  }
-  lay(hi);
-}
 
 dds::DeviceState device_state_of(haptic::DeviceState s, bool forces) {
   switch (s) {
@@ -211,8 +179,10 @@ Errc Executive::start_run() {
   const double straight = (end_m_ - start_m_).norm();
   const double length = rope_->model() == RopeModel::articulated ? straight * (1.0 + config_.slack) : straight;
   const storage::ResidentSampler& s = forces_->sampler();
-  lay_with_slack(start_m_, end_m_, length, forces_->gains().clearance_m + 20.0, n, scratch_.get(),
-                 [&](double x, double y) { return s.height(x, y); });
+  const Vec3 a = start_m_, b = end_m_;
+  lay_with_slack([&](int i) { return Vec3(a + (static_cast<double>(i) / n) * (b - a)); }, n, 1, length,
+                 forces_->gains().clearance_m + 20.0, s.level().geometry(),
+                 [&](double x, double y) { return s.height(x, y); }, scratch_.get());
   const Errc e = rope_->set_params(params_for(rope_->model(), n, std::max(length / n, 1e-3)));
   if (e != Errc::ok) return e;
   if (!rope_->reset(scratch_.get(), n + 1, n).ok()) return Errc::invalid_argument;
@@ -229,7 +199,7 @@ Errc Executive::start_run() {
 
 Errc Executive::restart_rope(const Vec3* polyline, int points, int segments, RopeModel model) {
   Rope* next = ropes_[index_of(model)].get();
-  const double length = polyline_length(polyline, points);
+  const double length = polyline_length_m(polyline, points);
   const Errc e = next->set_params(params_for(model, segments, std::max(length / segments, 1e-3)));
   if (e != Errc::ok) return e;
   if (!next->reset(polyline, points, segments).ok()) return Errc::invalid_argument;

@@ -10,6 +10,7 @@
 // acceleration (spacing / 0.1 s^2).
 // k1 < 0 hides, k1 > 0 shows.
 //
+// Containment: beside the field's volume a push back in.
 // Terrain force field: inside the terrain a strong push out along the
 // outward displacement; in the band above it (1 - d / offset)^2 along it;
 // nothing beyond the band.
@@ -77,6 +78,11 @@ class FieldForces final : public RopeEnvironment, public PathField {
     const fields::VolumeGeometry& g = level.geometry();
     accel_ref_ = g.spacing_m / (0.1 * 0.1);
     gradient_ref_ = measure_reference_gradient();
+    x0_ = g.origin_x;
+    x1_ = g.origin_x + (g.nx - 1) * g.spacing_m;
+    y0_ = g.origin_y - (g.ny - 1) * g.spacing_m;
+    y1_ = g.origin_y;
+    ramp_m_ = g.spacing_m;
   }
 
   void set_gains(const ForceGains& g) { gains_ = g; }
@@ -97,6 +103,7 @@ class FieldForces final : public RopeEnvironment, public PathField {
       a += (gains_.k1_visibility * accel_ref_ / std::max(1.0, n / kSaturation)) * g;
     }
     if (gains_.k2_terrain != 0) a += gains_.k2_terrain * accel_ref_ * terrain_push(p);
+    a += accel_ref_ * kSaturation * inward_push(p);
     const double ground = sampler_.height(p.x(), p.y());
     const double h = p.z() - ground;
     // Clearance: a push ramping up over a margin above the clearance, as strong
@@ -124,6 +131,21 @@ class FieldForces final : public RopeEnvironment, public PathField {
   double terrain_height_m(double x, double y) const override { return sampler_.height(x, y); }
 
  private:
+  // Beside the field's volume the sampler clamps to its edge and the field
+  // means nothing there: back in, ramping over one post spacing to eight
+  // times the saturated visibility pull (dimensionless). Above its top the
+  // top level's F_p and gradient carry on upward, so a path may climb there
+  // (to stay visible to a point, say).
+  Vec3 inward_push(const Vec3& p) const {
+    auto ramp = [&](double excess_m) { return std::min(excess_m / ramp_m_, 8.0); };
+    Vec3 push = Vec3::Zero();
+    if (p.x() < x0_) push.x() = ramp(x0_ - p.x());
+    if (p.x() > x1_) push.x() = -ramp(p.x() - x1_);
+    if (p.y() < y0_) push.y() = ramp(y0_ - p.y());
+    if (p.y() > y1_) push.y() = -ramp(p.y() - y1_);
+    return push;
+  }
+
   // The terrain force field's direction and profile (dimensionless).
   Vec3 terrain_push(const Vec3& p) const {
     const fields::TffSample s = sampler_.terrain_force(p.x(), p.y(), p.z());
@@ -164,6 +186,8 @@ class FieldForces final : public RopeEnvironment, public PathField {
   ForceGains gains_;
   double accel_ref_ = 1.0;
   double gradient_ref_ = 1.0;
+  double x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // the field's horizontal extent, world metres
+  double ramp_m_ = 1.0;
   const PointHull* hidden_from_ = nullptr;
   const PointHull* visible_to_ = nullptr;
 };

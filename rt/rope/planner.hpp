@@ -5,7 +5,7 @@
 // Initial paths: the straight segment, a polyline (a 2D one lifted to the
 // clearance above the terrain, or a 3D one), or the global graph search on the
 // coarsest level. An inextensible (articulated) rope needs slack to move: it is
-// `slack` longer than its initial path, laid with a gentle upward bulge.
+// `slack` longer than its initial path, bent sideways (rt/rope/slack.hpp).
 //
 // Equilibrium: over the last half second, the rope's RMS speed stays under a
 // tenth of a post spacing per second and F_c changes by less than 0.2% of
@@ -30,6 +30,7 @@
 #include "rt/rope/global_search.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/rope.hpp"
+#include "rt/rope/slack.hpp"
 
 namespace visvol::rt {
 
@@ -85,8 +86,13 @@ struct PlanResult {
 RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness,
                               double accel_ref);
 
-// `polyline` lengthened to `length_m` by lifting it along a half sine.
+// `polyline` lengthened to `length_m` by lifting it along a half sine: a
+// rope laid over the synthetic fields of tests and benches. Plans on real
+// terrain use lay_with_slack (sideways, above the ground, inside the field).
 std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m);
+
+// Points of the slack rope as laid (the rope resamples them to its segments).
+inline constexpr int kLaidSegments = 128;
 
 template <class Level>
 Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanRequest& request,
@@ -166,7 +172,17 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   if (request.model == RopeModel::articulated) {
     const double slack = request.slack >= 0 ? request.slack : (request.init == InitialPath::straight ? 0.3 : 0.05);
     rope_length *= 1.0 + slack;
-    laid = with_slack(start_path, rope_length);
+    std::vector<Vec3> base(static_cast<std::size_t>(kLaidSegments) + 1);
+    VISVOL_RETURN_IF_ERROR(resample_polyline(start_path.data(), static_cast<int>(start_path.size()), kLaidSegments,
+                                             base.data()));
+    laid.resize(base.size());
+    const double floor_m = request.clearance_m + 20.0;
+    // A straight start bows out once; a planned one wiggles in place, a full
+    // wave every eight rope segments.
+    const int half_waves = request.init == InitialPath::straight ? 1 : std::max(1, request.segments / 4);
+    rope_length = lay_with_slack([&](int i) { return base[static_cast<std::size_t>(i)]; }, kLaidSegments,
+                                 half_waves, rope_length, floor_m, finest.geometry(),
+                                 [&](double x, double y) { return judge.terrain_height_m(x, y); }, laid.data());
   }
   const RopeParams rp = scaled_rope_params(request.model, request.segments, rope_length / request.segments,
                                            request.stiffness, judge.reference_acceleration());

@@ -144,7 +144,8 @@ int run_plan(const PlanOptions& o) {
     nlohmann::json j = {{"objective", report.objective}, {"model", report.model}, {"init", o.init},
                         {"segments", r.segments}, {"fc_start", a.fc}, {"fc_end", b.fc},
                         {"length_start_m", a.length_m}, {"length_m", b.length_m},
-                        {"min_clearance_m", b.min_clearance_m}, {"max_climb_deg", b.max_climb_deg},
+                        {"min_clearance_start_m", a.min_clearance_m}, {"min_clearance_m", b.min_clearance_m},
+                        {"max_climb_deg", b.max_climb_deg},
                         {"max_descent_deg", b.max_descent_deg},
                         {"min_turn_radius_m", std::isfinite(b.min_turn_radius_m) ? nlohmann::json(b.min_turn_radius_m) : nlohmann::json()},
                         {"simulated_s", res->simulated_s}, {"equilibrium_s", res->equilibrium_s},
@@ -162,7 +163,8 @@ int run_plan(const PlanOptions& o) {
     std::printf("F_c        %.5f at the start -> %.5f (%+.1f%%)\n", a.fc, b.fc, a.fc > 0 ? 100.0 * (b.fc / a.fc - 1) : 0.0);
     if (res->has_global) std::printf("           the global search's path had %.5f\n", res->global.fc);
     std::printf("length     %.0f m (start %.0f m)\n", b.length_m, a.length_m);
-    std::printf("clearance  %.1f m at the lowest (asked %.1f m)\n", b.min_clearance_m, o.clearance_m);
+    std::printf("clearance  %.1f m at the lowest (start %.1f m, asked %.1f m)\n", b.min_clearance_m, a.min_clearance_m,
+                o.clearance_m);
     std::printf("climb      %.1f deg at the steepest, descent %.1f deg, tightest turn radius %.0f m\n",
                 b.max_climb_deg, b.max_descent_deg, b.min_turn_radius_m);
     std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %zu levels), %.2f s wall\n",

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
@@ -68,6 +69,7 @@ struct Console::Impl {
   dds::AckQueue acks;
   std::unique_ptr<rt::SimulatedDevice> sim;
   std::unique_ptr<can::SocketCanBus> socket_bus;
+  std::unique_ptr<ThumbnailThread> thumbs;
   std::unique_ptr<rt::Executive> exec;
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
@@ -77,6 +79,7 @@ struct Console::Impl {
 
   Status start();
   Status start_dds(const fields::VolumeGeometry& g);
+  Status start_thumbnails();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   dds::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
 };
@@ -155,6 +158,12 @@ Status Console::Impl::start() {
   // the budget: what runs already, what the loop reserves, the tiles get the rest
   budget = rt::MemoryBudget(static_cast<std::uint64_t>(o.budget_mib * kMiB));
   budget.reserve(o.dds ? "process (code, libraries, DDS)" : "process (code, libraries)", rt::resident_bytes());
+  if (o.thumbnail_view != "none") {
+    const std::uint64_t before = rt::resident_bytes();
+    VISVOL_RETURN_IF_ERROR(start_thumbnails());
+    const std::uint64_t after = rt::resident_bytes();
+    budget.reserve("renderer (GL context, mesh, F_p texture, PNG)", after > before ? after - before : 0);
+  }
   const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
   budget.reserve("ropes (both models, max segments)", 2 * segments * 1024);
   budget.reserve("executive (samples, scratch)", sizeof(dds::PathSample) * 2 + segments * 64 + 64 * 1024);
@@ -226,6 +235,7 @@ Status Console::Impl::start() {
     out.device = &publisher->device_status();
     out.acks = &acks;
   }
+  if (thumbs) out.path_render = &thumbs->paths();
   auto e = rt::Executive::create(ec, *field, bus, sim.get(), &commands, out);
   if (!e.ok()) return e.status();
   exec = std::move(*e);
@@ -240,6 +250,22 @@ Status Console::Impl::start() {
   field->start_pager();
   loop = std::make_unique<rt::PeriodicLoop>(*exec);
   return loop->start(loop_config);
+}
+
+Status Console::Impl::start_thumbnails() {
+  ThumbnailConfig tc;
+  auto view = render::parse_view(o.thumbnail_view);
+  if (!view.ok()) return view.status();
+  tc.view = *view;
+  auto size = parse_thumbnail_size(o.thumbnail_size);
+  if (!size.ok()) return size.status();
+  tc.width_px = size->first;
+  tc.height_px = size->second;
+  tc.max_hz = o.thumbnail_max_hz;
+  auto t = ThumbnailThread::start(pack, tc, publisher ? &publisher->thumbnail() : nullptr);
+  if (!t.ok()) return Status(t.status().code(), "thumbnails: " + t.status().message());
+  thumbs = std::move(*t);
+  return {};
 }
 
 dds::HealthSample Console::Impl::health(const rt::LoopReport& r, const rt::ExecutiveCounters& c,
@@ -303,6 +329,7 @@ Status Console::run(const std::atomic<bool>& stop) {
   const rt::LoopRun run = m.loop->stop();
   m.field->set_reader_active(false);
   m.field->stop_pager();
+  if (m.thumbs) m.thumbs->stop();  // after one last thumbnail, which the publisher still sends
   Status delivered;
   if (m.publisher) delivered = m.publisher->stop();
   if (m.intake) m.intake->stop();
@@ -332,6 +359,10 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/path.csv", csv));
   VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/health.csv", health_csv));
+  if (thumbs) {
+    const Status t = thumbs->write_last(o.out + "/thumbnail.png");
+    if (!t.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", t.message().c_str());
+  }
 
   const rt::ExecutiveCounters& c = exec->counters();
   const storage::ResidentStats ts = field->stats();
@@ -399,7 +430,14 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   if (publisher) {
     const dds::PublisherStats ps = publisher->stats();
-    j["dds"] = {{"domain", o.domain}, {"paths", ps.paths}, {"health", ps.health}, {"errors", ps.errors}};
+    j["dds"] = {{"domain", o.domain}, {"paths", ps.paths},           {"health", ps.health},
+                {"thumbnails", ps.thumbnails}, {"errors", ps.errors}};
+  }
+  if (thumbs) {
+    const ThumbnailStats t = thumbs->stats();
+    j["thumbnails"] = {{"view", o.thumbnail_view}, {"size", o.thumbnail_size}, {"rendered", t.rendered},
+                       {"failed", t.failed}, {"last_render_ms", t.last_render_ms},
+                       {"gl_renderer", thumbs->scene().gl_renderer}};
   }
   VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/summary.json", j.dump(2) + "\n"));
   std::printf("visvol-console: %.1f s, %llu ticks; wake-up p50 %.0f us p99 %.0f us max %.0f us; compute p50 %.0f us "
@@ -414,7 +452,14 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   std::printf("memory: peak RSS %.1f MiB of a %.0f MiB budget; tiles %.1f of %.1f MiB (pack %.1f MiB)\n",
               static_cast<double>(rss_peak) / kMiB, o.budget_mib, static_cast<double>(ts.resident_bytes) / kMiB,
               static_cast<double>(ts.budget_bytes) / kMiB, static_cast<double>(ts.pack_bytes) / kMiB);
-  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json\n", o.out.c_str(), o.out.c_str(), o.out.c_str());
+  if (thumbs) {
+    const ThumbnailStats t = thumbs->stats();
+    std::printf("thumbnails: %llu %s %s (last %.0f ms to render and encode), %llu failed\n",
+                static_cast<unsigned long long>(t.rendered), o.thumbnail_view.c_str(), o.thumbnail_size.c_str(),
+                t.last_render_ms, static_cast<unsigned long long>(t.failed));
+  }
+  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json%s\n", o.out.c_str(), o.out.c_str(),
+              o.out.c_str(), thumbs ? (", " + o.out + "/thumbnail.png").c_str() : "");
   return {};
 }
 

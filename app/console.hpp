@@ -6,6 +6,7 @@
 //                      to the log, a progress line every second
 //   loop thread        the executive's ticks (SCHED_FIFO when permitted)
 //   pager thread       resident tiles around the rope
+//   renderer thread    a thumbnail when the rope comes to rest (at most 1 Hz)
 //   DDS threads        publisher, command intake, Cyclone's own
 //
 // Outputs in the output directory (written whole or not at all):
@@ -13,6 +14,7 @@
 //   health.csv     one line a second: loop timing, F_c, device, tiles, memory
 //   summary.json   the run: loop timing percentiles, overruns, faults, memory
 //                  against the budget, tiles, commands, the path's figures
+//   thumbnail.png  the last thumbnail: the rope where it ended
 #pragma once
 
 #include <atomic>

@@ -1,6 +1,7 @@
 #include "app/console_options.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace visvol::app {
 
@@ -38,6 +39,22 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--dds-config", o.dds_config, "Cyclone DDS XML configuration (default: loopback only)")->check(CLI::ExistingFile);
   app.add_option("--namespace", o.dds_namespace, "DDS topic namespace");
   app.add_option("--tile-margin", o.tile_margin_m, "Tiles kept resident around the rope, m")->capture_default_str();
+  app.add_option("--thumbnail-view", o.thumbnail_view,
+                 "Thumbnails when the rope comes to rest (DDS and thumbnail.png): oblique, top, volume, slice, none")
+      ->check(CLI::IsMember({"oblique", "top", "volume", "slice", "none"}))
+      ->capture_default_str();
+  app.add_option("--thumbnail-size", o.thumbnail_size, "Thumbnail size WxH, pixels")->capture_default_str();
+  app.add_option("--thumbnail-max-hz", o.thumbnail_max_hz, "Thumbnails a second at most")->capture_default_str();
+}
+
+Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 32 ||
+      h < 32 || w > 4096 || h > 4096) {
+    return invalid_argument("--thumbnail-size: '" + text + "' is not WxH with sides 32..4096 pixels");
+  }
+  return std::pair{w, h};
 }
 
 Status validate(const ConsoleOptions& o) {
@@ -61,6 +78,8 @@ Status validate(const ConsoleOptions& o) {
   if (!(o.tile_margin_m >= 0 && o.tile_margin_m <= 1e5)) return bad("--tile-margin: must be in 0..100000 m");
   if (!o.from.empty() && o.from.size() != 3) return bad("--from: needs X Y Z");
   if (!o.to.empty() && o.to.size() != 3) return bad("--to: needs X Y Z");
+  if (auto size = parse_thumbnail_size(o.thumbnail_size); !size.ok()) return size.status();
+  if (!(o.thumbnail_max_hz > 0 && o.thumbnail_max_hz <= 50)) return bad("--thumbnail-max-hz: must be in (0, 50]");
   return {};
 }
 

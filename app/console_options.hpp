@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rt/base/status.hpp"
@@ -43,7 +44,14 @@ struct ConsoleOptions {
   std::string dds_namespace;
   // Tiles.
   double tile_margin_m = 1000;
+  // Thumbnails (renderer thread).
+  std::string thumbnail_view = "oblique";  // oblique | top | volume | slice | none
+  std::string thumbnail_size = "256x256";  // WxH, pixels
+  double thumbnail_max_hz = 1.0;
 };
+
+// "WxH" in pixels, each side 32..4096; invalid_argument naming the option.
+Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text);
 
 // Registers the options (with --help texts, units and defaults) on `app`.
 void add_console_options(CLI::App& app, ConsoleOptions& o);

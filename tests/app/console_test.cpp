@@ -78,7 +78,8 @@ TEST_F(Console, HelpAndBadOptions) {
   for (const std::string& args :
        {std::string("--pack /nonexistent.vvp"), "--pack " + *pack_ + " --segments 1",
         "--pack " + *pack_ + " --device socketcan", "--pack " + *pack_ + " --objective sideways",
-        "--pack " + *pack_ + " --from 1 2 3 --no-dds", "--pack " + *pack_ + " --level 7 --no-dds"}) {
+        "--pack " + *pack_ + " --from 1 2 3 --no-dds", "--pack " + *pack_ + " --level 7 --no-dds",
+        "--pack " + *pack_ + " --thumbnail-size 10x10 --no-dds", "--pack " + *pack_ + " --thumbnail-view side"}) {
     const Outcome r = console(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
     EXPECT_NE(r.err.find("visvol-console: "), std::string::npos) << args;
@@ -103,6 +104,9 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);  // header + 33 vertices
   const std::string health = slurp(out + "/health.csv");
   EXPECT_GE(std::count(health.begin(), health.end(), '\n'), 3);  // header + a line a second
+  EXPECT_GE(s["thumbnails"]["rendered"].get<int>(), 1);  // at least the one where the rope ended
+  EXPECT_EQ(s["thumbnails"]["failed"].get<int>(), 0);
+  EXPECT_EQ(slurp(out + "/thumbnail.png").substr(0, 4), "\x89PNG");
 }
 
 TEST_F(Console, PublishesOnDdsAndTakesCommands) {
@@ -115,7 +119,8 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   auto paths = Reader::create(**participant, Topic::path_update);
   auto acks = Reader::create(**participant, Topic::command_ack);
   auto commands = Writer::create(**participant, Topic::command);
-  ASSERT_TRUE(paths.ok() && acks.ok() && commands.ok());
+  auto thumbnails = Reader::create(**participant, Topic::thumbnail);
+  ASSERT_TRUE(paths.ok() && acks.ok() && commands.ok() && thumbnails.ok());
 
   const std::string out = out_dir("dds");
   Outcome r;
@@ -156,6 +161,17 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
       64);
   ASSERT_TRUE(p.ok());
   EXPECT_GE(received, 1);
+  int pictures = 0;
+  auto t = thumbnails->take<sensor_msgs_msg_dds__CompressedImage_>(
+      [&](const sensor_msgs_msg_dds__CompressedImage_& m, const dds_sample_info_t&) {
+        ++pictures;
+        EXPECT_STREQ(m.format, "png");
+        ASSERT_GT(m.data._length, 8u);
+        EXPECT_EQ(m.data._buffer[1], 'P');
+      },
+      8);
+  ASSERT_TRUE(t.ok());
+  EXPECT_GE(pictures, 1);
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_GT(s["dds"]["paths"].get<int>(), 50);
   EXPECT_EQ(s["commands"]["applied"].get<int>(), 1);

@@ -1,5 +1,6 @@
 #include "app/console.hpp"
 
+#include <sys/mman.h>
 #include <sys/stat.h>
 
 #include <chrono>
@@ -80,6 +81,7 @@ struct Console::Impl {
   Status start();
   Status start_dds(const fields::VolumeGeometry& g);
   Status start_thumbnails();
+  void release_pack_pages();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   dds::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
 };
@@ -161,6 +163,7 @@ Status Console::Impl::start() {
   if (o.thumbnail_view != "none") {
     const std::uint64_t before = rt::resident_bytes();
     VISVOL_RETURN_IF_ERROR(start_thumbnails());
+    release_pack_pages();
     const std::uint64_t after = rt::resident_bytes();
     budget.reserve("renderer (GL context, mesh, F_p texture, PNG)", after > before ? after - before : 0);
   }
@@ -250,6 +253,16 @@ Status Console::Impl::start() {
   field->start_pager();
   loop = std::make_unique<rt::PeriodicLoop>(*exec);
   return loop->start(loop_config);
+}
+
+// The renderer reads the pack's finest level once (mesh, F_p texture) and,
+// under mlockall, those mapped pages stay locked. Hand them back: the tiles
+// the rope needs are made resident by the resident pack, within its budget.
+void Console::Impl::release_pack_pages() {
+  void* base = const_cast<std::uint8_t*>(pack->mapping());
+  const auto bytes = static_cast<std::size_t>(pack->file_bytes());
+  munlock(base, bytes);
+  madvise(base, bytes, MADV_DONTNEED);
 }
 
 Status Console::Impl::start_thumbnails() {

@@ -1,15 +1,18 @@
 #!/usr/bin/env bash
 # The main job on the bundled default: imports the San Francisco North DEM,
 # builds its field pack (visibility field F_p with three levels of detail and
-# the terrain force field), checks it, samples it, exports it, and writes a
-# viewshed. Outputs go to out/ (or $VISVOL_OUT).
+# the terrain force field), checks it, samples it, exports it, writes a
+# viewshed, plans a hidden path offline and draws it, then runs the console
+# for 20 s: the 1 kHz executive with the simulated haptic device (an operator
+# script grabs and pulls the rope), DDS on loopback, thumbnails.
+# Outputs go to out/ (or $VISVOL_OUT).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${VISVOL_OUT:-out}
 
-tools/deps.sh build storage
+tools/deps.sh build storage dds render
 cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build build -j "$(nproc)" --target visvol
+cmake --build build -j "$(nproc)" --target visvol visvol-console
 
 mkdir -p "$out"
 dem=tests/data/sf_north_utm10_30m.tif
@@ -35,6 +38,19 @@ echo "== export for ParaView / 3D Slicer / VolView"
 echo "== viewshed of an observer 2 m above the highest post"
 "$visvol" viewshed "$dem" --fill-nodata --observer 544200 4189200 --observer-height 2 \
   -o "$out/viewshed_highest_post.tif" | tee "$out/viewshed.txt"
+
+echo "== a path hidden from the ground, Marin Headlands to downtown (global search, then the rope)"
+"$visvol" plan "$pack" --from 546000 4189000 200 --to 553000 4182000 200 --objective hide \
+  --init global --segments 128 -o "$out/plan_hide" | tee "$out/plan_hide.txt"
+
+echo "== thumbnails of the plan"
+for view in oblique volume slice; do
+  "$visvol" render "$pack" --path "$out/plan_hide.csv" --view "$view" --size 640x480 \
+    -o "$out/plan_hide_$view.png"
+done
+
+echo "== the console: 20 s at 1 kHz, simulated haptic device, DDS on loopback (domain 0)"
+build/app/visvol-console --pack "$pack" --seconds 20 --out "$out/console"
 
 echo
 echo "outputs in $out/:"

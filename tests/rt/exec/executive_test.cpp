@@ -391,8 +391,11 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
   EXPECT_EQ(run.totals.faults_after_settle.major, 0) << "the loop thread waited on the disk";
   // not even a minor fault once settled: every page a tick reads is locked and
   // mapped (a read of a brick that is not resident would fault, from the page
-  // cache at best)
+  // cache at best). Under AddressSanitizer the shadow of newly touched memory
+  // is mapped lazily (tens of minor faults), so only the optimised build checks.
+#if !defined(__SANITIZE_ADDRESS__)
   EXPECT_EQ(run.totals.faults_after_settle.minor, 0);
+#endif
   EXPECT_GT((*field)->fallbacks(), 0u) << "the rope should have outrun the pager somewhere";
   EXPECT_EQ(task.allocations(), 0u) << "the loop thread allocated";
   EXPECT_GT(s.bricks_evicted, 0u);

@@ -44,6 +44,11 @@ namespace {
 // Samples along the volume box's diagonal: the ray-marching step.
 constexpr double kVolumeStepsPerDiagonal = 256;
 constexpr int kColourMapTexels = 256;
+// Terrain mesh density: a vertex per 2 x 2 pixels; 3 x 3 in the volume view,
+// whose plain terrain lies under the F_p fog (llvmpipe's vertex work is
+// single-threaded and dominates large frames: a third less there).
+constexpr double kPixelsPerVertex = 2.0;
+constexpr double kVolumePixelsPerVertex = 3.0;
 constexpr int kWarmupSidePx = 64;
 // Scenes larger than this many pixels ray-march at half resolution (a
 // quarter of the cost; the fog is smooth) and are upsampled bilinearly.
@@ -67,6 +72,20 @@ const float kSliceGround[3] = {0.45f, 0.38f, 0.31f};
 GLsizei gl_count(std::size_t n) { return static_cast<GLsizei>(n); }
 GLsizeiptr gl_bytes(std::size_t n) { return static_cast<GLsizeiptr>(n); }
 const void* gl_offset(std::size_t bytes) { return reinterpret_cast<const void*>(static_cast<std::uintptr_t>(bytes)); }
+
+// Vertex arrays whose attributes 0, 1, 2 are `sizes` floats each, interleaved.
+void vertex_layout(const int (&sizes)[3]) {
+  const GLsizei stride = static_cast<GLsizei>((sizes[0] + sizes[1] + sizes[2]) * static_cast<int>(sizeof(float)));
+  std::size_t offset = 0;
+  for (GLuint a = 0; a < 3; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride, gl_offset(offset));
+    offset += static_cast<std::size_t>(sizes[a]) * sizeof(float);
+  }
+}
+static_assert(detail::kTerrainFloats == 3 + 3 + 1 && detail::kTubeFloats == 3 + 3 + 1 &&
+                  detail::kOverlayFloats == 2 + 4 + 1,
+              "vertex_layout's attribute sizes match the vertex formats");
 
 Result<GLuint> compile(GLenum kind, const char* source, const char* name) {
   const GLuint s = glCreateShader(kind);
@@ -217,6 +236,7 @@ struct Renderer::Impl {
   View view = View::oblique;
   Camera camera;
   double north_dx = 0, north_dy = -1;  // north on screen, a unit vector in pixels
+  double px_per_post = 1;              // a post spacing on screen at the terrain's centre (mesh choice)
   double mean_path_z_m = 0;
   double slice_length_m = 0, slice_z_top_m = 0, slice_z_bottom_m = 0;
 
@@ -225,10 +245,24 @@ struct Renderer::Impl {
   Status build_field_texture(const storage::PackLevel& level, std::size_t max_voxels, double fp_max_config,
                              SceneInfo& info);
   Status build_programs();
+  Status build_surface_programs();  // terrain, tube, overlay
+  Status build_field_programs();    // volume, its composite, slice
+  void upload_field(const std::vector<float>& mean, int tx, int ty, int tz);
+  void map_field_texture(const fields::VolumeGeometry& g, int stride, int tx, int ty);
+  void load_terrain(const storage::PackLevel& level, double vertical_exaggeration);
+  Status build_gl(const storage::PackLevel& level, const RendererConfig& config, SceneInfo& info);
   Status build_buffers(const RendererConfig& config);
+  Status build_frame_targets(int w, int h);
+  Status build_half_target(int w, int h);
+  void build_geometry_buffers(const RendererConfig& config);
+  void reserve_scratch(const RendererConfig& config);
   void upload_colour_map(const TransferFunction& tf);
 
   // the stages of a frame (render())
+  void prepare(const Frame& f, const Sizes& sizes, FrameLayout& layout, OverlayBuilder& o);
+  void draw(const Frame& f, const Sizes& sizes, const FrameLayout& layout, const OverlayBuilder& o,
+            const float (&background)[3], int mesh_step) const;
+  void read_back(int w, int h);
   void path_to_scene(const Frame& f);
   void place_camera(const Frame& f, FrameLayout& layout);
   void overlay_3d(const Frame& f, const Sizes& sizes, OverlayBuilder& o) const;
@@ -237,6 +271,8 @@ struct Renderer::Impl {
   void draw_terrain(const Frame& f, const PixelRect& scene, int mesh_step) const;
   void draw_path(std::size_t count, const Sizes& sizes, double metres_per_px) const;
   void draw_volume(const PixelRect& scene, int frame_w, int frame_h) const;
+  void march_volume(const PixelRect& scene, bool half) const;
+  void composite_half(const PixelRect& scene) const;
   void draw_slice(const PixelRect& scene) const;
   void draw_overlay(const OverlayBuilder& o, int frame_w, int frame_h) const;
   std::optional<PixelPoint> slice_point(const PixelRect& scene, double distance_m, double z_m) const;
@@ -261,9 +297,8 @@ Status Renderer::Impl::build_meshes(int max_width, int max_height) {
   const detail::BaseLayout largest = detail::base_layout(max_width, max_height);
   const int px = std::max(largest.layout.scene.width, largest.layout.scene.height);
   // the finest mesh has a vertex every two pixels at the largest size
-  int step = std::max(1, static_cast<int>(std::floor(2.0 * posts / std::max(1, px))));
-  for (int n = 0; n < 4; ++n, step *= 2) {
-    if (n > 0 && (nx - 1) / step < 8 && (ny - 1) / step < 8) break;  // coarser adds nothing useful
+  const int finest = std::max(1, static_cast<int>(std::floor(2.0 * posts / std::max(1, px))));
+  for (int step : detail::mesh_steps(finest, posts)) {
     detail::TerrainMesh m = detail::terrain_mesh(heights_m, nx, ny, step, spacing_m, origin_x_m, origin_y_m,
                                                  frame, field_box.min.z());
     Mesh g;
@@ -280,45 +315,42 @@ Status Renderer::Impl::build_meshes(int max_width, int max_height) {
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ibo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, gl_bytes(m.indices.size() * sizeof(std::uint32_t)), m.indices.data(),
                  GL_STATIC_DRAW);
-    const GLsizei stride = detail::kTerrainFloats * sizeof(float);
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, gl_offset(0));
-    glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, gl_offset(3 * sizeof(float)));
-    glEnableVertexAttribArray(2);
-    glVertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, stride, gl_offset(6 * sizeof(float)));
+    vertex_layout({3, 3, 1});  // position, normal, skirt flag
     glBindVertexArray(0);
     meshes.push_back(g);
   }
   return gl_status("building the terrain meshes");
 }
 
-Status Renderer::Impl::build_field_texture(const storage::PackLevel& level, std::size_t max_voxels,
-                                           double fp_max_config, SceneInfo& info) {
-  const fields::VolumeGeometry& g = level.geometry();
-  GLint max_3d = 0;
-  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
-  if (g.nz > max_3d) {
-    return Status(Errc::unsupported, "the pack's " + std::to_string(g.nz) + " height levels exceed the GL's " +
-                                         std::to_string(max_3d) + "-texel 3D textures");
-  }
-  // the smallest post stride whose texture fits the budget and the GL's limit
+namespace {
+
+int texels_of(int posts, int stride) { return (posts + stride - 1) / stride; }
+
+// The smallest post stride whose F_p texture fits the voxel budget and the
+// GL's 3D texture size.
+int volume_stride(const fields::VolumeGeometry& g, std::size_t max_voxels, int max_3d) {
   int stride = 1;
-  const auto texels = [&](int s, int n) { return (n + s - 1) / s; };
-  while (static_cast<std::size_t>(texels(stride, g.nx)) * static_cast<std::size_t>(texels(stride, g.ny)) *
-                 static_cast<std::size_t>(g.nz) >
-             max_voxels ||
-         texels(stride, g.nx) > max_3d || texels(stride, g.ny) > max_3d) {
+  const auto voxels = [&](int s) {
+    return static_cast<std::size_t>(texels_of(g.nx, s)) * static_cast<std::size_t>(texels_of(g.ny, s)) *
+           static_cast<std::size_t>(g.nz);
+  };
+  while (voxels(stride) > max_voxels || texels_of(g.nx, stride) > max_3d || texels_of(g.ny, stride) > max_3d) {
     ++stride;
   }
-  const int tx = texels(stride, g.nx), ty = texels(stride, g.ny), tz = g.nz;
-  // level 0 averaged over stride x stride posts: the coarser levels of the
-  // pack have a wider range (another field), so they are not used here
-  std::vector<float> mean(static_cast<std::size_t>(tx) * static_cast<std::size_t>(ty) *
-                          static_cast<std::size_t>(tz));
-  double largest = 0;
+  return stride;
+}
+
+// Level 0's F_p averaged over stride x stride posts, x fastest, then y
+// (southward), then z; `largest` is the largest F_p of a single voxel. The
+// coarser levels of the pack have a wider range (another field), so they are
+// not used for this.
+std::vector<float> averaged_field(const storage::PackLevel& level, int stride, double& largest) {
+  const fields::VolumeGeometry& g = level.geometry();
+  const int tx = texels_of(g.nx, stride), ty = texels_of(g.ny, stride);
+  std::vector<float> mean(static_cast<std::size_t>(tx) * static_cast<std::size_t>(ty) * static_cast<std::size_t>(g.nz));
+  largest = 0;
   std::size_t n = 0;
-  for (int k = 0; k < tz; ++k) {
+  for (int k = 0; k < g.nz; ++k) {
     for (int bj = 0; bj < ty; ++bj) {
       for (int bi = 0; bi < tx; ++bi) {
         double sum = 0;
@@ -335,13 +367,17 @@ Status Renderer::Impl::build_field_texture(const storage::PackLevel& level, std:
       }
     }
   }
-  fp_max = fp_max_config > 0 ? fp_max_config : (largest > 0 ? largest : 1.0);
+  return mean;
+}
+
+}  // namespace
+
+void Renderer::Impl::upload_field(const std::vector<float>& mean, int tx, int ty, int tz) {
   // stored as F_p / fp_max: the colour scale's full 8 bits
   std::vector<std::uint8_t> data(mean.size());
   for (std::size_t v = 0; v < mean.size(); ++v) {
     data[v] = static_cast<std::uint8_t>(std::lround(std::clamp(mean[v] / fp_max, 0.0, 1.0) * 255.0));
   }
-  info.fp_max = fp_max;
   glGenTextures(1, &field_tex);
   glBindTexture(GL_TEXTURE_3D, field_tex);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -351,6 +387,9 @@ Status Renderer::Impl::build_field_texture(const storage::PackLevel& level, std:
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+}
+
+void Renderer::Impl::map_field_texture(const fields::VolumeGeometry& g, int stride, int tx, int ty) {
   // texel (a, b, c) centres at world x0 + (a stride + (stride - 1) / 2) spacing,
   // y0 - (b stride + (stride - 1) / 2) spacing, z0 + c dz
   const double texel_m = stride * g.spacing_m;
@@ -361,82 +400,110 @@ Status Renderer::Impl::build_field_texture(const storage::PackLevel& level, std:
   tex_offset[0] = static_cast<float>((-first.x() / texel_m + 0.5) / tx);
   tex_scale[1] = static_cast<float>(-1.0 / (texel_m * ty));
   tex_offset[1] = static_cast<float>((first.y() / texel_m + 0.5) / ty);
-  tex_scale[2] = static_cast<float>(1.0 / (dz_scene * tz));
-  tex_offset[2] = static_cast<float>((-first.z() / dz_scene + 0.5) / tz);
+  tex_scale[2] = static_cast<float>(1.0 / (dz_scene * g.nz));
+  tex_offset[2] = static_cast<float>((-first.z() / dz_scene + 0.5) / g.nz);
+}
+
+Status Renderer::Impl::build_field_texture(const storage::PackLevel& level, std::size_t max_voxels,
+                                           double fp_max_config, SceneInfo& info) {
+  const fields::VolumeGeometry& g = level.geometry();
+  GLint max_3d = 0;
+  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+  if (g.nz > max_3d) {
+    return Status(Errc::unsupported, "the pack's " + std::to_string(g.nz) + " height levels exceed the GL's " +
+                                         std::to_string(max_3d) + "-texel 3D textures");
+  }
+  const int stride = volume_stride(g, max_voxels, max_3d);
+  const int tx = texels_of(g.nx, stride), ty = texels_of(g.ny, stride);
+  double largest = 0;
+  const std::vector<float> mean = averaged_field(level, stride, largest);
+  fp_max = fp_max_config > 0 ? fp_max_config : (largest > 0 ? largest : 1.0);
+  upload_field(mean, tx, ty, g.nz);
+  map_field_texture(g, stride, tx, ty);
+  info.fp_max = fp_max;
   info.volume_nx = tx;
   info.volume_ny = ty;
-  info.volume_nz = tz;
+  info.volume_nz = g.nz;
   info.volume_stride = stride;
   return gl_status("uploading the F_p texture");
 }
 
+namespace {
+
+GLint uniform(GLuint program, const char* name) { return glGetUniformLocation(program, name); }
+
+// Links a program into `id`; the name goes into the error.
+Status link_into(GLuint& id, const char* vertex, const char* fragment, const char* name) {
+  Result<GLuint> p = link(vertex, fragment, name);
+  if (!p.ok()) return p.status();
+  id = *p;
+  return Status::ok_status();
+}
+
+}  // namespace
+
+Status Renderer::Impl::build_surface_programs() {
+  VISVOL_RETURN_IF_ERROR(link_into(terrain.id, detail::kTerrainVertex, detail::kTerrainFragment, "terrain"));
+  const GLuint t = terrain.id;
+  terrain.view_proj = uniform(t, "u_view_proj");
+  terrain.field = uniform(t, "u_field");
+  terrain.colour_map = uniform(t, "u_colour_map");
+  terrain.tex_scale = uniform(t, "u_tex_scale");
+  terrain.tex_offset = uniform(t, "u_tex_offset");
+  terrain.mode = uniform(t, "u_mode");
+  terrain.height = uniform(t, "u_height");
+  terrain.light = uniform(t, "u_light");
+  terrain.plain_colour = uniform(t, "u_plain_colour");
+  terrain.skirt_colour = uniform(t, "u_skirt_colour");
+  VISVOL_RETURN_IF_ERROR(link_into(tube.id, detail::kTubeVertex, detail::kTubeFragment, "tube"));
+  tube.view_proj = uniform(tube.id, "u_view_proj");
+  tube.inflate = uniform(tube.id, "u_inflate");
+  tube.colour_map = uniform(tube.id, "u_colour_map");
+  tube.light = uniform(tube.id, "u_light");
+  tube.outline = uniform(tube.id, "u_outline");
+  tube.outline_colour = uniform(tube.id, "u_outline_colour");
+  VISVOL_RETURN_IF_ERROR(link_into(overlay.id, detail::kOverlayVertex, detail::kOverlayFragment, "overlay"));
+  overlay.size = uniform(overlay.id, "u_size");
+  overlay.colour_map = uniform(overlay.id, "u_colour_map");
+  return Status::ok_status();
+}
+
+Status Renderer::Impl::build_field_programs() {
+  VISVOL_RETURN_IF_ERROR(link_into(volume.id, detail::kFullscreenVertex, detail::kVolumeFragment, "volume"));
+  const GLuint v = volume.id;
+  volume.inverse = uniform(v, "u_inverse");
+  volume.viewport = uniform(v, "u_viewport");
+  volume.depth_map = uniform(v, "u_depth_map");
+  volume.box_min = uniform(v, "u_box_min");
+  volume.box_max = uniform(v, "u_box_max");
+  volume.depth = uniform(v, "u_depth");
+  volume.field = uniform(v, "u_field");
+  volume.colour_map = uniform(v, "u_colour_map");
+  volume.tex_scale = uniform(v, "u_tex_scale");
+  volume.tex_offset = uniform(v, "u_tex_offset");
+  volume.step = uniform(v, "u_step");
+  volume.max_steps = uniform(v, "u_max_steps");
+  VISVOL_RETURN_IF_ERROR(link_into(composite.id, detail::kFullscreenVertex, detail::kCompositeFragment, "composite"));
+  composite.viewport = uniform(composite.id, "u_viewport");
+  composite.texture_size = uniform(composite.id, "u_texture_size");
+  composite.half = uniform(composite.id, "u_half");
+  VISVOL_RETURN_IF_ERROR(link_into(slice.id, detail::kFullscreenVertex, detail::kSliceFragment, "slice"));
+  const GLuint c = slice.id;
+  slice.viewport = uniform(c, "u_viewport");
+  slice.profile = uniform(c, "u_profile");
+  slice.field = uniform(c, "u_field");
+  slice.colour_map = uniform(c, "u_colour_map");
+  slice.tex_scale = uniform(c, "u_tex_scale");
+  slice.tex_offset = uniform(c, "u_tex_offset");
+  slice.z_top = uniform(c, "u_z_top");
+  slice.z_bottom = uniform(c, "u_z_bottom");
+  slice.ground_colour = uniform(c, "u_ground_colour");
+  return Status::ok_status();
+}
+
 Status Renderer::Impl::build_programs() {
-  Result<GLuint> p = link(detail::kTerrainVertex, detail::kTerrainFragment, "terrain");
-  if (!p.ok()) return p.status();
-  terrain.id = *p;
-  const auto at = [](GLuint program, const char* name) { return glGetUniformLocation(program, name); };
-  terrain.view_proj = at(terrain.id, "u_view_proj");
-  terrain.field = at(terrain.id, "u_field");
-  terrain.colour_map = at(terrain.id, "u_colour_map");
-  terrain.tex_scale = at(terrain.id, "u_tex_scale");
-  terrain.tex_offset = at(terrain.id, "u_tex_offset");
-  terrain.mode = at(terrain.id, "u_mode");
-  terrain.height = at(terrain.id, "u_height");
-  terrain.light = at(terrain.id, "u_light");
-  terrain.plain_colour = at(terrain.id, "u_plain_colour");
-  terrain.skirt_colour = at(terrain.id, "u_skirt_colour");
-
-  p = link(detail::kTubeVertex, detail::kTubeFragment, "tube");
-  if (!p.ok()) return p.status();
-  tube.id = *p;
-  tube.view_proj = at(tube.id, "u_view_proj");
-  tube.inflate = at(tube.id, "u_inflate");
-  tube.colour_map = at(tube.id, "u_colour_map");
-  tube.light = at(tube.id, "u_light");
-  tube.outline = at(tube.id, "u_outline");
-  tube.outline_colour = at(tube.id, "u_outline_colour");
-
-  p = link(detail::kOverlayVertex, detail::kOverlayFragment, "overlay");
-  if (!p.ok()) return p.status();
-  overlay.id = *p;
-  overlay.size = at(overlay.id, "u_size");
-  overlay.colour_map = at(overlay.id, "u_colour_map");
-
-  p = link(detail::kFullscreenVertex, detail::kVolumeFragment, "volume");
-  if (!p.ok()) return p.status();
-  volume.id = *p;
-  volume.inverse = at(volume.id, "u_inverse");
-  volume.viewport = at(volume.id, "u_viewport");
-  volume.depth_map = at(volume.id, "u_depth_map");
-  volume.box_min = at(volume.id, "u_box_min");
-  volume.box_max = at(volume.id, "u_box_max");
-  volume.depth = at(volume.id, "u_depth");
-  volume.field = at(volume.id, "u_field");
-  volume.colour_map = at(volume.id, "u_colour_map");
-  volume.tex_scale = at(volume.id, "u_tex_scale");
-  volume.tex_offset = at(volume.id, "u_tex_offset");
-  volume.step = at(volume.id, "u_step");
-  volume.max_steps = at(volume.id, "u_max_steps");
-
-  p = link(detail::kFullscreenVertex, detail::kCompositeFragment, "composite");
-  if (!p.ok()) return p.status();
-  composite.id = *p;
-  composite.viewport = at(composite.id, "u_viewport");
-  composite.texture_size = at(composite.id, "u_texture_size");
-  composite.half = at(composite.id, "u_half");
-
-  p = link(detail::kFullscreenVertex, detail::kSliceFragment, "slice");
-  if (!p.ok()) return p.status();
-  slice.id = *p;
-  slice.viewport = at(slice.id, "u_viewport");
-  slice.profile = at(slice.id, "u_profile");
-  slice.field = at(slice.id, "u_field");
-  slice.colour_map = at(slice.id, "u_colour_map");
-  slice.tex_scale = at(slice.id, "u_tex_scale");
-  slice.tex_offset = at(slice.id, "u_tex_offset");
-  slice.z_top = at(slice.id, "u_z_top");
-  slice.z_bottom = at(slice.id, "u_z_bottom");
-  slice.ground_colour = at(slice.id, "u_ground_colour");
+  VISVOL_RETURN_IF_ERROR(build_surface_programs());
+  VISVOL_RETURN_IF_ERROR(build_field_programs());
   return gl_status("building the shaders");
 }
 
@@ -464,8 +531,7 @@ void Renderer::Impl::upload_colour_map(const TransferFunction& tf) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
-Status Renderer::Impl::build_buffers(const RendererConfig& config) {
-  const GLsizei w = config.max_width_px, h = config.max_height_px;
+Status Renderer::Impl::build_frame_targets(int w, int h) {
   // the frame: colour and depth renderbuffers; a depth texture the volume
   // pass reads (a copy, so it never samples what is attached for drawing)
   glGenFramebuffers(1, &fbo);
@@ -494,6 +560,12 @@ Status Renderer::Impl::build_buffers(const RendererConfig& config) {
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
     return Status(Errc::unsupported, "the depth copy's framebuffer object is incomplete");
   }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  return Status::ok_status();
+}
+
+Status Renderer::Impl::build_half_target(int w, int h) {
+  // the volume of a large frame marches at half resolution into this
   half_width = (w + 1) / 2;
   half_height = (h + 1) / 2;
   glGenTextures(1, &half_tex);
@@ -510,14 +582,16 @@ Status Renderer::Impl::build_buffers(const RendererConfig& config) {
     return Status(Errc::unsupported, "the half-resolution volume's framebuffer object is incomplete");
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
-
   // the slice view's profile: one texel per column
   glGenTextures(1, &profile_tex);
   glBindTexture(GL_TEXTURE_2D, profile_tex);
   glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, 1, 0, GL_RGBA, GL_FLOAT, nullptr);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  return Status::ok_status();
+}
 
+void Renderer::Impl::build_geometry_buffers(const RendererConfig& config) {
   // the path tube: vertices rewritten per frame, indices fixed
   const std::size_t tube_floats = config.max_path_vertices * detail::kTubeSides * detail::kTubeFloats;
   glGenVertexArrays(1, &tube_vao);
@@ -530,15 +604,8 @@ Status Renderer::Impl::build_buffers(const RendererConfig& config) {
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, tube_ibo);
   glBufferData(GL_ELEMENT_ARRAY_BUFFER, gl_bytes(indices.size() * sizeof(std::uint32_t)), indices.data(),
                GL_STATIC_DRAW);
-  const GLsizei tube_stride = detail::kTubeFloats * sizeof(float);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, tube_stride, gl_offset(0));
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, tube_stride, gl_offset(3 * sizeof(float)));
-  glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, tube_stride, gl_offset(6 * sizeof(float)));
-
-  // the overlay
+  vertex_layout({3, 3, 1});  // position, normal, F_p
+  // the overlay: pixel position, colour, F_p
   overlay_capacity = kOverlayBaseVertices + kOverlayVerticesPerPathPoint * config.max_path_vertices +
                      kOverlayVerticesPerMarker * (config.max_markers + 2);
   glGenVertexArrays(1, &overlay_vao);
@@ -547,24 +614,27 @@ Status Renderer::Impl::build_buffers(const RendererConfig& config) {
   glBindBuffer(GL_ARRAY_BUFFER, overlay_vbo);
   glBufferData(GL_ARRAY_BUFFER, gl_bytes(overlay_capacity * detail::kOverlayFloats * sizeof(float)), nullptr,
                GL_DYNAMIC_DRAW);
-  const GLsizei overlay_stride = detail::kOverlayFloats * sizeof(float);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, overlay_stride, gl_offset(0));
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, overlay_stride, gl_offset(2 * sizeof(float)));
-  glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, overlay_stride, gl_offset(6 * sizeof(float)));
+  vertex_layout({2, 4, 1});
   glGenVertexArrays(1, &empty_vao);
   glBindVertexArray(0);
+}
 
-  // CPU scratch
+void Renderer::Impl::reserve_scratch(const RendererConfig& config) {
+  const auto w = static_cast<std::size_t>(config.max_width_px), h = static_cast<std::size_t>(config.max_height_px);
   centres.resize(config.max_path_vertices);
   fps.resize(config.max_path_vertices);
   arc_m.resize(config.max_path_vertices);
-  tube_data.resize(tube_floats);
+  tube_data.resize(config.max_path_vertices * detail::kTubeSides * detail::kTubeFloats);
   overlay_data.resize(overlay_capacity * detail::kOverlayFloats);
-  profile.resize(static_cast<std::size_t>(w) * 4);
-  pixels.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
+  profile.resize(w * 4);
+  pixels.resize(w * h * 4);
+}
+
+Status Renderer::Impl::build_buffers(const RendererConfig& config) {
+  VISVOL_RETURN_IF_ERROR(build_frame_targets(config.max_width_px, config.max_height_px));
+  VISVOL_RETURN_IF_ERROR(build_half_target(config.max_width_px, config.max_height_px));
+  build_geometry_buffers(config);
+  reserve_scratch(config);
   return gl_status("building the frame buffers");
 }
 
@@ -602,6 +672,83 @@ Status validate_config(const RendererConfig& c) {
 
 }  // namespace
 
+void Renderer::Impl::load_terrain(const storage::PackLevel& level, double vertical_exaggeration) {
+  const fields::VolumeGeometry& g = level.geometry();
+  nx = g.nx;
+  ny = g.ny;
+  spacing_m = g.spacing_m;
+  origin_x_m = g.origin_x;
+  origin_y_m = g.origin_y;
+  top_m = g.top_m();
+  heights_m.resize(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
+  for (int j = 0; j < g.ny; ++j) {
+    for (int i = 0; i < g.nx; ++i) {
+      heights_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(g.nx) + static_cast<std::size_t>(i)] =
+          level.post(i, j);
+    }
+  }
+  // the scene: centred on the terrain, heights from the lowest level up
+  const double width_m = (g.nx - 1) * g.spacing_m, depth_m = (g.ny - 1) * g.spacing_m;
+  const double tall_m = std::max(g.top_m() - g.z0_m, 1e-3);
+  frame.centre_x_m = g.origin_x + width_m / 2;
+  frame.centre_y_m = g.origin_y - depth_m / 2;
+  frame.z_ref_m = g.z0_m;
+  frame.exaggeration = vertical_exaggeration > 0 ? vertical_exaggeration
+                                                 : std::clamp(0.2 * std::max(width_m, depth_m) / tall_m, 1.0, 10.0);
+  const float lowest = *std::min_element(heights_m.begin(), heights_m.end());
+  const float highest = *std::max_element(heights_m.begin(), heights_m.end());
+  terrain_box.min = frame.to_scene(g.origin_x, g.origin_y - depth_m, lowest);
+  terrain_box.max = frame.to_scene(g.origin_x + width_m, g.origin_y, highest);
+  field_box.min = frame.to_scene(g.origin_x, g.origin_y - depth_m, g.z0_m);
+  field_box.max = frame.to_scene(g.origin_x + width_m, g.origin_y, g.top_m());
+  volume_step = static_cast<float>((field_box.max - field_box.min).norm() / kVolumeStepsPerDiagonal);
+  volume_max_steps = static_cast<int>(kVolumeStepsPerDiagonal) + 2;
+}
+
+Status Renderer::Impl::build_gl(const storage::PackLevel& level, const RendererConfig& config, SceneInfo& info) {
+  Result<std::unique_ptr<GlContext>> made = GlContext::create();
+  if (!made.ok()) return made.status();
+  context = std::move(*made);
+  info.gl_renderer = context->renderer();
+  info.gl_version = context->version();
+  info.terrain_nx = nx;
+  info.terrain_ny = ny;
+  info.vertical_exaggeration = frame.exaggeration;
+  VISVOL_RETURN_IF_ERROR(build_programs());
+  VISVOL_RETURN_IF_ERROR(build_meshes(config.max_width_px, config.max_height_px));
+  for (const Mesh& mesh : meshes) info.mesh_steps.push_back(mesh.step);
+  VISVOL_RETURN_IF_ERROR(build_field_texture(level, config.max_volume_voxels, config.fp_max, info));
+  upload_colour_map(config.transfer);
+  VISVOL_RETURN_IF_ERROR(build_buffers(config));
+  Result<std::unique_ptr<PngEncoder>> encoder =
+      PngEncoder::create(config.max_width_px, config.max_height_px, config.png_compression_level);
+  if (!encoder.ok()) return encoder.status();
+  png = std::move(*encoder);
+  return Status::ok_status();
+}
+
+Status Renderer::warm_up() {
+  // one small frame of every view compiles llvmpipe's shader variants now,
+  // not in the first real frame
+  const Impl& m = *impl_;
+  const double w_m = (m.nx - 1) * m.spacing_m, h_m = (m.ny - 1) * m.spacing_m;
+  const PathPoint path[2] = {{m.origin_x_m + w_m * 0.25, m.origin_y_m - h_m * 0.25, m.top_m, 0.25},
+                             {m.origin_x_m + w_m * 0.75, m.origin_y_m - h_m * 0.75, m.top_m, 0.75}};
+  const auto frame = [&](View v, int side_px) {
+    Frame f;
+    f.view = v;
+    f.width_px = std::min(side_px, config_.max_width_px);
+    f.height_px = std::min(side_px, config_.max_height_px);
+    f.path = path;
+    f.path_size = 2;
+    return render(f).with_context(std::string("warm-up frame (") + to_string(v) + " view)");
+  };
+  for (View v : {View::top, View::oblique, View::volume, View::slice}) {
+    VISVOL_RETURN_IF_ERROR(frame(v, kWarmupSidePx));
+  }
+  return frame(View::volume, 400);  // the half-resolution volume, where allowed
+}
+
 Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage::Pack> pack,
                                                    const RendererConfig& config) {
   VISVOL_RETURN_IF_ERROR(validate_config(config));
@@ -614,79 +761,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage
   std::unique_ptr<Renderer> r(new Renderer());
   r->config_ = config;
   r->impl_ = std::make_unique<Impl>();
-  Impl& m = *r->impl_;
-  m.pack = pack;
-  m.nx = g.nx;
-  m.ny = g.ny;
-  m.spacing_m = g.spacing_m;
-  m.origin_x_m = g.origin_x;
-  m.origin_y_m = g.origin_y;
-  m.top_m = g.top_m();
-  m.heights_m.resize(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
-  for (int j = 0; j < g.ny; ++j) {
-    for (int i = 0; i < g.nx; ++i) {
-      m.heights_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(g.nx) + static_cast<std::size_t>(i)] =
-          level->post(i, j);
-    }
-  }
-
-  // the scene: centred on the terrain, heights from the lowest level up
-  const double width_m = (g.nx - 1) * g.spacing_m, depth_m = (g.ny - 1) * g.spacing_m;
-  const double tall_m = std::max(g.top_m() - g.z0_m, 1e-3);
-  m.frame.centre_x_m = g.origin_x + width_m / 2;
-  m.frame.centre_y_m = g.origin_y - depth_m / 2;
-  m.frame.z_ref_m = g.z0_m;
-  m.frame.exaggeration = config.vertical_exaggeration > 0
-                             ? config.vertical_exaggeration
-                             : std::clamp(0.2 * std::max(width_m, depth_m) / tall_m, 1.0, 10.0);
-  const float lowest = *std::min_element(m.heights_m.begin(), m.heights_m.end());
-  const float highest = *std::max_element(m.heights_m.begin(), m.heights_m.end());
-  m.terrain_box.min = m.frame.to_scene(g.origin_x, g.origin_y - depth_m, lowest);
-  m.terrain_box.max = m.frame.to_scene(g.origin_x + width_m, g.origin_y, highest);
-  m.field_box.min = m.frame.to_scene(g.origin_x, g.origin_y - depth_m, g.z0_m);
-  m.field_box.max = m.frame.to_scene(g.origin_x + width_m, g.origin_y, g.top_m());
-  const Vec3 diagonal = m.field_box.max - m.field_box.min;
-  m.volume_step = static_cast<float>(diagonal.norm() / kVolumeStepsPerDiagonal);
-  m.volume_max_steps = static_cast<int>(kVolumeStepsPerDiagonal) + 2;
-
-  Result<std::unique_ptr<GlContext>> context = GlContext::create();
-  if (!context.ok()) return context.status();
-  m.context = std::move(*context);
-  r->info_.gl_renderer = m.context->renderer();
-  r->info_.gl_version = m.context->version();
-  r->info_.terrain_nx = g.nx;
-  r->info_.terrain_ny = g.ny;
-  r->info_.vertical_exaggeration = m.frame.exaggeration;
-
-  VISVOL_RETURN_IF_ERROR(m.build_programs());
-  VISVOL_RETURN_IF_ERROR(m.build_meshes(config.max_width_px, config.max_height_px));
-  for (const Impl::Mesh& mesh : m.meshes) r->info_.mesh_steps.push_back(mesh.step);
-  VISVOL_RETURN_IF_ERROR(m.build_field_texture(*level, config.max_volume_voxels, config.fp_max, r->info_));
-  m.upload_colour_map(config.transfer);
-  VISVOL_RETURN_IF_ERROR(m.build_buffers(config));
-  Result<std::unique_ptr<PngEncoder>> png =
-      PngEncoder::create(config.max_width_px, config.max_height_px, config.png_compression_level);
-  if (!png.ok()) return png.status();
-  m.png = std::move(*png);
-
-  // one small frame of every view compiles llvmpipe's shader variants now,
-  // not in the first real frame
-  const double z = g.top_m();
-  const PathPoint warm[2] = {{g.origin_x + width_m * 0.25, g.origin_y - depth_m * 0.25, z, 0.25},
-                             {g.origin_x + width_m * 0.75, g.origin_y - depth_m * 0.75, z, 0.75}};
-  const auto warm_up = [&](View v, int width, int height) {
-    Frame f;
-    f.view = v;
-    f.width_px = std::min(width, config.max_width_px);
-    f.height_px = std::min(height, config.max_height_px);
-    f.path = warm;
-    f.path_size = 2;
-    return r->render(f).with_context(std::string("warm-up frame (") + to_string(v) + " view)");
-  };
-  for (View v : {View::top, View::oblique, View::volume, View::slice}) {
-    VISVOL_RETURN_IF_ERROR(warm_up(v, kWarmupSidePx, kWarmupSidePx));
-  }
-  VISVOL_RETURN_IF_ERROR(warm_up(View::volume, 400, 400));  // the half-resolution volume, where allowed
+  r->impl_->pack = pack;
+  r->impl_->load_terrain(*level, config.vertical_exaggeration);
+  VISVOL_RETURN_IF_ERROR(r->impl_->build_gl(*level, config, r->info_));
+  VISVOL_RETURN_IF_ERROR(r->warm_up());
   return r;
 }
 
@@ -694,13 +772,7 @@ Renderer::~Renderer() = default;  // the context owns every GL object and frees 
 
 namespace {
 
-Status validate_frame(const Frame& f, const RendererConfig& c) {
-  if (f.width_px < kMinSidePx || f.height_px < kMinSidePx || f.width_px > c.max_width_px ||
-      f.height_px > c.max_height_px) {
-    return invalid_argument("frame size " + std::to_string(f.width_px) + " x " + std::to_string(f.height_px) +
-                            " is outside " + std::to_string(kMinSidePx) + ".." + std::to_string(c.max_width_px) +
-                            " x " + std::to_string(kMinSidePx) + ".." + std::to_string(c.max_height_px));
-  }
+Status validate_path(const Frame& f, const RendererConfig& c) {
   if (f.path_size == 1 || f.path_size > c.max_path_vertices || (f.path_size > 0 && f.path == nullptr)) {
     return invalid_argument("path of " + std::to_string(f.path_size) + " vertices: need 0 or 2.." +
                             std::to_string(c.max_path_vertices));
@@ -715,6 +787,17 @@ Status validate_frame(const Frame& f, const RendererConfig& c) {
                               " is outside [0, 1]");
     }
   }
+  if (f.view != View::slice) return Status::ok_status();
+  if (f.path_size < 2) return invalid_argument("the slice view needs a path");
+  double length_m = 0;
+  for (std::size_t i = 1; i < f.path_size; ++i) {
+    length_m += std::hypot(f.path[i].x_m - f.path[i - 1].x_m, f.path[i].y_m - f.path[i - 1].y_m);
+  }
+  if (!(length_m > 1e-6)) return invalid_argument("the slice view needs a path that moves horizontally");
+  return Status::ok_status();
+}
+
+Status validate_markers(const Frame& f, const RendererConfig& c) {
   if (f.marker_count > c.max_markers || (f.marker_count > 0 && f.markers == nullptr)) {
     return invalid_argument(std::to_string(f.marker_count) + " markers: at most " + std::to_string(c.max_markers));
   }
@@ -727,20 +810,26 @@ Status validate_frame(const Frame& f, const RendererConfig& c) {
       return invalid_argument("marker " + std::to_string(i) + ": unknown kind");
     }
   }
-  if (f.height_above_ground_m && !(std::isfinite(*f.height_above_ground_m) && *f.height_above_ground_m >= 0)) {
-    return invalid_argument("height above ground " + std::to_string(*f.height_above_ground_m) +
-                            " m is not a finite non-negative number");
-  }
-  if (f.view == View::slice) {
-    if (f.path_size < 2) return invalid_argument("the slice view needs a path");
-    double length_m = 0;
-    for (std::size_t i = 1; i < f.path_size; ++i) {
-      length_m += std::hypot(f.path[i].x_m - f.path[i - 1].x_m, f.path[i].y_m - f.path[i - 1].y_m);
-    }
-    if (!(length_m > 1e-6)) return invalid_argument("the slice view needs a path that moves horizontally");
+  return Status::ok_status();
+}
+
+// Everything render() reads from a frame; messages name the bad field. Builds
+// a message (allocates) only on failure.
+Status validate_frame(const Frame& f, const RendererConfig& c) {
+  if (f.width_px < kMinSidePx || f.height_px < kMinSidePx || f.width_px > c.max_width_px ||
+      f.height_px > c.max_height_px) {
+    return invalid_argument("frame size " + std::to_string(f.width_px) + " x " + std::to_string(f.height_px) +
+                            " is outside " + std::to_string(kMinSidePx) + ".." + std::to_string(c.max_width_px) +
+                            " x " + std::to_string(kMinSidePx) + ".." + std::to_string(c.max_height_px));
   }
   if (f.view != View::top && f.view != View::oblique && f.view != View::volume && f.view != View::slice) {
     return invalid_argument("unknown view");
+  }
+  VISVOL_RETURN_IF_ERROR(validate_path(f, c));
+  VISVOL_RETURN_IF_ERROR(validate_markers(f, c));
+  if (f.height_above_ground_m && !(std::isfinite(*f.height_above_ground_m) && *f.height_above_ground_m >= 0)) {
+    return invalid_argument("height above ground " + std::to_string(*f.height_above_ground_m) +
+                            " m is not a finite non-negative number");
   }
   return Status::ok_status();
 }
@@ -853,6 +942,9 @@ void Renderer::Impl::place_camera(const Frame& f, FrameLayout& layout) {
   const std::optional<PixelPoint> n = camera.project(centre + Vec3(0, 100, 0));
   const double east_px = (c && e) ? std::hypot(e->x - c->x, e->y - c->y) : 1.0;
   layout.metres_per_px = 100.0 / std::max(east_px, 1e-9);
+  // a post's footprint on screen: the area spanned by 100 m east and north
+  const double area_px2 = (c && e && n) ? std::fabs((e->x - c->x) * (n->y - c->y) - (e->y - c->y) * (n->x - c->x)) : 0;
+  px_per_post = area_px2 > 0 ? std::sqrt(area_px2) * spacing_m / 100.0 : spacing_m / layout.metres_per_px;
   north_dx = 0;
   north_dy = -1;
   if (c && n && std::hypot(n->x - c->x, n->y - c->y) > 1e-9) {
@@ -1020,9 +1112,6 @@ void Renderer::Impl::draw_volume(const PixelRect& scene, int frame_w, int frame_
   glBlitFramebuffer(0, 0, frame_w, frame_h, 0, 0, frame_w, frame_h, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
   // large scenes march at half resolution into their own buffer
   const bool half = static_cast<long>(scene.width) * scene.height > kFullResolutionVolumePixels;
-  const float vx = half ? 0.0f : static_cast<float>(scene.x), vy = half ? 0.0f : static_cast<float>(scene.y);
-  const float vw = static_cast<float>(scene.width) / (half ? 2.0f : 1.0f);
-  const float vh = static_cast<float>(scene.height) / (half ? 2.0f : 1.0f);
   if (half) {
     glBindFramebuffer(GL_FRAMEBUFFER, half_fbo);
     glViewport(0, 0, (scene.width + 1) / 2, (scene.height + 1) / 2);
@@ -1034,12 +1123,21 @@ void Renderer::Impl::draw_volume(const PixelRect& scene, int frame_w, int frame_
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
   }
+  march_volume(scene, half);
+  if (half) composite_half(scene);
+}
+
+void Renderer::Impl::march_volume(const PixelRect& scene, bool half) const {
   glDisable(GL_DEPTH_TEST);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_2D, depth_tex);
   glUseProgram(volume.id);
   set_matrix(volume.inverse, camera.inverse);
-  glUniform4f(volume.viewport, vx, vy, vw, vh);
+  // the viewport the rays are cast through, and where its pixels' depths are
+  const float scale = half ? 2.0f : 1.0f;
+  const float vx = half ? 0.0f : static_cast<float>(scene.x), vy = half ? 0.0f : static_cast<float>(scene.y);
+  glUniform4f(volume.viewport, vx, vy, static_cast<float>(scene.width) / scale,
+              static_cast<float>(scene.height) / scale);
   if (half) {
     glUniform3f(volume.depth_map, static_cast<float>(scene.x), static_cast<float>(scene.y), 2.0f);
   } else {
@@ -1058,8 +1156,10 @@ void Renderer::Impl::draw_volume(const PixelRect& scene, int frame_w, int frame_
   glUniform1i(volume.max_steps, volume_max_steps);
   glBindVertexArray(empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
-  if (!half) return;
-  // blend the half-resolution volume over the frame
+}
+
+void Renderer::Impl::composite_half(const PixelRect& scene) const {
+  // blend the half-resolution volume over the frame (premultiplied)
   glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(scene.x, scene.y, scene.width, scene.height);
   glEnable(GL_BLEND);
@@ -1071,6 +1171,7 @@ void Renderer::Impl::draw_volume(const PixelRect& scene, int frame_w, int frame_
               static_cast<float>(scene.width), static_cast<float>(scene.height));
   glUniform2f(composite.texture_size, static_cast<float>(half_width), static_cast<float>(half_height));
   glUniform1i(composite.half, 3);
+  glBindVertexArray(empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
 }
 
@@ -1112,69 +1213,91 @@ void Renderer::Impl::draw_overlay(const OverlayBuilder& o, int frame_w, int fram
   glBindVertexArray(0);
 }
 
+namespace {
+
+// Marks scale with the frame's smaller side, with floors for thumbnails.
+Sizes sizes_for(const Frame& f, const detail::BaseLayout& base) {
+  const double short_side = std::min(f.width_px, f.height_px);
+  Sizes z;
+  z.tube_radius_px = std::max(2.0, short_side / 170.0);
+  z.outline_px = std::max(1.0, z.tube_radius_px * 0.4);
+  z.marker_radius_px = std::max(4.0, short_side * 0.022);
+  z.margin_px = base.margin_px;
+  z.text_scale = base.text_scale;
+  return z;
+}
+
+}  // namespace
+
+void Renderer::Impl::prepare(const Frame& f, const Sizes& z, FrameLayout& layout, OverlayBuilder& o) {
+  // geometry and overlay on the CPU, into the reserved arrays
+  width = f.width_px;
+  height = f.height_px;
+  view = f.view;
+  path_to_scene(f);
+  if (f.view != View::slice) {
+    place_camera(f, layout);
+    if (f.path_size >= 2) {
+      detail::tube_vertices(centres.data(), fps.data(), f.path_size, z.tube_radius_px * layout.metres_per_px,
+                            tube_data.data());
+    }
+    overlay_3d(f, z, o);
+    north_arrow(o, layout.scene, z.margin_px, z.text_scale, north_dx, north_dy);
+  } else {
+    slice_profile(f, layout);
+    overlay_slice(f, layout, z, o);
+  }
+  scale_bar(o, layout.scene, z.margin_px, z.text_scale, layout.metres_per_px, layout.scale_bar_m);
+  colour_bar(o, layout, z.text_scale, fp_max);
+  layout.overlay_vertices_dropped = o.dropped();
+}
+
+void Renderer::Impl::draw(const Frame& f, const Sizes& z, const FrameLayout& layout, const OverlayBuilder& o,
+                          const float (&background)[3], int mesh_step) const {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glViewport(0, 0, f.width_px, f.height_px);
+  glClearColor(background[0], background[1], background[2], 1.0f);
+  glClearDepth(1.0);
+  // clear the frame's corner only: the buffers are the largest frame's size
+  glEnable(GL_SCISSOR_TEST);
+  glScissor(0, 0, f.width_px, f.height_px);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glDisable(GL_SCISSOR_TEST);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_3D, field_tex);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, colour_map_tex);
+  if (f.view != View::slice) {
+    draw_terrain(f, layout.scene, mesh_step);
+    if (f.path_size >= 2) draw_path(f.path_size, z, layout.metres_per_px);
+    if (f.view == View::volume) draw_volume(layout.scene, f.width_px, f.height_px);
+  } else {
+    draw_slice(layout.scene);
+  }
+  draw_overlay(o, f.width_px, f.height_px);
+}
+
+void Renderer::Impl::read_back(int w, int h) {
+  // window rows run top to bottom (scene.hpp), so this is the image
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+}
+
 Status Renderer::render(const Frame& f) {
   VISVOL_RETURN_IF_ERROR(validate_frame(f, config_));
   Impl& m = *impl_;
   VISVOL_RETURN_IF_ERROR(m.context->make_current());
   const detail::BaseLayout base = detail::base_layout(f.width_px, f.height_px);
-  const double short_side = std::min(f.width_px, f.height_px);
-  Sizes sizes;
-  sizes.tube_radius_px = std::max(2.0, short_side / 170.0);
-  sizes.outline_px = std::max(1.0, sizes.tube_radius_px * 0.4);
-  sizes.marker_radius_px = std::max(4.0, short_side * 0.022);
-  sizes.margin_px = base.margin_px;
-  sizes.text_scale = base.text_scale;
+  const Sizes sizes = sizes_for(f, base);
   layout_ = base.layout;
-  m.width = f.width_px;
-  m.height = f.height_px;
-  m.view = f.view;
-  const PixelRect& scene = layout_.scene;
-  const bool three_d = f.view != View::slice;
-
-  // geometry and overlay on the CPU
-  m.path_to_scene(f);
   OverlayBuilder o(m.overlay_data.data(), m.overlay_capacity);
-  if (three_d) {
-    m.place_camera(f, layout_);
-    if (f.path_size >= 2) {
-      detail::tube_vertices(m.centres.data(), m.fps.data(), f.path_size, sizes.tube_radius_px * layout_.metres_per_px,
-                            m.tube_data.data());
-    }
-    m.overlay_3d(f, sizes, o);
-    north_arrow(o, scene, sizes.margin_px, sizes.text_scale, m.north_dx, m.north_dy);
-  } else {
-    m.slice_profile(f, layout_);
-    m.overlay_slice(f, layout_, sizes, o);
-  }
-  scale_bar(o, scene, sizes.margin_px, sizes.text_scale, layout_.metres_per_px, layout_.scale_bar_m);
-  colour_bar(o, layout_, sizes.text_scale, m.fp_max);
-  layout_.overlay_vertices_dropped = o.dropped();
-
-  // draw
-  glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-  glViewport(0, 0, f.width_px, f.height_px);
-  glClearColor(config_.background_rgb[0], config_.background_rgb[1], config_.background_rgb[2], 1.0f);
-  glClearDepth(1.0);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_3D, m.field_tex);
-  glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D, m.colour_map_tex);
-  if (three_d) {
-    m.draw_terrain(f, scene, detail::choose_mesh_step(info_.mesh_steps, std::max(m.nx, m.ny),
-                                                      std::max(scene.width, scene.height)));
-    if (f.path_size >= 2) m.draw_path(f.path_size, sizes, layout_.metres_per_px);
-    if (f.view == View::volume) m.draw_volume(scene, f.width_px, f.height_px);
-  } else {
-    m.draw_slice(scene);
-  }
-  m.draw_overlay(o, f.width_px, f.height_px);
-
-  // read back: window rows run top to bottom (scene.hpp), so this is the image
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo);
-  glReadBuffer(GL_COLOR_ATTACHMENT0);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, f.width_px, f.height_px, GL_RGBA, GL_UNSIGNED_BYTE, m.pixels.data());
+  m.prepare(f, sizes, layout_, o);
+  const int mesh_step = detail::choose_mesh_step(info_.mesh_steps, m.px_per_post,
+                                                 f.view == View::volume ? kVolumePixelsPerVertex : kPixelsPerVertex);
+  m.draw(f, sizes, layout_, o, config_.background_rgb, mesh_step);
+  m.read_back(f.width_px, f.height_px);
   return gl_status("drawing the frame");
 }
 

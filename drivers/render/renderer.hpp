@@ -184,6 +184,7 @@ class Renderer {
 
  private:
   Renderer() = default;
+  Status warm_up();
   RendererConfig config_;
   SceneInfo info_;
   FrameLayout layout_;

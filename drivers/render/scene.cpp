@@ -228,8 +228,18 @@ TerrainMesh terrain_mesh(const std::vector<float>& heights_m, int nx, int ny, in
   return m;
 }
 
-int choose_mesh_step(const std::vector<int>& steps, int posts_across, int scene_px_across) {
-  const double wanted = std::max(1.0, 2.0 * posts_across / std::max(1, scene_px_across));
+std::vector<int> mesh_steps(int finest, int posts_across) {
+  std::vector<int> steps = {std::max(1, finest)};
+  while (static_cast<int>(steps.size()) < kMaxMeshes) {
+    const int next = std::max(steps.back() + 1, static_cast<int>(std::lround(steps.back() * 1.5)));
+    if ((posts_across - 1) / next < kMinMeshCells) break;  // coarser adds nothing useful
+    steps.push_back(next);
+  }
+  return steps;
+}
+
+int choose_mesh_step(const std::vector<int>& steps, double px_per_post, double px_per_vertex) {
+  const double wanted = px_per_post > 0 ? std::max(1.0, px_per_vertex / px_per_post) : 1.0;
   int chosen = steps.front();
   for (int s : steps) {
     if (s <= wanted) chosen = s;

@@ -94,9 +94,20 @@ TerrainMesh terrain_mesh(const std::vector<float>& heights_m, int nx, int ny, in
 // The posts of a mesh side sampled every `step` (0, step, 2 step, ..., n - 1).
 std::vector<int> mesh_samples(int n, int step);
 
+// Post strides of the meshes to prepare: `finest`, then each about 1.5 times
+// the last (so a frame's chosen mesh has one vertex per 2 to 3 pixels, not
+// the 4 pixels of doubling strides), while the mesh keeps more than
+// kMinMeshCells cells across `posts_across` posts; at most kMaxMeshes.
+inline constexpr int kMinMeshCells = 8;
+inline constexpr int kMaxMeshes = 12;
+std::vector<int> mesh_steps(int finest, int posts_across);
+
 // The mesh stride to draw for a frame: the coarsest prepared one with at
-// least one vertex per two pixels of the scene's larger side.
-int choose_mesh_step(const std::vector<int>& steps, int posts_across, int scene_px_across);
+// least one vertex per px_per_vertex x px_per_vertex pixels of the terrain's
+// picture. px_per_post is a post spacing's length on screen (in a perspective
+// view, the geometric mean of the east and north spacings at the terrain's
+// centre, so the foreshortened direction counts).
+int choose_mesh_step(const std::vector<int>& steps, double px_per_post, double px_per_vertex = 2.0);
 
 // Tube around a polyline: kTubeSides vertices a ring, one ring per point;
 // vertex = x, y, z, nx, ny, nz, fp (7 floats). Writes points * kTubeSides *

@@ -159,12 +159,25 @@ TEST(TerrainMesh, SamplesEveryStepKeepsTheEdgesAndHasUpwardNormals) {
   EXPECT_EQ(s[2], 0.0f);
 }
 
+TEST(TerrainMesh, StridesGrowByAboutHalfUntilTheMeshIsTooCoarse) {
+  EXPECT_EQ(mesh_steps(1, 466), (std::vector<int>{1, 2, 3, 5, 8, 12, 18, 27, 41}));
+  EXPECT_EQ(mesh_steps(3, 466), (std::vector<int>{3, 5, 8, 12, 18, 27, 41}));
+  EXPECT_EQ(mesh_steps(0, 4), (std::vector<int>{1}));  // a tiny terrain: the finest only
+  EXPECT_EQ(mesh_steps(1, 100000).size(), static_cast<std::size_t>(kMaxMeshes));
+  // with these, a 230-pixel picture of the 466-post SF North terrain gets a
+  // vertex every 1.5 pixels (stride 3), not every pixel (stride 2 of 1, 2, 4, 8)
+  EXPECT_EQ(choose_mesh_step(mesh_steps(1, 466), 230.0 / 466), 3);
+}
+
 TEST(TerrainMesh, ChoosesAboutOneVertexPerTwoPixels) {
   const std::vector<int> steps = {1, 2, 4, 8};
-  EXPECT_EQ(choose_mesh_step(steps, 400, 100), 8);
-  EXPECT_EQ(choose_mesh_step(steps, 400, 200), 4);
-  EXPECT_EQ(choose_mesh_step(steps, 400, 800), 1);
-  EXPECT_EQ(choose_mesh_step({2, 4}, 100, 1000), 2);  // never finer than prepared
+  EXPECT_EQ(choose_mesh_step(steps, 0.25), 8);  // 4 posts a pixel: a vertex every 2 pixels
+  EXPECT_EQ(choose_mesh_step(steps, 0.5), 4);
+  EXPECT_EQ(choose_mesh_step(steps, 0.3), 4);   // 6.7 posts per 2 pixels: not 8
+  EXPECT_EQ(choose_mesh_step(steps, 2.0), 1);   // magnified: every post
+  EXPECT_EQ(choose_mesh_step({2, 4}, 10.0), 2);  // never finer than prepared
+  EXPECT_EQ(choose_mesh_step(steps, 0.0), 1);   // no scale known: the finest
+  EXPECT_EQ(choose_mesh_step(steps, 0.5, 4.0), 8);  // a vertex per 4 x 4 pixels
 }
 
 TEST(Tube, RingsAreRoundAroundThePathAndIndexedBetweenRings) {

@@ -102,21 +102,19 @@ class PackLevel {
   const fields::VolumeGeometry& geometry() const { return geometry_; }
   // Inline: the sampler calls these tens of times per query.
   float post(int i, int j) const {
-    return read_at<float>(height_[tile2d(i, j)], static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
+    return read_at<float>(height_[tile2d(i, j)], in_tile2d(i, j));
   }
   float area(int i, int j) const {
-    return read_at<float>(area_[tile2d(i, j)], static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts));
+    return read_at<float>(area_[tile2d(i, j)], in_tile2d(i, j));
   }
   float voxel(int i, int j, int k) const {
     const std::uint8_t* t = visibility_[brick(i, j)];
-    const std::size_t index =
-        static_cast<std::size_t>((k * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts);
+    const std::size_t index = grid(k) * kBrickColumnStride + in_brick(i, j);
     return quantised_ ? dequantise_visibility(read_at<std::uint16_t>(t, index)) : read_at<float>(t, index);
   }
   fields::TffSample tff(int i, int j, int b) const {
     const std::uint8_t* t = tff_tiles_[brick(i, j)];
-    const std::size_t index =
-        static_cast<std::size_t>(((b * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts) * 4);
+    const std::size_t index = (grid(b) * kBrickColumnStride + in_brick(i, j)) * 4;
     fields::TffSample s;
     s.dx_m = static_cast<float>(read_at<std::int16_t>(t, index) * kTffUnitM);
     s.dy_m = static_cast<float>(read_at<std::int16_t>(t, index + 1) * kTffUnitM);
@@ -125,23 +123,66 @@ class PackLevel {
     return s;
   }
   const fields::TffParams& tff_params() const { return tff_; }
+
+  // One column's bricks, found once: the sampler reads many levels of a
+  // column per query (fields/sampler.hpp). Values are exactly voxel() and tff().
+  class Column {
+   public:
+    float voxel(int k) const {
+      const std::size_t index = grid(k) * kBrickColumnStride;
+      return quantised_ ? dequantise_visibility(read_at<std::uint16_t>(visibility_, index))
+                        : read_at<float>(visibility_, index);
+    }
+    fields::TffSample tff(int b) const {
+      const std::size_t index = grid(b) * kBrickColumnStride * 4;
+      fields::TffSample s;
+      s.dx_m = static_cast<float>(read_at<std::int16_t>(tff_, index) * kTffUnitM);
+      s.dy_m = static_cast<float>(read_at<std::int16_t>(tff_, index + 1) * kTffUnitM);
+      s.dz_m = static_cast<float>(read_at<std::int16_t>(tff_, index + 2) * kTffUnitM);
+      s.signed_distance_m = static_cast<float>(read_at<std::int16_t>(tff_, index + 3) * kTffUnitM);
+      return s;
+    }
+
+   private:
+    friend class PackLevel;
+    const std::uint8_t* visibility_ = nullptr;  // the column's voxel at level 0
+    const std::uint8_t* tff_ = nullptr;         // its band sample 0
+    bool quantised_ = true;
+  };
+  Column column(int i, int j) const {
+    const std::size_t b = brick(i, j), n = in_brick(i, j);
+    Column c;
+    c.quantised_ = quantised_;
+    c.visibility_ = visibility_[b] + n * (quantised_ ? sizeof(std::uint16_t) : sizeof(float));
+    c.tff_ = tff_tiles_[b] + n * 4 * sizeof(std::int16_t);
+    return c;
+  }
+
   const Pack& pack() const { return *pack_; }
   std::shared_ptr<const Pack> shared_pack() const { return pack_; }
   int level() const { return level_; }
 
  private:
+  // Values between one level of a brick column and the next.
+  static constexpr std::size_t kBrickColumnStride = std::size_t{kBrickPosts} * kBrickPosts;
+
   template <typename T>
   static T read_at(const std::uint8_t* tile, std::size_t index) {
     T v;
     std::memcpy(&v, tile + index * sizeof(T), sizeof(T));
     return v;
   }
+  // Grid indices of a valid read are never negative: as unsigned, the tile
+  // divisions and remainders below are plain shifts and masks.
+  static std::size_t grid(int v) { return static_cast<std::size_t>(static_cast<unsigned>(v)); }
   std::size_t tile2d(int i, int j) const {
-    return static_cast<std::size_t>((j / kTile2dPosts) * tiles2d_x_ + i / kTile2dPosts);
+    return grid(j) / kTile2dPosts * grid(tiles2d_x_) + grid(i) / kTile2dPosts;
   }
-  std::size_t brick(int i, int j) const {
-    return static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts);
+  static std::size_t in_tile2d(int i, int j) {
+    return grid(j) % kTile2dPosts * kTile2dPosts + grid(i) % kTile2dPosts;
   }
+  std::size_t brick(int i, int j) const { return grid(j) / kBrickPosts * grid(bricks_x_) + grid(i) / kBrickPosts; }
+  static std::size_t in_brick(int i, int j) { return grid(j) % kBrickPosts * kBrickPosts + grid(i) % kBrickPosts; }
 
   std::shared_ptr<const Pack> pack_;
   int level_ = 0;

@@ -47,9 +47,12 @@ bool ResidentLevel::resident(int i, int j) const {
 
 bool ResidentLevel::resident(int i0, int j0, int i1, int j1) const {
   if (coarser_ == nullptr) return true;
-  for (int by = j0 / kBrickPosts; by <= j1 / kBrickPosts; ++by) {
-    for (int bx = i0 / kBrickPosts; bx <= i1 / kBrickPosts; ++bx) {
-      if (state_[static_cast<std::size_t>(by * bricks_x_ + bx)].load(std::memory_order_acquire) != kResident) {
+  // columns are never negative: unsigned division is a shift
+  const unsigned bx0 = static_cast<unsigned>(i0) / kBrickPosts, bx1 = static_cast<unsigned>(i1) / kBrickPosts;
+  const unsigned by0 = static_cast<unsigned>(j0) / kBrickPosts, by1 = static_cast<unsigned>(j1) / kBrickPosts;
+  for (unsigned by = by0; by <= by1; ++by) {
+    for (unsigned bx = bx0; bx <= bx1; ++bx) {
+      if (state_[by * static_cast<std::size_t>(bricks_x_) + bx].load(std::memory_order_acquire) != kResident) {
         return false;
       }
     }
@@ -86,20 +89,31 @@ ResidentSampler::ResidentSampler(const ResidentLevel& level) : level_(&level) {
   }
 }
 
-const fields::FieldSampler<PackLevelRef>& ResidentSampler::pick(double x, double y) const {
+int ResidentSampler::pick(double x, double y, Sampler::Cell& cell, Sampler::Cell* finest) const {
   for (int n = 0; n + 1 < count_; ++n) {
     const fields::VolumeGeometry& g = chain_[n]->geometry();
+    cell = samplers_[n].cell(x, y);
+    if (n == 0 && finest != nullptr) *finest = cell;
     // the columns a gradient reads: the cell's corners and their neighbours
-    const double gi = std::clamp((x - g.origin_x) / g.spacing_m, 0.0, double(g.nx - 1));
-    const double gj = std::clamp((g.origin_y - y) / g.spacing_m, 0.0, double(g.ny - 1));
-    const int i = std::min(static_cast<int>(gi), g.nx - 2), j = std::min(static_cast<int>(gj), g.ny - 2);
-    if (chain_[n]->resident(std::max(i - 1, 0), std::max(j - 1, 0), std::min(i + 2, g.nx - 1),
-                            std::min(j + 2, g.ny - 1))) {
-      return samplers_[n];
+    if (chain_[n]->resident(std::max(cell.i - 1, 0), std::max(cell.j - 1, 0), std::min(cell.i + 2, g.nx - 1),
+                            std::min(cell.j + 2, g.ny - 1))) {
+      return n;
     }
     chain_[n]->fallbacks_->fetch_add(1, std::memory_order_relaxed);
   }
-  return samplers_[count_ - 1];
+  cell = samplers_[count_ - 1].cell(x, y);
+  if (count_ == 1 && finest != nullptr) *finest = cell;
+  return count_ - 1;
+}
+
+fields::PointSample ResidentSampler::sample(double x, double y, double z, bool with_gradient,
+                                            bool with_terrain_force) const {
+  Sampler::Cell cell, finest;
+  const int n = pick(x, y, cell, &finest);
+  fields::PointSample s = samplers_[n].sample(cell, z, with_gradient, with_terrain_force);
+  // heights always come from the level given (its ground differs from a coarser one's)
+  if (n != 0) s.height_m = samplers_[0].height(finest);
+  return s;
 }
 
 // ---- the pack ----------------------------------------------------------------

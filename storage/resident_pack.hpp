@@ -84,6 +84,7 @@ class PackLevelRef {
   float post(int i, int j) const { return level_->post(i, j); }
   float voxel(int i, int j, int k) const { return level_->voxel(i, j, k); }
   fields::TffSample tff(int i, int j, int b) const { return level_->tff(i, j, b); }
+  PackLevel::Column column(int i, int j) const { return level_->column(i, j); }
   const fields::TffParams& tff_params() const { return level_->tff_params(); }
 
  private:
@@ -132,12 +133,22 @@ class ResidentSampler {
   double visibility(double x, double y, double z) const { return pick(x, y).visibility(x, y, z); }
   Eigen::Vector3d gradient(double x, double y, double z) const { return pick(x, y).gradient(x, y, z); }
   fields::TffSample terrain_force(double x, double y, double z) const { return pick(x, y).terrain_force(x, y, z); }
+  // height(), gradient() and terrain_force() with one pick of the level
+  // (fields::FieldSampler::sample): exactly what the three calls return.
+  fields::PointSample sample(double x, double y, double z, bool with_gradient, bool with_terrain_force) const;
 
  private:
-  const fields::FieldSampler<PackLevelRef>& pick(double x, double y) const;
+  using Sampler = fields::FieldSampler<PackLevelRef>;
+  const Sampler& pick(double x, double y) const {
+    Sampler::Cell unused;
+    return samplers_[pick(x, y, unused)];
+  }
+  // The finest level whose bricks around (x, y) are all resident, and the
+  // point's cell on it (and on the level given, where `finest` is set).
+  int pick(double x, double y, Sampler::Cell& cell, Sampler::Cell* finest = nullptr) const;
   const ResidentLevel* level_;
   const ResidentLevel* chain_[kMaxLevels] = {};
-  fields::FieldSampler<PackLevelRef> samplers_[kMaxLevels];
+  Sampler samplers_[kMaxLevels];
   int count_ = 0;
 };
 

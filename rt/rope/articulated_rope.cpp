@@ -7,12 +7,6 @@ namespace visvol::rt {
 
 namespace {
 
-Eigen::Matrix3d cross_matrix(const Vec3& r) {
-  Eigen::Matrix3d m;
-  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  return m;
-}
-
 // The unit quaternion of rotation vector w (its exponential map).
 Eigen::Quaterniond exp_map(const Vec3& w) {
   const double angle = w.norm();
@@ -31,6 +25,24 @@ Vec3 log_map(Eigen::Quaterniond q) {
 
 }  // namespace
 
+namespace detail {
+
+// Column j of [r]x m is r x m.col(j).
+Eigen::Matrix3d cross_times(const Vec3& r, const Eigen::Matrix3d& m) {
+  Eigen::Matrix3d out;
+  for (int j = 0; j < 3; ++j) out.col(j) = r.cross(m.col(j));
+  return out;
+}
+
+// Row i of m [r]x is m.row(i) x r.
+Eigen::Matrix3d times_cross(const Eigen::Matrix3d& m, const Vec3& r) {
+  Eigen::Matrix3d out;
+  for (int i = 0; i < 3; ++i) out.row(i) = m.row(i).cross(r.transpose());
+  return out;
+}
+
+}  // namespace detail
+
 ArticulatedRope::ArticulatedRope(const RopeParams& params) : p_(params) {
   const std::size_t n = static_cast<std::size_t>(p_.max_segments);
   x_.resize(n);
@@ -39,6 +51,7 @@ ArticulatedRope::ArticulatedRope(const RopeParams& params) : p_(params) {
   force_.resize(n);
   torque_.resize(n);
   q_.resize(n, Eigen::Quaterniond::Identity());
+  axis_.resize(n, Vec3::UnitZ());
   inv_inertia_.resize(n);
   sample_acc_.resize(2 * n + 1);
   joints_.resize(n + 1);
@@ -72,6 +85,7 @@ Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
     q_[k] = dir.norm() > 0 ? Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), dir) : Eigen::Quaterniond::Identity();
     v_[k] = w_[k] = Vec3::Zero();
   }
+  refresh_axes();
   ends_.start_m = polyline[0];
   ends_.end_m = polyline[points - 1];
   grasp_active_ = false;
@@ -86,6 +100,13 @@ Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
   }
   update_vertices();
   return Status::ok_status();
+}
+
+void ArticulatedRope::refresh_axes() {
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    axis_[k] = q_[k] * Vec3::UnitZ();
+  }
 }
 
 Eigen::Matrix3d ArticulatedRope::inverse_inertia_world(int i) const {
@@ -142,33 +163,45 @@ void ArticulatedRope::build_joints() {
 
 void ArticulatedRope::factor_chain() {
   const double inv_m = 1.0 / p_.mass_kg;
+  // [r_s]x I^-1 for an attachment: the left half of its couplings, shared by
+  // the diagonal block and the off-diagonal one that involve it.
+  auto left_of = [&](const Attachment& s) {
+    return detail::cross_times(s.r, inv_inertia_[static_cast<std::size_t>(s.body)]);
+  };
   // K(r1, r2) for two attachments on one body: s1 s2 (I/m - [r1]x I^-1 [r2]x).
-  auto coupling = [&](const Attachment& s, const Attachment& t) {
-    const Eigen::Matrix3d& ii = inv_inertia_[static_cast<std::size_t>(s.body)];
-    return Eigen::Matrix3d(s.sign * t.sign * (inv_m * Eigen::Matrix3d::Identity() - cross_matrix(s.r) * ii * cross_matrix(t.r)));
-  };
-  auto diagonal = [&](const Joint& j) {
-    Eigen::Matrix3d d = Eigen::Matrix3d::Zero();
-    if (j.a.body >= 0) d += coupling(j.a, j.a);
-    if (j.b.body >= 0) d += coupling(j.b, j.b);
-    return d;
-  };
-  // Joints k and k + 1 share one body: the b side of k is the a side of k + 1.
-  auto off_diagonal = [&](const Joint& j, const Joint& next) {
-    if (j.b.body >= 0 && j.b.body == next.a.body) return coupling(j.b, next.a);
-    if (j.a.body >= 0 && j.a.body == next.a.body) return coupling(j.a, next.a);  // start anchor, then body 0
-    return Eigen::Matrix3d(Eigen::Matrix3d::Zero());
+  auto coupling = [&](const Eigen::Matrix3d& left, const Attachment& s, const Attachment& t) {
+    return Eigen::Matrix3d(s.sign * t.sign * (inv_m * Eigen::Matrix3d::Identity() - detail::times_cross(left, t.r)));
   };
   // block LDU: d_inv_ holds the pivots' inverses, lower_ the multipliers
   for (int k = 0; k < joint_count_; ++k) {
     const std::size_t kk = static_cast<std::size_t>(k);
-    Eigen::Matrix3d d = diagonal(joints_[kk]);
+    const Joint& j = joints_[kk];
+    Eigen::Matrix3d d = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d left_a = Eigen::Matrix3d::Zero(), left_b = Eigen::Matrix3d::Zero();  // unused for an anchor
+    if (j.a.body >= 0) {
+      left_a = left_of(j.a);
+      d += coupling(left_a, j.a, j.a);
+    }
+    if (j.b.body >= 0) {
+      left_b = left_of(j.b);
+      d += coupling(left_b, j.b, j.b);
+    }
     if (k > 0) {
       lower_[kk] = upper_[kk - 1].transpose() * d_inv_[kk - 1];  // A(k, k-1) D(k-1)^-1
       d -= lower_[kk] * upper_[kk - 1];
     }
     d_inv_[kk] = d.inverse();
-    upper_[kk] = k + 1 < joint_count_ ? off_diagonal(joints_[kk], joints_[kk + 1]) : Eigen::Matrix3d::Zero();
+    // Joints k and k + 1 share one body: the b side of k is the a side of k + 1
+    // (the start anchor's joint shares its a side, body 0).
+    upper_[kk] = Eigen::Matrix3d::Zero();
+    if (k + 1 < joint_count_) {
+      const Attachment& next_a = joints_[kk + 1].a;
+      if (j.b.body >= 0 && j.b.body == next_a.body) {
+        upper_[kk] = coupling(left_b, j.b, next_a);
+      } else if (j.a.body >= 0 && j.a.body == next_a.body) {
+        upper_[kk] = coupling(left_a, j.a, next_a);
+      }
+    }
   }
 }
 
@@ -204,6 +237,7 @@ void ArticulatedRope::apply_impulses(bool positions) {
       }
     }
   }
+  if (positions) refresh_axes();
 }
 
 void ArticulatedRope::accumulate_forces(const RopeEnvironment& env) {
@@ -280,6 +314,7 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
     x_[k] += dt * v_[k];
     q_[k] = (exp_map(dt * w_[k]) * q_[k]).normalized();
   }
+  refresh_axes();
   // project away what the linearisation left open (with this step's factors)
   for (int it = 0; it < p_.projection_iterations && joint_count_ > 0; ++it) {
     refresh_attachments();
@@ -337,6 +372,7 @@ bool ArticulatedRope::pay_out_at_start() {
     const std::size_t k = static_cast<std::size_t>(i);
     x_[k] = x_[k - 1] + shift;
     q_[k] = q_[k - 1];
+    axis_[k] = axis_[k - 1];
     v_[k] = v_[k - 1];
     w_[k] = w_[k - 1];
   }

@@ -22,6 +22,14 @@
 
 namespace visvol::rt {
 
+namespace detail {
+// [r]x m and m [r]x, with [r]x the cross-product matrix of r, without its
+// zero terms: the joint solve forms several per joint and step. Each value is
+// the full matrix product's (the same sums with the zero terms left out).
+Eigen::Matrix3d cross_times(const Vec3& r, const Eigen::Matrix3d& m);
+Eigen::Matrix3d times_cross(const Eigen::Matrix3d& m, const Vec3& r);
+}  // namespace detail
+
 class ArticulatedRope final : public Rope {
  public:
   explicit ArticulatedRope(const RopeParams& params);
@@ -67,9 +75,12 @@ class ArticulatedRope final : public Rope {
     Vec3 anchor;      // world point when one side is the world
   };
 
-  Vec3 axis(int i) const { return q_[static_cast<std::size_t>(i)] * Vec3::UnitZ(); }
+  // The capsule's axis (body z in world axes), cached: read about ten times a
+  // step, it changes only where q_ does (refresh_axes()).
+  const Vec3& axis(int i) const { return axis_[static_cast<std::size_t>(i)]; }
   Vec3 end_a(int i) const { return x_[static_cast<std::size_t>(i)] - half_m_ * axis(i); }
   Vec3 end_b(int i) const { return x_[static_cast<std::size_t>(i)] + half_m_ * axis(i); }
+  void refresh_axes();
   Eigen::Matrix3d inverse_inertia_world(int i) const;
 
   void build_joints();
@@ -95,6 +106,7 @@ class ArticulatedRope final : public Rope {
   // per capsule
   std::vector<Vec3> x_, v_, w_, force_, torque_;
   std::vector<Eigen::Quaterniond> q_;
+  std::vector<Vec3> axis_;  // q_ times body z
   std::vector<Eigen::Matrix3d> inv_inertia_;
   // per sample point: ends and middles, 2 n + 1
   std::vector<Vec3> sample_acc_;

@@ -94,17 +94,21 @@ class FieldForces final : public RopeEnvironment, public PathField {
   const Sampler& sampler() const { return sampler_; }
 
   Vec3 acceleration(const Vec3& p) const override {
+    const bool with_gradient = gains_.k1_visibility != 0 && gradient_ref_ > 0;
+    const bool with_terrain = gains_.k2_terrain != 0;
+    // one lookup of the point's cell for the gradient, the terrain force and the height
+    const fields::PointSample s = sampler_.sample(p.x(), p.y(), p.z(), with_gradient, with_terrain);
     Vec3 a = Vec3::Zero();
-    if (gains_.k1_visibility != 0 && gradient_ref_ > 0) {
+    if (with_gradient) {
       // Saturated at kSaturation reference gradients: F_p changes abruptly at
       // the terrain, and an unbounded pull there would throw the rope through it.
-      const Vec3 g = sampler_.gradient(p.x(), p.y(), p.z()) / gradient_ref_;
+      const Vec3 g = s.gradient_per_m / gradient_ref_;
       const double n = g.norm();
       a += (gains_.k1_visibility * accel_ref_ / std::max(1.0, n / kSaturation)) * g;
     }
-    if (gains_.k2_terrain != 0) a += gains_.k2_terrain * accel_ref_ * terrain_push(p);
+    if (with_terrain) a += gains_.k2_terrain * accel_ref_ * terrain_push(s.tff);
     a += accel_ref_ * kSaturation * inward_push(p);
-    const double ground = sampler_.height(p.x(), p.y());
+    const double ground = s.height_m;
     const double h = p.z() - ground;
     // Clearance: a push ramping up over a margin above the clearance, as strong
     // as the saturated visibility pull half way down the margin, stronger below.
@@ -146,9 +150,9 @@ class FieldForces final : public RopeEnvironment, public PathField {
     return push;
   }
 
-  // The terrain force field's direction and profile (dimensionless).
-  Vec3 terrain_push(const Vec3& p) const {
-    const fields::TffSample s = sampler_.terrain_force(p.x(), p.y(), p.z());
+  // The terrain force field's direction and profile (dimensionless), from
+  // the sample at the point.
+  Vec3 terrain_push(const fields::TffSample& s) const {
     const double offset = sampler_.level().tff_params().band_offset_m;
     const double d = s.signed_distance_m;
     if (d >= offset) return Vec3::Zero();

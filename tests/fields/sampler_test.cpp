@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include "fields/dense_level.hpp"
 #include "fields/visibility_builder.hpp"
+#include "probe_points.hpp"
+#include "reference_sampler.hpp"
 #include "terrains.hpp"
 
 namespace visvol::fields {
@@ -104,6 +107,70 @@ TEST(Sampler, RealFieldGradientPointsUpInOpenAir) {
       const double z = hf.at(i, j) + 40.0;
       EXPECT_GE(s.gradient(hf.x_of(i), hf.y_of(j), z).z(), 0.0);
     }
+}
+
+
+// The sampler reads each column's posts and tiles once per query; the values
+// must be exactly those of reading every voxel through the level.
+void expect_same_tff(const TffSample& a, const TffSample& b, const Eigen::Vector3d& p) {
+  EXPECT_EQ(a.dx_m, b.dx_m) << p.transpose();
+  EXPECT_EQ(a.dy_m, b.dy_m) << p.transpose();
+  EXPECT_EQ(a.dz_m, b.dz_m) << p.transpose();
+  EXPECT_EQ(a.signed_distance_m, b.signed_distance_m) << p.transpose();
+}
+
+// A level that offers neither column() nor field(): the sampler reads it
+// through voxel() and tff() alone.
+struct PlainLevel {
+  const DenseLevel* level;
+  const VolumeGeometry& geometry() const { return level->geometry(); }
+  float post(int i, int j) const { return level->post(i, j); }
+  float voxel(int i, int j, int k) const { return level->voxel(i, j, k); }
+  TffSample tff(int i, int j, int b) const { return level->tff(i, j, b); }
+  const TffParams& tff_params() const { return level->tff_params(); }
+};
+
+template <class Level>
+void expect_matches_reference(const Level& level, const DenseLevel& dense) {
+  const FieldSampler<Level> s(level);
+  const testing::ReferenceSampler<DenseLevel> ref(dense);
+  const auto points = testing::probe_points(dense.geometry(), [&](double x, double y) { return ref.height(x, y); },
+                                            4000, 17);
+  int above_ground = 0;
+  for (const Eigen::Vector3d& q : points) {
+    const double x = q.x(), y = q.y(), z = q.z();
+    ASSERT_EQ(s.height(x, y), ref.height(x, y)) << q.transpose();
+    ASSERT_EQ(s.visibility(x, y, z), ref.visibility(x, y, z)) << q.transpose();
+    const Eigen::Vector3d g = ref.gradient(x, y, z);
+    ASSERT_EQ(s.gradient(x, y, z), g) << q.transpose();
+    expect_same_tff(s.terrain_force(x, y, z), ref.terrain_force(x, y, z), q);
+    // one call for all three, and for each part alone
+    for (int parts = 0; parts < 4; ++parts) {
+      const bool with_gradient = parts & 1, with_tff = parts & 2;
+      const PointSample all = s.sample(x, y, z, with_gradient, with_tff);
+      ASSERT_EQ(all.height_m, ref.height(x, y)) << q.transpose();
+      ASSERT_EQ(all.gradient_per_m, with_gradient ? g : Eigen::Vector3d::Zero()) << q.transpose();
+      expect_same_tff(all.tff, with_tff ? ref.terrain_force(x, y, z) : TffSample{}, q);
+    }
+    above_ground += g != Eigen::Vector3d::Zero();
+  }
+  EXPECT_GT(above_ground, 1000);  // the gradient was really exercised
+}
+
+TEST(Sampler, MatchesTheStraightforwardSamplerEverywhere) {
+  const Heightfield hf = fractal(70, 5);
+  FieldParams p;
+  p.nz = 24;
+  p.range_posts = 8;
+  TffParams tp;
+  tp.band_offset_m = 40;
+  tp.band_levels = 8;
+  const Result<std::vector<DenseLevel>> levels = build_dense_levels(hf, p, 2, tp);
+  ASSERT_TRUE(levels.ok()) << levels.status().message();
+  for (const DenseLevel& level : *levels) {
+    expect_matches_reference(level, level);               // its dense volume's columns
+    expect_matches_reference(PlainLevel{&level}, level);  // voxel() and tff() only
+  }
 }
 
 }  // namespace

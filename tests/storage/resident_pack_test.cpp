@@ -11,8 +11,12 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <random>
+#include <sstream>
 #include <thread>
 
+#include "../fields/probe_points.hpp"
+#include "../fields/reference_sampler.hpp"
 #include "../fields/terrains.hpp"
 #include "fields/sampler.hpp"
 #include "rt/exec/realtime.hpp"
@@ -184,6 +188,133 @@ TEST_F(ResidentPackTest, ACorruptBrickStaysOutAndIsNamed) {
   EXPECT_TRUE((*r)->level(0).resident(11 * 16 + 8, 12 * 16 + 8));
   r->reset();
   std::remove(bad.c_str());
+}
+
+// ---- the sampler's shortcuts against the straightforward reads ----------------
+
+void expect_same_tff(const fields::TffSample& a, const fields::TffSample& b, const std::string& where) {
+  EXPECT_EQ(a.dx_m, b.dx_m) << where;
+  EXPECT_EQ(a.dy_m, b.dy_m) << where;
+  EXPECT_EQ(a.dz_m, b.dz_m) << where;
+  EXPECT_EQ(a.signed_distance_m, b.signed_distance_m) << where;
+}
+
+// Every voxel and band sample of a column found once equals the one read
+// through the level, on brick edges and inside bricks.
+void expect_columns_match(const PackLevel& level) {
+  const fields::VolumeGeometry& g = level.geometry();
+  const int band = level.tff_params().band_levels;
+  std::mt19937 rng(3);
+  for (int n = 0; n < 300; ++n) {
+    const int i = n < 40 ? std::min(g.nx - 1, 16 * (n % 8) + (n % 2 ? 15 : 0)) : static_cast<int>(rng() % g.nx);
+    const int j = n < 40 ? std::min(g.ny - 1, 16 * (n / 8) + (n % 3 ? 0 : 15)) : static_cast<int>(rng() % g.ny);
+    const PackLevel::Column c = level.column(i, j);
+    for (int k = 0; k < g.nz; ++k) ASSERT_EQ(c.voxel(k), level.voxel(i, j, k)) << i << " " << j << " " << k;
+    for (int b = 0; b < band; ++b) {
+      expect_same_tff(c.tff(b), level.tff(i, j, b), std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(b));
+    }
+  }
+}
+
+// FieldSampler (columns found once, one lookup for all three) against the
+// straightforward sampler, on every level.
+void expect_sampler_matches(const PackLevel& level, std::uint32_t seed) {
+  const FieldSampler<PackLevelRef> s{PackLevelRef(level)};
+  const fields::testing::ReferenceSampler<PackLevel> ref(level);
+  const auto points = fields::testing::probe_points(
+      level.geometry(), [&](double x, double y) { return ref.height(x, y); }, 4000, seed);
+  int above_ground = 0;
+  for (const Eigen::Vector3d& q : points) {
+    const double x = q.x(), y = q.y(), z = q.z();
+    std::ostringstream where;
+    where.precision(17);
+    where << "level " << level.level() << " at " << x << " " << y << " " << z;
+    ASSERT_EQ(s.height(x, y), ref.height(x, y)) << where.str();
+    ASSERT_EQ(s.visibility(x, y, z), ref.visibility(x, y, z)) << where.str();
+    const Eigen::Vector3d g = ref.gradient(x, y, z);
+    ASSERT_EQ(s.gradient(x, y, z), g) << where.str();
+    const fields::TffSample t = ref.terrain_force(x, y, z);
+    expect_same_tff(s.terrain_force(x, y, z), t, where.str());
+    const fields::PointSample all = s.sample(x, y, z, true, true);
+    ASSERT_EQ(all.height_m, ref.height(x, y)) << where.str();
+    ASSERT_EQ(all.gradient_per_m, g) << where.str();
+    expect_same_tff(all.tff, t, where.str());
+    above_ground += g != Eigen::Vector3d::Zero();
+  }
+  EXPECT_GT(above_ground, 1000) << "level " << level.level();
+}
+
+TEST_F(ResidentPackTest, PackColumnsAndSamplerMatchTheStraightforwardReads) {
+  for (int l = 0; l < (*pack_)->level_count(); ++l) {
+    auto level = PackLevel::open(*pack_, l);
+    ASSERT_TRUE(level.ok()) << level.status().message();
+    expect_columns_match(*level);
+    expect_sampler_matches(*level, 100u + static_cast<std::uint32_t>(l));
+  }
+}
+
+TEST_F(ResidentPackTest, Float32PackColumnsAndSamplerMatchTheStraightforwardReads) {
+  const std::string path = pack_path("resident_f32");
+  PackBuildParams p;
+  p.field.nz = 16;
+  p.field.range_posts = 6;
+  p.lod_levels = 2;
+  p.encoding = VisibilityEncoding::float32;
+  p.tff.band_offset_m = 50;
+  p.tff.band_levels = 6;
+  ASSERT_TRUE(build_pack(fields::testing::fractal(75, 4), p, "", path).ok());
+  {
+    auto pack = Pack::open(path);
+    ASSERT_TRUE(pack.ok()) << pack.status().message();
+    for (int l = 0; l < (*pack)->level_count(); ++l) {
+      auto level = PackLevel::open(*pack, l);
+      ASSERT_TRUE(level.ok()) << level.status().message();
+      expect_columns_match(*level);
+      expect_sampler_matches(*level, 200u + static_cast<std::uint32_t>(l));
+    }
+  }
+  std::remove(path.c_str());
+}
+
+// The real-time sampler's one lookup for height, gradient and terrain force
+// returns exactly what its three calls return, where the finest level is
+// resident, where it falls back to a coarser one, and across the seams.
+TEST_F(ResidentPackTest, OneLookupForAllThreeIsWhatTheThreeCallsReturn) {
+  auto r = make(6 * kMiB);
+  ASSERT_TRUE(r);
+  r->set_focus(box_at(0.5, 0.5, 900));
+  ASSERT_TRUE(r->update().ok());
+  const ResidentSampler s(r->level(0));
+  const fields::VolumeGeometry g = r->level(0).geometry();
+  auto points = fields::testing::probe_points(g, [&](double x, double y) { return s.height(x, y); }, 3000, 300);
+  // and as many across the edge of what is resident around the focus
+  const WorldBox seam = box_at(0.5, 0.5, 1500);
+  std::mt19937 rng(301);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int n = 0; n < 3000; ++n) {
+    const double x = seam.x0_m + u(rng) * (seam.x1_m - seam.x0_m), y = seam.y0_m + u(rng) * (seam.y1_m - seam.y0_m);
+    points.emplace_back(x, y, s.height(x, y) + (n % 4 == 0 ? 0.0 : u(rng) * 6 * g.dz_m));
+  }
+  int resident = 0, fallen_back = 0;
+  for (const Eigen::Vector3d& q : points) {
+    const double x = q.x(), y = q.y(), z = q.z();
+    std::ostringstream where;
+    where.precision(17);
+    where << x << " " << y << " " << z;
+    for (int parts = 0; parts < 4; ++parts) {
+      const bool with_gradient = parts & 1, with_tff = parts & 2;
+      const fields::PointSample all = s.sample(x, y, z, with_gradient, with_tff);
+      ASSERT_EQ(all.height_m, s.height(x, y)) << where.str();
+      ASSERT_EQ(all.gradient_per_m, with_gradient ? s.gradient(x, y, z) : Eigen::Vector3d::Zero()) << where.str();
+      expect_same_tff(all.tff, with_tff ? s.terrain_force(x, y, z) : fields::TffSample{}, where.str());
+    }
+    const int i = static_cast<int>(std::clamp((x - g.origin_x) / g.spacing_m, 0.0, g.nx - 1.0));
+    const int j = static_cast<int>(std::clamp((g.origin_y - y) / g.spacing_m, 0.0, g.ny - 1.0));
+    (r->level(0).resident(i, j) ? resident : fallen_back) += 1;
+  }
+  EXPECT_GT(resident, 300);
+  EXPECT_GT(fallen_back, 300);
+  EXPECT_GT(r->fallbacks(), 0u);
 }
 
 // Drops the pack's pages that nobody has mapped from the page cache, so that

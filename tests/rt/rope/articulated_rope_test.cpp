@@ -1,0 +1,74 @@
+// The articulated rope's joint solve forms its coupling blocks from cross
+// products instead of full products with cross-product matrices: the values
+// must be exactly those of the full products.
+#include "rt/rope/articulated_rope.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace visvol::rt {
+namespace {
+
+// The cross-product matrix of r: [r]x v = r x v.
+Eigen::Matrix3d cross_matrix(const Vec3& r) {
+  Eigen::Matrix3d m;
+  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  return m;
+}
+
+// Vectors and matrices of mixed signs and magnitudes, with exact zeros and
+// ones among their entries (where a skipped zero term could show).
+struct Random {
+  std::mt19937 rng{11};
+  double value() {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    switch (rng() % 8) {
+      case 0: return 0.0;
+      case 1: return 1.0;
+      case 2: return u(rng) * 1e-9;
+      case 3: return u(rng) * 1e6;
+      default: return u(rng) * 10.0;
+    }
+  }
+  Vec3 vector() { return {value(), value(), value()}; }
+  Eigen::Matrix3d matrix() {
+    Eigen::Matrix3d m;
+    for (int i = 0; i < 9; ++i) m(i) = value();
+    return m;
+  }
+  // an inverse inertia in world axes: symmetric positive definite
+  Eigen::Matrix3d inverse_inertia() {
+    const Eigen::Quaterniond q = Eigen::Quaterniond(Eigen::Vector4d::Random()).normalized();
+    const Eigen::Matrix3d r = q.toRotationMatrix();
+    const Vec3 inv = Vec3(1.0 / 40.0, 1.0 / 40.0, 1.0 / 0.5) * (1 + 0.1 * std::abs(value()));
+    return r * inv.asDiagonal() * r.transpose();
+  }
+};
+
+TEST(ArticulatedRope, CrossProductFormsAreTheFullProducts) {
+  Random random;
+  for (int n = 0; n < 20000; ++n) {
+    const Vec3 r = random.vector();
+    const Eigen::Matrix3d m = random.matrix();
+    const Eigen::Matrix3d left = cross_matrix(r) * m, right = m * cross_matrix(r);
+    ASSERT_EQ(detail::cross_times(r, m), left) << "r " << r.transpose() << "\nm\n" << m;
+    ASSERT_EQ(detail::times_cross(m, r), right) << "r " << r.transpose() << "\nm\n" << m;
+  }
+}
+
+TEST(ArticulatedRope, JointCouplingsAreTheThreeFactorProducts) {
+  // [r1]x I^-1 [r2]x for two attachment points of one capsule, as the joint
+  // solve forms it: the left half once, then the right factor.
+  Random random;
+  for (int n = 0; n < 20000; ++n) {
+    const Vec3 r1 = random.vector(), r2 = n % 3 == 0 ? Vec3(-r1) : random.vector();
+    const Eigen::Matrix3d ii = random.inverse_inertia();
+    const Eigen::Matrix3d full = cross_matrix(r1) * ii * cross_matrix(r2);
+    ASSERT_EQ(detail::times_cross(detail::cross_times(r1, ii), r2), full)
+        << "r1 " << r1.transpose() << " r2 " << r2.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace visvol::rt

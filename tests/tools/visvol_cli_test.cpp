@@ -177,23 +177,27 @@ TEST_F(Cli, PlanWritesThePathInFourFormats) {
   for (const char* ext : {".geojson", ".csv", ".kml", ".plan"}) std::remove((base + ext).c_str());
 }
 
-// `visvol plan --init` takes the CSV a plan wrote: the rope starts on that
-// path (the same F_c and length it ended with), not on a straight line.
-TEST_F(Cli, PlanStartsFromTheCsvOfAnEarlierPlan) {
+// `visvol plan --init` takes the CSV and the GeoJSON a plan wrote: the rope
+// starts on that path (the same F_c and length it ended with), not on a
+// straight line.
+TEST_F(Cli, PlanStartsFromTheCsvOrGeoJsonOfAnEarlierPlan) {
   const std::string base = *pack_ + "_first", again = *pack_ + "_again";
   const std::string ends = " --from 550100 4182600 250 --to 551050 4181700 250 --objective hide";
   const Outcome first =
       visvol("plan " + *pack_ + ends + " --init straight --segments 32 --max-seconds 5 --json -o " + base);
   ASSERT_EQ(first.status, 0) << first.err;
   const nlohmann::json a = nlohmann::json::parse(first.out);
-  const Outcome second =
-      visvol("plan " + *pack_ + ends + " --init " + base + ".csv --segments 32 --max-seconds 1 --json -o " + again);
-  ASSERT_EQ(second.status, 0) << second.err;
-  const nlohmann::json b = nlohmann::json::parse(second.out);
-  EXPECT_NEAR(b["fc_start"].get<double>(), a["fc_end"].get<double>(), 1e-4 * a["fc_end"].get<double>());
-  EXPECT_NEAR(b["length_start_m"].get<double>(), a["length_m"].get<double>(), 0.1);
-  // not the straight line
-  EXPECT_GT(std::fabs(b["length_start_m"].get<double>() - a["length_start_m"].get<double>()), 10.0);
+  for (const char* format : {".csv", ".geojson"}) {
+    SCOPED_TRACE(format);
+    const Outcome second = visvol("plan " + *pack_ + ends + " --init " + base + format +
+                                  " --segments 32 --max-seconds 1 --json -o " + again);
+    ASSERT_EQ(second.status, 0) << second.err;
+    const nlohmann::json b = nlohmann::json::parse(second.out);
+    EXPECT_NEAR(b["fc_start"].get<double>(), a["fc_end"].get<double>(), 1e-4 * a["fc_end"].get<double>());
+    EXPECT_NEAR(b["length_start_m"].get<double>(), a["length_m"].get<double>(), 0.1);
+    // not the straight line
+    EXPECT_GT(std::fabs(b["length_start_m"].get<double>() - a["length_start_m"].get<double>()), 10.0);
+  }
   for (const std::string& f : {base, again}) {
     for (const char* ext : {".geojson", ".csv", ".kml", ".plan"}) std::remove((f + ext).c_str());
   }

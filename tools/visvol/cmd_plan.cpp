@@ -86,7 +86,7 @@ int run_plan(const PlanOptions& o) {
   } else if (o.init == "global") {
     r.init = rt::InitialPath::global;
   } else {
-    Result<PathFile> file = read_path_file(o.init);
+    Result<PathFile> file = read_path_file(o.init, (*pack)->metadata().crs_wkt);
     if (!file.ok()) return fail("plan", file.status());
     r.init = rt::InitialPath::polyline;
     if (file->has_heights) {

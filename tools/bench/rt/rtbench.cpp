@@ -9,13 +9,16 @@
 // loop and of cyclictest, heap allocations and page faults in the loop thread,
 // and resident memory against the budget. --json ends with one object.
 // With --dds the executive's path and device hand-offs are published by the
-// DDS publisher thread (loopback), to compare the loop with and without it.
+// DDS publisher thread (loopback); --compare-dds N alternates N runs without
+// and N with it and prints the medians side by side.
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <vector>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -53,6 +56,14 @@ struct Options {
   double tile_ratio = 8;   // pack bytes per tile-budget byte
   double budget_mib = 256;
   std::uint32_t domain = 222;
+  int compare_rounds = 0;  // --compare-dds: pairs of runs without and with publishing
+};
+
+// One run's figures, for the side-by-side comparison.
+struct Figures {
+  double wake_p50_us = 0, wake_p99_us = 0, compute_p50_us = 0, compute_p99_us = 0, compute_p999_us = 0;
+  double cyclictest_p99_us = 0;
+  std::uint64_t overruns = 0;
 };
 
 // The loop thread's allocations, counted after warm-up.
@@ -161,7 +172,7 @@ Cyclictest finish_cyclictest(pid_t pid, const std::string& json_path) {
   return c;
 }
 
-int run(const Options& o) {
+int run(const Options& o, Figures& fig) {
   auto pack_path = o.pack.empty() ? default_pack() : Result<std::string>(o.pack);
   if (!pack_path.ok()) {
     std::fprintf(stderr, "visvol-rtbench: %s\n", pack_path.status().message().c_str());
@@ -301,6 +312,13 @@ int run(const Options& o) {
   const storage::ResidentStats ts = f.stats();
 
   const double wake_p99 = run.wake_latency.percentile_us(0.99);
+  fig.wake_p50_us = run.wake_latency.percentile_us(0.5);
+  fig.wake_p99_us = wake_p99;
+  fig.compute_p50_us = run.compute.percentile_us(0.5);
+  fig.compute_p99_us = run.compute.percentile_us(0.99);
+  fig.compute_p999_us = run.compute.percentile_us(0.999);
+  fig.cyclictest_p99_us = c.ran ? c.p99_us : 0.0;
+  fig.overruns = run.totals.overruns;
   std::printf("visvol-rtbench: %.0f s at 1 kHz, %d-segment %s rope, servo and simulated device, pack %s "
               "(%.1f MiB, tiles %.1f MiB = 1/%.0f)%s\n",
               o.seconds, o.segments, "articulated", pack_path->c_str(), static_cast<double>(ts.pack_bytes) / kMiB,
@@ -366,6 +384,51 @@ int run(const Options& o) {
   return 0;
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// The executive with and without DDS publishing, in alternating runs of one
+// invocation (so that both see the same machine load), medians per figure.
+int compare_dds(Options o) {
+  std::vector<Figures> without, with;
+  for (int r = 0; r < o.compare_rounds; ++r) {
+    for (bool dds : {false, true}) {
+      o.dds = dds;
+      Figures f;
+      std::printf("\n--- round %d of %d, %s\n", r + 1, o.compare_rounds, dds ? "publishing" : "not publishing");
+      if (const int rc = run(o, f); rc != 0) return rc;
+      (dds ? with : without).push_back(f);
+    }
+  }
+  auto column = [](const std::vector<Figures>& v, double Figures::*field) {
+    std::vector<double> x;
+    for (const Figures& f : v) x.push_back(f.*field);
+    return median(x);
+  };
+  struct Row {
+    const char* name;
+    double Figures::*field;
+  };
+  const Row rows[] = {{"loop wake-up p50", &Figures::wake_p50_us},     {"loop wake-up p99", &Figures::wake_p99_us},
+                      {"loop compute p50", &Figures::compute_p50_us},  {"loop compute p99", &Figures::compute_p99_us},
+                      {"loop compute p99.9", &Figures::compute_p999_us}, {"cyclictest p99", &Figures::cyclictest_p99_us}};
+  std::printf("\nexecutive with and without DDS publishing: medians of %d alternating runs of %.0f s each\n",
+              o.compare_rounds, o.seconds);
+  std::printf("%-22s %12s %12s %8s\n", "us", "without DDS", "with DDS", "ratio");
+  nlohmann::json j = {{"rounds", o.compare_rounds}, {"seconds", o.seconds}};
+  for (const Row& row : rows) {
+    const double a = column(without, row.field), b = column(with, row.field);
+    std::printf("%-22s %12.0f %12.0f %8.2f\n", row.name, a, b, a > 0 ? b / a : 0.0);
+    j["without_dds"][row.name] = a;
+    j["with_dds"][row.name] = b;
+  }
+  if (o.json) std::printf("%s\n", j.dump().c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -385,6 +448,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--budget-mib", o.budget_mib, "Memory budget of the process, MiB")->capture_default_str();
   app.add_option("--domain", o.domain, "DDS domain for --dds")->check(CLI::Range(0u, 232u))->capture_default_str();
+  app.add_option("--compare-dds", o.compare_rounds,
+                 "Run N pairs of runs, without and then with DDS publishing, and print their medians side by side")
+      ->check(CLI::Range(1, 100));
   CLI11_PARSE(app, argc, argv);
-  return run(o);
+  if (o.compare_rounds > 0) return compare_dds(o);
+  Figures unused;
+  return run(o, unused);
 }

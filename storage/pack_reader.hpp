@@ -145,9 +145,10 @@ class PackLevel {
 
    private:
     friend class PackLevel;
-    const std::uint8_t* visibility_ = nullptr;  // the column's voxel at level 0
-    const std::uint8_t* tff_ = nullptr;         // its band sample 0
-    bool quantised_ = true;
+    // unset until column() fills them (a sampler's query holds sixteen)
+    const std::uint8_t* visibility_;  // the column's voxel at level 0
+    const std::uint8_t* tff_;         // its band sample 0
+    bool quantised_;
   };
   Column column(int i, int j) const {
     const std::size_t b = brick(i, j), n = in_brick(i, j);

@@ -28,6 +28,8 @@ namespace detail {
 // the full matrix product's (the same sums with the zero terms left out).
 Eigen::Matrix3d cross_times(const Vec3& r, const Eigen::Matrix3d& m);
 Eigen::Matrix3d times_cross(const Eigen::Matrix3d& m, const Vec3& r);
+// The unit quaternion of rotation vector w (series for small angles).
+Eigen::Quaterniond exp_map(const Vec3& w);
 }  // namespace detail
 
 class ArticulatedRope final : public Rope {

@@ -72,3 +72,27 @@ TEST(ArticulatedRope, JointCouplingsAreTheThreeFactorProducts) {
 
 }  // namespace
 }  // namespace visvol::rt
+
+namespace visvol::rt {
+namespace {
+
+// The small-angle series agrees with the angle-axis form (sin and cos) to
+// rounding, on both sides of the switch between them, and stays a unit quaternion.
+TEST(ArticulatedRope, ExponentialMapSeriesMatchesAngleAxis) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (double angle : {1e-9, 1e-6, 1e-4, 9.99e-4, 1.001e-3, 1e-2, 1.0}) {
+    for (int n = 0; n < 50; ++n) {
+      const Vec3 axis = Vec3(unit(rng), unit(rng), unit(rng)).normalized();
+      const Eigen::Quaterniond q = detail::exp_map(angle * axis);
+      const Eigen::Quaterniond ref(Eigen::AngleAxisd(angle, axis));
+      ASSERT_NEAR(q.w(), ref.w(), 1e-15) << angle;
+      ASSERT_LT((q.vec() - ref.vec()).norm(), 1e-15) << angle;
+      ASSERT_NEAR(q.norm(), 1.0, 1e-15) << angle;
+    }
+  }
+  EXPECT_EQ(detail::exp_map(Vec3::Zero()).coeffs(), Eigen::Quaterniond::Identity().coeffs());
+}
+
+}  // namespace
+}  // namespace visvol::rt

@@ -45,6 +45,18 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Hidden-from / visible-to hull sets built, refused and put in force.
+nlohmann::json constraints_json(const rt::ConstraintHulls* hulls, const rt::ExecutiveCounters& c) {
+  if (hulls == nullptr) return {{"hull_builder", false}};
+  const rt::HullStats s = hulls->stats();
+  return {{"hull_builder", true},
+          {"built", s.built},
+          {"refused", s.failed},
+          {"in_force", c.hull_sets},
+          {"last_build_ms", s.last_build_ms},
+          {"last_error", s.last_error}};
+}
+
 dds::TimingSummary summary_of(const rt::DurationHistogram& h) {
   return {h.min_us(), h.mean_us(), h.percentile_us(0.99), h.max_us(), static_cast<std::uint32_t>(h.count())};
 }
@@ -71,6 +83,7 @@ struct Console::Impl {
   std::unique_ptr<rt::SimulatedDevice> sim;
   std::unique_ptr<can::SocketCanBus> socket_bus;
   std::unique_ptr<ThumbnailThread> thumbs;
+  std::unique_ptr<rt::ConstraintHulls> hulls;  // with DDS: hidden-from / visible-to commands
   std::unique_ptr<rt::Executive> exec;
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
@@ -173,6 +186,11 @@ Status Console::Impl::start() {
   budget.reserve("loop (histograms, reports)", sizeof(rt::LoopReport) * 3 + sizeof(rt::LoopRun) * 2);
   budget.reserve("loop stack (prefaulted)", rtc.stack_prefault_bytes);
   if (o.device == "sim") budget.reserve("simulated device and bus", 2 * 4096 * sizeof(can::CanFrame) + 64 * 1024);
+  if (o.dds) {
+    const fields::VolumeGeometry& hg = pack->geometry(o.level);
+    budget.reserve("constraint hulls (3 sets, one build)",
+                   rt::ConstraintHulls::reserved_bytes(hg) + rt::ConstraintHulls::build_bytes(hg));
+  }
   VISVOL_RETURN_IF_ERROR(budget.check(1, "tiles"));
   storage::ResidentConfig rc;
   rc.budget_bytes = budget.remaining_bytes();
@@ -243,6 +261,11 @@ Status Console::Impl::start() {
   if (!e.ok()) return e.status();
   exec = std::move(*e);
   fc_start = exec->counters().fc;
+  if (o.dds) {
+    hulls = rt::ConstraintHulls::create(field->level(o.level));
+    VISVOL_RETURN_IF_ERROR(exec->set_constraint_hulls(hulls.get()));
+    hulls->start();
+  }
 
   // the loop and the pager
   loop_config.period_ns = static_cast<std::int64_t>(std::llround(o.period_us * 1000));
@@ -342,6 +365,7 @@ Status Console::run(const std::atomic<bool>& stop) {
   const rt::LoopRun run = m.loop->stop();
   m.field->set_reader_active(false);
   m.field->stop_pager();
+  if (m.hulls) m.hulls->stop();
   if (m.thumbs) m.thumbs->stop();  // after one last thumbnail, which the publisher still sends
   Status delivered;
   if (m.publisher) delivered = m.publisher->stop();
@@ -423,6 +447,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
         {"grasps", c.grasps},
         {"send_failures", c.send_failures}}},
       {"commands", {{"applied", c.commands_applied}, {"failed", c.commands_failed}}},
+      {"constraints", constraints_json(hulls.get(), c)},
       {"memory",
        {{"budget_mib", o.budget_mib},
         {"rss_peak_mib", static_cast<double>(rss_peak) / kMiB},

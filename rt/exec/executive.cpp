@@ -326,23 +326,8 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       }
       return Errc::ok;
     }
-    case dds::CommandKind::set_constraints: {
-      double clearance = forces_->gains().clearance_m;
-      for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
-        const dds::Constraint& k = c.constraints.items[i];
-        if (k.kind != dds::ConstraintKind::clearance) {
-          reason = "hidden-from and visible-to constraints are not supported by the console yet "
-                   "(visvol plan --hidden-from/--visible-to)";
-          return Errc::unsupported;
-        }
-        clearance = k.clearance_m;
-      }
-      ForceGains g = forces_->gains();
-      g.clearance_m = clearance;
-      forces_->set_gains(g);
-      equilibrium_.reset();
-      return Errc::ok;
-    }
+    case dds::CommandKind::set_constraints:
+      return apply_constraints(c, reason);
     case dds::CommandKind::start:
       if (start_run() != Errc::ok) {
         reason = "the rope could not be laid between the endpoints";
@@ -360,6 +345,69 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
   }
   reason = "unknown command";
   return Errc::invalid_argument;
+}
+
+Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
+  if (hulls != nullptr && &hulls->level() != &field_.level(config_.level)) {
+    return Status(Errc::invalid_argument, "constraint hulls: built on another level than the executive's");
+  }
+  hulls_ = hulls;
+  return Status::ok_status();
+}
+
+// set-constraints replaces the whole set: the clearance at once, the
+// hidden-from and visible-to hulls once the builder has them (the newest of
+// each kind in the command; an empty list clears them).
+Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
+  double clearance = forces_->gains().clearance_m;
+  HullRequest r;
+  r.sequence = c.sequence;
+  const storage::ResidentLevel& level = field_.level(config_.level);
+  const fields::VolumeGeometry& g = level.geometry();
+  for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
+    const dds::Constraint& k = c.constraints.items[i];
+    if (k.kind == dds::ConstraintKind::clearance) {
+      clearance = k.clearance_m;
+      continue;
+    }
+    if (hulls_ == nullptr) {
+      reason = "hidden-from and visible-to constraints are not supported without the console's hull builder "
+               "(visvol plan --hidden-from/--visible-to)";
+      return Errc::unsupported;
+    }
+    // point_hull's own test, on the nearest post (heights are always resident)
+    const double fi = std::floor((k.position.x_m - g.origin_x) / g.spacing_m + 0.5);
+    const double fj = std::floor((g.origin_y - k.position.y_m) / g.spacing_m + 0.5);
+    if (!(fi >= 0 && fj >= 0 && fi < g.nx && fj < g.ny)) {
+      reason = "a hidden-from or visible-to point is outside the pack";
+      return Errc::invalid_argument;
+    }
+    if (k.position.z_m < level.post(static_cast<int>(fi), static_cast<int>(fj))) {
+      reason = "a hidden-from or visible-to point is below the terrain";
+      return Errc::invalid_argument;
+    }
+    const bool hidden = k.kind == dds::ConstraintKind::hidden_from;
+    double* to = hidden ? r.hidden_from_m : r.visible_to_m;
+    (hidden ? r.hidden : r.visible) = true;
+    to[0] = k.position.x_m;
+    to[1] = k.position.y_m;
+    to[2] = k.position.z_m;
+  }
+  ForceGains gains = forces_->gains();
+  gains.clearance_m = clearance;
+  forces_->set_gains(gains);
+  if (hulls_ != nullptr) hulls_->request(r);
+  equilibrium_.reset();
+  return Errc::ok;
+}
+
+void Executive::install_hulls() {
+  const HullSet* set = hulls_->take();
+  if (set == nullptr) return;
+  forces_->set_hidden_from(set->has_hidden ? &set->hidden : nullptr);
+  forces_->set_visible_to(set->has_visible ? &set->visible : nullptr);
+  ++counters_.hull_sets;
+  equilibrium_.reset();
 }
 
 // ---- the tick ---------------------------------------------------------------
@@ -436,6 +484,7 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
 void Executive::tick(const TickTime& time) {
   const std::int64_t now_ns = time.woke_ns;
   apply_commands();                                        // 1
+  if (hulls_ != nullptr) install_hulls();
   if (simulation_ != nullptr) simulation_->step(now_ns);  // 2
   if (driver_) haptics(now_ns, static_cast<double>(now_ns) * 1e-9);  // 3, 4
   if (counters_.running) {                                 // 5

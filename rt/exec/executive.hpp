@@ -2,7 +2,8 @@
 //
 // Each tick, in this order (the stages of DESIGN.md):
 //   1. apply queued commands   (DDS command intake -> CommandQueue; each one
-//                               acknowledged applied or failed on the AckQueue)
+//                               acknowledged applied or failed on the AckQueue),
+//                               then put in force hull constraints built since
 //   2. simulated device        (only with a simulation on the in-process bus)
 //   3. read CAN                (the haptic driver drains the bus)
 //   4. servo                   (proxy, soft joint, force safety)
@@ -41,6 +42,7 @@
 #include "drivers/dds/samples.hpp"
 #include "drivers/haptic/device_driver.hpp"
 #include "rt/base/handoff.hpp"
+#include "rt/exec/constraint_hulls.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/rope/equilibrium.hpp"
 #include "rt/rope/field_forces.hpp"
@@ -102,6 +104,7 @@ struct ExecutiveCounters {
   std::uint64_t grasps = 0;
   std::uint64_t send_failures = 0;      // device commands the bus refused
   std::uint64_t runs = 0;               // planning runs started
+  std::uint64_t hull_sets = 0;          // hidden-from / visible-to hull sets put in force
   bool running = false;                 // the rope is stepping
   bool converged = false;
   double fc = 0.0;
@@ -137,6 +140,11 @@ class Executive final : public PeriodicTask {
   void tick(const TickTime& time) override;
   void safe_state() override;
 
+  // Hidden-from and visible-to constraints (set-constraints) need a hull
+  // builder on the executive's level; without one they are refused as
+  // unsupported. Set before the loop starts; `hulls` must outlive the executive.
+  Status set_constraint_hulls(ConstraintHulls* hulls);
+
   const ExecutiveCounters& counters() const { return counters_; }
   // The counters, handed to another thread every device_every_ticks.
   LatestValue<ExecutiveCounters>& snapshot() { return snapshot_; }
@@ -154,6 +162,8 @@ class Executive final : public PeriodicTask {
               const ExecutiveOutputs& outputs);
 
   void apply_commands();
+  void install_hulls();
+  Errc apply_constraints(const dds::Command& c, const char*& reason);
   Errc apply(const dds::Command& c, const char*& reason);
   void ack(const dds::Command& c, Errc result, const char* reason);
   Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
@@ -177,6 +187,7 @@ class Executive final : public PeriodicTask {
   std::optional<servo::Servo> servo_;
   std::optional<haptic::DeviceDriver> driver_;
   DeviceSimulation* simulation_ = nullptr;
+  ConstraintHulls* hulls_ = nullptr;
   dds::CommandQueue* commands_ = nullptr;
   ExecutiveOutputs outputs_;
   LatestValue<ExecutiveCounters> snapshot_;

@@ -89,6 +89,8 @@ class FieldForces final : public RopeEnvironment, public PathField {
   const ForceGains& gains() const { return gains_; }
   void set_hidden_from(const PointHull* hull) { hidden_from_ = hull; }
   void set_visible_to(const PointHull* hull) { visible_to_ = hull; }
+  const PointHull* hidden_from() const { return hidden_from_; }
+  const PointHull* visible_to() const { return visible_to_; }
   double reference_acceleration() const { return accel_ref_; }
   double reference_gradient() const { return gradient_ref_; }
   const Sampler& sampler() const { return sampler_; }

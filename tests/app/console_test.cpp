@@ -15,6 +15,7 @@
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
+#include "storage/pack_reader.hpp"
 #include "../fields/terrains.hpp"
 
 namespace {
@@ -136,6 +137,23 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   copy_text(show.source, "console_test");
   CommandMessage msg;
   ASSERT_EQ(commands->write(&msg.fill(show)), DDS_RETCODE_OK);
+  // stay hidden from a point 50 m above the middle of the pack
+  auto pack = visvol::storage::Pack::open(*pack_);
+  ASSERT_TRUE(pack.ok());
+  auto level = visvol::storage::PackLevel::open(*pack, 0);
+  ASSERT_TRUE(level.ok());
+  const visvol::fields::VolumeGeometry g = level->geometry();
+  const int ci = g.nx / 2, cj = g.ny / 2;
+  Command hide{};
+  hide.kind = CommandKind::set_constraints;
+  hide.sequence = 8;
+  copy_text(hide.source, "console_test");
+  hide.constraints.count = 1;
+  hide.constraints.items[0].kind = ConstraintKind::hidden_from;
+  hide.constraints.items[0].position.x_m = g.origin_x + ci * g.spacing_m;
+  hide.constraints.items[0].position.y_m = g.origin_y - cj * g.spacing_m;
+  hide.constraints.items[0].position.z_m = level->post(ci, cj) + 50.0;
+  ASSERT_EQ(commands->write(&msg.fill(hide)), DDS_RETCODE_OK);
   run.join();
   ASSERT_EQ(r.status, 0) << r.err;
 
@@ -143,14 +161,14 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   auto a = acks->take<visvol_msgs_msg_dds__CommandAck_>(
       [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
         const CommandAck ack = decode_ack(m);
-        EXPECT_EQ(ack.sequence, 7u);
+        EXPECT_TRUE(ack.sequence == 7u || ack.sequence == 8u) << ack.sequence;
         applied += ack.result == AckResult::applied;
         accepted += ack.result == AckResult::accepted;
       },
       16);
   ASSERT_TRUE(a.ok());
-  EXPECT_EQ(accepted, 1);
-  EXPECT_EQ(applied, 1);
+  EXPECT_EQ(accepted, 2);
+  EXPECT_EQ(applied, 2);
   int received = 0;
   auto p = paths->take<visvol_msgs_msg_dds__PathUpdate_>(
       [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
@@ -174,7 +192,11 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   EXPECT_GE(pictures, 1);
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_GT(s["dds"]["paths"].get<int>(), 50);
-  EXPECT_EQ(s["commands"]["applied"].get<int>(), 1);
+  EXPECT_EQ(s["commands"]["applied"].get<int>(), 2);
+  // the hidden-from hull was built beside the loop and put in force
+  EXPECT_EQ(s["constraints"]["built"].get<int>(), 1);
+  EXPECT_EQ(s["constraints"]["in_force"].get<int>(), 1);
+  EXPECT_EQ(s["constraints"]["refused"].get<int>(), 0);
 }
 
 }  // namespace

@@ -242,6 +242,59 @@ double distance_to(const Rope& r, const Vec3& p) {
   return best;
 }
 
+// With the hull builder beside the loop, set-constraints puts a hidden-from
+// hull in force within a few ticks of it being built, refuses a point under
+// the terrain with a reason, and an empty set clears the hulls.
+TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  auto hulls = ConstraintHulls::create(field_->level(0));
+  ASSERT_TRUE(e->set_constraint_hulls(hulls.get()).ok());
+  hulls->start();
+  const Vec3 p = point_at(*field_, 0.5, 0.5, 60), q = point_at(*field_, 0.3, 0.6, 80);
+  dds::Command set = command(dds::CommandKind::set_constraints, 1);
+  set.constraints.count = 2;
+  set.constraints.items[0].kind = dds::ConstraintKind::hidden_from;
+  set.constraints.items[0].position = {p.x(), p.y(), p.z()};
+  set.constraints.items[1].kind = dds::ConstraintKind::visible_to;
+  set.constraints.items[1].position = {q.x(), q.y(), q.z()};
+  ASSERT_TRUE(commands_.try_push(set));
+  run(*e, 1);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  auto wait_for_sets = [&](std::uint64_t n) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (e->counters().hull_sets < n && std::chrono::steady_clock::now() < end) {
+      run(*e, 1);
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  };
+  wait_for_sets(1);
+  ASSERT_EQ(e->counters().hull_sets, 1u);
+  ASSERT_NE(e->forces().hidden_from(), nullptr);
+  ASSERT_NE(e->forces().visible_to(), nullptr);
+  Result<PointHull> direct = point_hull(field_->level(0), p, "p");
+  ASSERT_TRUE(direct.ok());
+  EXPECT_EQ(e->forces().hidden_from()->height_m, direct->height_m);
+
+  dds::Command under = command(dds::CommandKind::set_constraints, 2);
+  under.constraints.count = 1;
+  under.constraints.items[0].kind = dds::ConstraintKind::hidden_from;
+  under.constraints.items[0].position = {p.x(), p.y(), p.z() - 500};
+  dds::Command clear = command(dds::CommandKind::set_constraints, 3);
+  ASSERT_TRUE(commands_.try_push(under));
+  ASSERT_TRUE(commands_.try_push(clear));
+  run(*e, 1);
+  const dds::CommandAck a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_NE(std::string(a.reason).find("below the terrain"), std::string::npos) << a.reason;
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  wait_for_sets(2);
+  EXPECT_EQ(e->counters().hull_sets, 2u);
+  EXPECT_EQ(e->forces().hidden_from(), nullptr);
+  EXPECT_EQ(e->forces().visible_to(), nullptr);
+  hulls->stop();
+}
+
 TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
   auto still_sim = simulated("", now_ns_);
   auto still = make(&still_sim->console_bus(), still_sim.get());

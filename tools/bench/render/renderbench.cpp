@@ -264,6 +264,13 @@ int main(int argc, char** argv) {
   int frames = 1000;
   std::vector<char*> rest = {argv[0]};
   for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      std::printf("visvol-renderbench [--pack PACK] [--frames N] [Google Benchmark options]\n"
+                  "  Milliseconds per thumbnail (render and PNG separately) for every view at 256 x 256 and\n"
+                  "  1024 x 768, after a memory check over N frames (1000). Without --pack it builds the\n"
+                  "  SF North pack from the bundled DEM into /tmp first.\n");
+      return 0;
+    }
     if (std::strcmp(argv[i], "--pack") == 0 && i + 1 < argc) {
       pack_path = argv[++i];
     } else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {

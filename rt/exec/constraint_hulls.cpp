@@ -1,0 +1,148 @@
+#include "rt/exec/constraint_hulls.hpp"
+
+#include <pthread.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace visvol::rt {
+
+namespace {
+
+constexpr std::uint64_t posts(const fields::VolumeGeometry& g) {
+  return static_cast<std::uint64_t>(g.nx) * static_cast<std::uint64_t>(g.ny);
+}
+
+void size_hull(PointHull& h, const fields::VolumeGeometry& g) {
+  h.nx = g.nx;
+  h.ny = g.ny;
+  h.origin_x = g.origin_x;
+  h.origin_y = g.origin_y;
+  h.spacing_m = g.spacing_m;
+  h.height_m.assign(static_cast<std::size_t>(posts(g)), 0.0f);
+}
+
+// Copies a built hull into a reserved one of the same grid (no reallocation).
+void copy_hull(const PointHull& from, PointHull& to) {
+  std::copy(from.height_m.begin(), from.height_m.end(), to.height_m.begin());
+}
+
+}  // namespace
+
+ConstraintHulls::ConstraintHulls(const storage::ResidentLevel& level) : level_(&level) {
+  for (HullSet& s : sets_) {
+    size_hull(s.hidden, level.geometry());
+    size_hull(s.visible, level.geometry());
+  }
+}
+
+std::unique_ptr<ConstraintHulls> ConstraintHulls::create(const storage::ResidentLevel& level) {
+  return std::unique_ptr<ConstraintHulls>(new ConstraintHulls(level));
+}
+
+ConstraintHulls::~ConstraintHulls() { stop(); }
+
+std::uint64_t ConstraintHulls::reserved_bytes(const fields::VolumeGeometry& g) {
+  return 3 * 2 * posts(g) * sizeof(float);
+}
+
+std::uint64_t ConstraintHulls::build_bytes(const fields::VolumeGeometry& g) {
+  // point_hull: the heightfield, the terrain padded by the largest radius on
+  // every side, the horizon over the square of that radius, the hull
+  const std::uint64_t r = static_cast<std::uint64_t>(std::max(g.nx, g.ny) - 1);
+  const std::uint64_t padded = (static_cast<std::uint64_t>(g.nx) + 2 * r) * (static_cast<std::uint64_t>(g.ny) + 2 * r);
+  const std::uint64_t side = 2 * r + 1;
+  return (2 * posts(g) + padded + side * side) * sizeof(float);
+}
+
+void ConstraintHulls::start() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (thread_.joinable()) return;
+  stopping_ = false;
+  thread_ = std::thread([this] { run(); });
+}
+
+void ConstraintHulls::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!thread_.joinable()) return;
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void ConstraintHulls::request(const HullRequest& r) { requests_.write(r); }
+
+const HullSet* ConstraintHulls::take() {
+  if ((middle_.load(std::memory_order_acquire) & kFresh) == 0) return nullptr;
+  const unsigned prev = middle_.exchange(front_, std::memory_order_acq_rel);
+  front_ = prev & kIndex;
+  return &sets_[front_];
+}
+
+void ConstraintHulls::publish_set() {
+  const unsigned prev = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel);
+  back_ = prev & kIndex;
+}
+
+HullStats ConstraintHulls::stats() const {
+  HullStats s;
+  s.built = built_.load(std::memory_order_relaxed);
+  s.failed = failed_.load(std::memory_order_relaxed);
+  s.last_build_ms = static_cast<double>(last_build_us_.load(std::memory_order_relaxed)) * 1e-3;
+  std::lock_guard<std::mutex> lock(mutex_);
+  s.last_error = last_error_;
+  return s;
+}
+
+Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
+  out.sequence = r.sequence;
+  out.has_hidden = out.has_visible = false;
+  if (r.hidden) {
+    const Vec3 p(r.hidden_from_m[0], r.hidden_from_m[1], r.hidden_from_m[2]);
+    Result<PointHull> h = point_hull(*level_, p, "hidden-from point");
+    if (!h.ok()) return h.status();
+    copy_hull(*h, out.hidden);
+    out.has_hidden = true;
+  }
+  if (r.visible) {
+    const Vec3 p(r.visible_to_m[0], r.visible_to_m[1], r.visible_to_m[2]);
+    Result<PointHull> h = point_hull(*level_, p, "visible-to point");
+    if (!h.ok()) return h.status();
+    copy_hull(*h, out.visible);
+    out.has_visible = true;
+  }
+  return Status::ok_status();
+}
+
+void ConstraintHulls::run() {
+  pthread_setname_np(pthread_self(), "visvol-hulls");
+  // The loop cannot wake this thread (it makes no system call but its
+  // sleep): requests are polled.
+  constexpr auto kPoll = std::chrono::milliseconds(20);
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stopping_) {
+    wake_.wait_for(lock, kPoll, [this] { return stopping_; });
+    if (stopping_) break;
+    lock.unlock();
+    if (const HullRequest* r = requests_.take()) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const Status s = build(*r, sets_[back_]);
+      last_build_us_.store(std::chrono::duration_cast<std::chrono::microseconds>(
+                               std::chrono::steady_clock::now() - t0).count(),
+                           std::memory_order_relaxed);
+      if (s.ok()) {
+        publish_set();
+        built_.fetch_add(1, std::memory_order_relaxed);
+      } else {
+        failed_.fetch_add(1, std::memory_order_relaxed);
+        std::lock_guard<std::mutex> error_lock(mutex_);
+        last_error_ = s.message();
+      }
+    }
+    lock.lock();
+  }
+}
+
+}  // namespace visvol::rt

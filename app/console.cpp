@@ -72,6 +72,9 @@ struct Console::Impl {
   ConsoleOptions o;
   std::shared_ptr<const storage::Pack> pack;
   std::string pack_id;
+  std::vector<std::pair<std::string, std::string>> terrains;  // id, path: where switch-terrain may go
+  std::string switch_to;    // the pack id a switch-terrain command asked for, once seen
+  double session_s = 0;     // how long the session ran
   rt::MemoryBudget budget{0};
   rt::RealtimeReport realtime;
   std::unique_ptr<storage::ResidentPack> field;
@@ -92,6 +95,8 @@ struct Console::Impl {
   std::uint64_t rss_peak = 0;
 
   Status start();
+  Status open_terrains();
+  std::string out_dir() const;
   Status start_dds(const fields::VolumeGeometry& g);
   Status start_thumbnails();
   void release_pack_pages();
@@ -114,6 +119,29 @@ Result<std::unique_ptr<Console>> Console::start(const ConsoleOptions& options) {
   return std::unique_ptr<Console>(new Console(std::move(impl)));
 }
 
+std::optional<ConsoleOptions> Console::next_session() const {
+  const Impl& m = *impl_;
+  if (m.switch_to.empty()) return std::nullopt;
+  ConsoleOptions next = m.o;
+  for (const auto& t : m.terrains) {
+    if (t.first == m.switch_to) next.pack = t.second;
+  }
+  if (next.pack == m.o.pack) return std::nullopt;  // not one of this console's packs (the intake checks)
+  // the old pack becomes one to switch back to
+  next.terrains.push_back(m.o.pack);
+  if (m.o.seconds > 0) {
+    const double left = m.o.seconds - m.session_s;
+    if (left < 1.0) return std::nullopt;  // the time is up
+    next.seconds = left;
+  }
+  // the endpoints were in the old pack's area: the new one's default
+  next.from.clear();
+  next.to.clear();
+  next.session = m.o.session + 1;
+  next.switched_from = m.pack_id;
+  return next;
+}
+
 Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   dds::ParticipantConfig pc;
   pc.domain_id = o.domain;
@@ -133,6 +161,7 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   ic.limits.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m() + 10000.0};
   ic.limits.max_segments = static_cast<std::uint32_t>(o.max_segments);
   VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
+  for (const auto& t : terrains) VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, t.first));
   auto in = dds::CommandIntake::start(*participant, ic, commands, &acks);
   if (!in.ok()) return in.status();
   intake = std::move(*in);
@@ -152,12 +181,32 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   return {};
 }
 
+// The other packs: each opened once (structure and checksums of its tables)
+// so that a switch never lands on a bad file; ids unique.
+Status Console::Impl::open_terrains() {
+  for (const std::string& path : o.terrains) {
+    const std::string id = storage::pack_id_from_path(path);
+    if (id == pack_id) continue;  // the pack of this session
+    for (const auto& t : terrains) {
+      if (t.first == id) return invalid_argument("--terrain " + path + ": pack id '" + id + "' is also " + t.second);
+    }
+    if (terrains.size() + 1 >= dds::kMaxKnownPacks) {
+      return invalid_argument("--terrain: at most " + std::to_string(dds::kMaxKnownPacks - 1) + " other packs");
+    }
+    auto p = storage::Pack::open(path);
+    if (!p.ok()) return Status(p.status().code(), "--terrain " + path + ": " + p.status().message());
+    terrains.emplace_back(id, path);
+  }
+  return {};
+}
+
 Status Console::Impl::start() {
   // the pack (mapped, nothing read but its tables)
   auto p = storage::Pack::open(o.pack);
   if (!p.ok()) return p.status();
   pack = *p;
   pack_id = storage::pack_id_from_path(o.pack);
+  VISVOL_RETURN_IF_ERROR(open_terrains());
   if (o.level < 0 || o.level >= pack->level_count()) {
     return invalid_argument("--level: " + std::to_string(o.level) + " is not in " + o.pack + " (0.." +
                             std::to_string(pack->level_count() - 1) + ")");
@@ -337,6 +386,12 @@ Status Console::run(const std::atomic<bool>& stop) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     if (const rt::LoopReport* r = m.loop->reports().take()) last = *r;
     if (const rt::ExecutiveCounters* c = m.exec->snapshot().take()) counters = *c;
+    char next[dds::kPackIdCapacity];
+    if (m.exec->terrain_switch(next)) {
+      m.switch_to = next;
+      std::fprintf(stderr, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
+      break;
+    }
     if (m.publisher && last.sequence > 0) m.publisher->health().write(m.health(last, counters, ++health_seq));
     const double t = seconds_since(t0);
     if (t >= next_line_s) {
@@ -362,6 +417,7 @@ Status Console::run(const std::atomic<bool>& stop) {
     }
   }
   const double wall_s = seconds_since(t0);
+  m.session_s = wall_s;
   const rt::LoopRun run = m.loop->stop();
   m.field->set_reader_active(false);
   m.field->stop_pager();
@@ -375,11 +431,20 @@ Status Console::run(const std::atomic<bool>& stop) {
   return {};
 }
 
+// A session that ends in a terrain switch keeps its outputs apart, in
+// OUT/session-N-PACKID; the last session's are in OUT itself.
+std::string Console::Impl::out_dir() const {
+  return switch_to.empty() ? o.out : o.out + "/session-" + std::to_string(o.session) + "-" + pack_id;
+}
+
 Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
-  ::mkdir(o.out.c_str(), 0755);
-  struct stat st {};
-  if (::stat(o.out.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    return Status(Errc::io, o.out + ": cannot create the output directory");
+  const std::string out = out_dir();
+  for (const std::string& dir : {o.out, out}) {
+    ::mkdir(dir.c_str(), 0755);
+    struct stat st {};
+    if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+      return Status(Errc::io, dir + ": cannot create the output directory");
+    }
   }
   const rt::Rope& rope = exec->rope();
   const storage::ResidentSampler& s = exec->forces().sampler();
@@ -394,10 +459,10 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
                   clearance);
     csv += line;
   }
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/path.csv", csv));
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/health.csv", health_csv));
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", csv));
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/health.csv", health_csv));
   if (thumbs) {
-    const Status t = thumbs->write_last(o.out + "/thumbnail.png");
+    const Status t = thumbs->write_last(out + "/thumbnail.png");
     if (!t.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", t.message().c_str());
   }
 
@@ -415,6 +480,9 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   nlohmann::json j = {
       {"pack", o.pack},
       {"pack_id", pack_id},
+      {"session", o.session},
+      {"switched_from", o.switched_from},
+      {"switched_to", switch_to},
       {"wall_s", wall_s},
       {"loop",
        {{"period_us", o.period_us},
@@ -477,7 +545,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
                        {"failed", t.failed}, {"last_render_ms", t.last_render_ms},
                        {"gl_renderer", thumbs->scene().gl_renderer}};
   }
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(o.out + "/summary.json", j.dump(2) + "\n"));
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/summary.json", j.dump(2) + "\n"));
   std::printf("visvol-console: %.1f s, %llu ticks; wake-up p50 %.0f us p99 %.0f us max %.0f us; compute p50 %.0f us "
               "p99 %.0f us; overruns %llu; major faults %lld\n",
               wall_s, static_cast<unsigned long long>(run.totals.ticks), run.wake_latency.percentile_us(0.5),
@@ -496,8 +564,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
                 static_cast<unsigned long long>(t.rendered), o.thumbnail_view.c_str(), o.thumbnail_size.c_str(),
                 t.last_render_ms, static_cast<unsigned long long>(t.failed));
   }
-  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json%s\n", o.out.c_str(), o.out.c_str(),
-              o.out.c_str(), thumbs ? (", " + o.out + "/thumbnail.png").c_str() : "");
+  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json%s\n", out.c_str(), out.c_str(),
+              out.c_str(), thumbs ? (", " + out + "/thumbnail.png").c_str() : "");
   return {};
 }
 

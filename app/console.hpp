@@ -15,10 +15,13 @@
 //   summary.json   the run: loop timing percentiles, overruns, faults, memory
 //                  against the budget, tiles, commands, the path's figures
 //   thumbnail.png  the last thumbnail: the rope where it ended
+// A session that ends on a switch-terrain command writes them into
+// OUT/session-N-PACKID, and the next session runs on the other pack.
 #pragma once
 
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "app/console_options.hpp"
@@ -37,6 +40,11 @@ class Console {
   // stops every thread and writes the outputs. Returns what went wrong
   // writing them, if anything.
   Status run(const std::atomic<bool>& stop);
+
+  // After run(): when it ended on a switch-terrain command, the options of
+  // the next session (the same console on that pack, for the time left, the
+  // endpoints at the new pack's default); otherwise nothing.
+  std::optional<ConsoleOptions> next_session() const;
 
  private:
   struct Impl;

@@ -8,6 +8,10 @@ namespace visvol::app {
 void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)");
   app.add_option("--pack", o.pack, "Field pack to plan in (visvol build ... -o PACK)")->required()->check(CLI::ExistingFile);
+  app.add_option("--terrain", o.terrains,
+                 "Another preloaded pack that a switch-terrain command (by pack id: the file name without its "
+                 "extension) may move the console to; repeatable")
+      ->check(CLI::ExistingFile);
   app.add_option("--seconds", o.seconds, "Run this long, s (0: until Ctrl-C or SIGTERM)")->capture_default_str();
   app.add_option("-o,--out", o.out, "Directory for the path, health log and summary")->capture_default_str();
   app.add_option("--from", o.from, "Rope start X Y Z (pack CRS, m; default: west edge, 150 m up)")->expected(3);

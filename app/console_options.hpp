@@ -14,6 +14,7 @@ namespace visvol::app {
 
 struct ConsoleOptions {
   std::string pack;
+  std::vector<std::string> terrains;  // other packs a switch-terrain command may move to
   double seconds = 0;                 // 0: until SIGINT or SIGTERM
   std::string out = "out/console";    // outputs
   // The planning problem (pack CRS, metres); empty: across the pack west to east.
@@ -48,6 +49,9 @@ struct ConsoleOptions {
   std::string thumbnail_view = "oblique";  // oblique | top | volume | slice | none
   std::string thumbnail_size = "256x256";  // WxH, pixels
   double thumbnail_max_hz = 1.0;
+  // Set by the console itself for a session after a terrain switch (not options).
+  int session = 1;
+  std::string switched_from;          // the previous session's pack id
 };
 
 // "WxH" in pixels, each side 32..4096; invalid_argument naming the option.

@@ -1,13 +1,15 @@
 // visvol-console: the planning console. Maps a field pack within a memory
 // budget, runs the rope and the haptic servo at 1 kHz against the haptic
 // device (simulated by default), publishes the path over DDS and takes
-// commands, until the time is up or Ctrl-C.
+// commands, until the time is up or Ctrl-C. A switch-terrain command to
+// one of its --terrain packs ends the session and starts one on that pack.
 //
 // Exit status: 0 success, 1 a failure while running, 2 bad options or input.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <optional>
 
 #include "app/console.hpp"
 
@@ -36,16 +38,23 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  auto console = app::Console::start(options);
-  if (!console.ok()) {
-    std::fprintf(stderr, "visvol-console: %s\n", console.status().message().c_str());
-    const Errc c = console.status().code();
-    return c == Errc::invalid_argument || c == Errc::resource || c == Errc::corrupt ? 2 : 1;
-  }
-  const Status s = (*console)->run(g_stop);
-  if (!s.ok()) {
-    std::fprintf(stderr, "visvol-console: %s\n", s.message().c_str());
-    return 1;
+  // one session per pack: a switch-terrain command ends a session and the
+  // next one starts on the other pack, everything made anew
+  std::optional<app::ConsoleOptions> session = options;
+  while (session) {
+    auto console = app::Console::start(*session);
+    if (!console.ok()) {
+      std::fprintf(stderr, "visvol-console: %s\n", console.status().message().c_str());
+      const Errc c = console.status().code();
+      const bool bad_input = c == Errc::invalid_argument || c == Errc::resource || c == Errc::corrupt;
+      return bad_input && session->session == 1 ? 2 : 1;
+    }
+    const Status s = (*console)->run(g_stop);
+    if (!s.ok()) {
+      std::fprintf(stderr, "visvol-console: %s\n", s.message().c_str());
+      return 1;
+    }
+    session = g_stop.load() ? std::nullopt : (*console)->next_session();
   }
   return 0;
 }

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
+
+#include "fields/hull_kernel.hpp"
 
 namespace visvol::rt {
 
@@ -49,10 +52,9 @@ std::uint64_t ConstraintHulls::reserved_bytes(const fields::VolumeGeometry& g) {
 std::uint64_t ConstraintHulls::build_bytes(const fields::VolumeGeometry& g) {
   // point_hull: the heightfield, the terrain padded by the largest radius on
   // every side, the horizon over the square of that radius, the hull
-  const std::uint64_t r = static_cast<std::uint64_t>(std::max(g.nx, g.ny) - 1);
-  const std::uint64_t padded = (static_cast<std::uint64_t>(g.nx) + 2 * r) * (static_cast<std::uint64_t>(g.ny) + 2 * r);
-  const std::uint64_t side = 2 * r + 1;
-  return (2 * posts(g) + padded + side * side) * sizeof(float);
+  const int radius = std::max(g.nx, g.ny) - 1;
+  const std::uint64_t side = 2 * static_cast<std::uint64_t>(radius) + 1;
+  return (2 * posts(g) + side * side) * sizeof(float) + fields::padded_terrain_bytes(g.nx, g.ny, radius);
 }
 
 void ConstraintHulls::start() {
@@ -128,7 +130,12 @@ void ConstraintHulls::run() {
     lock.unlock();
     if (const HullRequest* r = requests_.take()) {
       const auto t0 = std::chrono::steady_clock::now();
-      const Status s = build(*r, sets_[back_]);
+      Status s;
+      try {
+        s = build(*r, sets_[back_]);
+      } catch (const std::exception& e) {  // bad_alloc on a level too large for the memory left
+        s = Status(Errc::resource, std::string("building the hulls: ") + e.what());
+      }
       last_build_us_.store(std::chrono::duration_cast<std::chrono::microseconds>(
                                std::chrono::steady_clock::now() - t0).count(),
                            std::memory_order_relaxed);
@@ -136,6 +143,7 @@ void ConstraintHulls::run() {
         publish_set();
         built_.fetch_add(1, std::memory_order_relaxed);
       } else {
+        refused_sequence_.store(r->sequence, std::memory_order_release);
         failed_.fetch_add(1, std::memory_order_relaxed);
         std::lock_guard<std::mutex> error_lock(mutex_);
         last_error_ = s.message();

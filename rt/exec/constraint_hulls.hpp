@@ -76,6 +76,10 @@ class ConstraintHulls {
   void request(const HullRequest& r);
   const HullSet* take();
 
+  // The sequence of the last request the builder refused (0: none): the
+  // loop stops waiting for that set (the previous one stays in force).
+  std::uint64_t refused_sequence() const { return refused_sequence_.load(std::memory_order_acquire); }
+
   HullStats stats() const;
   const storage::ResidentLevel& level() const { return *level_; }
 
@@ -98,6 +102,7 @@ class ConstraintHulls {
 
   std::atomic<std::uint64_t> built_{0}, failed_{0};
   std::atomic<std::int64_t> last_build_us_{0};
+  std::atomic<std::uint64_t> refused_sequence_{0};
   mutable std::mutex mutex_;  // last_error_, stopping_
   std::condition_variable wake_;
   std::string last_error_;

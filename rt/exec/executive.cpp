@@ -340,8 +340,23 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       rope_->clear_point_force();
       return Errc::ok;
     case dds::CommandKind::switch_terrain:
-      reason = "switching terrain needs a console restart with that pack";
-      return Errc::unsupported;
+      if (c.pack_id[0] == '\0') {
+        reason = "switch-terrain names no pack";
+        return Errc::invalid_argument;
+      }
+      if (std::strncmp(c.pack_id, config_.pack_id, sizeof c.pack_id) == 0) {
+        reason = "the console is on that pack already";
+        return Errc::invalid_argument;
+      }
+      if (switch_requested_.load(std::memory_order_relaxed)) {
+        reason = "a terrain switch is already under way";
+        return Errc::invalid_argument;
+      }
+      // the console ends this session and starts one on that pack
+      std::memcpy(switch_pack_id_, c.pack_id, sizeof switch_pack_id_);
+      switch_pack_id_[sizeof switch_pack_id_ - 1] = '\0';
+      switch_requested_.store(true, std::memory_order_release);
+      return Errc::ok;
   }
   reason = "unknown command";
   return Errc::invalid_argument;
@@ -361,7 +376,6 @@ Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
 Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
   double clearance = forces_->gains().clearance_m;
   HullRequest r;
-  r.sequence = c.sequence;
   const storage::ResidentLevel& level = field_.level(config_.level);
   const fields::VolumeGeometry& g = level.geometry();
   for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
@@ -382,7 +396,7 @@ Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
       reason = "a hidden-from or visible-to point is outside the pack";
       return Errc::invalid_argument;
     }
-    if (k.position.z_m < level.post(static_cast<int>(fi), static_cast<int>(fj))) {
+    if (!std::isfinite(k.position.z_m) || k.position.z_m < level.post(static_cast<int>(fi), static_cast<int>(fj))) {
       reason = "a hidden-from or visible-to point is below the terrain";
       return Errc::invalid_argument;
     }
@@ -396,14 +410,28 @@ Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
   ForceGains gains = forces_->gains();
   gains.clearance_m = clearance;
   forces_->set_gains(gains);
-  if (hulls_ != nullptr) hulls_->request(r);
+  if (hulls_ != nullptr) {
+    // until the hulls are in force (or refused) the path is not at rest under them
+    r.sequence = ++hull_requests_;
+    hull_pending_ = r.sequence;
+    hulls_->request(r);
+  }
   equilibrium_.reset();
+  counters_.converged = false;
   return Errc::ok;
 }
 
+bool Executive::terrain_switch(char (&pack_id)[dds::kPackIdCapacity]) const {
+  if (!switch_requested_.load(std::memory_order_acquire)) return false;
+  std::memcpy(pack_id, switch_pack_id_, sizeof pack_id);
+  return true;
+}
+
 void Executive::install_hulls() {
+  if (hull_pending_ != 0 && hulls_->refused_sequence() == hull_pending_) hull_pending_ = 0;
   const HullSet* set = hulls_->take();
   if (set == nullptr) return;
+  if (set->sequence == hull_pending_) hull_pending_ = 0;
   forces_->set_hidden_from(set->has_hidden ? &set->hidden : nullptr);
   forces_->set_visible_to(set->has_visible ? &set->visible : nullptr);
   ++counters_.hull_sets;
@@ -518,7 +546,7 @@ void Executive::measure() {
   const double rms = std::sqrt(2.0 * rope_->kinetic_energy_j() / (rope_->params().mass_kg * n));
   counters_.fc = fc;
   counters_.length_m = rope_->length_m();
-  const bool at_rest = equilibrium_.add(rms, fc);
+  const bool at_rest = equilibrium_.add(rms, fc) && hull_pending_ == 0;
   if (at_rest && !counters_.converged && counters_.equilibrium_s == 0) counters_.equilibrium_s = counters_.run_s;
   counters_.converged = at_rest;
 }

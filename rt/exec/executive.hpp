@@ -145,6 +145,11 @@ class Executive final : public PeriodicTask {
   // unsupported. Set before the loop starts; `hulls` must outlive the executive.
   Status set_constraint_hulls(ConstraintHulls* hulls);
 
+  // A switch-terrain command to another pack, once applied: copies its pack
+  // id and returns true (any thread; the loop asks nothing more until the
+  // console has switched). The console checks the id against its packs first.
+  bool terrain_switch(char (&pack_id)[dds::kPackIdCapacity]) const;
+
   const ExecutiveCounters& counters() const { return counters_; }
   // The counters, handed to another thread every device_every_ticks.
   LatestValue<ExecutiveCounters>& snapshot() { return snapshot_; }
@@ -188,6 +193,11 @@ class Executive final : public PeriodicTask {
   std::optional<haptic::DeviceDriver> driver_;
   DeviceSimulation* simulation_ = nullptr;
   ConstraintHulls* hulls_ = nullptr;
+  std::uint64_t hull_requests_ = 0;  // hull requests made (their sequence numbers, from 1)
+  std::uint64_t hull_pending_ = 0;   // the one being built, 0: none
+  // switch-terrain: the id written by the loop, then the flag (release)
+  char switch_pack_id_[dds::kPackIdCapacity] = {};
+  std::atomic<bool> switch_requested_{false};
   dds::CommandQueue* commands_ = nullptr;
   ExecutiveOutputs outputs_;
   LatestValue<ExecutiveCounters> snapshot_;

@@ -199,4 +199,78 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   EXPECT_EQ(s["constraints"]["refused"].get<int>(), 0);
 }
 
+
+// switch-terrain to a --terrain pack: the session on the first pack ends
+// (its outputs kept in session-1-ID) and one on the other pack runs for the
+// time left, writing the outputs; an unknown pack id is refused by the intake.
+TEST_F(Console, SwitchesTerrainOnCommand) {
+  using namespace visvol::dds;
+  const std::string other = ::testing::TempDir() + "/console_b_" + std::to_string(getpid()) + ".vvp";
+  visvol::storage::PackBuildParams bp;
+  bp.field.nz = 32;
+  bp.field.ceiling_m = 200;
+  bp.field.range_posts = 8;
+  bp.lod_levels = 2;
+  bp.tff.band_offset_m = 60;
+  bp.tff.band_levels = 8;
+  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), bp, "", other).ok());
+  const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_b_" + std::to_string(getpid());
+
+  ParticipantConfig pc;
+  pc.domain_id = 225;
+  pc.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(pc);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto commands = Writer::create(**participant, Topic::command);
+  auto acks = Reader::create(**participant, Topic::command_ack);
+  ASSERT_TRUE(commands.ok() && acks.ok());
+  const std::string out = out_dir("switch");
+  Outcome r;
+  std::thread run([&] {
+    r = console("--pack " + *pack_ + " --terrain " + other + " --seconds 8 --domain 225 --priority 0 --no-lock "
+                "--segments 32 --script none --thumbnail-view none --out " + out);
+  });
+  ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  CommandMessage msg;
+  Command unknown{};
+  unknown.kind = CommandKind::switch_terrain;
+  unknown.sequence = 1;
+  copy_text(unknown.source, "console_test");
+  copy_text(unknown.pack_id, "no_such_pack");
+  ASSERT_EQ(commands->write(&msg.fill(unknown)), DDS_RETCODE_OK);
+  Command go = unknown;
+  go.sequence = 2;
+  copy_text(go.pack_id, other_id);
+  ASSERT_EQ(commands->write(&msg.fill(go)), DDS_RETCODE_OK);
+  run.join();
+  std::remove(other.c_str());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("switch-terrain"), std::string::npos) << r.err;
+
+  int refused = 0, applied = 0;
+  auto a = acks->take<visvol_msgs_msg_dds__CommandAck_>(
+      [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
+        const CommandAck ack = decode_ack(m);
+        refused += ack.sequence == 1 && ack.result == AckResult::rejected;
+        applied += ack.sequence == 2 && ack.result == AckResult::applied;
+      },
+      16);
+  ASSERT_TRUE(a.ok());
+  EXPECT_EQ(refused, 1);
+  EXPECT_EQ(applied, 1);
+
+  const nlohmann::json before =
+      nlohmann::json::parse(slurp(out + "/session-1-" + first_id + "/summary.json"));
+  EXPECT_EQ(before["pack_id"], first_id);
+  EXPECT_EQ(before["switched_to"], other_id);
+  const nlohmann::json after = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(after["pack_id"], other_id);
+  EXPECT_EQ(after["session"], 2);
+  EXPECT_EQ(after["switched_from"], first_id);
+  EXPECT_EQ(after["switched_to"], "");
+  EXPECT_GT(after["loop"]["ticks"].get<int>(), 1000);  // it ran on the other pack
+  const std::string csv = slurp(out + "/path.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);  // header + 33 vertices
+}
+
 }  // namespace

@@ -295,6 +295,33 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   hulls->stop();
 }
 
+// switch-terrain to another pack is handed to the console once; the pack
+// it is on, a second switch while one is under way and no pack are refused.
+TEST_F(ExecutiveTest, ASwitchTerrainCommandIsHandedToTheConsole) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  char id[dds::kPackIdCapacity];
+  EXPECT_FALSE(e->terrain_switch(id));
+  dds::Command same = command(dds::CommandKind::switch_terrain, 1);
+  dds::copy_text(same.pack_id, "fractal");
+  dds::Command other = command(dds::CommandKind::switch_terrain, 2);
+  dds::copy_text(other.pack_id, "taunus");
+  dds::Command again = command(dds::CommandKind::switch_terrain, 3);
+  dds::copy_text(again.pack_id, "sf_north");
+  for (const dds::Command& c : {same, other, again}) ASSERT_TRUE(commands_.try_push(c));
+  run(*e, 1);
+  dds::CommandAck a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_NE(std::string(a.reason).find("already"), std::string::npos) << a.reason;
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  a = next_ack();
+  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_NE(std::string(a.reason).find("under way"), std::string::npos) << a.reason;
+  ASSERT_TRUE(e->terrain_switch(id));
+  EXPECT_STREQ(id, "taunus");
+  EXPECT_TRUE(e->counters().running);  // the rope keeps stepping until the console ends the session
+}
+
 TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
   auto still_sim = simulated("", now_ns_);
   auto still = make(&still_sim->console_bus(), still_sim.get());

@@ -4,7 +4,8 @@
 # the terrain force field), checks it, samples it, exports it, writes a
 # viewshed, plans a hidden path offline and draws it, then runs the console
 # for 20 s: the 1 kHz executive with the simulated haptic device (an operator
-# script grabs and pulls the rope), DDS on loopback, thumbnails.
+# script grabs and pulls the rope), DDS on loopback, thumbnails, and a
+# hidden-from constraint sent to it over DDS by visvol-echo.
 # Outputs go to out/ (or $VISVOL_OUT).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,7 +13,7 @@ out=${VISVOL_OUT:-out}
 
 tools/deps.sh build storage dds render
 cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build build -j "$(nproc)" --target visvol visvol-console
+cmake --build build -j "$(nproc)" --target visvol visvol-console visvol-echo
 
 mkdir -p "$out"
 dem=tests/data/sf_north_utm10_30m.tif
@@ -49,8 +50,15 @@ for view in oblique volume slice; do
     -o "$out/plan_hide_$view.png"
 done
 
-echo "== the console: 20 s at 1 kHz, simulated haptic device, DDS on loopback (domain 0)"
+echo "== the console: 20 s at 1 kHz, simulated haptic device, DDS on loopback (domain 0);"
+echo "   at 8 s a second station tells it over DDS to stay hidden from above the Presidio"
+(
+  sleep 8
+  build/tools/echo/visvol-echo command set-constraints --hidden-from 545500,4185500,150 --clearance 30 \
+    >"$out/console_command.txt" 2>&1 || echo "visvol-echo failed: see $out/console_command.txt"
+) &
 build/app/visvol-console --pack "$pack" --seconds 20 --out "$out/console"
+wait
 
 echo
 echo "outputs in $out/:"

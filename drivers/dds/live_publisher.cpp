@@ -205,15 +205,30 @@ void LivePublisher::publish_path(const PathSample& sample, std::int64_t now) {
   }
 }
 
+void LivePublisher::note_path_producer(const PathSample& sample) {
+  if (last_path_sequence_ != 0 && sample.sequence > last_path_sequence_ && sample.stamp_ns > last_path_stamp_ns_) {
+    path_period_ns_ = (sample.stamp_ns - last_path_stamp_ns_) /
+                      static_cast<std::int64_t>(sample.sequence - last_path_sequence_);
+  } else if (sample.sequence <= last_path_sequence_) {
+    path_period_ns_ = -1;  // a new planning run numbers from the start
+  }
+  last_path_sequence_ = sample.sequence;
+  last_path_stamp_ns_ = sample.stamp_ns;
+}
+
 void LivePublisher::service_path(std::int64_t now, bool final) {
   if (!final && now < path_stream_.next_allowed_ns) return;
   if (const PathSample* sample = path_.take()) {
     path_stream_.last_fresh_ns = now;
+    note_path_producer(*sample);
     const std::int64_t age_ns = now_stamp_ns() - sample->stamp_ns;
     const bool fresh = age_ns <= to_ns(config_.poll_interval_s);
+    const std::int64_t wait_ns = to_ns(config_.path_refresh_wait_s);
+    const bool newer_soon = path_period_ns_ < 0 || path_period_ns_ <= wait_ns;
     // the newest path goes out when it is fresh, when it replaces one kept
-    // back, or when there is no time to wait
-    if (fresh || holding_path_ || final || config_.path_refresh_wait_s <= 0.0) {
+    // back, when no newer one is due within the wait, or when there is no
+    // time to wait
+    if (fresh || holding_path_ || final || wait_ns <= 0 || !newer_soon) {
       publish_path(*sample, now);
       return;
     }

@@ -29,7 +29,10 @@
 // 1 kHz executive hands one off within a millisecond), then publishes the
 // newer one or, failing that, the one it kept. So what a subscriber receives
 // is about as old as the poll interval plus delivery, not up to one producer
-// period older. 0 turns this off.
+// period older. It waits only for a producer that hands off at least once per
+// path_refresh_wait_s (its period estimated from the sequence numbers and
+// stamps of the paths it took; unknown at first): waiting for one that hands
+// off less often only delays the path. 0 turns this off.
 //
 // Thread-safety: the hand-offs as above; stop() and stats() from any one
 // other thread. Cost: one thread; hand-offs and messages reserved at start
@@ -149,6 +152,11 @@ class LivePublisher {
   Stream path_stream_, health_stream_, device_stream_, thumbnail_stream_, terrain_stream_;
   std::unique_ptr<PathSample> held_path_;  // a stale path kept while a newer one may come
   bool holding_path_ = false;
+  // the path producer's hand-off period, from the paths taken (-1: unknown)
+  std::uint64_t last_path_sequence_ = 0;
+  std::int64_t last_path_stamp_ns_ = 0;
+  std::int64_t path_period_ns_ = -1;
+  void note_path_producer(const PathSample& sample);
   std::int64_t hold_until_ns_ = 0;
 
   std::atomic<std::uint64_t> errors_{0};

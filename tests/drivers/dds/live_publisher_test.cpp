@@ -184,6 +184,53 @@ TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
   EXPECT_EQ((*pub)->stats().paths, 2u);
 }
 
+// A producer that hands off less often than the wait (events, or the
+// executive's 50 Hz paths) is not waited for: a path that is already old goes
+// out at once instead of after path_refresh_wait_s.
+TEST(LivePublisher, AStalePathFromASlowProducerGoesOutAtOnce) {
+  auto p = make_participant(loopback(kDomain));
+  ASSERT_NE(p, nullptr);
+  QosPtr qos = reader_qos(Topic::path_update);
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  Result<Reader> reader = Reader::create(*p, Topic::path_update, qos.get());
+  ASSERT_TRUE(reader.ok());
+  PublisherConfig config;
+  config.path_refresh_wait_s = 0.01;
+  Result<std::unique_ptr<LivePublisher>> pub = LivePublisher::start(*p, config);
+  ASSERT_TRUE(pub.ok());
+  ASSERT_TRUE(reader->wait_for_writers(1, 5.0).ok());
+  std::vector<std::uint64_t> seen;
+  const auto collect = [&] {
+    (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
+        [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
+          seen.push_back(m.sequence_number);
+        });
+  };
+  // paths 1 and 2, 60 ms apart: a producer period of 60 ms, over the 10 ms wait
+  for (std::uint64_t seq : {1u, 2u}) {
+    PathSample& s = (*pub)->path().back();
+    fill_path(s, seq, 4);
+    s.stamp_ns = now_stamp_ns();
+    (*pub)->path().publish();
+    ASSERT_TRUE(wait_until([&] {
+      collect();
+      return seen.size() == seq;
+    }, 5.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  }
+  // path 3, stamped 5 ms before its hand-off: stale, but nothing newer is due
+  PathSample& late = (*pub)->path().back();
+  fill_path(late, 3, 4);
+  late.stamp_ns = now_stamp_ns() - 5000000;
+  (*pub)->path().publish();
+  ASSERT_TRUE(wait_until([&] {
+    collect();
+    return seen.size() == 3;
+  }, 5.0));
+  EXPECT_EQ(seen, (std::vector<std::uint64_t>{1, 2, 3}));
+  EXPECT_EQ((*pub)->stats().paths_held, 0u);
+}
+
 TEST(LivePublisher, ThumbnailAtMostOncePerIntervalAndTheLastOnStop) {
   auto p = make_participant(loopback(kDomain));
   ASSERT_NE(p, nullptr);

@@ -390,13 +390,12 @@ Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
       return Errc::unsupported;
     }
     // point_hull's own test, on the nearest post (heights are always resident)
-    const double fi = std::floor((k.position.x_m - g.origin_x) / g.spacing_m + 0.5);
-    const double fj = std::floor((g.origin_y - k.position.y_m) / g.spacing_m + 0.5);
-    if (!(fi >= 0 && fj >= 0 && fi < g.nx && fj < g.ny)) {
+    int pi = 0, pj = 0;
+    if (!hull_post(g, Vec3(k.position.x_m, k.position.y_m, k.position.z_m), pi, pj)) {
       reason = "a hidden-from or visible-to point is outside the pack";
       return Errc::invalid_argument;
     }
-    if (!std::isfinite(k.position.z_m) || k.position.z_m < level.post(static_cast<int>(fi), static_cast<int>(fj))) {
+    if (!std::isfinite(k.position.z_m) || k.position.z_m < level.post(pi, pj)) {
       reason = "a hidden-from or visible-to point is below the terrain";
       return Errc::invalid_argument;
     }

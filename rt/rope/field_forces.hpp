@@ -66,6 +66,18 @@ struct PointHull {
 template <class Level>
 Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name);
 
+// The post a hull's point stands on: the nearest post of grid g to (x, y);
+// false when there is none (outside the grid, or x or y not finite).
+// point_hull's rule, for callers that check a point before asking for its hull.
+inline bool hull_post(const fields::VolumeGeometry& g, const Vec3& p, int& i, int& j) {
+  const double fi = std::floor((p.x() - g.origin_x) / g.spacing_m + 0.5);
+  const double fj = std::floor((g.origin_y - p.y()) / g.spacing_m + 0.5);
+  if (!(fi >= 0 && fj >= 0 && fi < g.nx && fj < g.ny)) return false;
+  i = static_cast<int>(fi);
+  j = static_cast<int>(fj);
+  return true;
+}
+
 // `Sampler` answers the queries (fields::FieldSampler<Level>, or one that
 // picks the level per query, like storage::ResidentSampler).
 template <class Level, class Sampler = fields::FieldSampler<Level>>
@@ -223,11 +235,10 @@ Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name
   hf.height_m.resize(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
   for (int j = 0; j < g.ny; ++j)
     for (int i = 0; i < g.nx; ++i) hf.at(i, j) = level.post(i, j);
-  const double fi = std::floor(hf.i_of(p.x()) + 0.5), fj = std::floor(hf.j_of(p.y()) + 0.5);
-  if (!p.allFinite() || fi < 0 || fj < 0 || fi >= g.nx || fj >= g.ny) {
+  int pi = 0, pj = 0;
+  if (!p.allFinite() || !hull_post(g, p, pi, pj)) {
     return invalid_argument(std::string(name) + ": point is outside the pack");
   }
-  const int pi = static_cast<int>(fi), pj = static_cast<int>(fj);
   if (p.z() < hf.at(pi, pj)) {
     return invalid_argument(std::string(name) + ": point is " + std::to_string(hf.at(pi, pj) - p.z()) +
                             " m below the terrain");

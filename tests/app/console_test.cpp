@@ -39,18 +39,24 @@ Outcome console(const std::string& args) {
   return r;
 }
 
+// The console's test packs: small, two levels of detail.
+visvol::storage::PackBuildParams small_pack_params() {
+  visvol::storage::PackBuildParams p;
+  p.field.nz = 32;
+  p.field.ceiling_m = 200;
+  p.field.range_posts = 8;
+  p.lod_levels = 2;
+  p.tff.band_offset_m = 60;
+  p.tff.band_levels = 8;
+  return p;
+}
+
 class Console : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     pack_ = new std::string(::testing::TempDir() + "/console_" + std::to_string(getpid()) + ".vvp");
-    visvol::storage::PackBuildParams p;
-    p.field.nz = 32;
-    p.field.ceiling_m = 200;
-    p.field.range_posts = 8;
-    p.lod_levels = 2;
-    p.tff.band_offset_m = 60;
-    p.tff.band_levels = 8;
-    ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(97, 5), p, "", *pack_).ok());
+    ASSERT_TRUE(
+        visvol::storage::build_pack(visvol::fields::testing::fractal(97, 5), small_pack_params(), "", *pack_).ok());
     // grab at 0.5 s, pull, let go at 2 s
     script_ = new std::string(::testing::TempDir() + "/console_script_" + std::to_string(getpid()) + ".txt");
     std::ofstream(*script_) << "0.3 move 0 0 0 0.1\n0.5 pull 20 0 -20 1.0\n2.0 release\n";
@@ -206,14 +212,7 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
 TEST_F(Console, SwitchesTerrainOnCommand) {
   using namespace visvol::dds;
   const std::string other = ::testing::TempDir() + "/console_b_" + std::to_string(getpid()) + ".vvp";
-  visvol::storage::PackBuildParams bp;
-  bp.field.nz = 32;
-  bp.field.ceiling_m = 200;
-  bp.field.range_posts = 8;
-  bp.lod_levels = 2;
-  bp.tff.band_offset_m = 60;
-  bp.tff.band_levels = 8;
-  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), bp, "", other).ok());
+  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
   const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_b_" + std::to_string(getpid());
 
   ParticipantConfig pc;

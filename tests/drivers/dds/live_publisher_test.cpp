@@ -132,25 +132,43 @@ TEST(LivePublisher, PathRateIsAtMostTheConfiguredRate) {
   for (std::size_t i = 1; i < sequences.size(); ++i) EXPECT_GT(sequences[i], sequences[i - 1]);
 }
 
-TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
-  auto p = make_participant(loopback(kDomain));
-  ASSERT_NE(p, nullptr);
-  QosPtr qos = reader_qos(Topic::path_update);
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  Result<Reader> reader = Reader::create(*p, Topic::path_update, qos.get());
-  ASSERT_TRUE(reader.ok());
-  PublisherConfig config;
-  config.path_refresh_wait_s = 0.1;
-  Result<std::unique_ptr<LivePublisher>> pub = LivePublisher::start(*p, config);
-  ASSERT_TRUE(pub.ok());
-  ASSERT_TRUE(reader->wait_for_writers(1, 5.0).ok());
+// A publisher with the given path_refresh_wait_s and a keep-all reader of
+// its path updates: the sequence numbers seen, in order.
+struct PathWatch {
+  std::unique_ptr<Participant> participant;
+  std::unique_ptr<Reader> reader;
+  std::unique_ptr<LivePublisher> pub;
   std::vector<std::uint64_t> seen;
-  const auto collect = [&] {
+
+  void start(double refresh_wait_s) {
+    participant = make_participant(loopback(kDomain));
+    ASSERT_NE(participant, nullptr);
+    QosPtr qos = reader_qos(Topic::path_update);
+    dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+    Result<Reader> r = Reader::create(*participant, Topic::path_update, qos.get());
+    ASSERT_TRUE(r.ok());
+    reader = std::make_unique<Reader>(std::move(*r));
+    PublisherConfig config;
+    config.path_refresh_wait_s = refresh_wait_s;
+    Result<std::unique_ptr<LivePublisher>> p = LivePublisher::start(*participant, config);
+    ASSERT_TRUE(p.ok());
+    pub = std::move(*p);
+    ASSERT_TRUE(reader->wait_for_writers(1, 5.0).ok());
+  }
+  void collect() {
     (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
         [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
           seen.push_back(m.sequence_number);
         });
-  };
+  }
+};
+
+TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
+  PathWatch w;
+  ASSERT_NO_FATAL_FAILURE(w.start(0.1));
+  std::unique_ptr<LivePublisher>* pub = &w.pub;
+  std::vector<std::uint64_t>& seen = w.seen;
+  const auto collect = [&] { w.collect(); };
 
   // a path stamped 10 ms before its hand-off is kept back ...
   PathSample& stale = (*pub)->path().back();
@@ -188,24 +206,11 @@ TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
 // executive's 50 Hz paths) is not waited for: a path that is already old goes
 // out at once instead of after path_refresh_wait_s.
 TEST(LivePublisher, AStalePathFromASlowProducerGoesOutAtOnce) {
-  auto p = make_participant(loopback(kDomain));
-  ASSERT_NE(p, nullptr);
-  QosPtr qos = reader_qos(Topic::path_update);
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  Result<Reader> reader = Reader::create(*p, Topic::path_update, qos.get());
-  ASSERT_TRUE(reader.ok());
-  PublisherConfig config;
-  config.path_refresh_wait_s = 0.01;
-  Result<std::unique_ptr<LivePublisher>> pub = LivePublisher::start(*p, config);
-  ASSERT_TRUE(pub.ok());
-  ASSERT_TRUE(reader->wait_for_writers(1, 5.0).ok());
-  std::vector<std::uint64_t> seen;
-  const auto collect = [&] {
-    (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
-        [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
-          seen.push_back(m.sequence_number);
-        });
-  };
+  PathWatch w;
+  ASSERT_NO_FATAL_FAILURE(w.start(0.01));
+  std::unique_ptr<LivePublisher>* pub = &w.pub;
+  std::vector<std::uint64_t>& seen = w.seen;
+  const auto collect = [&] { w.collect(); };
   // paths 1 and 2, 60 ms apart: a producer period of 60 ms, over the 10 ms wait
   for (std::uint64_t seq : {1u, 2u}) {
     PathSample& s = (*pub)->path().back();

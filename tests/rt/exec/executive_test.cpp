@@ -259,8 +259,9 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   set.constraints.items[1].kind = dds::ConstraintKind::visible_to;
   set.constraints.items[1].position = {q.x(), q.y(), q.z()};
   ASSERT_TRUE(commands_.try_push(set));
+  // the ticks that take the command and put the hulls in force allocate nothing
+  const std::uint64_t allocations = testing::thread_allocation_count();
   run(*e, 1);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
   auto wait_for_sets = [&](std::uint64_t n) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     while (e->counters().hull_sets < n && std::chrono::steady_clock::now() < end) {
@@ -269,6 +270,8 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
     }
   };
   wait_for_sets(1);
+  EXPECT_EQ(testing::thread_allocation_count(), allocations);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
   ASSERT_EQ(e->counters().hull_sets, 1u);
   ASSERT_NE(e->forces().hidden_from(), nullptr);
   ASSERT_NE(e->forces().visible_to(), nullptr);
@@ -309,7 +312,9 @@ TEST_F(ExecutiveTest, ASwitchTerrainCommandIsHandedToTheConsole) {
   dds::Command again = command(dds::CommandKind::switch_terrain, 3);
   dds::copy_text(again.pack_id, "sf_north");
   for (const dds::Command& c : {same, other, again}) ASSERT_TRUE(commands_.try_push(c));
+  const std::uint64_t allocations = testing::thread_allocation_count();
   run(*e, 1);
+  EXPECT_EQ(testing::thread_allocation_count(), allocations);
   dds::CommandAck a = next_ack();
   EXPECT_EQ(a.result, dds::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("already"), std::string::npos) << a.reason;

@@ -32,6 +32,16 @@ struct VolumeGeometry {
   double top_m() const { return z0_m + (nz - 1) * dz_m; }
 };
 
+// A horizontal box in world metres (the pack's CRS), edges included.
+struct Bounds2D {
+  double xmin_m = 0, ymin_m = 0, xmax_m = 0, ymax_m = 0;
+
+  bool contains(double x_m, double y_m) const {
+    return x_m >= xmin_m && x_m <= xmax_m && y_m >= ymin_m && y_m <= ymax_m;
+  }
+  bool empty() const { return !(xmax_m > xmin_m && ymax_m > ymin_m); }
+};
+
 // A dense volume of float values (F_p in [0, 1] for the visibility field).
 struct DenseVolume {
   VolumeGeometry geometry;

@@ -1,0 +1,58 @@
+#include "rt/rope/vehicle.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace visvol::rt {
+
+const char* to_string(VehicleType type) {
+  return type == VehicleType::multirotor ? "multirotor" : "fixed-wing";
+}
+
+Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
+  VehicleEnvelope v;
+  if (name == "fixed-wing") return v;
+  if (name == "multirotor") {
+    v.name = name;
+    v.type = VehicleType::multirotor;
+    v.speed_mps = 8.0;
+    v.max_climb_deg = 60.0;
+    v.max_descent_deg = 45.0;
+    v.min_turn_radius_m = 0.0;
+    return v;
+  }
+  return invalid_argument("vehicle: '" + name + "' is neither fixed-wing, multirotor nor a file");
+}
+
+Status validate(const VehicleEnvelope& v) {
+  std::ostringstream msg;
+  auto bad = [&](const char* key, double value, const char* what) {
+    msg << "vehicle " << v.name << ": " << key << " " << value << " " << what;
+    return invalid_argument(msg.str());
+  };
+  if (!(std::isfinite(v.speed_mps) && v.speed_mps > 0 && v.speed_mps <= 1000)) {
+    return bad("speed", v.speed_mps, "is outside (0, 1000] m/s");
+  }
+  if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90)) return bad("max-climb", v.max_climb_deg, "is outside (0, 90] deg");
+  if (!(v.max_descent_deg > 0 && v.max_descent_deg <= 90)) {
+    return bad("max-descent", v.max_descent_deg, "is outside (0, 90] deg");
+  }
+  if (!(std::isfinite(v.min_turn_radius_m) && v.min_turn_radius_m >= 0 && v.min_turn_radius_m <= 1e5)) {
+    return bad("min-turn-radius", v.min_turn_radius_m, "is outside [0, 100000] m");
+  }
+  if (!(std::isfinite(v.clearance_m) && v.clearance_m >= 0 && v.clearance_m <= 1e4)) {
+    return bad("clearance", v.clearance_m, "is outside [0, 10000] m");
+  }
+  if (!(v.max_agl_m > 0 && v.max_agl_m <= VehicleEnvelope::kNone)) return bad("max-agl", v.max_agl_m, "is not above 0 m");
+  if (!(v.max_agl_m > v.clearance_m)) {
+    msg << "vehicle " << v.name << ": max-agl " << v.max_agl_m << " m is not above the clearance " << v.clearance_m
+        << " m: no height is allowed";
+    return invalid_argument(msg.str());
+  }
+  if (std::isnan(v.max_altitude_m) || v.max_altitude_m == -VehicleEnvelope::kNone || v.max_altitude_m > 1e5) {
+    return bad("max-altitude", v.max_altitude_m, "is not a height up to 100000 m");
+  }
+  return Status::ok_status();
+}
+
+}  // namespace visvol::rt

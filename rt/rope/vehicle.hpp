@@ -1,0 +1,54 @@
+// The flight envelope a planned path must stay inside: what the vehicle can
+// fly (climb, descent, turn) and where it may fly (clearance above the
+// terrain, a ceiling above the terrain and above the datum).
+//
+// Angles in degrees from the horizontal, lengths in metres, speed in metres
+// per second. A limit of +infinity means "none" (a multirotor turns on the
+// spot: min_turn_radius_m 0). max_agl_m left infinite means "the field's top"
+// to the planner, which bounds `show` there (F_p grows upward, so "most seen"
+// is only well posed under a ceiling).
+//
+// Turn radius: the largest radius of a circular arc tangent to both segments
+// at a vertex whose tangent points lie within half of each segment (the
+// fillet an autopilot flies at a waypoint), r = min(a, b) / 2 / tan(theta / 2)
+// for a turn of theta between segments of lengths a and b.
+//
+// Values, no allocation beyond the name; thread-compatible.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "rt/base/status.hpp"
+
+namespace visvol::rt {
+
+enum class VehicleType : std::uint8_t { fixed_wing = 0, multirotor = 1 };
+const char* to_string(VehicleType type);  // "fixed-wing", "multirotor"
+
+struct VehicleEnvelope {
+  static constexpr double kNone = std::numeric_limits<double>::infinity();
+
+  std::string name = "fixed-wing";     // preset or file it came from
+  VehicleType type = VehicleType::fixed_wing;
+  double speed_mps = 20.0;             // cruise ground speed (exposure time, .plan speeds)
+  double max_climb_deg = 15.0;         // steepest climb of a segment
+  double max_descent_deg = 15.0;       // steepest descent of a segment (positive)
+  double min_turn_radius_m = 80.0;     // tightest fillet at a waypoint, 0 for none
+  double clearance_m = 30.0;           // least height above the finest terrain
+  double max_agl_m = kNone;            // highest height above the finest terrain
+  double max_altitude_m = kNone;       // highest height above the datum
+};
+
+// The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m
+// or wider) and "multirotor" (8 m/s, climb 60 deg, descent 45 deg, no turn
+// limit). Errc::invalid_argument naming the value otherwise.
+Result<VehicleEnvelope> vehicle_preset(const std::string& name);
+
+// Checks every value (finite where it must be, in range, consistent: a
+// ceiling above the clearance). Errors name the key as the user spells it
+// ("max-climb", "max-agl", ...) and the value.
+Status validate(const VehicleEnvelope& envelope);
+
+}  // namespace visvol::rt

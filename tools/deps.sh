@@ -12,6 +12,7 @@ build_packages=(
   nlohmann-json3-dev     # --json output
   libgtest-dev libgmock-dev  # unit tests
   libbenchmark-dev       # micro-benchmarks
+  libtomlplusplus-dev    # vehicle files (visvol plan --vehicle FILE)
 )
 
 storage_packages=(libisal-dev libssl-dev)           # CRC32C of pack tiles, SHA-256 of sources

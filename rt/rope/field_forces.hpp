@@ -31,7 +31,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "fields/hull_kernel.hpp"
@@ -48,7 +50,14 @@ struct ForceGains {
   double k_hull = 1.0;           // hidden-from and visible-to constraints
   double clearance_m = 30.0;
   double hull_margin_m = 20.0;
+  // Ceiling: above min(terrain + max_agl_m, max_altitude_m) a push down as
+  // strong as the clearance's push up. Infinite: none.
+  double max_agl_m = std::numeric_limits<double>::infinity();
+  double max_altitude_m = std::numeric_limits<double>::infinity();
 };
+
+// Hulls of each kind (hidden-from, visible-to) the forces hold at most.
+inline constexpr int kMaxConstraintHulls = 8;
 
 // The lowest visible height over every post of a level from one point: the
 // constraint surface of "stay hidden from" and "stay visible to".
@@ -65,6 +74,22 @@ struct PointHull {
 // below the terrain, naming it.
 template <class Level>
 Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name);
+
+// A level's terrain as a heightfield (a copy: allocates).
+template <class Level>
+fields::Heightfield level_terrain(const Level& level) {
+  const fields::VolumeGeometry& g = level.geometry();
+  fields::Heightfield hf;
+  hf.nx = g.nx;
+  hf.ny = g.ny;
+  hf.spacing_m = g.spacing_m;
+  hf.origin_x = g.origin_x;
+  hf.origin_y = g.origin_y;
+  hf.height_m.resize(hf.size());
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) hf.at(i, j) = level.post(i, j);
+  return hf;
+}
 
 // The post a hull's point stands on: the nearest post of grid g to (x, y);
 // false when there is none (outside the grid, or x or y not finite).
@@ -99,10 +124,15 @@ class FieldForces final : public RopeEnvironment, public PathField {
 
   void set_gains(const ForceGains& g) { gains_ = g; }
   const ForceGains& gains() const { return gains_; }
-  void set_hidden_from(const PointHull* hull) { hidden_from_ = hull; }
-  void set_visible_to(const PointHull* hull) { visible_to_ = hull; }
-  const PointHull* hidden_from() const { return hidden_from_; }
-  const PointHull* visible_to() const { return visible_to_; }
+  // At most kMaxHulls of each kind; the hulls must outlive their use.
+  static constexpr int kMaxHulls = kMaxConstraintHulls;
+  void set_hidden_from(const PointHull* hull) { set_hulls(hidden_, hidden_count_, &hull, hull ? 1 : 0); }
+  void set_visible_to(const PointHull* hull) { set_hulls(visible_, visible_count_, &hull, hull ? 1 : 0); }
+  // Several of a kind (any beyond kMaxHulls are ignored: callers validate).
+  void set_hidden_from(const PointHull* const* hulls, int count) { set_hulls(hidden_, hidden_count_, hulls, count); }
+  void set_visible_to(const PointHull* const* hulls, int count) { set_hulls(visible_, visible_count_, hulls, count); }
+  const PointHull* hidden_from() const { return hidden_count_ ? hidden_[0] : nullptr; }
+  const PointHull* visible_to() const { return visible_count_ ? visible_[0] : nullptr; }
   double reference_acceleration() const { return accel_ref_; }
   double reference_gradient() const { return gradient_ref_; }
   const Sampler& sampler() const { return sampler_; }
@@ -131,17 +161,22 @@ class FieldForces final : public RopeEnvironment, public PathField {
     if (gains_.clearance_m > 0 && depth > 0) {
       a.z() += gains_.k_clearance * accel_ref_ * kSaturation * std::min(2.0 * depth / margin, 8.0);
     }
+    // Ceiling: the mirror of the clearance push.
+    const double ceiling = std::min(ground + gains_.max_agl_m, gains_.max_altitude_m);
+    const double above = h - (ceiling - ground) + margin;
+    if (std::isfinite(ceiling) && above > 0) {
+      a.z() -= gains_.k_clearance * accel_ref_ * kSaturation * std::min(2.0 * above / margin, 8.0);
+    }
     const double hull_margin = std::max(gains_.hull_margin_m, 1e-3);
-    if (hidden_from_) {
+    double over = 0, under = 0;  // the most binding hull of each kind
+    for (int c = 0; c < hidden_count_; ++c) over = std::max(over, p.z() - hidden_[static_cast<std::size_t>(c)]->at(p.x(), p.y()) + hull_margin);
+    for (int c = 0; c < visible_count_; ++c) under = std::max(under, visible_[static_cast<std::size_t>(c)]->at(p.x(), p.y()) + hull_margin - p.z());
+    if (over > 0) {
       // Safety first: the push down fades out within the clearance margin.
       const double room = gains_.clearance_m > 0 ? std::clamp((h - gains_.clearance_m) / margin, 0.0, 1.0) : 1.0;
-      const double over = p.z() - hidden_from_->at(p.x(), p.y()) + hull_margin;
-      if (over > 0) a.z() -= room * gains_.k_hull * accel_ref_ * kSaturation * std::min(over / hull_margin, 4.0);
+      a.z() -= room * gains_.k_hull * accel_ref_ * kSaturation * std::min(over / hull_margin, 4.0);
     }
-    if (visible_to_) {
-      const double under = visible_to_->at(p.x(), p.y()) + hull_margin - p.z();
-      if (under > 0) a.z() += gains_.k_hull * accel_ref_ * kSaturation * std::min(under / hull_margin, 4.0);
-    }
+    if (under > 0) a.z() += gains_.k_hull * accel_ref_ * kSaturation * std::min(under / hull_margin, 4.0);
     return a;
   }
 
@@ -206,8 +241,14 @@ class FieldForces final : public RopeEnvironment, public PathField {
   double gradient_ref_ = 1.0;
   double x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // the field's horizontal extent, world metres
   double ramp_m_ = 1.0;
-  const PointHull* hidden_from_ = nullptr;
-  const PointHull* visible_to_ = nullptr;
+  static void set_hulls(std::array<const PointHull*, kMaxHulls>& to, int& count, const PointHull* const* from, int n) {
+    count = 0;
+    for (int c = 0; c < n && count < kMaxHulls; ++c)
+      if (from[c]) to[static_cast<std::size_t>(count++)] = from[c];
+  }
+
+  std::array<const PointHull*, kMaxHulls> hidden_{}, visible_{};
+  int hidden_count_ = 0, visible_count_ = 0;
 };
 
 // ---- implementation of the templates ------------------------------------------
@@ -226,15 +267,7 @@ inline double PointHull::at(double x, double y) const {
 template <class Level>
 Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name) {
   const fields::VolumeGeometry& g = level.geometry();
-  fields::Heightfield hf;
-  hf.nx = g.nx;
-  hf.ny = g.ny;
-  hf.spacing_m = g.spacing_m;
-  hf.origin_x = g.origin_x;
-  hf.origin_y = g.origin_y;
-  hf.height_m.resize(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
-  for (int j = 0; j < g.ny; ++j)
-    for (int i = 0; i < g.nx; ++i) hf.at(i, j) = level.post(i, j);
+  const fields::Heightfield hf = level_terrain(level);
   int pi = 0, pj = 0;
   if (!p.allFinite() || !hull_post(g, p, pi, pj)) {
     return invalid_argument(std::string(name) + ": point is outside the pack");

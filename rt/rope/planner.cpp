@@ -18,7 +18,7 @@ Status validate(const PlanRequest& r) {
     double v;
     const char* name;
     double lo, hi;
-  } ranges[] = {{r.clearance_m, "clearance", 0.0, 1.0e4},       {r.visibility_gain, "visibility gain", 0.0, 1.0e3},
+  } ranges[] = {{r.candidate_interval_s, "candidate interval", 1.0e-3, 1.0e3}, {r.visibility_gain, "visibility gain", 0.0, 1.0e3},
                 {r.terrain_gain, "terrain gain", 0.0, 1.0e3},     {r.stiffness, "stiffness", 1.0e-3, 1.0e3},
                 {r.slack < 0 ? 0.0 : r.slack, "slack", 0.0, 10.0},                    {r.length_weight, "length weight", 0.0, 1.0e3},
                 {r.dt_s, "time step", 1.0e-5, 0.01},              {r.max_seconds_per_level, "seconds per level", 1.0e-3, 1.0e5}};
@@ -38,11 +38,93 @@ Status validate(const PlanRequest& r) {
       }
     }
   }
-  for (const auto* p : {&r.hidden_from, &r.visible_to}) {
-    if (*p && !(*p)->allFinite()) return invalid_argument("plan: constraint points must be finite");
+  VISVOL_RETURN_IF_ERROR(validate(r.envelope));
+  int per_kind[2] = {0, 0};
+  for (const ConstraintPoint& c : r.constraints) {
+    if (!c.point_m.allFinite() || !std::isfinite(c.eye_height_m)) {
+      return invalid_argument(std::string("plan: --") + to_string(c.kind) + " must be finite");
+    }
+    if (++per_kind[static_cast<int>(c.kind)] > kMaxConstraintHulls) {
+      msg << "plan: more than " << kMaxConstraintHulls << " --" << to_string(c.kind)
+          << " points";
+      return invalid_argument(msg.str());
+    }
+  }
+  if (!(std::isfinite(r.curvature_coeff) && r.curvature_coeff >= 0 && r.curvature_coeff <= 1)) {
+    return invalid_argument("plan: the curvature coefficient must be in 0..1");
+  }
+  if (r.planning_bounds) {
+    for (const Vec3* p : {&r.from, &r.to}) {
+      if (!r.planning_bounds->contains(p->x(), p->y())) {
+        const fields::Bounds2D& b = *r.planning_bounds;
+        msg.precision(1);
+        msg << std::fixed << "plan: " << (p == &r.from ? "--from" : "--to") << " (" << p->x() << ", " << p->y()
+            << ") is outside the pack's planning bounds (x " << b.xmin_m << ".." << b.xmax_m << ", y " << b.ymin_m
+            << ".." << b.ymax_m << "), where F_p undercounts observers beyond the DEM";
+        return invalid_argument(msg.str());
+      }
+    }
   }
   return Status::ok_status();
 }
+
+namespace detail {
+
+Status check_ends(const PlanRequest& r, const PathChecker& checker, double top_m) {
+  const fields::Heightfield& t = checker.terrain();
+  const VehicleEnvelope& e = r.envelope;
+  for (const Vec3* p : {&r.from, &r.to}) {
+    const char* name = p == &r.from ? "--from" : "--to";
+    std::ostringstream msg;
+    msg.precision(1);
+    msg << std::fixed << name << ": ";
+    const double i = t.i_of(p->x()), j = t.j_of(p->y());
+    if (!(i >= 0 && j >= 0 && i <= t.nx - 1 && j <= t.ny - 1)) {
+      msg << "(" << p->x() << ", " << p->y() << ") is outside the pack (x " << t.x_of(0) << ".." << t.x_of(t.nx - 1)
+          << ", y " << t.y_of(t.ny - 1) << ".." << t.y_of(0) << ")";
+      return invalid_argument(msg.str());
+    }
+    const double h = p->z() - checker.ground_m(p->x(), p->y());
+    if (h < 0) {
+      msg << -h << " m below the terrain";
+      return invalid_argument(msg.str());
+    }
+    if (h < e.clearance_m - 0.01) {
+      msg << h << " m above the terrain, under the clearance " << e.clearance_m << " m";
+      return invalid_argument(msg.str());
+    }
+    if (h > e.max_agl_m + 0.01) {
+      msg << h << " m above the terrain, over --max-agl " << e.max_agl_m << " m";
+      return invalid_argument(msg.str());
+    }
+    if (p->z() > e.max_altitude_m + 0.01) {
+      msg << p->z() << " m high, over --max-altitude " << e.max_altitude_m << " m";
+      return invalid_argument(msg.str());
+    }
+    if (p->z() > top_m + 0.01) {
+      msg << p->z() << " m high, over the field's top " << top_m << " m";
+      return invalid_argument(msg.str());
+    }
+  }
+  return Status::ok_status();
+}
+
+bool better(const PathCheck& a, const PathCheck& b, Objective objective) {
+  if (a.all_met != b.all_met) return a.all_met;
+  if (!a.all_met && std::abs(a.violation - b.violation) > 1e-9) return a.violation < b.violation;
+  return objective == Objective::hide ? a.fc < b.fc : a.fc > b.fc;
+}
+
+std::vector<const PointHull*> hulls_of(const std::vector<PointHull>& hulls,
+                                       const std::vector<ConstraintPoint>& constraints, ConstraintKind kind) {
+  std::vector<const PointHull*> out;
+  for (std::size_t c = 0; c < constraints.size() && c < hulls.size(); ++c) {
+    if (constraints[c].kind == kind) out.push_back(&hulls[c]);
+  }
+  return out;
+}
+
+}  // namespace detail
 
 RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness,
                               double accel_ref) {

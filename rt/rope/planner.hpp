@@ -1,16 +1,24 @@
-// The offline planner: a rope from A to B settles in the field, coarse level
-// of detail first, then the finer ones (coarse-to-fine continuation), until it
-// reaches equilibrium on the finest.
+// The offline planner: a path a crew can fly and trust, from A to B.
 //
-// Initial paths: the straight segment, a polyline (a 2D one lifted to the
-// clearance above the terrain, or a 3D one), or the global graph search on the
-// coarsest level. An inextensible (articulated) rope needs slack to move: it is
-// `slack` longer than its initial path, bent sideways (rt/rope/slack.hpp).
-//
-// Equilibrium: over the last half second, the rope's RMS speed stays under a
-// tenth of a post spacing per second and F_c changes by less than 0.2% of
-// itself per second (plus 1e-6): what is left is a slow creep along a flat
-// ridge of the objective that no longer changes F_c.
+// 1. A start: the straight segment, a polyline (a 2D one lifted to the
+//    clearance above the terrain, or a 3D one), or the global graph search
+//    (rt/rope/global_search.hpp), which treats hidden-from and visible-to as
+//    forbidden volume and the envelope as limits; when its path breaks a
+//    constraint on the coarsest level, it searches the next finer one (up to
+//    `max_search_voxels`).
+// 2. A rope laid on the start settles in the field, coarse level of detail
+//    first, then the finer ones, until it reaches equilibrium on the finest.
+//    An inextensible (articulated) rope gets `slack` extra length, bent
+//    sideways (rt/rope/slack.hpp). Equilibrium: over the last half second the
+//    rope's RMS speed stays under a tenth of a post spacing per second and F_c
+//    changes by less than 0.2% of itself per second (plus 1e-6).
+// 3. Every path seen (the start, each search, the rope every
+//    `candidate_interval_s` on the finest level and at the end of every level)
+//    is fitted into the flight envelope (rt/rope/envelope_fit.hpp) and judged
+//    by rt::PathChecker: exact sight lines and limits on the finest terrain.
+//    The answer is the best of them: every requirement met first, then the
+//    least violation, then F_c. So the rope never makes the start worse, and
+//    a constraint is never traded for F_c.
 //
 // Offline: allocates. `Level` is a sampler level (storage::PackLevel for
 // `visvol plan`, DenseLevelView in tests).
@@ -25,12 +33,15 @@
 #include <string>
 #include <vector>
 
+#include "rt/rope/envelope_fit.hpp"
 #include "rt/rope/equilibrium.hpp"
 #include "rt/rope/field_forces.hpp"
 #include "rt/rope/global_search.hpp"
+#include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/rope.hpp"
 #include "rt/rope/slack.hpp"
+#include "rt/rope/vehicle.hpp"
 
 namespace visvol::rt {
 
@@ -43,9 +54,10 @@ struct PlanRequest {
   int segments = 128;
   InitialPath init = InitialPath::straight;
   std::vector<Vec3> polyline;       // init == polyline: the path (already lifted if it was 2D)
-  std::optional<Vec3> hidden_from;  // stay hidden from this point
-  std::optional<Vec3> visible_to;   // stay visible to this point
-  double clearance_m = 30.0;
+  VehicleEnvelope envelope;         // clearance, ceiling, climb, descent, turns
+  std::vector<ConstraintPoint> constraints;  // hidden from / visible to observers
+  std::optional<fields::Bounds2D> planning_bounds;  // the pack's trusted region
+  double curvature_coeff = 0;       // the pack's Earth curvature and refraction, for the sight lines
   double visibility_gain = 1.0;     // |k1|; its sign comes from the objective
   double terrain_gain = 1.0;        // k2
   double stiffness = 1.0;           // scales the rope's springs
@@ -55,6 +67,8 @@ struct PlanRequest {
   double length_weight = 0.0;       // global search: cost per metre on top of F_p
   double dt_s = 0.001;
   double max_seconds_per_level = 40.0;
+  double candidate_interval_s = 0.25;  // rope states judged this often on the finest level
+  std::size_t max_search_voxels = 8000000;  // the finest level the global search may refine to
   int fc_samples = 256;
 };
 
@@ -72,10 +86,15 @@ struct PlanProgress {
 struct PlanResult {
   std::vector<Vec3> initial_path, final_path, global_path;
   PathMetrics initial, final_metrics, global;  // all on the finest level
+  PathCheck initial_check, final_check;        // exact, on the finest terrain
   bool has_global = false;
+  int global_level = -1;       // the level the kept global search ran on
+  std::string chosen;          // which path is the answer: "start", "global search", "rope"
+  int candidates = 0;          // paths judged
   double simulated_s = 0;      // all levels
   double equilibrium_s = 0;    // on the finest level, until equilibrium
   bool converged = false;      // the finest level reached equilibrium
+  bool diverged = false;       // the rope's state stopped being finite (the best path before stands)
   double wall_s = 0;
   double rope_length_m = 0;
   double max_energy_j = 0;     // largest kinetic energy seen (stability)
@@ -94,6 +113,37 @@ std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m)
 // Points of the slack rope as laid (the rope resamples them to its segments).
 inline constexpr int kLaidSegments = 128;
 
+namespace detail {
+
+// The ends of a request: inside the pack and its planning bounds, above the
+// finest terrain and inside the envelope's band of heights there.
+Status check_ends(const PlanRequest& request, const PathChecker& checker, double top_m);
+
+// Is path a (its check) better than path b?
+bool better(const PathCheck& a, const PathCheck& b, Objective objective);
+
+// One hull per constraint on a level, its eye lifted onto that level's
+// terrain where the level is coarser (and higher) than the finest.
+template <class Level>
+Result<std::vector<PointHull>> constraint_hulls(const Level& level, const std::vector<ConstraintPoint>& constraints) {
+  std::vector<PointHull> hulls;
+  for (const ConstraintPoint& c : constraints) {
+    Vec3 eye = c.eye_m();
+    int i = 0, j = 0;
+    if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
+    Result<PointHull> h = point_hull(level, eye, c.kind == ConstraintKind::hidden_from ? "--hidden-from" : "--visible-to");
+    if (!h.ok()) return h.status();
+    hulls.push_back(std::move(*h));
+  }
+  return hulls;
+}
+
+// The hulls of one kind, as pointers.
+std::vector<const PointHull*> hulls_of(const std::vector<PointHull>& hulls,
+                                       const std::vector<ConstraintPoint>& constraints, ConstraintKind kind);
+
+}  // namespace detail
+
 template <class Level>
 Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanRequest& request,
                         const std::function<void(const PlanProgress&)>& on_progress = {}) {
@@ -102,72 +152,106 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   VISVOL_RETURN_IF_ERROR(validate(request));
   if (levels.empty()) return invalid_argument("plan: no levels of detail");
   const Level& finest = *levels.front();
-  const Level& coarsest = *levels.back();
-  for (const Vec3* p : {&request.from, &request.to}) {
-    const fields::VolumeGeometry& g = finest.geometry();
-    const double x1 = g.origin_x + (g.nx - 1) * g.spacing_m, y0 = g.origin_y - (g.ny - 1) * g.spacing_m;
-    const char* name = p == &request.from ? "--from" : "--to";
-    if (p->x() < g.origin_x || p->x() > x1 || p->y() < y0 || p->y() > g.origin_y) {
-      return invalid_argument(std::string(name) + ": (" + std::to_string(p->x()) + ", " + std::to_string(p->y()) +
-                              ") is outside the pack (x " + std::to_string(g.origin_x) + ".." + std::to_string(x1) +
-                              ", y " + std::to_string(y0) + ".." + std::to_string(g.origin_y) + ")");
-    }
-    const double ground = fields::FieldSampler<Level>(finest).height(p->x(), p->y());
-    if (p->z() < ground) {
-      return invalid_argument(std::string(name) + ": " + std::to_string(ground - p->z()) + " m below the terrain");
-    }
-  }
+  const VehicleEnvelope& envelope = request.envelope;
+  const double top_m = finest.geometry().top_m();
 
   ForceGains gains;
   gains.k1_visibility = (request.objective == Objective::hide ? -1.0 : 1.0) * request.visibility_gain;
   gains.k2_terrain = request.terrain_gain;
-  gains.clearance_m = request.clearance_m;
-  // one environment (and constraint hulls) per level
+  gains.clearance_m = envelope.clearance_m;
+  gains.max_agl_m = envelope.max_agl_m;
+  gains.max_altitude_m = std::min(envelope.max_altitude_m, top_m);
+  // one environment and one hull per constraint, per level
   std::vector<std::unique_ptr<FieldForces<Level>>> envs;
-  std::vector<PointHull> hulls;
-  hulls.reserve(2 * levels.size());
-  for (const Level* level : levels) {
-    envs.push_back(std::make_unique<FieldForces<Level>>(*level, gains));
-    if (request.hidden_from) {
-      Result<PointHull> h = point_hull(*level, *request.hidden_from, "--hidden-from");
-      if (!h.ok()) return h.status();
-      hulls.push_back(std::move(*h));
-      envs.back()->set_hidden_from(&hulls.back());
-    }
-    if (request.visible_to) {
-      Result<PointHull> h = point_hull(*level, *request.visible_to, "--visible-to");
-      if (!h.ok()) return h.status();
-      hulls.push_back(std::move(*h));
-      envs.back()->set_visible_to(&hulls.back());
-    }
+  std::vector<std::vector<PointHull>> hulls(levels.size());
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    envs.push_back(std::make_unique<FieldForces<Level>>(*levels[l], gains));
+    Result<std::vector<PointHull>> h = detail::constraint_hulls(*levels[l], request.constraints);
+    if (!h.ok()) return h.status();
+    hulls[l] = std::move(*h);
+    const auto hidden = detail::hulls_of(hulls[l], request.constraints, ConstraintKind::hidden_from);
+    const auto visible = detail::hulls_of(hulls[l], request.constraints, ConstraintKind::visible_to);
+    envs.back()->set_hidden_from(hidden.data(), static_cast<int>(hidden.size()));
+    envs.back()->set_visible_to(visible.data(), static_cast<int>(visible.size()));
   }
   const FieldForces<Level>& judge = *envs.front();  // metrics on the finest level
 
+  PathCheckSpec spec;
+  spec.envelope = envelope;
+  spec.constraints = request.constraints;
+  spec.planning_bounds = request.planning_bounds;
+  spec.curvature_coeff = request.curvature_coeff;
+  Result<PathChecker> checker = PathChecker::create(level_terrain(finest), &judge, spec);
+  if (!checker.ok()) return checker.status();
+  VISVOL_RETURN_IF_ERROR(detail::check_ends(request, *checker, top_m));
+
+  EnvelopeFitSpec fit;
+  fit.envelope = envelope;
+  fit.planning_bounds = request.planning_bounds;
+  fit.top_m = top_m;
+  fit.below = detail::hulls_of(hulls.front(), request.constraints, ConstraintKind::hidden_from);
+  fit.above = detail::hulls_of(hulls.front(), request.constraints, ConstraintKind::visible_to);
+
   PlanResult result;
+  std::vector<Vec3> best;
+  PathCheck best_check;
+  PathCheck last_check;  // of the path considered last
+  // Fits a path into the envelope, judges it, keeps it when it is the best;
+  // true when it was kept.
+  auto consider = [&](const Vec3* v, int count, const char* source) {
+    EnvelopeFit f = fit_to_envelope(std::vector<Vec3>(v, v + count), fit, checker->terrain());
+    last_check = checker->check(f.path);
+    ++result.candidates;
+    if (!best.empty() && !detail::better(last_check, best_check, request.objective)) return false;
+    best = std::move(f.path);
+    best_check = last_check;
+    result.chosen = source;
+    return true;
+  };
+
+  // the start
   std::vector<Vec3> start_path;
   switch (request.init) {
     case InitialPath::straight: start_path = {request.from, request.to}; break;
     case InitialPath::polyline: start_path = request.polyline; break;
-    case InitialPath::global: {
-      GlobalSearchParams gp;
-      gp.objective = request.objective;
-      gp.length_weight = request.length_weight;
-      gp.clearance_m = request.clearance_m;
-      Result<GlobalPath> gpath = global_search(coarsest, request.from, request.to, gp);
-      if (!gpath.ok()) return gpath.status();
-      start_path = gpath->points;
-      break;
+    case InitialPath::global: start_path = {request.from, request.to}; break;
+  }
+  consider(start_path.data(), static_cast<int>(start_path.size()), "start");
+  if (request.init == InitialPath::global) {
+    GlobalSearchParams gp;
+    gp.objective = request.objective;
+    gp.length_weight = request.length_weight;
+    gp.clearance_m = envelope.clearance_m;
+    gp.max_agl_m = envelope.max_agl_m;
+    gp.max_altitude_m = envelope.max_altitude_m;
+    gp.max_climb_deg = envelope.max_climb_deg;
+    gp.max_descent_deg = envelope.max_descent_deg;
+    gp.bounds = request.planning_bounds;
+    // coarsest first; finer while a constraint is broken and the level is small enough
+    for (int l = static_cast<int>(levels.size()) - 1; l >= 0; --l) {
+      const Level& level = *levels[static_cast<std::size_t>(l)];
+      if (l != static_cast<int>(levels.size()) - 1 && level.geometry().voxel_count() > request.max_search_voxels) break;
+      gp.hidden_from = detail::hulls_of(hulls[static_cast<std::size_t>(l)], request.constraints, ConstraintKind::hidden_from);
+      gp.visible_to = detail::hulls_of(hulls[static_cast<std::size_t>(l)], request.constraints, ConstraintKind::visible_to);
+      Result<GlobalPath> gpath = global_search(level, request.from, request.to, gp);
+      if (!gpath.ok()) break;  // no lattice path inside the envelope: the straight start stays
+      if (consider(gpath->points.data(), static_cast<int>(gpath->points.size()), "global search")) {
+        result.global_path = best;
+        result.global_level = l;
+        result.has_global = true;
+      }
+      if (request.constraints.empty() || last_check.all_met) break;
     }
   }
-  auto length_of = [](const std::vector<Vec3>& p) {
-    double l = 0;
-    for (std::size_t i = 1; i < p.size(); ++i) l += (p[i] - p[i - 1]).norm();
-    return l;
-  };
-  result.initial_path = start_path;
-  result.initial = path_metrics(start_path.data(), static_cast<int>(start_path.size()), judge,
-                                request.fc_samples, finest.geometry().spacing_m / 2);
-  double rope_length = length_of(start_path);
+  start_path = best;
+  result.initial_path = best;
+  result.initial_check = best_check;
+  result.initial = path_metrics(best.data(), static_cast<int>(best.size()), judge, request.fc_samples,
+                                finest.geometry().spacing_m / 2);
+  if (result.has_global) result.global = result.initial;
+
+  // the rope, laid on the best start
+  double rope_length = polyline_length_m(start_path.data(), static_cast<int>(start_path.size()));
   std::vector<Vec3> laid = start_path;
   if (request.model == RopeModel::articulated) {
     const double slack = request.slack >= 0 ? request.slack : (request.init == InitialPath::straight ? 0.3 : 0.05);
@@ -176,7 +260,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     VISVOL_RETURN_IF_ERROR(resample_polyline(start_path.data(), static_cast<int>(start_path.size()), kLaidSegments,
                                              base.data()));
     laid.resize(base.size());
-    const double floor_m = request.clearance_m + 20.0;
+    const double floor_m = envelope.clearance_m + 20.0;
     // A straight start bows out once; a planned one wiggles in place, a full
     // wave every eight rope segments.
     const int half_waves = request.init == InitialPath::straight ? 1 : std::max(1, request.segments / 4);
@@ -199,6 +283,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
 
   // coarse to fine
   const int steps_per_check = std::max(1, static_cast<int>(std::lround(0.02 / request.dt_s)));
+  const int checks_per_candidate =
+      std::max(1, static_cast<int>(std::lround(request.candidate_interval_s / (steps_per_check * request.dt_s))));
   for (int level = static_cast<int>(levels.size()) - 1; level >= 0; --level) {
     const FieldForces<Level>& env = *envs[static_cast<std::size_t>(level)];
     const double spacing = levels[static_cast<std::size_t>(level)]->geometry().spacing_m;
@@ -208,7 +294,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     EquilibriumDetector equilibrium(criteria);
     double level_s = 0;
     bool settled = false;
-    while (level_s < request.max_seconds_per_level) {
+    for (int check = 1; level_s < request.max_seconds_per_level; ++check) {
       for (int s = 0; s < steps_per_check; ++s) rope.step(request.dt_s, env);
       level_s += steps_per_check * request.dt_s;
       const double ke = rope.kinetic_energy_j();
@@ -216,29 +302,28 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
       const double rms = std::sqrt(2.0 * ke / (rp.mass_kg * (rope.segments() + 1)));
       const double fc = path_fc(rope.vertices(), rope.segments() + 1, env, request.fc_samples);
       if (!std::isfinite(fc) || !std::isfinite(ke)) {
-        return Status(Errc::state, "plan: the rope diverged at level " + std::to_string(level) +
-                                       " after " + std::to_string(level_s) + " s; lower the gains");
+        result.diverged = true;  // the best path seen so far stands
+        break;
       }
       if (on_progress) on_progress({level, result.simulated_s + level_s, fc, rms, rope.vertices(), rope.segments() + 1});
+      if (level == 0 && check % checks_per_candidate == 0) consider(rope.vertices(), rope.segments() + 1, "rope");
       if (equilibrium.add(rms, fc)) {
         settled = true;
         break;
       }
     }
     result.simulated_s += level_s;
+    if (result.diverged) break;
+    consider(rope.vertices(), rope.segments() + 1, "rope");
     if (level == 0) {
       result.converged = settled;
       result.equilibrium_s = level_s;
     }
   }
-  result.final_path.assign(rope.vertices(), rope.vertices() + rope.segments() + 1);
+  result.final_path = best;
+  result.final_check = std::move(best_check);
   result.final_metrics = path_metrics(result.final_path.data(), static_cast<int>(result.final_path.size()), judge,
                                       request.fc_samples, finest.geometry().spacing_m / 2);
-  if (request.init == InitialPath::global) {
-    result.global_path = start_path;
-    result.global = result.initial;
-    result.has_global = true;
-  }
   result.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return result;
 }

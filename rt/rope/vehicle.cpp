@@ -49,7 +49,8 @@ Status validate(const VehicleEnvelope& v) {
         << " m: no height is allowed";
     return invalid_argument(msg.str());
   }
-  if (std::isnan(v.max_altitude_m) || v.max_altitude_m == -VehicleEnvelope::kNone || v.max_altitude_m > 1e5) {
+  if (std::isnan(v.max_altitude_m) || v.max_altitude_m == -VehicleEnvelope::kNone ||
+      (std::isfinite(v.max_altitude_m) && v.max_altitude_m > 1e5)) {
     return bad("max-altitude", v.max_altitude_m, "is not a height up to 100000 m");
   }
   return Status::ok_status();

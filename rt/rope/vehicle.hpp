@@ -8,10 +8,9 @@
 // to the planner, which bounds `show` there (F_p grows upward, so "most seen"
 // is only well posed under a ceiling).
 //
-// Turn radius: the largest radius of a circular arc tangent to both segments
-// at a vertex whose tangent points lie within half of each segment (the
-// fillet an autopilot flies at a waypoint), r = min(a, b) / 2 / tan(theta / 2)
-// for a turn of theta between segments of lengths a and b.
+// Turn radius: the largest radius of the circular arcs an autopilot flies
+// at the waypoints, tangent to both segments, without two arcs overlapping
+// (rt::turn_radii_m in rt/rope/path_check.hpp).
 //
 // Values, no allocation beyond the name; thread-compatible.
 #pragma once

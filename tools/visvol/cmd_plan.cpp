@@ -6,9 +6,12 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "mission_options.hpp"
 #include "path_io.hpp"
+#include "planning_pack.hpp"
 #include "plan_publish.hpp"
 #include "rt/rope/planner.hpp"
 #include "storage/pack_identity.hpp"
@@ -22,10 +25,11 @@ using storage::PackLevel;
 
 struct PlanOptions {
   std::string pack, out;
-  std::vector<double> from, to, hidden_from, visible_to;
+  std::vector<double> from, to;
   std::string objective = "hide", model = "articulated", init = "global";
   int segments = 128;
-  double clearance_m = 30.0;
+  EnvelopeOptions envelope;
+  ConstraintOptions constraints;
   double k1 = 1.0, k2 = 1.0, stiffness = 1.0, slack = -1.0, length_weight = 0.0;
   double max_seconds = 40.0;
   bool json = false;
@@ -51,54 +55,68 @@ std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
   return rt::Vec3(v[0], v[1], v[2]);
 }
 
-int run_plan(const PlanOptions& o) {
-  Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(o.pack);
-  if (!pack.ok()) return fail("plan", pack.status());
-  std::vector<PackLevel> levels;
-  for (int l = 0; l < (*pack)->level_count(); ++l) {
-    Result<PackLevel> level = PackLevel::open(*pack, l);
-    if (!level.ok()) return fail("plan", level.status());
-    levels.push_back(std::move(*level));
-  }
-  std::vector<const PackLevel*> pointers;
-  for (const PackLevel& l : levels) pointers.push_back(&l);
-
+// The request from the options and the pack: envelope, constraints, bounds.
+Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p) {
   rt::PlanRequest r;
   r.from = *point_of(o.from);
   r.to = *point_of(o.to);
   r.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
   Result<rt::RopeModel> model = rt::parse_rope_model(o.model.c_str());
-  if (!model.ok()) return fail("plan", model.status());
+  if (!model.ok()) return model.status();
   r.model = *model;
   r.segments = o.segments;
-  r.clearance_m = o.clearance_m;
+  Result<rt::VehicleEnvelope> envelope = resolve_envelope(o.envelope);
+  if (!envelope.ok()) return envelope.status();
+  r.envelope = *envelope;
+  r.constraints = constraint_points(o.constraints);
+  r.planning_bounds = p.bounds;
+  r.curvature_coeff = p.curvature_coeff;
   r.visibility_gain = o.k1;
   r.terrain_gain = o.k2;
   r.stiffness = o.stiffness;
   r.slack = o.slack;
   r.length_weight = o.length_weight;
   r.max_seconds_per_level = o.max_seconds;
-  if (!o.hidden_from.empty()) r.hidden_from = point_of(o.hidden_from);
-  if (!o.visible_to.empty()) r.visible_to = point_of(o.visible_to);
-  const fields::FieldSampler<PackLevel> finest(levels.front());
+  const fields::FieldSampler<PackLevel> finest(p.levels.front());
   if (o.init == "straight") {
     r.init = rt::InitialPath::straight;
   } else if (o.init == "global") {
     r.init = rt::InitialPath::global;
   } else {
-    Result<PathFile> file = read_path_file(o.init, (*pack)->metadata().crs_wkt);
-    if (!file.ok()) return fail("plan", file.status());
+    Result<PathFile> file = read_path_file(o.init, p.pack->metadata().crs_wkt);
+    if (!file.ok()) return invalid_argument("--init " + file.status().message());
     r.init = rt::InitialPath::polyline;
     if (file->has_heights) {
       r.polyline = file->points;
     } else {
-      r.polyline = lift_polyline(file->points, o.clearance_m, levels.front().geometry().spacing_m / 2,
+      r.polyline = lift_polyline(file->points, r.envelope.clearance_m, p.levels.front().geometry().spacing_m / 2,
                                  [&](double x, double y) { return finest.height(x, y); });
+    }
+    for (std::size_t i = 0; i < r.polyline.size(); ++i) {
+      if (!p.bounds.contains(r.polyline[i].x(), r.polyline[i].y())) {
+        return invalid_argument("--init " + o.init + ": point " + std::to_string(i + 1) +
+                                " is outside the pack's planning bounds");
+      }
     }
     // The rope runs between --from and --to: they close the traced path.
     r.polyline.insert(r.polyline.begin(), r.from);
     r.polyline.push_back(r.to);
   }
+  return r;
+}
+
+int run_plan(const PlanOptions& o) {
+  Result<PlanningPack> opened = open_planning_pack(o.pack);
+  if (!opened.ok()) return fail("plan", opened.status());
+  const PlanningPack& p = *opened;
+  std::vector<const PackLevel*> pointers;
+  for (const PackLevel& l : p.levels) pointers.push_back(&l);
+  Result<rt::PlanRequest> request = plan_request(o, p);
+  if (!request.ok()) return fail("plan", request.status());
+  const rt::PlanRequest& r = *request;
+  const auto& levels = p.levels;
+  const fields::FieldSampler<PackLevel> finest(levels.front());
+  const auto& pack = p.pack;
 
   std::unique_ptr<PlanPublisher> publisher;
   if (o.publish) {
@@ -107,7 +125,7 @@ int run_plan(const PlanOptions& o) {
       clearance_m = v.z() - finest.height(v.x(), v.y());
     };
     Result<std::unique_ptr<PlanPublisher>> p = PlanPublisher::create(
-        o.dds, terrain_info(**pack, o.pack),
+        o.dds, terrain_info(*pack, o.pack),
         r.objective == rt::Objective::show ? dds::Objective::show : dds::Objective::hide, probe);
     if (!p.ok()) return fail("plan", p.status());
     publisher = std::move(*p);
@@ -131,7 +149,7 @@ int run_plan(const PlanOptions& o) {
   report.objective = rt::to_string(r.objective);
   report.model = rt::to_string(r.model);
   report.pack = o.pack;
-  report.crs_wkt = (*pack)->metadata().crs_wkt;
+  report.crs_wkt = pack->metadata().crs_wkt;
   for (const rt::Vec3& v : report.vertices) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }
@@ -140,17 +158,25 @@ int run_plan(const PlanOptions& o) {
 
   const rt::PathMetrics& a = res->initial;
   const rt::PathMetrics& b = res->final_metrics;
+  const rt::PathCheck& check = res->final_check;
   if (o.json) {
     nlohmann::json j = {{"objective", report.objective}, {"model", report.model}, {"init", o.init},
                         {"segments", r.segments}, {"fc_start", a.fc}, {"fc_end", b.fc},
+                        {"fc_start_met_all", res->initial_check.all_met},
                         {"length_start_m", a.length_m}, {"length_m", b.length_m},
+                        {"vertices", res->final_path.size()},
                         {"min_clearance_start_m", a.min_clearance_m}, {"min_clearance_m", b.min_clearance_m},
-                        {"max_climb_deg", b.max_climb_deg},
-                        {"max_descent_deg", b.max_descent_deg},
-                        {"min_turn_radius_m", std::isfinite(b.min_turn_radius_m) ? nlohmann::json(b.min_turn_radius_m) : nlohmann::json()},
+                        {"chosen", res->chosen}, {"candidates", res->candidates},
                         {"simulated_s", res->simulated_s}, {"equilibrium_s", res->equilibrium_s},
-                        {"converged", res->converged}, {"wall_s", res->wall_s}, {"outputs", written}};
-    if (res->has_global) j["fc_global_search"] = res->global.fc;
+                        {"converged", res->converged}, {"diverged", res->diverged}, {"wall_s", res->wall_s},
+                        {"outputs", written}};
+    j.update(check_json(check, r.envelope));
+    j["planning_bounds"] = {{"xmin_m", p.bounds.xmin_m}, {"ymin_m", p.bounds.ymin_m}, {"xmax_m", p.bounds.xmax_m},
+                            {"ymax_m", p.bounds.ymax_m}};
+    if (res->has_global) {
+      j["fc_global_search"] = res->global.fc;
+      j["global_search_level"] = res->global_level;
+    }
     if (publisher) {
       j["dds"] = {{"domain", o.dds.domain_id}, {"paths_published", publisher->published()},
                   {"publish_errors", publisher->errors()}, {"subscribers", publisher->subscribers()},
@@ -158,18 +184,20 @@ int run_plan(const PlanOptions& o) {
     }
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("%s path, %s rope of %d segments, start: %s\n", report.objective.c_str(), report.model.c_str(),
-                r.segments, o.init.c_str());
-    std::printf("F_c        %.5f at the start -> %.5f (%+.1f%%)\n", a.fc, b.fc, a.fc > 0 ? 100.0 * (b.fc / a.fc - 1) : 0.0);
-    if (res->has_global) std::printf("           the global search's path had %.5f\n", res->global.fc);
-    std::printf("length     %.0f m (start %.0f m)\n", b.length_m, a.length_m);
-    std::printf("clearance  %.1f m at the lowest (start %.1f m, asked %.1f m)\n", b.min_clearance_m, a.min_clearance_m,
-                o.clearance_m);
-    std::printf("climb      %.1f deg at the steepest, descent %.1f deg, tightest turn radius %.0f m\n",
-                b.max_climb_deg, b.max_descent_deg, b.min_turn_radius_m);
+    std::printf("%s path, %s rope of %d segments, start: %s, vehicle %s\n", report.objective.c_str(),
+                report.model.c_str(), r.segments, o.init.c_str(), r.envelope.name.c_str());
+    std::printf("F_c        %.5f at the start -> %.5f (%+.1f%%); the answer is the %s's path (best of %d judged)\n",
+                a.fc, b.fc, a.fc > 0 ? 100.0 * (b.fc / a.fc - 1) : 0.0, res->chosen.c_str(), res->candidates);
+    if (res->has_global) {
+      std::printf("           the global search (level %d) had %.5f\n", res->global_level, res->global.fc);
+    }
+    std::printf("length     %.0f m, %zu waypoints, %.0f s at %.1f m/s\n", b.length_m, res->final_path.size(),
+                check.duration_s, r.envelope.speed_mps);
     std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %zu levels), %.2f s wall\n",
-                res->converged ? "at equilibrium" : "NOT at equilibrium (time limit)", res->equilibrium_s,
-                res->simulated_s, levels.size(), res->wall_s);
+                res->diverged ? "NO (the rope diverged; the best path before stands)"
+                : res->converged ? "at equilibrium" : "NOT at equilibrium (time limit)",
+                res->equilibrium_s, res->simulated_s, levels.size(), res->wall_s);
+    print_check(check, r.envelope);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
     if (publisher) {
       std::printf("published  %llu path updates on DDS domain %u (%llu not sent), %u subscriber(s)%s\n",
@@ -180,6 +208,11 @@ int run_plan(const PlanOptions& o) {
   }
   if (!delivery.ok()) return fail("plan", delivery);
   if (!outputs.ok()) return fail("plan", outputs);
+  if (!check.all_met) {
+    std::fprintf(stderr, "visvol plan: the path does not meet every requirement (written, marked unmet):\n");
+    for (const std::string& u : check.unmet()) std::fprintf(stderr, "  %s\n", u.c_str());
+    return kExitFailure;
+  }
   return kExitOk;
 }
 
@@ -200,12 +233,11 @@ Runner add_plan_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--segments", o->segments, "Rope segments (2..100000)")->capture_default_str();
   c->add_option("--init", o->init,
-                "straight, global (graph search on the coarsest level), or a file of points "
-                "'x y' (lifted to the clearance) or 'x y z'")
+                "straight, global (graph search inside the envelope and constraints, coarsest level "
+                "first), or a path file (text 'x y' lifted to the clearance or 'x y z', plan CSV, GeoJSON)")
       ->capture_default_str();
-  c->add_option("--hidden-from", o->hidden_from, "Stay hidden from this point X Y Z")->expected(3);
-  c->add_option("--visible-to", o->visible_to, "Stay visible to this point X Y Z")->expected(3);
-  c->add_option("--clearance", o->clearance_m, "Least height above the terrain, m")->capture_default_str();
+  add_envelope_options(*c, o->envelope);
+  add_constraint_options(*c, o->constraints);
   c->add_option("--k1", o->k1, "Visibility gain (its sign comes from the objective)")->capture_default_str();
   c->add_option("--k2", o->k2, "Terrain force field gain")->capture_default_str();
   c->add_option("--stiffness", o->stiffness, "Rope stiffness factor")->capture_default_str();
@@ -216,6 +248,10 @@ Runner add_plan_command(CLI::App& app) {
   c->add_option("--max-seconds", o->max_seconds, "Simulated seconds per level of detail at most")
       ->capture_default_str();
   c->add_option("-o,--output", o->out, "Output base name: writes BASE.geojson, .csv, .kml, .plan")->required();
+  c->footer(
+      "Exit status: 0 when the path meets every requirement (constraints, envelope, planning bounds: "
+      "checked with exact sight lines on the finest terrain), 1 when one is unmet (the path is still "
+      "written and marked unmet) or planning failed, 2 for bad arguments or input.");
   c->add_flag("--json", o->json, "Print the summary as one JSON object");
   c->add_flag("--publish", o->publish,
               "Publish the path on DDS (the console's path topics) while it settles and when done");

@@ -16,6 +16,7 @@ Runner add_verify_command(CLI::App& app);
 Runner add_sample_command(CLI::App& app);
 Runner add_export_command(CLI::App& app);
 Runner add_plan_command(CLI::App& app);
+Runner add_check_command(CLI::App& app);
 Runner add_render_command(CLI::App& app);
 
 }  // namespace visvol::cli

@@ -7,6 +7,7 @@
 //   visvol viewshed DEM --observer X Y -o OUT.tif
 //   visvol export PACK --layer L --format mhd|vti -o FILE
 //   visvol plan PACK --from X Y Z --to X Y Z --objective hide|show -o OUT
+//   visvol check PACK PATH [--hidden-from X Y Z] [--visible-to X Y Z] [--vehicle V] [--json]
 //   visvol render PACK [--path FILE] [--size WxH] [--view V] [--transfer FILE] -o OUT.png
 //
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   runners["viewshed"] = add_viewshed_command(app);
   runners["export"] = add_export_command(app);
   runners["plan"] = add_plan_command(app);
+  runners["check"] = add_check_command(app);
   runners["render"] = add_render_command(app);
   try {
     app.parse(argc, argv);

@@ -14,6 +14,14 @@ namespace {
 using fields::DenseLevel;
 using namespace visvol::fields::testing;
 
+// The paper's experiments fly anything: no climb, descent or turn limit.
+VehicleEnvelope paper_envelope() {
+  VehicleEnvelope e = *vehicle_preset("multirotor");
+  e.max_climb_deg = e.max_descent_deg = 90;
+  e.clearance_m = 5;
+  return e;
+}
+
 std::vector<const DenseLevel*> pointers(const std::vector<DenseLevel>& levels) {
   std::vector<const DenseLevel*> out;
   for (const DenseLevel& l : levels) out.push_back(&l);
@@ -52,7 +60,7 @@ class PrismExperiment : public ::testing::Test {
     r.objective = Objective::show;
     r.model = model;
     r.segments = 64;
-    r.clearance_m = 5;
+    r.envelope = paper_envelope();
     const Result<PlanResult> res = plan(pointers(*levels_), r);
     ASSERT_TRUE(res.ok()) << res.status().message();
     GlobalSearchParams gp;
@@ -123,7 +131,7 @@ class RealTerrain : public ::testing::Test {
     r.objective = Objective::hide;
     r.model = model;
     r.segments = 96;
-    r.clearance_m = 30;
+    r.envelope.clearance_m = 30;
     return r;
   }
   // Lowest height above the terrain, sampled every 2 m along the path.
@@ -153,7 +161,7 @@ TEST_F(RealTerrain, HidingLowersFcAndKeepsTheClearance) {
     std::cout << "hide on SF North (" << to_string(model) << "): F_c " << res->initial.fc << " -> "
               << res->final_metrics.fc << ", clearance " << densest_clearance(res->final_path) << " m\n";
     EXPECT_LT(res->final_metrics.fc, res->initial.fc) << to_string(model);
-    EXPECT_GE(densest_clearance(res->final_path), r.clearance_m) << to_string(model);
+    EXPECT_GE(densest_clearance(res->final_path), r.envelope.clearance_m) << to_string(model);
   }
 }
 
@@ -165,7 +173,7 @@ TEST_F(RealTerrain, GlobalStartIsRefinedNotLost) {
   ASSERT_TRUE(res->has_global);
   // The rope smooths the voxel path's corners: it stays within 10% of it.
   EXPECT_LE(res->final_metrics.fc, res->global.fc * 1.10);
-  EXPECT_GE(densest_clearance(res->final_path), r.clearance_m);
+  EXPECT_GE(densest_clearance(res->final_path), r.envelope.clearance_m);
 }
 
 TEST_F(RealTerrain, StaysHiddenFromAPointAndVisibleToAnother) {
@@ -186,7 +194,7 @@ TEST_F(RealTerrain, StaysHiddenFromAPointAndVisibleToAnother) {
   auto hidden_share = [&](const std::vector<Vec3>& path) {
     int possible = 0, hidden = 0;
     for (const Vec3& v : path) {
-      if (h1->at(v.x(), v.y()) <= s.height(v.x(), v.y()) + r.clearance_m) continue;
+      if (h1->at(v.x(), v.y()) <= s.height(v.x(), v.y()) + r.envelope.clearance_m) continue;
       ++possible;
       hidden += v.z() <= h1->at(v.x(), v.y());
     }
@@ -200,10 +208,10 @@ TEST_F(RealTerrain, StaysHiddenFromAPointAndVisibleToAnother) {
   const Result<PlanResult> free = plan(pointers(*levels_), r);
   ASSERT_TRUE(free.ok()) << free.status().message();
   PlanRequest hidden = r;
-  hidden.hidden_from = p1;
+  hidden.constraints = {{ConstraintKind::hidden_from, p1, 0.0}};
   const Result<PlanResult> held = plan(pointers(*levels_), hidden);
   PlanRequest seen = r;
-  seen.visible_to = p2;
+  seen.constraints = {{ConstraintKind::visible_to, p2, 0.0}};
   const Result<PlanResult> shown = plan(pointers(*levels_), seen);
   ASSERT_TRUE(held.ok() && shown.ok());
   std::cout << "hidden from p1: " << hidden_share(free->final_path) << " -> " << hidden_share(held->final_path)
@@ -212,7 +220,7 @@ TEST_F(RealTerrain, StaysHiddenFromAPointAndVisibleToAnother) {
   EXPECT_GT(hidden_share(held->final_path), hidden_share(free->final_path) + 0.25);
   EXPECT_GE(seen_share(shown->final_path), 0.9);
   EXPECT_GT(seen_share(shown->final_path), seen_share(free->final_path) + 0.2);
-  EXPECT_GE(densest_clearance(held->final_path), r.clearance_m);
+  EXPECT_GE(densest_clearance(held->final_path), r.envelope.clearance_m);
 }
 
 TEST_F(RealTerrain, BesideTheFieldTheRopeIsPushedBackIn) {
@@ -254,7 +262,7 @@ TEST_F(RealTerrain, BadRequestsAreRefusedByName) {
   r.polyline = {r.from};
   EXPECT_FALSE(plan(levels, r).ok());
   r = hide_request(RopeModel::articulated);
-  r.hidden_from = Vec3(terrain_->x_of(5), terrain_->y_of(5), -500);
+  r.constraints = {{ConstraintKind::hidden_from, Vec3(terrain_->x_of(5), terrain_->y_of(5), -500), 2.0}};
   EXPECT_NE(plan(levels, r).status().message().find("--hidden-from"), std::string::npos);
 }
 

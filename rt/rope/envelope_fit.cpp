@@ -1,0 +1,224 @@
+#include "rt/rope/envelope_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rt/rope/path_check.hpp"
+
+namespace visvol::rt {
+
+namespace {
+
+constexpr double kRadPerDeg = 0.017453292519943295;
+constexpr int kTurnPasses = 400;
+constexpr int kHeightPasses = 60;
+
+double ground_m(const fields::Heightfield& t, double x, double y) {
+  const double i = std::clamp(t.i_of(x), 0.0, double(t.nx - 1));
+  const double j = std::clamp(t.j_of(y), 0.0, double(t.ny - 1));
+  return fields::bilinear_height(t, i, j);
+}
+
+struct Band {
+  double lo = 0, hi = 0;
+};
+
+// Heights allowed above (x, y): the envelope first; the hulls narrow it but
+// yield to it (clearance before a hidden-from hull, the ceiling before a
+// visible-to hull).
+Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, double y) {
+  const VehicleEnvelope& e = s.envelope;
+  const double g = ground_m(t, x, y);
+  Band b;
+  b.lo = g + e.clearance_m + s.margin_m;
+  b.hi = std::min({g + e.max_agl_m - s.margin_m, e.max_altitude_m - s.margin_m, s.top_m});
+  double lo = b.lo, hi = b.hi;
+  for (const PointHull* h : s.above) lo = std::max(lo, h->at(x, y) + s.hull_margin_m);
+  for (const PointHull* h : s.below) hi = std::min(hi, h->at(x, y) - s.hull_margin_m);
+  b.hi = std::max(b.lo, std::min(b.hi, hi));
+  b.lo = std::min(b.hi, std::max(b.lo, lo));
+  return b;
+}
+
+std::vector<Vec3> without_repeats(const std::vector<Vec3>& path) {
+  std::vector<Vec3> out;
+  for (const Vec3& p : path) {
+    if (out.empty() || (p - out.back()).norm() > 1e-6) out.push_back(p);
+  }
+  if (out.size() == 1 && path.size() > 1) out.push_back(path.back());  // keep both ends
+  return out;
+}
+
+void clamp_to_bounds(std::vector<Vec3>& p, const fields::Bounds2D& b) {
+  for (std::size_t i = 1; i + 1 < p.size(); ++i) {
+    p[i].x() = std::clamp(p[i].x(), b.xmin_m, b.xmax_m);
+    p[i].y() = std::clamp(p[i].y(), b.ymin_m, b.ymax_m);
+  }
+}
+
+// Laplacian passes on the horizontal position of the vertices whose fillet
+// is too tight.
+bool turns_fit(const std::vector<Vec3>& p, double radius_m) {
+  if (!(radius_m > 0)) return true;
+  for (double r : turn_radii_m(p.data(), static_cast<int>(p.size())))
+    if (r < radius_m) return false;
+  return true;
+}
+
+void relax_turns(std::vector<Vec3>& p, double radius_m) {
+  if (!(radius_m > 0) || p.size() < 3) return;
+  for (int pass = 0; pass < kTurnPasses; ++pass) {
+    bool moved = false;
+    const std::vector<double> radii = turn_radii_m(p.data(), static_cast<int>(p.size()));
+    for (std::size_t i = 1; i + 1 < p.size(); ++i) {
+      if (radii[i] >= radius_m) continue;
+      const double mx = 0.5 * (p[i - 1].x() + p[i + 1].x()), my = 0.5 * (p[i - 1].y() + p[i + 1].y());
+      p[i].x() += 0.5 * (mx - p[i].x());
+      p[i].y() += 0.5 * (my - p[i].y());
+      moved = true;
+    }
+    if (!moved) return;
+  }
+}
+
+// The heights nearest `target` within [lo, hi] per vertex and the slope
+// limits per segment, ends fixed; false when no heights satisfy them all
+// (the heights then keep the slopes and come as near the band as they can).
+bool fit_heights(const std::vector<Vec3>& p, const std::vector<double>& lo, const std::vector<double>& hi,
+                 double climb_per_m, double descent_per_m, std::vector<double>& z) {
+  const std::size_t n = p.size();
+  std::vector<double> rise(n - 1), drop(n - 1), C(n), D(n);
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double h = std::hypot(p[i + 1].x() - p[i].x(), p[i + 1].y() - p[i].y());
+    rise[i] = climb_per_m * h;
+    drop[i] = descent_per_m * h;
+  }
+  // backwards: heights from which the end stays reachable
+  C[n - 1] = D[n - 1] = p[n - 1].z();
+  bool feasible = true;
+  for (std::size_t i = n - 1; i-- > 0;) {
+    C[i] = std::max(lo[i], C[i + 1] - rise[i]);
+    D[i] = std::min(hi[i], D[i + 1] + drop[i]);
+    feasible = feasible && C[i] <= D[i] + 1e-9;
+  }
+  // forwards: nearest the target inside both
+  z.assign(n, 0.0);
+  z[0] = p[0].z();
+  for (std::size_t i = 1; i < n; ++i) {
+    const double step_lo = z[i - 1] - drop[i - 1], step_hi = z[i - 1] + rise[i - 1];
+    const double a = std::max(C[i], step_lo), b = std::min(D[i], step_hi);
+    if (a <= b + 1e-9) {
+      z[i] = std::clamp(p[i].z(), a, std::max(a, b));
+    } else {
+      feasible = false;
+      z[i] = std::clamp(C[i] <= D[i] ? std::clamp(p[i].z(), C[i], D[i]) : C[i], step_lo, step_hi);
+    }
+  }
+  z[n - 1] = p[n - 1].z();  // the ends are the user's: where they cannot be reached, the check says so
+  return feasible;
+}
+
+struct SegmentMiss {
+  double deficit = 0, excess = 0;  // worst under the band's floor, over its ceiling (m)
+  double worst_t = 0.5;            // where, as a fraction of the segment
+};
+
+SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& a, const Vec3& b,
+                         double step_m) {
+  SegmentMiss m;
+  const double len = std::hypot(b.x() - a.x(), b.y() - a.y());
+  const int k = std::max(2, static_cast<int>(std::ceil(len / step_m)));
+  double worst = 0;
+  for (int q = 1; q < k; ++q) {
+    const double f = static_cast<double>(q) / k;
+    const Vec3 p = a + f * (b - a);
+    const Band band = band_at(s, t, p.x(), p.y());
+    const double d = band.lo - p.z(), e = p.z() - band.hi;
+    if (d > m.deficit) m.deficit = d;
+    if (e > m.excess) m.excess = e;
+    if (std::max(d, e) > worst) {
+      worst = std::max(d, e);
+      m.worst_t = f;
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
+EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
+                            const fields::Heightfield& terrain) {
+  EnvelopeFit out;
+  std::vector<Vec3> p = without_repeats(path);
+  if (p.size() < 2) {
+    out.path = p;
+    return out;
+  }
+  if (spec.planning_bounds) clamp_to_bounds(p, *spec.planning_bounds);
+  relax_turns(p, spec.envelope.min_turn_radius_m);
+  const double step = spec.step_m > 0 ? spec.step_m : 0.25 * terrain.spacing_m;
+  const double climb = std::tan(std::min(spec.envelope.max_climb_deg, 89.99) * kRadPerDeg);
+  const double descent = std::tan(std::min(spec.envelope.max_descent_deg, 89.99) * kRadPerDeg);
+  const std::size_t max_points = 4 * p.size() + 64;
+
+  std::vector<double> lo(p.size()), hi(p.size()), z;
+  auto set_band = [&](std::size_t i) {
+    const bool end = i == 0 || i + 1 == p.size();
+    const Band b = end ? Band{p[i].z(), p[i].z()} : band_at(spec, terrain, p[i].x(), p[i].y());
+    lo[i] = b.lo;
+    hi[i] = b.hi;
+  };
+  for (std::size_t i = 0; i < p.size(); ++i) set_band(i);
+
+  bool feasible = false;
+  for (int pass = 0; pass < kHeightPasses; ++pass) {
+    feasible = fit_heights(p, lo, hi, climb, descent, z);
+    std::vector<Vec3> fitted = p;
+    for (std::size_t i = 0; i < p.size(); ++i) fitted[i].z() = z[i];
+    bool changed = false;
+    for (std::size_t i = 0; i + 1 < p.size(); ++i) {
+      const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step);
+      if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
+      feasible = false;
+      // between the vertices the band asks both vertices to move by the miss
+      const double shift = m.deficit > 1e-6 ? m.deficit : -m.excess;
+      bool moved = false, held = true;
+      for (std::size_t v : {i, i + 1}) {
+        if (v == 0 || v + 1 == p.size()) continue;
+        const double want = z[v] + shift;
+        if (shift > 0) {
+          held = held && want <= hi[v];
+          const double raised = std::min(want, hi[v]);
+          if (raised > lo[v] + 1e-9) lo[v] = raised, moved = true;
+        } else {
+          held = held && want >= lo[v];
+          const double lowered = std::max(want, lo[v]);
+          if (lowered < hi[v] - 1e-9) hi[v] = lowered, moved = true;
+        }
+      }
+      changed = changed || moved;
+      if ((held && moved) || p.size() >= max_points) continue;
+      // the segment cannot hold the band: a vertex at its worst sample
+      const Vec3 mid = p[i] + m.worst_t * (p[i + 1] - p[i]);
+      p.insert(p.begin() + static_cast<std::ptrdiff_t>(i) + 1, mid);
+      lo.insert(lo.begin() + static_cast<std::ptrdiff_t>(i) + 1, 0.0);
+      hi.insert(hi.begin() + static_cast<std::ptrdiff_t>(i) + 1, 0.0);
+      set_band(i + 1);
+      changed = true;
+      break;  // heights again with the new vertex
+    }
+    if (!changed) {
+      for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];
+      out.feasible = feasible && turns_fit(p, spec.envelope.min_turn_radius_m);
+      out.path = std::move(p);
+      return out;
+    }
+  }
+  // the passes ran out: the last heights, not proven
+  (void)fit_heights(p, lo, hi, climb, descent, z);
+  for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];
+  out.path = std::move(p);
+  return out;
+}
+
+}  // namespace visvol::rt

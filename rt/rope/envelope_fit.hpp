@@ -1,0 +1,56 @@
+// Fits a path into the flight envelope: the projection that makes any path
+// (a rope's, a graph search's, a user's) flyable while moving it as little as
+// the limits need.
+//
+// 1. Points beside the planning bounds are moved onto them.
+// 2. Turns (fixed-wing): interior vertices whose fillet radius is under the
+//    vehicle's are pulled towards their neighbours' midpoint, in the
+//    horizontal plane, until every fillet fits (a bounded number of passes).
+// 3. Heights: each vertex keeps its height where it can, inside a band from
+//    the clearance (and above every visible-to hull) up to the ceiling (terrain
+//    + max AGL, max altitude, the field's top, and under every hidden-from
+//    hull), with every segment within the climb and descent limits. The band
+//    is checked between vertices too (the terrain under a straight segment);
+//    a segment that cannot hold it is split. The ends stay where they are.
+//    Heights are chosen by two passes along the path: backwards, the band of
+//    heights from which the end is still reachable; forwards, the height
+//    nearest the path's own inside that band and one segment's climb or
+//    descent from the previous vertex.
+//
+// The fit is exact for the envelope where the band allows it (`feasible`);
+// constraint hulls come from the field's hull kernel, so hidden-from and
+// visible-to are made likely, not proven: rt::PathChecker's sight lines judge.
+// Offline: allocates.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "fields/heightfield.hpp"
+#include "fields/volume.hpp"
+#include "rt/rope/field_forces.hpp"
+#include "rt/rope/vehicle.hpp"
+
+namespace visvol::rt {
+
+struct EnvelopeFitSpec {
+  VehicleEnvelope envelope;
+  std::optional<fields::Bounds2D> planning_bounds;
+  double top_m = std::numeric_limits<double>::infinity();  // highest height allowed (the field's top)
+  double margin_m = 0.5;       // kept inside the height limits (the checker samples elsewhere)
+  double hull_margin_m = 5.0;  // kept under hidden-from and over visible-to hulls
+  double step_m = 0;           // between-vertex samples; 0: a quarter post spacing
+  std::vector<const PointHull*> below;  // hidden-from hulls (finest level)
+  std::vector<const PointHull*> above;  // visible-to hulls
+};
+
+struct EnvelopeFit {
+  std::vector<Vec3> path;
+  bool feasible = false;  // heights inside the band and slopes within the limits everywhere
+};
+
+// `terrain` is the finest terrain (bilinear between posts).
+EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
+                            const fields::Heightfield& terrain);
+
+}  // namespace visvol::rt

@@ -1,0 +1,255 @@
+#include "rt/rope/path_check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <iomanip>
+#include <sstream>
+
+#include "fields/exact_visibility.hpp"
+
+namespace visvol::rt {
+
+namespace {
+
+constexpr double kDegPerRad = 57.29577951308232;
+constexpr double kHeightTolM = 0.01;    // heights compare to a centimetre
+constexpr double kAngleTolDeg = 1e-6;
+
+// Running tally of one requirement over weighted samples.
+struct Tally {
+  double ok_weight = 0, weight = 0;
+  bool failed = false;
+  void add(bool ok, double w) {
+    weight += w;
+    if (ok) ok_weight += w;
+    failed = failed || !ok;
+  }
+  double fraction() const { return weight > 0 ? ok_weight / weight : (failed ? 0.0 : 1.0); }
+};
+
+LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t) {
+  LimitResult r;
+  r.name = name;
+  r.unit = unit;
+  r.limit = limit_value;
+  r.worst = worst;
+  r.satisfied_fraction = t.fraction();
+  r.met = !t.failed;
+  return r;
+}
+
+}  // namespace
+
+const char* to_string(ConstraintKind kind) {
+  return kind == ConstraintKind::visible_to ? "visible-to" : "hidden-from";
+}
+
+double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Eigen::Vector2d u(b.x() - a.x(), b.y() - a.y()), w(c.x() - b.x(), c.y() - b.y());
+  const double lu = u.norm(), lw = w.norm();
+  if (lu < 1e-9 || lw < 1e-9) return std::numeric_limits<double>::infinity();
+  const double cos_turn = std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0);
+  const double turn = std::acos(cos_turn);
+  if (turn < 1e-9) return std::numeric_limits<double>::infinity();
+  return 0.5 * std::min(lu, lw) / std::tan(0.5 * turn);
+}
+
+std::vector<double> turn_radii_m(const Vec3* v, int count) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::size_t n = count > 0 ? static_cast<std::size_t>(count) : 0;
+  std::vector<double> t(n, 0.0), radius(n, inf);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const Eigen::Vector2d u(v[i].x() - v[i - 1].x(), v[i].y() - v[i - 1].y()),
+        w(v[i + 1].x() - v[i].x(), v[i + 1].y() - v[i].y());
+    const double lu = u.norm(), lw = w.norm();
+    if (lu < 1e-9 || lw < 1e-9) continue;  // a vertical segment: climb limits judge it
+    const double turn = std::acos(std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0));
+    t[i] = turn > 1e-9 ? std::tan(0.5 * std::min(turn, M_PI - 1e-9)) : 0.0;
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double tangents = t[i] + t[i + 1];
+    if (tangents <= 0) continue;
+    const double bound = std::hypot(v[i + 1].x() - v[i].x(), v[i + 1].y() - v[i].y()) / tangents;
+    if (t[i] > 0) radius[i] = std::min(radius[i], bound);
+    if (t[i + 1] > 0) radius[i + 1] = std::min(radius[i + 1], bound);
+  }
+  return radius;
+}
+
+std::vector<std::string> PathCheck::unmet() const {
+  std::vector<std::string> out;
+  for (const ConstraintResult& c : constraints) {
+    if (c.met) continue;
+    std::ostringstream s;
+    s.precision(1);
+    s << std::fixed << to_string(c.constraint.kind) << " (" << c.constraint.point_m.x() << ", "
+      << c.constraint.point_m.y() << ", " << c.constraint.point_m.z() << "): holds on " << std::setprecision(3)
+      << c.satisfied_fraction << " of the length";
+    out.push_back(s.str());
+  }
+  for (const LimitResult& l : envelope) {
+    if (l.met) continue;
+    std::ostringstream s;
+    s.precision(1);
+    s << std::fixed << l.name << " " << l.limit << " " << l.unit << ": worst " << l.worst << " " << l.unit
+      << ", holds on " << std::setprecision(3) << l.satisfied_fraction << " of the length";
+    out.push_back(s.str());
+  }
+  if (!inside_planning_bounds) {
+    std::ostringstream s;
+    s.precision(3);
+    s << "planning bounds: " << inside_bounds_fraction << " of the length inside";
+    out.push_back(s.str());
+  }
+  return out;
+}
+
+Result<PathChecker> PathChecker::create(fields::Heightfield terrain, const PathField* field, PathCheckSpec spec) {
+  if (terrain.nx < 2 || terrain.ny < 2 || !(terrain.spacing_m > 0) || terrain.height_m.size() != terrain.size()) {
+    return invalid_argument("path check: the terrain is empty");
+  }
+  VISVOL_RETURN_IF_ERROR(validate(spec.envelope));
+  if (!(spec.sample_step_m >= 0 && std::isfinite(spec.sample_step_m))) {
+    return invalid_argument("path check: the sample step must be a finite length");
+  }
+  if (spec.sample_step_m == 0) spec.sample_step_m = 0.25 * terrain.spacing_m;
+  PathChecker c;
+  c.terrain_ = std::move(terrain);
+  c.field_ = field;
+  const fields::Heightfield& t = c.terrain_;
+  for (const ConstraintPoint& p : spec.constraints) {
+    const std::string name = std::string("--") + to_string(p.kind);
+    if (!p.point_m.allFinite() || !std::isfinite(p.eye_height_m) || p.eye_height_m < 0 || p.eye_height_m > 1e4) {
+      return invalid_argument(name + ": the point and the eye height must be finite (eye 0..10000 m)");
+    }
+    const double i = t.i_of(p.point_m.x()), j = t.j_of(p.point_m.y());
+    if (!(i >= 0 && j >= 0 && i <= t.nx - 1 && j <= t.ny - 1)) {
+      return invalid_argument(name + ": (" + std::to_string(p.point_m.x()) + ", " + std::to_string(p.point_m.y()) +
+                              ") is outside the terrain");
+    }
+    const double ground = fields::bilinear_height(t, i, j);
+    if (p.point_m.z() < ground - kHeightTolM) {
+      return invalid_argument(name + ": the point is " + std::to_string(ground - p.point_m.z()) +
+                              " m below the finest terrain (" + std::to_string(ground) + " m there)");
+    }
+  }
+  c.spec_ = std::move(spec);
+  return c;
+}
+
+double PathChecker::ground_m(double x, double y) const {
+  const double i = std::clamp(terrain_.i_of(x), 0.0, double(terrain_.nx - 1));
+  const double j = std::clamp(terrain_.j_of(y), 0.0, double(terrain_.ny - 1));
+  return fields::bilinear_height(terrain_, i, j);
+}
+
+bool PathChecker::sees(const ConstraintPoint& c, const Vec3& p) const {
+  const Vec3 eye = c.eye_m();
+  return fields::r3_visible(terrain_, terrain_.i_of(eye.x()), terrain_.j_of(eye.y()), eye.z(), terrain_.i_of(p.x()),
+                            terrain_.j_of(p.y()), p.z(), spec_.curvature_coeff);
+}
+
+PathCheck PathChecker::check(const Vec3* v, int count) const {
+  PathCheck out;
+  const VehicleEnvelope& e = spec_.envelope;
+  const std::size_t nc = spec_.constraints.size();
+  if (count < 2 || v == nullptr) {
+    out.violation = 1;
+    return out;
+  }
+  std::vector<Tally> constraint_tally(nc);
+  std::vector<double> seen_m(nc, 0.0);
+  Tally clearance, agl, altitude, bounds, climb, descent, turn;
+  double lowest = std::numeric_limits<double>::infinity(), highest_agl = -lowest, highest = -lowest;
+  double steepest_climb = 0, steepest_descent = 0, tightest = std::numeric_limits<double>::infinity();
+
+  auto sample = [&](const Vec3& p, double w) {
+    const double ground = ground_m(p.x(), p.y());
+    const double h = p.z() - ground;
+    lowest = std::min(lowest, h);
+    highest_agl = std::max(highest_agl, h);
+    highest = std::max(highest, p.z());
+    clearance.add(h >= e.clearance_m - kHeightTolM, w);
+    agl.add(h <= e.max_agl_m + kHeightTolM, w);
+    altitude.add(p.z() <= e.max_altitude_m + kHeightTolM, w);
+    bounds.add(!spec_.planning_bounds || spec_.planning_bounds->contains(p.x(), p.y()), w);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const bool seen = sees(spec_.constraints[c], p);
+      if (seen) seen_m[c] += w;
+      constraint_tally[c].add(seen == (spec_.constraints[c].kind == ConstraintKind::visible_to), w);
+    }
+  };
+
+  // samples along every segment, trapezoid weights by length
+  for (int s = 0; s + 1 < count; ++s) {
+    const Vec3 a = v[s], b = v[s + 1];
+    const double len = (b - a).norm();
+    out.length_m += len;
+    const int m = std::max(1, static_cast<int>(std::ceil(len / spec_.sample_step_m)));
+    for (int k = 0; k <= m; ++k) {
+      const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);
+      sample(Vec3(a + (b - a) * (static_cast<double>(k) / m)), w);
+    }
+    const double horizontal = std::hypot(b.x() - a.x(), b.y() - a.y());
+    const double angle = len > 1e-9 ? std::atan2(b.z() - a.z(), horizontal) * kDegPerRad : 0.0;
+    steepest_climb = std::max(steepest_climb, angle);
+    steepest_descent = std::max(steepest_descent, -angle);
+    climb.add(angle <= e.max_climb_deg + kAngleTolDeg, len);
+    descent.add(-angle <= e.max_descent_deg + kAngleTolDeg, len);
+  }
+
+  out.per_vertex.resize(static_cast<std::size_t>(count));
+  const std::vector<double> radii = turn_radii_m(v, count);
+  for (int i = 0; i < count; ++i) {
+    VertexCheck& vc = out.per_vertex[static_cast<std::size_t>(i)];
+    vc.ground_m = ground_m(v[i].x(), v[i].y());
+    vc.clearance_m = v[i].z() - vc.ground_m;
+    vc.fp = field_ ? field_->visibility(v[i]) : 0.0;
+    vc.turn_radius_m = std::numeric_limits<double>::infinity();
+    if (i + 1 < count) {
+      const Vec3 d = v[i + 1] - v[i];
+      vc.climb_deg = d.norm() > 1e-9 ? std::atan2(d.z(), std::hypot(d.x(), d.y())) * kDegPerRad : 0.0;
+    }
+    if (i > 0 && i + 1 < count) {
+      vc.turn_radius_m = radii[static_cast<std::size_t>(i)];
+      tightest = std::min(tightest, vc.turn_radius_m);
+      const double w = 0.5 * ((v[i] - v[i - 1]).norm() + (v[i + 1] - v[i]).norm());
+      turn.add(vc.turn_radius_m >= e.min_turn_radius_m - 1e-6, w);
+    }
+    vc.seen_by.resize(nc);
+    for (std::size_t c = 0; c < nc; ++c) vc.seen_by[c] = sees(spec_.constraints[c], v[i]);
+  }
+
+  out.fc = field_ ? path_fc(v, count, *field_, 256) : 0.0;
+  out.duration_s = out.length_m / e.speed_mps;
+  for (std::size_t c = 0; c < nc; ++c) {
+    ConstraintResult r;
+    r.constraint = spec_.constraints[c];
+    r.satisfied_fraction = constraint_tally[c].fraction();
+    r.seen_m = seen_m[c];
+    r.met = !constraint_tally[c].failed;
+    out.constraints.push_back(r);
+  }
+  out.envelope.push_back(limit("clearance", "m", e.clearance_m, lowest, clearance));
+  out.envelope.push_back(limit("max-agl", "m", e.max_agl_m, highest_agl, agl));
+  out.envelope.push_back(limit("max-altitude", "m", e.max_altitude_m, highest, altitude));
+  out.envelope.push_back(limit("max-climb", "deg", e.max_climb_deg, steepest_climb, climb));
+  out.envelope.push_back(limit("max-descent", "deg", e.max_descent_deg, steepest_descent, descent));
+  out.envelope.push_back(limit("min-turn-radius", "m", e.min_turn_radius_m, tightest, turn));
+  out.inside_bounds_fraction = bounds.fraction();
+  out.inside_planning_bounds = !bounds.failed;
+
+  out.all_met = out.inside_planning_bounds;
+  auto count_violation = [&](bool met, double fraction) {
+    if (met) return;
+    out.all_met = false;
+    out.violation += std::max(1e-9, 1.0 - fraction);
+  };
+  for (const ConstraintResult& r : out.constraints) count_violation(r.met, r.satisfied_fraction);
+  for (const LimitResult& l : out.envelope) count_violation(l.met, l.satisfied_fraction);
+  count_violation(out.inside_planning_bounds, out.inside_bounds_fraction);
+  return out;
+}
+
+}  // namespace visvol::rt

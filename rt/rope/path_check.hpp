@@ -1,0 +1,135 @@
+// The independent assessment of a path (the paper's path assessment, and the
+// check a crew trusts): every constraint and envelope limit measured on the
+// finest terrain, never on the field or the planner's own numbers.
+//
+// - Hidden from / visible to a point: Franklin & Ray's R3 sight line
+//   (fields::r3_visible) from the observer's eye to samples along the path,
+//   at most `sample_step_m` apart (default a quarter post spacing), each
+//   sample standing for its share of the path's length.
+// - Clearance, height above the terrain (AGL) and altitude: at the same
+//   samples, against the bilinear finest terrain.
+// - Climb and descent: every segment's angle from the horizontal.
+// - Turn radius: the largest flyable fillet at every interior vertex
+//   (turn_radii_m below), weighted by half of each neighbouring segment.
+// - Planning bounds: the samples inside the trusted region.
+// A requirement is met when every sample, segment or vertex satisfies it
+// (satisfied_fraction == 1).
+//
+// Offline: allocates (a copy of the finest terrain at construction).
+// Thread-compatible: check() is const and may run on several threads.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fields/heightfield.hpp"
+#include "fields/volume.hpp"
+#include "rt/rope/path_metrics.hpp"
+#include "rt/rope/vehicle.hpp"
+
+namespace visvol::rt {
+
+enum class ConstraintKind : std::uint8_t { hidden_from = 0, visible_to = 1 };
+const char* to_string(ConstraintKind kind);  // "hidden-from", "visible-to"
+
+// An observer as a user names it: a point at or above the finest terrain
+// (pack CRS metres), whose eye is `eye_height_m` above it.
+struct ConstraintPoint {
+  ConstraintKind kind = ConstraintKind::hidden_from;
+  Vec3 point_m = Vec3::Zero();
+  double eye_height_m = 2.0;
+  Vec3 eye_m() const { return point_m + Vec3(0, 0, eye_height_m); }
+};
+
+struct PathCheckSpec {
+  VehicleEnvelope envelope;                   // limits; max_agl_m infinite: none
+  std::vector<ConstraintPoint> constraints;
+  std::optional<fields::Bounds2D> planning_bounds;
+  double curvature_coeff = 0;                 // the pack's Earth curvature and refraction
+  double sample_step_m = 0;                   // 0: a quarter of the terrain's post spacing
+};
+
+struct ConstraintResult {
+  ConstraintPoint constraint;
+  double satisfied_fraction = 0;  // of the path's length
+  double seen_m = 0;              // length of path in sight of the observer
+  bool met = false;
+};
+
+struct LimitResult {
+  std::string name;               // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius"
+  std::string unit;               // "m", "deg"
+  double limit = 0;               // as asked
+  double worst = 0;               // the path's worst value (lowest for a lower limit, highest for an upper)
+  double satisfied_fraction = 1;  // of the path's length
+  bool met = true;
+};
+
+struct VertexCheck {
+  double fp = 0;                 // F_p of the field at the vertex (informative)
+  double ground_m = 0;           // finest terrain below it
+  double clearance_m = 0;        // height above it
+  double climb_deg = 0;          // of the segment to the next vertex (negative: descent)
+  double turn_radius_m = 0;      // the largest flyable turn radius here (turn_radii_m; infinite: straight or an end)
+  std::vector<bool> seen_by;     // per constraint: the observer sees this vertex (R3)
+};
+
+struct PathCheck {
+  double fc = 0;                  // F_c of the field along the path
+  double length_m = 0;
+  double duration_s = 0;          // at the vehicle's speed
+  std::vector<ConstraintResult> constraints;
+  std::vector<LimitResult> envelope;
+  double inside_bounds_fraction = 1;  // of the path's length inside the planning bounds
+  bool inside_planning_bounds = true;
+  std::vector<VertexCheck> per_vertex;
+  bool all_met = false;           // every constraint and limit, and inside the bounds
+  // Sum over requirements of the unmet fraction (0 when all are met): a
+  // ranking of infeasible paths, least violation first.
+  double violation = 0;
+
+  // "hidden-from (x, y, z): 0.82 of the length" lines for what is unmet.
+  std::vector<std::string> unmet() const;
+};
+
+class PathChecker {
+ public:
+  // `terrain` is the finest level's terrain; `field` gives F_p (may be null:
+  // fp and fc are then 0). Refuses a constraint point outside the terrain or
+  // below it, naming the point's option ("--hidden-from").
+  static Result<PathChecker> create(fields::Heightfield terrain, const PathField* field, PathCheckSpec spec);
+
+  PathCheck check(const Vec3* vertices, int count) const;
+  PathCheck check(const std::vector<Vec3>& path) const {
+    return check(path.data(), static_cast<int>(path.size()));
+  }
+
+  const PathCheckSpec& spec() const { return spec_; }
+  const fields::Heightfield& terrain() const { return terrain_; }
+  // Bilinear finest terrain at a world point (clamped to the grid).
+  double ground_m(double x, double y) const;
+  // The observer of constraint c sees world point p (R3 on the finest terrain).
+  bool sees(const ConstraintPoint& c, const Vec3& p) const;
+
+ private:
+  PathChecker() = default;
+  fields::Heightfield terrain_;
+  const PathField* field_ = nullptr;
+  PathCheckSpec spec_;
+};
+
+// The fillet radius at vertex b between segments a-b and b-c (horizontal
+// plane) when each fillet may use half of each segment, infinite for a
+// straight continuation.
+double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c);
+
+// The largest turn radius flyable at each vertex of a path (horizontal
+// plane): a fillet of radius R at a vertex turning by theta starts
+// R tan(theta / 2) before it, and two fillets may not overlap, so every
+// segment i of horizontal length L_i needs R (t_i + t_(i+1)) <= L_i with
+// t = tan(theta / 2). A vertex's radius is the smaller of its two segments'
+// bounds; straight vertices and the ends are infinite.
+std::vector<double> turn_radii_m(const Vec3* vertices, int count);
+
+}  // namespace visvol::rt

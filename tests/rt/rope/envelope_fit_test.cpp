@@ -1,0 +1,115 @@
+#include "rt/rope/envelope_fit.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "../../fields/terrains.hpp"
+#include "rt/rope/path_check.hpp"
+
+namespace visvol::rt {
+namespace {
+
+using namespace visvol::fields::testing;
+
+// The fitted paths are judged by the checker (sight lines and limits on the
+// terrain), not by the fit's own flag.
+class FitOnRelief : public ::testing::Test {
+ protected:
+  fields::Heightfield terrain = fractal(96, 7, 30.0, 150.0);
+  VehicleEnvelope envelope() const {
+    VehicleEnvelope e;  // fixed-wing: 15 deg, 80 m turns
+    e.clearance_m = 40;
+    e.max_agl_m = 400;
+    return e;
+  }
+  Vec3 at(double i, double j, double agl) const {
+    return {terrain.x_of(i), terrain.y_of(j), fields::bilinear_height(terrain, i, j) + agl};
+  }
+  static EnvelopeFitSpec spec_of(const VehicleEnvelope& e) {
+    EnvelopeFitSpec s;
+    s.envelope = e;
+    return s;
+  }
+  PathCheck judge(const std::vector<Vec3>& path, const VehicleEnvelope& e) const {
+    PathCheckSpec s;
+    s.envelope = e;
+    auto checker = PathChecker::create(terrain, nullptr, s);
+    EXPECT_TRUE(checker.ok());
+    return checker->check(path);
+  }
+};
+
+TEST_F(FitOnRelief, AStraightLineThroughTheHillsBecomesFlyable) {
+  const std::vector<Vec3> straight = {at(5, 5, 60), at(90, 88, 60)};
+  ASSERT_FALSE(judge(straight, envelope()).all_met);  // it cuts through the relief
+  const EnvelopeFit fit = fit_to_envelope(straight, spec_of(envelope()), terrain);
+  EXPECT_TRUE(fit.feasible);
+  const PathCheck c = judge(fit.path, envelope());
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_EQ(fit.path.front(), straight.front());
+  EXPECT_EQ(fit.path.back(), straight.back());
+}
+
+TEST_F(FitOnRelief, RandomWigglesBecomeFlyableAndKeepTheirEnds) {
+  // property: any path between valid ends, fitted, meets every limit (when the fit says it could)
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(8, 88), h(-200, 600);
+  int feasible = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Vec3> path = {at(u(rng), u(rng), 100)};
+    for (int k = 0; k < 12; ++k) {
+      const double i = u(rng), j = u(rng);
+      path.push_back({terrain.x_of(i), terrain.y_of(j), fields::bilinear_height(terrain, i, j) + h(rng)});
+    }
+    path.push_back(at(u(rng), u(rng), 100));
+    const EnvelopeFit fit = fit_to_envelope(path, spec_of(envelope()), terrain);
+    EXPECT_EQ(fit.path.front(), path.front());
+    EXPECT_EQ(fit.path.back(), path.back());
+    for (const Vec3& v : fit.path) ASSERT_TRUE(v.allFinite());
+    if (!fit.feasible) continue;
+    ++feasible;
+    const PathCheck c = judge(fit.path, envelope());
+    for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << "trial " << trial << ": " << l.name << " worst " << l.worst;
+  }
+  EXPECT_GE(feasible, 15);
+}
+
+TEST_F(FitOnRelief, ACeilingAndAnAltitudeLimitHold) {
+  VehicleEnvelope e = envelope();
+  e.max_agl_m = 120;
+  e.max_altitude_m = at(48, 48, 0).z() + 300;
+  std::vector<Vec3> high = {at(10, 10, 100)};
+  for (int k = 1; k < 10; ++k) high.push_back(at(10 + 8 * k, 10 + 8 * k, 2000));  // far too high
+  high.push_back(at(85, 85, 100));
+  if (high.back().z() > e.max_altitude_m) GTEST_SKIP() << "end above the altitude limit on this relief";
+  const EnvelopeFit fit = fit_to_envelope(high, spec_of(e), terrain);
+  const PathCheck c = judge(fit.path, e);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met || !fit.feasible) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(fit.feasible);
+}
+
+TEST_F(FitOnRelief, TightTurnsAreOpenedUp) {
+  VehicleEnvelope e = envelope();
+  e.min_turn_radius_m = 150;
+  // a zig-zag of 90 degree corners every 120 m
+  std::vector<Vec3> zig;
+  for (int k = 0; k <= 16; ++k) zig.push_back(at(20 + 4 * k, 40 + ((k % 2) ? 4 : 0), 150));
+  const EnvelopeFit fit = fit_to_envelope(zig, spec_of(e), terrain);
+  EXPECT_TRUE(fit.feasible);
+  const PathCheck c = judge(fit.path, e);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+}
+
+TEST_F(FitOnRelief, StaysInsideThePlanningBounds) {
+  const fields::Bounds2D b{terrain.x_of(10), terrain.y_of(80), terrain.x_of(80), terrain.y_of(10)};
+  std::vector<Vec3> wide = {at(20, 20, 100), at(2, 50, 100), at(70, 94, 100), at(60, 60, 100)};
+  EnvelopeFitSpec spec = spec_of(envelope());
+  spec.planning_bounds = b;
+  const EnvelopeFit fit = fit_to_envelope(wide, spec, terrain);
+  for (const Vec3& v : fit.path) EXPECT_TRUE(b.contains(v.x(), v.y())) << v.transpose();
+}
+
+}  // namespace
+}  // namespace visvol::rt

@@ -1,0 +1,163 @@
+#include "rt/rope/path_check.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "../../fields/terrains.hpp"
+#include "fields/exact_visibility.hpp"
+
+namespace visvol::rt {
+namespace {
+
+using namespace visvol::fields::testing;
+
+// A flat plain at 100 m with a 60 m wall along post column 30 (10 m posts).
+class WallTerrain : public ::testing::Test {
+ protected:
+  fields::Heightfield terrain = wall(64, 30, 60.0f);
+  Vec3 post(double i, double j, double z) const { return {terrain.x_of(i), terrain.y_of(j), z}; }
+  PathCheckSpec spec() const {
+    PathCheckSpec s;
+    s.envelope = *vehicle_preset("multirotor");
+    s.envelope.clearance_m = 10;
+    return s;
+  }
+};
+
+TEST_F(WallTerrain, ObserverBehindTheWallDoesNotSeeALowPathAndSeesAHighOne) {
+  PathCheckSpec s = spec();
+  s.constraints = {{ConstraintKind::hidden_from, post(50, 32, 100), 2.0}};
+  const auto checker = PathChecker::create(terrain, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  // west of the wall, 20 m up: hidden behind 60 m of wall
+  const PathCheck low = checker->check({post(5, 10, 120), post(5, 50, 120)});
+  ASSERT_EQ(low.constraints.size(), 1u);
+  EXPECT_TRUE(low.constraints[0].met);
+  EXPECT_DOUBLE_EQ(low.constraints[0].satisfied_fraction, 1.0);
+  EXPECT_TRUE(low.all_met);
+  // 300 m up: seen everywhere
+  const PathCheck high = checker->check({post(5, 10, 400), post(5, 50, 400)});
+  EXPECT_FALSE(high.constraints[0].met);
+  EXPECT_NEAR(high.constraints[0].satisfied_fraction, 0.0, 1e-12);
+  EXPECT_FALSE(high.all_met);
+  EXPECT_GT(high.violation, 0.9);
+  ASSERT_EQ(high.unmet().size(), 1u);
+  EXPECT_NE(high.unmet()[0].find("hidden-from"), std::string::npos);
+}
+
+TEST_F(WallTerrain, FractionsAreShareOfLengthAndAgreeWithR3) {
+  PathCheckSpec s = spec();
+  s.constraints = {{ConstraintKind::visible_to, post(50, 32, 100), 2.0}};
+  const auto checker = PathChecker::create(terrain, nullptr, s);
+  ASSERT_TRUE(checker.ok());
+  // A path that climbs over the wall: the observer east of it sees only the part high enough.
+  const std::vector<Vec3> path = {post(5, 32, 120), post(25, 32, 120), post(29, 32, 180), post(45, 32, 180)};
+  const PathCheck c = checker->check(path);
+  // the reference: R3 at 1 m steps, by length
+  double seen = 0, total = 0;
+  for (std::size_t k = 1; k < path.size(); ++k) {
+    const double len = (path[k] - path[k - 1]).norm();
+    const int n = static_cast<int>(len);
+    for (int q = 0; q < n; ++q) {
+      const Vec3 p = path[k - 1] + (path[k] - path[k - 1]) * ((q + 0.5) / n);
+      const Vec3 eye = s.constraints[0].eye_m();
+      seen += fields::r3_visible(terrain, terrain.i_of(eye.x()), terrain.j_of(eye.y()), eye.z(), terrain.i_of(p.x()),
+                                 terrain.j_of(p.y()), p.z(), 0.0) * len / n;
+      total += len / n;
+    }
+  }
+  EXPECT_NEAR(c.constraints[0].satisfied_fraction, seen / total, 0.02);
+  EXPECT_NEAR(c.constraints[0].seen_m, seen, 0.02 * total);
+  EXPECT_FALSE(c.constraints[0].met);
+  EXPECT_NEAR(c.length_m, total, 1e-6);
+}
+
+TEST_F(WallTerrain, EnvelopeLimitsAreMeasuredPerSegmentAndSample) {
+  PathCheckSpec s = spec();
+  s.envelope.max_climb_deg = 20;
+  s.envelope.max_descent_deg = 20;
+  s.envelope.max_agl_m = 100;
+  s.envelope.min_turn_radius_m = 50;
+  const auto checker = PathChecker::create(terrain, nullptr, s);
+  ASSERT_TRUE(checker.ok());
+  // 100 m flat, then a 45 deg climb over 100 m, then a right angle turn
+  const std::vector<Vec3> path = {post(5, 10, 120), post(15, 10, 120), post(25, 10, 220), post(25, 20, 220)};
+  const PathCheck c = checker->check(path);
+  auto limit = [&](const std::string& name) {
+    for (const LimitResult& l : c.envelope)
+      if (l.name == name) return l;
+    ADD_FAILURE() << name;
+    return LimitResult{};
+  };
+  EXPECT_NEAR(limit("max-climb").worst, 45.0, 1e-9);
+  EXPECT_FALSE(limit("max-climb").met);
+  // the climb is 141 m of 341 m
+  EXPECT_NEAR(limit("max-climb").satisfied_fraction, 200.0 / (200.0 + 100.0 * std::sqrt(2.0)), 1e-9);
+  EXPECT_TRUE(limit("max-descent").met);
+  EXPECT_NEAR(limit("max-agl").worst, 120.0, 1e-6);
+  EXPECT_FALSE(limit("max-agl").met);
+  EXPECT_NEAR(limit("clearance").worst, 20.0, 1e-6);
+  EXPECT_TRUE(limit("clearance").met);
+  // the right angle between two 100 m (horizontal) segments whose other ends
+  // do not turn: the arc may use all of both, 100 m
+  EXPECT_NEAR(c.per_vertex[2].turn_radius_m, 100.0, 1e-6);
+  EXPECT_TRUE(std::isinf(c.per_vertex[1].turn_radius_m));
+  EXPECT_TRUE(limit("min-turn-radius").met);
+}
+
+TEST(TurnRadii, NeighbouringTurnsShareTheirSegment) {
+  // a zig-zag of right angles every 100 m: each arc gets half of each segment
+  const std::vector<Vec3> zig = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}, {200, 100, 0}, {200, 200, 0}};
+  const std::vector<double> r = turn_radii_m(zig.data(), 5);
+  EXPECT_TRUE(std::isinf(r[0]) && std::isinf(r[4]));
+  EXPECT_NEAR(r[1], 50.0, 1e-9);  // its second segment is shared with vertex 2
+  EXPECT_NEAR(r[2], 50.0, 1e-9);
+  EXPECT_NEAR(r[3], 50.0, 1e-9);
+  // a point inserted on a straight segment takes no share of it
+  const std::vector<Vec3> split = {{0, 0, 0}, {100, 0, 0}, {100, 50, 0}, {100, 100, 0}, {200, 100, 0}};
+  EXPECT_NEAR(turn_radii_m(split.data(), 5)[1], 50.0, 1e-9);
+}
+
+TEST(FilletRadius, MatchesTheTangentArcThatFits) {
+  // straight on: no turn
+  EXPECT_TRUE(std::isinf(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {200, 0, 0})));
+  // 90 degrees between 100 m segments: arc tangent at 50 m from the corner, radius 50 m
+  EXPECT_NEAR(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {100, 100, 0}), 50.0, 1e-9);
+  // a hairpin cannot be flown
+  EXPECT_NEAR(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {0, 0, 0}), 0.0, 1e-9);
+  // heights do not matter, the shorter segment does
+  EXPECT_NEAR(fillet_radius_m({0, 0, 0}, {100, 0, 50}, {100, 20, 80}), 10.0, 1e-9);
+}
+
+TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
+  PathCheckSpec s = spec();
+  s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 99.0), 2.0}};  // 1 m under the plain
+  auto c = PathChecker::create(terrain, nullptr, s);
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.status().message().find("--hidden-from"), std::string::npos);
+  EXPECT_NE(c.status().message().find("below"), std::string::npos);
+  // on the ground exactly: accepted
+  s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 100.0), 2.0}};
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s).ok());
+  s.constraints = {{ConstraintKind::visible_to, post(-10, 10, 100.0), 2.0}};
+  c = PathChecker::create(terrain, nullptr, s);
+  ASSERT_FALSE(c.ok());
+  EXPECT_NE(c.status().message().find("--visible-to"), std::string::npos);
+  s.constraints = {{ConstraintKind::visible_to, post(10, 10, std::nan("")), 2.0}};
+  EXPECT_FALSE(PathChecker::create(terrain, nullptr, s).ok());
+}
+
+TEST_F(WallTerrain, PlanningBoundsAreAFractionOfLength) {
+  PathCheckSpec s = spec();
+  s.planning_bounds = fields::Bounds2D{terrain.x_of(10), terrain.y_of(50), terrain.x_of(50), terrain.y_of(10)};
+  const auto checker = PathChecker::create(terrain, nullptr, s);
+  ASSERT_TRUE(checker.ok());
+  const PathCheck c = checker->check({post(0, 20, 130), post(20, 20, 130)});  // half outside
+  EXPECT_FALSE(c.inside_planning_bounds);
+  EXPECT_NEAR(c.inside_bounds_fraction, 0.5, 0.02);
+  EXPECT_FALSE(c.all_met);
+}
+
+}  // namespace
+}  // namespace visvol::rt

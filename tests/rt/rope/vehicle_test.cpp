@@ -1,0 +1,44 @@
+#include "rt/rope/vehicle.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace visvol::rt {
+namespace {
+
+TEST(Vehicle, PresetsAreValidAndDiffer) {
+  const auto fw = vehicle_preset("fixed-wing");
+  const auto mr = vehicle_preset("multirotor");
+  ASSERT_TRUE(fw.ok() && mr.ok());
+  EXPECT_TRUE(validate(*fw).ok());
+  EXPECT_TRUE(validate(*mr).ok());
+  EXPECT_EQ(fw->type, VehicleType::fixed_wing);
+  EXPECT_EQ(mr->type, VehicleType::multirotor);
+  EXPECT_GT(fw->min_turn_radius_m, 0.0);
+  EXPECT_EQ(mr->min_turn_radius_m, 0.0);
+  EXPECT_LT(fw->max_climb_deg, mr->max_climb_deg);
+  EXPECT_FALSE(vehicle_preset("helicopter").ok());
+}
+
+TEST(Vehicle, BadValuesAreRefusedByKey) {
+  auto refused = [](void (*change)(VehicleEnvelope&), const char* key) {
+    VehicleEnvelope v;
+    change(v);
+    const Status s = validate(v);
+    EXPECT_FALSE(s.ok()) << key;
+    EXPECT_NE(s.message().find(key), std::string::npos) << s.message();
+  };
+  refused([](VehicleEnvelope& v) { v.max_climb_deg = 0; }, "max-climb");
+  refused([](VehicleEnvelope& v) { v.max_climb_deg = std::nan(""); }, "max-climb");
+  refused([](VehicleEnvelope& v) { v.max_descent_deg = 91; }, "max-descent");
+  refused([](VehicleEnvelope& v) { v.min_turn_radius_m = -1; }, "min-turn-radius");
+  refused([](VehicleEnvelope& v) { v.speed_mps = 0; }, "speed");
+  refused([](VehicleEnvelope& v) { v.clearance_m = std::nan(""); }, "clearance");
+  refused([](VehicleEnvelope& v) { v.max_altitude_m = std::nan(""); }, "max-altitude");
+  // contradictory: a ceiling under the clearance
+  refused([](VehicleEnvelope& v) { v.max_agl_m = 20; }, "max-agl");
+}
+
+}  // namespace
+}  // namespace visvol::rt

@@ -1,0 +1,92 @@
+#include "check_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace visvol::cli {
+
+namespace {
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json point(const rt::Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); }
+
+}  // namespace
+
+nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
+  nlohmann::json j;
+  j["constraints"] = nlohmann::json::array();
+  for (const rt::ConstraintResult& r : c.constraints) {
+    j["constraints"].push_back({{"kind", rt::to_string(r.constraint.kind)},
+                                {"point", point(r.constraint.point_m)},
+                                {"eye_m", point(r.constraint.eye_m())},
+                                {"satisfied_fraction", r.satisfied_fraction},
+                                {"seen_m", r.seen_m},
+                                {"exposure_s", r.seen_m / e.speed_mps},
+                                {"met", r.met}});
+  }
+  j["envelope"] = nlohmann::json::array();
+  for (const rt::LimitResult& l : c.envelope) {
+    j["envelope"].push_back({{"name", l.name},
+                             {"unit", l.unit},
+                             {"limit", number(l.limit)},
+                             {"worst", number(l.worst)},
+                             {"satisfied_fraction", l.satisfied_fraction},
+                             {"met", l.met}});
+  }
+  j["vehicle"] = {{"name", e.name}, {"type", rt::to_string(e.type)}, {"speed_mps", e.speed_mps}};
+  j["inside_planning_bounds"] = c.inside_planning_bounds;
+  j["inside_bounds_fraction"] = c.inside_bounds_fraction;
+  j["all_met"] = c.all_met;
+  j["unmet"] = c.unmet();
+  j["length_m"] = c.length_m;
+  j["duration_s"] = c.duration_s;
+  j["fc"] = c.fc;
+  return j;
+}
+
+nlohmann::json vertices_json(const rt::PathCheck& c, const std::vector<rt::Vec3>& path) {
+  nlohmann::json out = nlohmann::json::array();
+  for (std::size_t i = 0; i < path.size() && i < c.per_vertex.size(); ++i) {
+    const rt::VertexCheck& v = c.per_vertex[i];
+    nlohmann::json seen = nlohmann::json::array();
+    for (bool s : v.seen_by) seen.push_back(s);
+    out.push_back({{"x_m", path[i].x()},
+                   {"y_m", path[i].y()},
+                   {"z_m", path[i].z()},
+                   {"fp", v.fp},
+                   {"ground_m", v.ground_m},
+                   {"clearance_m", v.clearance_m},
+                   {"climb_deg", v.climb_deg},
+                   {"turn_radius_m", number(v.turn_radius_m)},
+                   {"seen_by", seen}});
+  }
+  return out;
+}
+
+void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
+  for (const rt::ConstraintResult& r : c.constraints) {
+    const rt::Vec3& p = r.constraint.point_m;
+    std::printf("constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the length, in sight %.0f m (%.0f s) %s\n",
+                rt::to_string(r.constraint.kind), p.x(), p.y(), p.z(), r.satisfied_fraction, r.seen_m,
+                r.seen_m / e.speed_mps, r.met ? "met" : "NOT MET");
+  }
+  for (const rt::LimitResult& l : c.envelope) {
+    if (!std::isfinite(l.limit)) {
+      std::printf("envelope   %s none: worst %.1f %s\n", l.name.c_str(), l.worst, l.unit.c_str());
+      continue;
+    }
+    std::printf("envelope   %s %.1f %s: worst %.1f %s, holds on %.3f of the length %s\n", l.name.c_str(), l.limit,
+                l.unit.c_str(), l.worst, l.unit.c_str(), l.satisfied_fraction, l.met ? "met" : "NOT MET");
+  }
+  std::printf("bounds     %.3f of the length inside the planning bounds %s\n", c.inside_bounds_fraction,
+              c.inside_planning_bounds ? "met" : "NOT MET");
+  if (c.all_met) {
+    std::printf("requirements all met (sight lines and limits checked on the finest terrain)\n");
+    return;
+  }
+  std::printf("requirements NOT MET:\n");
+  for (const std::string& u : c.unmet()) std::printf("  %s\n", u.c_str());
+}
+
+}  // namespace visvol::cli

@@ -1,0 +1,26 @@
+// How `visvol plan` and `visvol check` report a path's assessment
+// (rt::PathCheck): the JSON members and the text lines they share.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "rt/rope/path_check.hpp"
+
+namespace visvol::cli {
+
+// {"constraints": [{kind, point, eye_m, satisfied_fraction, seen_m, exposure_s, met}],
+//  "envelope": [{name, unit, limit, worst, satisfied_fraction, met}],
+//  "inside_planning_bounds", "inside_bounds_fraction", "all_met", "unmet": [...],
+//  "length_m", "duration_s", "fc"}; infinite limits are null.
+nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope);
+
+// Per vertex: x_m, y_m, z_m, fp, ground_m, clearance_m, climb_deg, turn_radius_m, seen_by.
+nlohmann::json vertices_json(const rt::PathCheck& check, const std::vector<rt::Vec3>& path);
+
+// Lines "constraint  hidden-from (x, y, z): met on 1.000 of the length" and
+// "envelope   max-climb 15.0 deg: worst 12.3 deg, met", then "requirements  all met"
+// or "requirements  NOT MET: ...".
+void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope);
+
+}  // namespace visvol::cli

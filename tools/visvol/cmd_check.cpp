@@ -1,0 +1,102 @@
+// visvol check PACK PATH: the paper's path assessment for any path (visvol's
+// own, a QGroundControl .plan, GeoJSON, CSV, text), checked the independent
+// way: exact sight lines and limits on the finest terrain.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "check_report.hpp"
+#include "cli.hpp"
+#include "commands.hpp"
+#include "mission_options.hpp"
+#include "path_io.hpp"
+#include "planning_pack.hpp"
+#include "rt/rope/field_forces.hpp"
+#include "rt/rope/path_check.hpp"
+
+namespace visvol::cli {
+
+namespace {
+
+struct CheckOptions {
+  std::string pack, path;
+  EnvelopeOptions envelope;
+  ConstraintOptions constraints;
+  bool json = false;
+};
+
+void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path) {
+  std::printf("%5s %12s %12s %8s %8s %9s %7s %9s  %s\n", "#", "x_m", "y_m", "z_m", "F_p", "clear_m", "climb", "turn_m",
+              "seen by");
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const rt::VertexCheck& v = c.per_vertex[i];
+    std::string seen;
+    for (std::size_t k = 0; k < v.seen_by.size(); ++k) {
+      if (v.seen_by[k]) seen += (seen.empty() ? "" : ",") + std::to_string(k + 1);
+    }
+    std::printf("%5zu %12.1f %12.1f %8.1f %8.5f %9.1f %7.1f %9s  %s\n", i, path[i].x(), path[i].y(), path[i].z(),
+                v.fp, v.clearance_m, v.climb_deg,
+                std::isfinite(v.turn_radius_m) ? std::to_string(std::lround(v.turn_radius_m)).c_str() : "-",
+                seen.empty() ? "-" : seen.c_str());
+  }
+}
+
+int run_check(const CheckOptions& o) {
+  Result<PlanningPack> opened = open_planning_pack(o.pack);
+  if (!opened.ok()) return fail("check", opened.status());
+  const PlanningPack& p = *opened;
+  Result<rt::VehicleEnvelope> envelope = resolve_envelope(o.envelope);
+  if (!envelope.ok()) return fail("check", envelope.status());
+  Result<PathFile> file = read_path_file(o.path, p.pack->metadata().crs_wkt);
+  if (!file.ok()) return fail("check", file.status());
+  if (!file->has_heights) {
+    return fail("check", invalid_argument(o.path + ": the path has no heights (x y z or a file with altitudes)"));
+  }
+  const rt::FieldForces<storage::PackLevel> field(p.levels.front(), rt::ForceGains{});
+  rt::PathCheckSpec spec;
+  spec.envelope = *envelope;
+  spec.constraints = constraint_points(o.constraints);
+  spec.planning_bounds = p.bounds;
+  spec.curvature_coeff = p.curvature_coeff;
+  Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
+  if (!checker.ok()) return fail("check", checker.status());
+  const rt::PathCheck c = checker->check(file->points);
+
+  if (o.json) {
+    nlohmann::json j = check_json(c, *envelope);
+    j["pack"] = o.pack;
+    j["path"] = o.path;
+    j["per_vertex"] = vertices_json(c, file->points);
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("path       %s: %zu vertices, %.0f m, %.0f s at %.1f m/s (vehicle %s)\n", o.path.c_str(),
+                file->points.size(), c.length_m, c.duration_s, envelope->speed_mps, envelope->name.c_str());
+    std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
+    print_vertices(c, file->points);
+    print_check(c, *envelope);
+  }
+  return c.all_met ? kExitOk : kExitFailure;
+}
+
+}  // namespace
+
+Runner add_check_command(CLI::App& app) {
+  auto o = std::make_shared<CheckOptions>();
+  CLI::App* c = app.add_subcommand(
+      "check", "Assess any path: per vertex F_p, clearance, sight of each observer, climb and turn; totals");
+  c->add_option("PACK", o->pack, "Field pack")->required();
+  c->add_option("PATH", o->path,
+                "The path: a QGroundControl .plan, GeoJSON (RFC 7946), the CSV of visvol plan, or text 'x y z' "
+                "(pack CRS, m)")
+      ->required();
+  add_envelope_options(*c, o->envelope);
+  add_constraint_options(*c, o->constraints);
+  c->add_flag("--json", o->json, "Print the assessment as one JSON object (per_vertex included)");
+  c->footer(
+      "Sight lines are Franklin & Ray's R3 on the finest terrain from each observer's eye to samples a quarter "
+      "post apart. Exit status: 0 when every requirement holds, 1 when one does not, 2 for bad arguments or input.");
+  return [o] { return run_check(*o); };
+}
+
+}  // namespace visvol::cli

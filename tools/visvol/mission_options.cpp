@@ -1,0 +1,177 @@
+#include "mission_options.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstring>
+#include <toml++/toml.h>
+
+namespace visvol::cli {
+
+namespace {
+
+constexpr std::size_t kMaxVehicleFileBytes = 64 * 1024;
+
+// The whole of a small regular file; never blocks on a FIFO or a device.
+Result<std::string> read_small_file(const std::string& path, std::size_t max_bytes) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return io_error(path + ": " + std::strerror(errno));
+  struct stat st {};
+  std::string text;
+  Status status;
+  if (::fstat(fd, &st) != 0) {
+    status = io_error(path + ": " + std::strerror(errno));
+  } else if (!S_ISREG(st.st_mode)) {
+    status = invalid_argument(path + ": not a regular file");
+  } else if (static_cast<std::size_t>(st.st_size) > max_bytes) {
+    status = invalid_argument(path + ": larger than " + std::to_string(max_bytes) + " bytes");
+  } else {
+    text.resize(static_cast<std::size_t>(st.st_size));
+    std::size_t got = 0;
+    while (got < text.size()) {
+      const ssize_t n = ::read(fd, &text[got], text.size() - got);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      got += static_cast<std::size_t>(n);
+    }
+    if (got != text.size()) status = io_error(path + ": short read");
+  }
+  ::close(fd);
+  if (!status.ok()) return status;
+  return text;
+}
+
+// A number under `key` (an integer is taken as one too), or an error.
+Status read_number(const toml::node& node, const std::string& file, const std::string& key, double& out) {
+  if (const auto* f = node.as_floating_point()) {
+    out = f->get();
+  } else if (const auto* i = node.as_integer()) {
+    out = static_cast<double>(i->get());
+  } else {
+    return invalid_argument(file + ": " + key + " must be a number");
+  }
+  return Status::ok_status();
+}
+
+}  // namespace
+
+Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
+  Result<std::string> text = read_small_file(path, kMaxVehicleFileBytes);
+  if (!text.ok()) return text.status();
+  toml::table table;
+  try {
+    table = toml::parse(*text, path);
+  } catch (const toml::parse_error& e) {
+    const auto& where = e.source().begin;
+    return invalid_argument(path + ":" + std::to_string(where.line) + ":" + std::to_string(where.column) + ": " +
+                            std::string(e.description()));
+  }
+  // the type first: it picks the preset the other keys change
+  std::string type = "fixed-wing";
+  if (const toml::node* t = table.get("type")) {
+    const auto* s = t->as_string();
+    if (!s) return invalid_argument(path + ": type must be \"fixed-wing\" or \"multirotor\"");
+    type = s->get();
+  }
+  Result<rt::VehicleEnvelope> v = rt::vehicle_preset(type);
+  if (!v.ok()) return invalid_argument(path + ": type \"" + type + "\" is neither fixed-wing nor multirotor");
+  v->name = path;
+  const struct {
+    const char* key;
+    double rt::VehicleEnvelope::*field;
+  } numbers[] = {{"speed", &rt::VehicleEnvelope::speed_mps},
+                 {"max-climb", &rt::VehicleEnvelope::max_climb_deg},
+                 {"max-descent", &rt::VehicleEnvelope::max_descent_deg},
+                 {"min-turn-radius", &rt::VehicleEnvelope::min_turn_radius_m},
+                 {"clearance", &rt::VehicleEnvelope::clearance_m},
+                 {"max-agl", &rt::VehicleEnvelope::max_agl_m},
+                 {"max-altitude", &rt::VehicleEnvelope::max_altitude_m}};
+  for (const auto& [key, node] : table) {
+    const std::string k(key.str());
+    if (k == "type") continue;
+    if (k == "name") {
+      const auto* s = node.as_string();
+      if (!s) return invalid_argument(path + ": name must be a string");
+      v->name = s->get();
+      continue;
+    }
+    bool known = false;
+    for (const auto& n : numbers) {
+      if (k != n.key) continue;
+      VISVOL_RETURN_IF_ERROR(read_number(node, path, k, (*v).*(n.field)));
+      known = true;
+    }
+    if (!known) {
+      return invalid_argument(path + ": unknown key '" + k +
+                              "' (known: name, type, speed, max-climb, max-descent, min-turn-radius, clearance, "
+                              "max-agl, max-altitude)");
+    }
+  }
+  const Status valid = rt::validate(*v);
+  if (!valid.ok()) return invalid_argument(path + ": " + valid.message());
+  return v;
+}
+
+void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
+  c.add_option("--vehicle", o.vehicle,
+               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m), multirotor (8 m/s, climb 60 deg, "
+               "descent 45 deg) or a TOML file of the keys below")
+      ->capture_default_str();
+  c.add_option("--speed", o.speed_mps, "Cruise speed, m/s (exposure time, mission speeds)");
+  c.add_option("--max-climb", o.max_climb_deg, "Steepest climb of a segment, deg");
+  c.add_option("--max-descent", o.max_descent_deg, "Steepest descent of a segment, deg");
+  c.add_option("--min-turn-radius", o.min_turn_radius_m, "Tightest turn at a waypoint, m (0: none)");
+  c.add_option("--clearance", o.clearance_m, "Least height above the terrain, m (default 30)");
+  c.add_option("--max-agl", o.max_agl_m, "Highest height above the terrain, m (default: the field's top bounds it)");
+  c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
+}
+
+void add_constraint_options(CLI::App& c, ConstraintOptions& o) {
+  c.add_option("--hidden-from", o.hidden_from,
+               "Stay hidden from an observer standing at X Y Z (pack CRS, m; at or above the terrain); repeatable")
+      ->expected(3)
+      ->allow_extra_args(false);
+  c.add_option("--visible-to", o.visible_to, "Stay visible to an observer at X Y Z; repeatable")
+      ->expected(3)
+      ->allow_extra_args(false);
+  c.add_option("--eye-height", o.eye_height_m, "Observers' eyes above the points named, m")->capture_default_str();
+}
+
+Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& o) {
+  Result<rt::VehicleEnvelope> v = o.vehicle == "fixed-wing" || o.vehicle == "multirotor"
+                                      ? rt::vehicle_preset(o.vehicle)
+                                      : read_vehicle_file(o.vehicle);
+  if (!v.ok()) return invalid_argument("--vehicle " + v.status().message());
+  const struct {
+    const std::optional<double>& value;
+    double rt::VehicleEnvelope::*field;
+  } overrides[] = {{o.speed_mps, &rt::VehicleEnvelope::speed_mps},
+                   {o.max_climb_deg, &rt::VehicleEnvelope::max_climb_deg},
+                   {o.max_descent_deg, &rt::VehicleEnvelope::max_descent_deg},
+                   {o.min_turn_radius_m, &rt::VehicleEnvelope::min_turn_radius_m},
+                   {o.clearance_m, &rt::VehicleEnvelope::clearance_m},
+                   {o.max_agl_m, &rt::VehicleEnvelope::max_agl_m},
+                   {o.max_altitude_m, &rt::VehicleEnvelope::max_altitude_m}};
+  for (const auto& x : overrides) {
+    if (x.value) (*v).*(x.field) = *x.value;
+  }
+  const Status valid = rt::validate(*v);
+  if (!valid.ok()) return invalid_argument(valid.message());
+  return v;
+}
+
+std::vector<rt::ConstraintPoint> constraint_points(const ConstraintOptions& o) {
+  std::vector<rt::ConstraintPoint> out;
+  for (const auto& [points, kind] : {std::pair{&o.hidden_from, rt::ConstraintKind::hidden_from},
+                                     std::pair{&o.visible_to, rt::ConstraintKind::visible_to}}) {
+    for (const std::vector<double>& p : *points) {
+      if (p.size() == 3) out.push_back({kind, rt::Vec3(p[0], p[1], p[2]), o.eye_height_m});
+    }
+  }
+  return out;
+}
+
+}  // namespace visvol::cli

@@ -40,12 +40,22 @@ Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, d
   return b;
 }
 
-std::vector<Vec3> without_repeats(const std::vector<Vec3>& path) {
+// Without points standing on (or within `min_m` horizontally of) the one
+// before them: a vertical step is never flyable, and the heights are fitted
+// afterwards anyway. The ends stay.
+std::vector<Vec3> without_repeats(const std::vector<Vec3>& path, double min_m) {
   std::vector<Vec3> out;
-  for (const Vec3& p : path) {
-    if (out.empty() || (p - out.back()).norm() > 1e-6) out.push_back(p);
+  auto apart = [&](const Vec3& a, const Vec3& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()) > min_m; };
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    if (out.empty()) {
+      out.push_back(path[i]);
+    } else if (i + 1 == path.size()) {
+      if (out.size() > 1 && !apart(path[i], out.back())) out.pop_back();  // the end wins
+      out.push_back(path[i]);
+    } else if (apart(path[i], out.back())) {
+      out.push_back(path[i]);
+    }
   }
-  if (out.size() == 1 && path.size() > 1) out.push_back(path.back());  // keep both ends
   return out;
 }
 
@@ -149,7 +159,7 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
 EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
                             const fields::Heightfield& terrain) {
   EnvelopeFit out;
-  std::vector<Vec3> p = without_repeats(path);
+  std::vector<Vec3> p = without_repeats(path, 0.05 * terrain.spacing_m);
   if (p.size() < 2) {
     out.path = p;
     return out;

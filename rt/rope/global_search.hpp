@@ -191,8 +191,12 @@ Result<GlobalPath> global_search(const Level& level, const Vec3& from, const Vec
     reversed.push_back({g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, g.z_of(k)});
     if (u == start) break;
   }
+  // the ends stand in their own columns: they replace the voxels they snapped to
   out.points.push_back(from);
-  for (auto it = reversed.rbegin(); it != reversed.rend(); ++it) out.points.push_back(*it);
+  for (auto it = reversed.rbegin(); it != reversed.rend(); ++it) {
+    const bool end_voxel = it == reversed.rbegin() || it + 1 == reversed.rend();
+    if (!end_voxel || reversed.size() < 3) out.points.push_back(*it);
+  }
   out.points.push_back(to);
   return out;
 }

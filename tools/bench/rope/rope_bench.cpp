@@ -87,7 +87,8 @@ void print_convergence() {
   std::vector<const DenseLevel*> levels;
   for (const DenseLevel& l : w.levels) levels.push_back(&l);
   std::printf("\nsettling on the Taunus window (256 x 256 posts, 90 m, range 32, 3 levels of detail):\n");
-  std::printf("model        start     F_c start  F_c final  graph F_c  sim s (finest)  sim s (all)  wall s  converged\n");
+  std::printf("model        start     F_c start  F_c final  graph F_c  sim s (finest)  sim s (all)  wall s  converged  "
+              "requirements (fixed-wing, exact check)  answer\n");
   GlobalSearchParams gp;
   gp.objective = Objective::hide;
   gp.clearance_m = 30;
@@ -107,9 +108,10 @@ void print_convergence() {
         std::printf("%s\n", res.status().message().c_str());
         continue;
       }
-      std::printf("%-12s %-9s %9.4f  %9.4f  %9.4f  %14.1f  %11.1f  %6.2f  %s\n", to_string(model),
+      std::printf("%-12s %-9s %9.4f  %9.4f  %9.4f  %14.1f  %11.1f  %6.2f  %-9s  %-38s  %s\n", to_string(model),
                   init == InitialPath::straight ? "straight" : "global", res->initial.fc, res->final_metrics.fc,
-                  graph_fc, res->equilibrium_s, res->simulated_s, res->wall_s, res->converged ? "yes" : "no");
+                  graph_fc, res->equilibrium_s, res->simulated_s, res->wall_s, res->converged ? "yes" : "no",
+                  res->final_check.all_met ? "all met" : "NOT met", res->chosen.c_str());
       if (model == RopeModel::articulated && init == InitialPath::global) {
         // After a perturbation: start from the settled path lifted 200 m in its middle.
         std::vector<Vec3> bent = res->final_path;
@@ -121,9 +123,10 @@ void print_convergence() {
         std::vector<const DenseLevel*> finest{&w.levels[0]};
         auto res2 = plan(finest, again);
         if (res2.ok()) {
-          std::printf("%-12s %-9s %9.4f  %9.4f  %9.4f  %14.1f  %11.1f  %6.2f  %s\n", "articulated", "perturbed",
-                      res2->initial.fc, res2->final_metrics.fc, graph_fc, res2->equilibrium_s, res2->simulated_s,
-                      res2->wall_s, res2->converged ? "yes" : "no");
+          std::printf("%-12s %-9s %9.4f  %9.4f  %9.4f  %14.1f  %11.1f  %6.2f  %-9s  %-38s  %s\n", "articulated",
+                      "perturbed", res2->initial.fc, res2->final_metrics.fc, graph_fc, res2->equilibrium_s,
+                      res2->simulated_s, res2->wall_s, res2->converged ? "yes" : "no",
+                      res2->final_check.all_met ? "all met" : "NOT met", res2->chosen.c_str());
         }
       }
     }

@@ -8,6 +8,7 @@ build_packages=(
   cmake g++ make pkg-config
   libeigen3-dev          # vectors and matrices (rope, sampler, servo)
   libgdal-dev            # DEM import and GeoTIFF output (offline tools only)
+  libproj-dev proj-data  # path files: DEM (EGM96) heights to WGS84 ellipsoidal ones for GeoJSON (the EGM96 grid)
   libcli11-dev           # command-line parsing
   nlohmann-json3-dev     # --json output
   libgtest-dev libgmock-dev  # unit tests

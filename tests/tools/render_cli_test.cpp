@@ -58,7 +58,8 @@ Ends ends_printed(const std::string& out) {
 Ends ends_of_csv(const std::string& file) {
   std::ifstream in(file);
   std::string line, first, last;
-  std::getline(in, line);  // header: index,x_m,y_m,z_m,...
+  // '#' lines (CRS and datums), then the header: index,x_m,y_m,z_m,...
+  while (std::getline(in, line) && line.rfind('#', 0) == 0) continue;
   while (std::getline(in, line)) {
     if (first.empty()) first = line;
     last = line;

@@ -164,16 +164,24 @@ TEST_F(Cli, PlanWritesThePathInFourFormats) {
   ASSERT_EQ(coords.size(), 33u);
   EXPECT_NEAR(coords[0][0].get<double>(), -122.43, 0.1);  // San Francisco, WGS84 longitude
   EXPECT_NEAR(coords[0][1].get<double>(), 37.79, 0.1);
-  EXPECT_DOUBLE_EQ(coords[0][2].get<double>(), 250.0);
+  // RFC 7946: above the WGS84 ellipsoid, EGM96's geoid being about 32 m under it here
+  EXPECT_DOUBLE_EQ(gj["features"][0]["properties"]["vertex_height_orthometric_m"][0].get<double>(), 250.0);
+  EXPECT_NEAR(coords[0][2].get<double>(), 250.0 - 32.0, 2.0);
   const nlohmann::json plan = nlohmann::json::parse(slurp(base + ".plan"));
   EXPECT_EQ(plan["fileType"], "Plan");
-  EXPECT_EQ(plan["mission"]["items"].size(), 33u);
-  EXPECT_EQ(plan["mission"]["items"][0]["frame"], 0);  // MAV_FRAME_GLOBAL: above mean sea level
-  EXPECT_EQ(plan["mission"]["items"][0]["command"], 16);
+  // fixed-wing (the default vehicle): takeoff, 33 waypoints, land start, loiter, land
+  EXPECT_EQ(plan["mission"]["items"].size(), 37u);
+  EXPECT_EQ(plan["mission"]["items"][0]["command"], 22);
+  EXPECT_EQ(plan["mission"]["items"][1]["frame"], 0);  // MAV_FRAME_GLOBAL: above mean sea level
+  EXPECT_EQ(plan["mission"]["items"][1]["command"], 16);
+  EXPECT_DOUBLE_EQ(plan["mission"]["items"][1]["params"][6].get<double>(), 250.0);
   const std::string kml = slurp(base + ".kml");
   EXPECT_NE(kml.find("<altitudeMode>absolute</altitudeMode>"), std::string::npos);
-  const std::string csv = slurp(base + ".csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);
+  // '#' lines naming the CRS and datums, the header, 33 rows
+  std::istringstream csv(slurp(base + ".csv"));
+  int rows = 0;
+  for (std::string line; std::getline(csv, line);) rows += !line.empty() && line[0] != '#';
+  EXPECT_EQ(rows, 34);
   for (const char* ext : {".geojson", ".csv", ".kml", ".plan"}) std::remove((base + ext).c_str());
 }
 

@@ -150,6 +150,9 @@ int run_plan(const PlanOptions& o) {
   report.model = rt::to_string(r.model);
   report.pack = o.pack;
   report.crs_wkt = pack->metadata().crs_wkt;
+  report.home_ground_m = finest.height(report.vertices.front().x(), report.vertices.front().y());
+  report.land_ground_m = finest.height(report.vertices.back().x(), report.vertices.back().y());
+  report.vehicle = r.envelope;
   for (const rt::Vec3& v : report.vertices) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }

@@ -1,8 +1,10 @@
 #include "path_io.hpp"
 
 #include <ogr_spatialref.h>
+#include <proj.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -15,7 +17,7 @@
 #include <sstream>
 #include <utility>
 
-#include "cli.hpp"
+#include "rt/base/atomic_file.hpp"
 
 namespace visvol::cli {
 
@@ -293,14 +295,19 @@ Status read_positions(const nlohmann::json& coordinates, const std::string& path
   return Status::ok_status();
 }
 
-// The GeoJSON `visvol plan` writes (or any with one LineString), to the pack's CRS.
-Result<PathFile> parse_geojson(const std::string& text, const std::string& path, const std::string& crs_wkt) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    return invalid_argument(path + ": not valid JSON: " + e.what());
-  }
+// What a visvol GeoJSON written before its heights were ellipsoidal said of
+// them: such a file's heights are the DEM's, read as they are.
+constexpr const char* kOrthometricGeoJsonReference = "the DEM's vertical datum (mean sea level)";
+
+bool heights_are_orthometric(const nlohmann::json& properties) {
+  if (!properties.is_object() || properties.contains("vertical_datum")) return false;
+  const auto it = properties.find("height_reference");
+  return it != properties.end() && it->is_string() && it->get<std::string>() == kOrthometricGeoJsonReference;
+}
+
+// The GeoJSON `visvol plan` writes (or any with one LineString), to the pack's
+// CRS and the DEM's (orthometric) heights.
+Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
   const nlohmann::json no_properties;
   LineStrings lines;
   std::vector<std::string> others;
@@ -312,18 +319,191 @@ Result<PathFile> parse_geojson(const std::string& text, const std::string& path,
   PathFile out;
   out.format = PathFormat::geojson;
   const nlohmann::json& line = *lines.front().first;
+  const nlohmann::json& properties = *lines.front().second;
   if (!line.contains("coordinates")) return invalid_argument(path + ": the LineString has no coordinates");
   VISVOL_RETURN_IF_ERROR(read_positions(line["coordinates"], path, out));
   VISVOL_RETURN_IF_ERROR(check_count(out, path));
-  VISVOL_RETURN_IF_ERROR(read_vertex_fp(*lines.front().second, out.points.size(), path, out.fp));
+  VISVOL_RETURN_IF_ERROR(read_vertex_fp(properties, out.points.size(), path, out.fp));
   if (crs_wkt.empty()) {
     return invalid_argument(path + ": a GeoJSON path is in WGS84 longitude and latitude, and there is no pack CRS "
                                    "to convert it to (use the CSV or x y z text in the pack's CRS)");
+  }
+  // RFC 7946: heights above the WGS84 ellipsoid; the pack's are the DEM's
+  if (out.has_heights && !heights_are_orthometric(properties)) {
+    Result<std::vector<Vec3>> orthometric = ellipsoidal_to_orthometric(out.points);
+    if (!orthometric.ok()) return orthometric.status().with_context(path + ": heights");
+    out.points = std::move(*orthometric);
   }
   Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
   if (!projected.ok()) return projected.status().with_context(path);
   out.points = std::move(*projected);
   return out;
+}
+
+// ---- QGroundControl .plan ----
+
+const char* frame_name(int frame) {
+  switch (frame) {
+    case mavlink::kFrameGlobal: return "MAV_FRAME_GLOBAL";
+    case 1: return "MAV_FRAME_LOCAL_NED";
+    case 2: return "MAV_FRAME_MISSION";
+    case mavlink::kFrameGlobalRelativeAlt: return "MAV_FRAME_GLOBAL_RELATIVE_ALT";
+    case 4: return "MAV_FRAME_LOCAL_ENU";
+    case mavlink::kFrameGlobalInt: return "MAV_FRAME_GLOBAL_INT";
+    case mavlink::kFrameGlobalRelativeAltInt: return "MAV_FRAME_GLOBAL_RELATIVE_ALT_INT";
+    case mavlink::kFrameGlobalTerrainAlt: return "MAV_FRAME_GLOBAL_TERRAIN_ALT, above the terrain";
+    case 11: return "MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, above the terrain";
+    default: return "not a global frame";
+  }
+}
+
+// A JSON number with an integer value (QGroundControl writes integers; 16.0 is 16).
+bool integer_of(const nlohmann::json& j, long long& v) {
+  if (j.is_number_integer()) {
+    v = j.get<long long>();
+    return true;
+  }
+  if (!j.is_number_float()) return false;
+  const double d = j.get<double>();
+  if (!std::isfinite(d) || d != std::floor(d) || std::fabs(d) > 1e15) return false;
+  v = static_cast<long long>(d);
+  return true;
+}
+
+std::string json_brief(const nlohmann::json& j) { return quoted(j.dump()); }
+
+// mission.plannedHomePosition: [latitude, longitude, altitude above mean sea level].
+Status read_home_altitude(const nlohmann::json& mission, const std::string& where, double& altitude_m) {
+  const auto it = mission.find("plannedHomePosition");
+  if (it == mission.end() || !it->is_array() || it->size() != 3) {
+    return invalid_argument(where + "mission.plannedHomePosition is missing or not [latitude, longitude, altitude]");
+  }
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!(*it)[k].is_number() || !std::isfinite((*it)[k].get<double>())) {
+      return invalid_argument(where + "mission.plannedHomePosition[" + std::to_string(k) + "] " +
+                              json_brief((*it)[k]) + " is not a finite number");
+    }
+  }
+  altitude_m = (*it)[2].get<double>();
+  return Status::ok_status();
+}
+
+// The NAV_WAYPOINT items of a QGroundControl .plan, to the pack's CRS.
+Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
+  const std::string file = path + ": ";
+  if (!j["fileType"].is_string() || j["fileType"].get<std::string>() != "Plan") {
+    return invalid_argument(file + "fileType " + json_brief(j["fileType"]) + "; a QGroundControl plan has \"Plan\"");
+  }
+  long long version = 0;
+  if (!j.contains("version") || !integer_of(j["version"], version) || version != qgc::kPlanVersion) {
+    return invalid_argument(file + "version " + (j.contains("version") ? json_brief(j["version"]) : "missing") +
+                            "; this reader knows QGroundControl plan version " + std::to_string(qgc::kPlanVersion));
+  }
+  if (!j.contains("mission") || !j["mission"].is_object()) return invalid_argument(file + "no mission object");
+  const nlohmann::json& mission = j["mission"];
+  if (!mission.contains("items") || !mission["items"].is_array()) {
+    return invalid_argument(file + "mission.items is missing or not an array");
+  }
+  const nlohmann::json& items = mission["items"];
+  PathFile out;
+  out.format = PathFormat::qgc_plan;
+  out.has_heights = true;
+  bool have_home = false;
+  double home_altitude_m = 0;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const nlohmann::json& item = items[i];
+    std::string where = file + "mission.items[" + std::to_string(i) + "]";
+    long long jump_id = 0;
+    if (item.is_object() && item.contains("doJumpId") && integer_of(item["doJumpId"], jump_id)) {
+      where += " (doJumpId " + std::to_string(jump_id) + ")";
+    }
+    where += ": ";
+    if (!item.is_object() || !item.contains("type") || !item["type"].is_string()) {
+      return invalid_argument(where + "not a mission item (an object with a type)");
+    }
+    const std::string type = item["type"].get<std::string>();
+    if (type == "ComplexItem") {
+      const std::string kind = item.contains("complexItemType") && item["complexItemType"].is_string()
+                                   ? item["complexItemType"].get<std::string>()
+                                   : std::string("of no complexItemType");
+      return invalid_argument(where + "a ComplexItem (" + kind +
+                              "): its flown path is not in the file; only SimpleItems are read");
+    }
+    if (type != "SimpleItem") return invalid_argument(where + "type '" + quoted(type) + "' is not SimpleItem");
+    long long command = 0;
+    if (!item.contains("command") || !integer_of(item["command"], command)) {
+      const std::string given = item.contains("command") ? json_brief(item["command"]) : "missing";
+      return invalid_argument(where + "command " + given + " is not an integer");
+    }
+    if (command != mavlink::kCmdNavWaypoint) continue;  // takeoff, land, loiter, DO_...: not the path
+    long long frame = 0;
+    if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
+      return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
+                              " is not an integer");
+    }
+    if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
+      return invalid_argument(where + "params is missing or not an array of 7");
+    }
+    const nlohmann::json& params = item["params"];
+    static constexpr std::array<const char*, 3> kNames = {"latitude", "longitude", "altitude"};
+    double v[3] = {0, 0, 0};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const nlohmann::json& p = params[4 + k];
+      if (!p.is_number() || !std::isfinite(p.get<double>())) {
+        return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kNames[k] + ") " + json_brief(p) +
+                                " is not a finite number");
+      }
+      v[k] = p.get<double>();
+    }
+    const double lat = v[0], lon = v[1];
+    if (std::fabs(lat) > 90 || std::fabs(lon) > 180) {
+      return invalid_argument(where + "latitude " + fixed(lat, 6) + ", longitude " + fixed(lon, 6) +
+                              " is not a WGS84 position in degrees");
+    }
+    double altitude_m = v[2];
+    if (frame == mavlink::kFrameGlobalRelativeAlt || frame == mavlink::kFrameGlobalRelativeAltInt) {
+      if (!have_home) {
+        VISVOL_RETURN_IF_ERROR(read_home_altitude(mission, where + "frame " + std::to_string(frame) + " (" +
+                                                               frame_name(static_cast<int>(frame)) +
+                                                               ", above home) needs the home altitude: ",
+                                                  home_altitude_m));
+        have_home = true;
+      }
+      altitude_m += home_altitude_m;
+    } else if (frame != mavlink::kFrameGlobal && frame != mavlink::kFrameGlobalInt) {
+      return invalid_argument(where + "frame " + std::to_string(frame) + " (" +
+                              frame_name(frame >= 0 && frame < 64 ? static_cast<int>(frame) : -1) +
+                              ") is not supported; visvol reads waypoints in frame 0 (MAV_FRAME_GLOBAL, above mean "
+                              "sea level) or 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, above the planned home)");
+    }
+    out.points.push_back({lon, lat, altitude_m});
+  }
+  if (out.points.size() < 2) {
+    return invalid_argument(file + std::to_string(out.points.size()) + " NAV_WAYPOINT (" +
+                            std::to_string(mavlink::kCmdNavWaypoint) + ") items in mission.items (of " +
+                            std::to_string(items.size()) + "); a path needs at least 2");
+  }
+  if (crs_wkt.empty()) {
+    return invalid_argument(file + "a .plan is in WGS84 latitude and longitude, and there is no pack CRS to convert "
+                                   "it to");
+  }
+  // altitudes above mean sea level: the DEM's heights, kept
+  Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
+  if (!projected.ok()) return projected.status().with_context(path);
+  out.points = std::move(*projected);
+  return out;
+}
+
+// A JSON document: a QGroundControl plan (it has a fileType) or GeoJSON.
+Result<PathFile> parse_json_path(const std::string& text, const std::string& path, const std::string& crs_wkt) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    return invalid_argument(path + ": not valid JSON: " + e.what());
+  }
+  if (j.is_object() && j.contains("fileType")) return parse_qgc_plan(j, path, crs_wkt);
+  return parse_geojson(j, path, crs_wkt);
 }
 
 }  // namespace
@@ -332,7 +512,7 @@ Result<PathFile> read_path_file(const std::string& path, const std::string& crs_
   Result<std::string> text = read_whole_file(path);
   if (!text.ok()) return text.status();
   const std::size_t first = text->find_first_not_of(" \t\r\n");
-  if (first != std::string::npos && (*text)[first] == '{') return parse_geojson(*text, path, crs_wkt);
+  if (first != std::string::npos && (*text)[first] == '{') return parse_json_path(*text, path, crs_wkt);
   if (is_plan_csv(*text)) return parse_plan_csv(*text, path);
   return parse_text_points(*text, path);
 }
@@ -397,95 +577,354 @@ Result<std::vector<Vec3>> from_wgs84(const std::vector<Vec3>& lon_lat_h, const s
   return transform_xy(lon_lat_h, crs_wkt, false);
 }
 
-Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
-  const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt);
-  // CSV: always (projected coordinates are enough)
-  {
-    std::ostringstream csv;
-    csv << "index,x_m,y_m,z_m," << (geo.ok() ? "lon_deg,lat_deg," : "") << "fp,clearance_m\n";
-    for (std::size_t i = 0; i < r.vertices.size(); ++i) {
-      const Vec3& v = r.vertices[i];
-      csv << i << ',' << fixed(v.x(), 3) << ',' << fixed(v.y(), 3) << ',' << fixed(v.z(), 3) << ',';
-      if (geo.ok()) csv << fixed((*geo)[i].x(), 8) << ',' << fixed((*geo)[i].y(), 8) << ',';
-      csv << fixed(r.per_vertex[i].fp, 6) << ',' << fixed(r.per_vertex[i].clearance_m, 2) << '\n';
-    }
-    VISVOL_RETURN_IF_ERROR(write_text_file(base + ".csv", csv.str()));
-    written.push_back(base + ".csv");
+// ---- Heights: EGM96 orthometric <-> WGS84 ellipsoidal ----
+
+namespace {
+
+constexpr const char* kOrthometricCrs = "EPSG:4326+5773";  // WGS 84 + EGM96 height
+constexpr const char* kEllipsoidalCrs = "EPSG:4979";        // WGS 84 (3D): height above the ellipsoid
+// The grid PROJ's EPSG transformation uses, and its name before PROJ 7.
+constexpr const char* kGeoidGridNames = "us_nga_egm96_15.tif (egm96_15.gtx before PROJ 7)";
+
+struct ProjContextFree {
+  void operator()(PJ_CONTEXT* c) const { proj_context_destroy(c); }
+};
+struct ProjFree {
+  void operator()(PJ* p) const { proj_destroy(p); }
+};
+struct ProjListFree {
+  void operator()(PJ_OBJ_LIST* l) const { proj_list_destroy(l); }
+};
+struct ProjFactoryFree {
+  void operator()(PJ_OPERATION_FACTORY_CONTEXT* f) const { proj_operation_factory_context_destroy(f); }
+};
+using ProjContext = std::unique_ptr<PJ_CONTEXT, ProjContextFree>;
+using ProjObject = std::unique_ptr<PJ, ProjFree>;
+
+struct GeoidShift {
+  std::vector<Vec3> points;
+  std::string grid;  // the grid PROJ used
+};
+
+Status geoid_missing(const std::string& grids) {
+  return Status(Errc::unsupported,
+                "the EGM96 geoid grid " + grids +
+                    " is not installed in PROJ's data folder (Debian: proj-data, /usr/share/proj; or PROJ_DATA): "
+                    "heights above the WGS84 ellipsoid (GeoJSON, RFC 7946) need it");
+}
+
+// Orthometric (EGM96) to ellipsoidal heights (WGS84) or back at WGS84
+// (longitude, latitude, height) points: the EPSG transformation through the
+// EGM96 grid, never PROJ's "ballpark" one that leaves heights unchanged, and
+// no grid fetched from the network. A context of its own per call (GDAL keeps
+// its own), so this is thread-compatible.
+Result<GeoidShift> shift_heights(const std::vector<Vec3>& lon_lat_h, bool to_ellipsoidal) {
+  const ProjContext ctx(proj_context_create());
+  if (!ctx) return resource_error("PROJ: no context");
+  proj_log_level(ctx.get(), PJ_LOG_NONE);  // failures are reported below, in words
+  proj_context_set_enable_network(ctx.get(), 0);
+  const ProjObject source(proj_create(ctx.get(), kOrthometricCrs)), target(proj_create(ctx.get(), kEllipsoidalCrs));
+  if (!source || !target) {
+    return Status(Errc::unsupported, std::string("PROJ does not know ") + kOrthometricCrs + " or " + kEllipsoidalCrs +
+                                         " (is its database proj.db installed?)");
   }
-  if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
+  const std::unique_ptr<PJ_OPERATION_FACTORY_CONTEXT, ProjFactoryFree> factory(
+      proj_create_operation_factory_context(ctx.get(), nullptr));
+  if (!factory) return resource_error("PROJ: no operation factory");
+  proj_operation_factory_context_set_allow_ballpark_transformations(ctx.get(), factory.get(), 0);
+  // list the transformations whether their grids are here or not, to name a missing one
+  proj_operation_factory_context_set_grid_availability_use(ctx.get(), factory.get(), PROJ_GRID_AVAILABILITY_IGNORED);
+  proj_operation_factory_context_set_spatial_criterion(ctx.get(), factory.get(),
+                                                       PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
+  const std::unique_ptr<PJ_OBJ_LIST, ProjListFree> operations(
+      proj_create_operations(ctx.get(), source.get(), target.get(), factory.get()));
+  const int count = operations ? proj_list_get_count(operations.get()) : 0;
+  ProjObject chosen;
+  std::string grid, missing;
+  for (int i = 0; i < count && !chosen; ++i) {
+    ProjObject op(proj_list_get(ctx.get(), operations.get(), i));
+    if (!op) continue;
+    const int grids = proj_coordoperation_get_grid_used_count(ctx.get(), op.get());
+    bool available = grids > 0;  // a transformation without a grid does not apply the geoid
+    std::string names;
+    for (int g = 0; g < grids; ++g) {
+      const char *short_name = nullptr, *full_name = nullptr, *package = nullptr, *url = nullptr;
+      int direct_download = 0, open_license = 0, here = 0;
+      if (!proj_coordoperation_get_grid_used(ctx.get(), op.get(), g, &short_name, &full_name, &package, &url,
+                                             &direct_download, &open_license, &here)) {
+        available = false;
+        continue;
+      }
+      names += (names.empty() ? "" : ", ") + std::string(short_name != nullptr ? short_name : "?");
+      if (here == 0) available = false;
+    }
+    if (available) {
+      chosen.reset(proj_normalize_for_visualization(ctx.get(), op.get()));  // longitude, latitude order
+      grid = names;
+    } else if (missing.empty() && !names.empty()) {
+      missing = names;
+    }
+  }
+  if (!chosen) return geoid_missing(missing.empty() ? kGeoidGridNames : missing);
+
+  GeoidShift out;
+  out.grid = grid;
+  out.points.reserve(lon_lat_h.size());
+  for (std::size_t i = 0; i < lon_lat_h.size(); ++i) {
+    const Vec3& p = lon_lat_h[i];
+    const PJ_COORD shifted =
+        proj_trans(chosen.get(), to_ellipsoidal ? PJ_FWD : PJ_INV, proj_coord(p.x(), p.y(), p.z(), 0));
+    if (!std::isfinite(shifted.xyz.z) || shifted.xyz.z == HUGE_VAL) {
+      const int err = proj_context_errno(ctx.get());
+      return invalid_argument("point " + std::to_string(i) + " (longitude " + fixed(p.x(), 6) + ", latitude " +
+                              fixed(p.y(), 6) + "): no EGM96 geoid height there" +
+                              (err != 0 ? std::string(" (") + proj_context_errno_string(ctx.get(), err) + ")" : ""));
+    }
+    out.points.push_back({p.x(), p.y(), shifted.xyz.z});
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<std::vector<Vec3>> orthometric_to_ellipsoidal(const std::vector<Vec3>& lon_lat_h) {
+  Result<GeoidShift> s = shift_heights(lon_lat_h, true);
+  if (!s.ok()) return s.status();
+  return std::move(s->points);
+}
+
+Result<std::vector<Vec3>> ellipsoidal_to_orthometric(const std::vector<Vec3>& lon_lat_h) {
+  Result<GeoidShift> s = shift_heights(lon_lat_h, false);
+  if (!s.ok()) return s.status();
+  return std::move(s->points);
+}
+
+// ---- Outputs ----
+
+namespace {
+
+// The pack's CRS for a CSV comment: its name and EPSG code, no commas (a
+// spreadsheet would split the line) and no '#'.
+std::string crs_description(const std::string& crs_wkt) {
+  if (crs_wkt.empty()) return "the pack's CRS (the pack names none)";
+  OGRSpatialReference srs;
+  if (srs.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return "the pack's CRS (its WKT does not parse)";
+  std::string name = srs.GetName() != nullptr ? srs.GetName() : "unnamed CRS";
+  const char* authority = srs.GetAuthorityName(nullptr);
+  if (authority == nullptr && srs.AutoIdentifyEPSG() == OGRERR_NONE) authority = srs.GetAuthorityName(nullptr);
+  const char* code = srs.GetAuthorityCode(nullptr);
+  std::string text = "the pack's CRS \"" + name + "\" (" +
+                     (authority != nullptr && code != nullptr ? std::string(authority) + ":" + code : "no EPSG code") +
+                     ")";
+  for (char& c : text) {
+    if (c == ',' || c == '#' || c == '\n' || c == '\r') c = ' ';
+  }
+  return text;
+}
+
+bool all_finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+// Everything the outputs rely on, checked before any is written.
+Status validate_report(const PathReport& r) {
+  if (r.vertices.size() < 2) {
+    return invalid_argument("path outputs: " + std::to_string(r.vertices.size()) + " vertices; a path has at least 2");
+  }
+  if (r.per_vertex.size() != r.vertices.size()) {
+    return invalid_argument("path outputs: " + std::to_string(r.per_vertex.size()) + " per-vertex values for " +
+                            std::to_string(r.vertices.size()) + " vertices");
+  }
+  for (std::size_t i = 0; i < r.vertices.size(); ++i) {
+    if (!all_finite(r.vertices[i]) || !std::isfinite(r.per_vertex[i].fp) ||
+        !std::isfinite(r.per_vertex[i].clearance_m)) {
+      return invalid_argument("path outputs: vertex " + std::to_string(i) + " is not finite");
+    }
+  }
+  // what the .plan takes from the vehicle (rt::validate would check limits it does not use)
+  const rt::VehicleEnvelope& v = r.vehicle;
+  const std::string vehicle = "path outputs: vehicle " + v.name + ": ";
+  if (v.type != rt::VehicleType::fixed_wing && v.type != rt::VehicleType::multirotor) {
+    return invalid_argument(vehicle + "type " + std::to_string(static_cast<int>(v.type)) + " is unknown");
+  }
+  if (!(std::isfinite(v.speed_mps) && v.speed_mps > 0)) {
+    return invalid_argument(vehicle + "speed " + std::to_string(v.speed_mps) + " m/s is not above 0");
+  }
+  if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90)) {
+    return invalid_argument(vehicle + "max-climb " + std::to_string(v.max_climb_deg) + " deg is outside (0, 90]");
+  }
+  if (!(std::isfinite(v.min_turn_radius_m) && v.min_turn_radius_m >= 0)) {
+    return invalid_argument(vehicle + "min-turn-radius " + std::to_string(v.min_turn_radius_m) +
+                            " m is not 0 or more");
+  }
+  if (!std::isfinite(r.home_ground_m)) return invalid_argument("path outputs: home_ground_m is not set");
+  if (!std::isfinite(r.land_ground_m)) return invalid_argument("path outputs: land_ground_m is not set");
+  return Status::ok_status();
+}
+
+// The .plan takes off from the ground below the first vertex and lands on the
+// ground below the last: neither may be above its vertex.
+Status check_plan_ground(const PathReport& r) {
+  const auto check = [](const char* name, double ground_m, const Vec3& vertex, const char* which) {
+    if (ground_m <= vertex.z()) return Status::ok_status();
+    return invalid_argument(std::string(name) + " " + fixed(ground_m, 2) + " m is above the " + which + " vertex (" +
+                            fixed(vertex.z(), 2) + " m): the path starts or ends below the terrain");
+  };
+  VISVOL_RETURN_IF_ERROR(check("home_ground_m", r.home_ground_m, r.vertices.front(), "first"));
+  return check("land_ground_m", r.land_ground_m, r.vertices.back(), "last");
+}
+
+std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo,
+                     const Result<GeoidShift>& ellipsoidal) {
+  std::ostringstream csv;
+  csv << "# visvol plan path (" << r.objective << "); one row per vertex\n"
+      << "# x_m y_m: " << crs_description(r.crs_wkt) << " in metres\n"
+      << "# z_m: height above the DEM's vertical datum (orthometric; m; taken as EGM96 like SRTM's)\n";
+  if (geo.ok()) csv << "# lon_deg lat_deg: WGS84 (EPSG:4326) longitude and latitude in degrees\n";
+  if (ellipsoidal.ok()) {
+    csv << "# h_ellipsoidal_m: height above the WGS84 ellipsoid (EPSG:4979) = z_m + EGM96 geoid undulation (m)\n";
+  }
+  csv << "# fp: F_p at the vertex in [0 1]; clearance_m: height above the terrain (m)\n";
+  csv << "index,x_m,y_m,z_m," << (geo.ok() ? "lon_deg,lat_deg," : "") << (ellipsoidal.ok() ? "h_ellipsoidal_m," : "")
+      << "fp,clearance_m\n";
+  for (std::size_t i = 0; i < r.vertices.size(); ++i) {
+    const Vec3& v = r.vertices[i];
+    csv << i << ',' << fixed(v.x(), 3) << ',' << fixed(v.y(), 3) << ',' << fixed(v.z(), 3) << ',';
+    if (geo.ok()) csv << fixed((*geo)[i].x(), 8) << ',' << fixed((*geo)[i].y(), 8) << ',';
+    if (ellipsoidal.ok()) csv << fixed(ellipsoidal->points[i].z(), 3) << ',';
+    csv << fixed(r.per_vertex[i].fp, 6) << ',' << fixed(r.per_vertex[i].clearance_m, 2) << '\n';
+  }
+  return csv.str();
+}
+
+std::string kml_text(const PathReport& r, const std::vector<Vec3>& geo) {
   const rt::PathMetrics& m = r.metrics;
-  nlohmann::json props = {{"objective", r.objective},          {"model", r.model},
-                          {"pack", r.pack},                    {"fc", m.fc},
-                          {"length_m", m.length_m},            {"min_clearance_m", m.min_clearance_m},
-                          {"max_climb_deg", m.max_climb_deg},  {"max_descent_deg", m.max_descent_deg},
-                          {"min_turn_radius_m", std::isfinite(m.min_turn_radius_m) ? nlohmann::json(m.min_turn_radius_m) : nlohmann::json()},
-                          {"height_reference", "the DEM's vertical datum (mean sea level)"}};
-  nlohmann::json fp = nlohmann::json::array(), clearance = nlohmann::json::array();
-  for (const VertexInfo& v : r.per_vertex) {
-    fp.push_back(v.fp);
-    clearance.push_back(v.clearance_m);
+  std::ostringstream kml;
+  kml << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>visvol " << r.objective
+      << " path</name>\n<Placemark>\n<name>F_c " << fixed(m.fc, 4) << ", " << fixed(m.length_m / 1000.0, 2)
+      << " km, clearance " << fixed(m.min_clearance_m, 0) << " m</name>\n"
+      << "<description>Altitudes above mean sea level: the DEM's heights (orthometric, taken as EGM96)."
+      << "</description>\n<LineString>\n<altitudeMode>absolute</altitudeMode>\n<coordinates>\n";
+  for (const Vec3& g : geo) kml << fixed(g.x(), 8) << ',' << fixed(g.y(), 8) << ',' << fixed(g.z(), 2) << '\n';
+  kml << "</coordinates>\n</LineString>\n</Placemark>\n</Document>\n</kml>\n";
+  return kml.str();
+}
+
+// A SimpleItem; `altitude`: QGroundControl's altitude fields (absolute mode).
+nlohmann::json mission_item(int jump_id, int command, int frame, const std::array<nlohmann::json, 7>& params,
+                            bool altitude) {
+  nlohmann::json item = {{"autoContinue", true}, {"command", command}, {"doJumpId", jump_id},
+                         {"frame", frame},       {"params", params},   {"type", "SimpleItem"}};
+  if (altitude) {
+    item["AMSLAltAboveTerrain"] = nullptr;
+    item["Altitude"] = params[6];
+    item["AltitudeMode"] = qgc::kAltitudeModeAbsolute;
+  }
+  return item;
+}
+
+// The .plan: heights above mean sea level are the DEM's (orthometric).
+nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
+  using namespace mavlink;
+  const bool fixed_wing = r.vehicle.type == rt::VehicleType::fixed_wing;
+  const nlohmann::json no_yaw;  // NaN: the autopilot's default heading
+  const Vec3 &start = geo.front(), &end = geo.back();
+  nlohmann::json items = nlohmann::json::array();
+  int id = 1;
+  // takeoff at home to the first vertex's altitude (fixed-wing: climbing at
+  // least its steepest climb, param 1, as PX4 and ArduPlane read it)
+  const double takeoff_pitch_deg = fixed_wing ? r.vehicle.max_climb_deg : 0.0;
+  items.push_back(mission_item(id++, kCmdNavTakeoff, kFrameGlobal,
+                               {takeoff_pitch_deg, 0, 0, no_yaw, start.y(), start.x(), start.z()}, true));
+  for (const Vec3& g : geo) {
+    items.push_back(mission_item(id++, kCmdNavWaypoint, kFrameGlobal, {0, 0, 0, no_yaw, g.y(), g.x(), g.z()}, true));
+  }
+  if (fixed_wing) {
+    // the landing sequence (an RTL with mission landing flies it too): circle
+    // over the last vertex at its altitude, then land on the ground below it
+    items.push_back(mission_item(id++, kCmdDoLandStart, kFrameGlobal, {0, 0, 0, 0, end.y(), end.x(), 0}, false));
+    items.push_back(mission_item(id++, kCmdNavLoiterToAlt, kFrameGlobal,
+                                 {0, r.vehicle.min_turn_radius_m, 0, 0, end.y(), end.x(), end.z()}, true));
+  }
+  items.push_back(
+      mission_item(id++, kCmdNavLand, kFrameGlobal, {0, 0, 0, no_yaw, end.y(), end.x(), r.land_ground_m}, true));
+  return {{"fileType", "Plan"},
+          {"geoFence",
+           {{"circles", nlohmann::json::array()},
+            {"polygons", nlohmann::json::array()},
+            {"version", qgc::kGeoFenceVersion}}},
+          {"groundStation", "QGroundControl"},
+          {"mission",
+           {{"cruiseSpeed", r.vehicle.speed_mps},
+            {"firmwareType", r.autopilot == Autopilot::ardupilot ? kAutopilotArduPilotMega : kAutopilotPx4},
+            {"globalPlanAltitudeMode", qgc::kAltitudeModeAbsolute},
+            {"hoverSpeed", r.vehicle.speed_mps},
+            {"items", items},
+            {"plannedHomePosition", {start.y(), start.x(), r.home_ground_m}},
+            {"vehicleType", fixed_wing ? kTypeFixedWing : kTypeQuadrotor},
+            {"version", qgc::kMissionVersion}}},
+          {"rallyPoints", {{"points", nlohmann::json::array()}, {"version", qgc::kRallyPointsVersion}}},
+          {"version", qgc::kPlanVersion}};
+}
+
+nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const GeoidShift& ellipsoidal) {
+  const rt::PathMetrics& m = r.metrics;
+  nlohmann::json props = {
+      {"objective", r.objective},
+      {"model", r.model},
+      {"pack", r.pack},
+      {"fc", m.fc},
+      {"length_m", m.length_m},
+      {"min_clearance_m", m.min_clearance_m},
+      {"max_climb_deg", m.max_climb_deg},
+      {"max_descent_deg", m.max_descent_deg},
+      {"min_turn_radius_m",
+       std::isfinite(m.min_turn_radius_m) ? nlohmann::json(m.min_turn_radius_m) : nlohmann::json()},
+      {"height_reference", "coordinates: height above the WGS84 ellipsoid (RFC 7946); vertex_height_orthometric_m: "
+                           "the DEM's height (above mean sea level)"},
+      {"vertical_datum", "WGS 84 ellipsoid (EPSG:4979)"},
+      {"vertical_datum_source", kVerticalDatumSource},
+      {"geoid_grid", ellipsoidal.grid}};
+  nlohmann::json fp = nlohmann::json::array(), clearance = nlohmann::json::array(),
+                 orthometric = nlohmann::json::array(), coords = nlohmann::json::array();
+  for (std::size_t i = 0; i < geo.size(); ++i) {
+    fp.push_back(r.per_vertex[i].fp);
+    clearance.push_back(r.per_vertex[i].clearance_m);
+    orthometric.push_back(geo[i].z());
+    coords.push_back({geo[i].x(), geo[i].y(), ellipsoidal.points[i].z()});
   }
   props["vertex_fp"] = fp;
   props["vertex_clearance_m"] = clearance;
-  // GeoJSON
-  {
-    nlohmann::json coords = nlohmann::json::array();
-    for (const Vec3& g : *geo) coords.push_back({g.x(), g.y(), g.z()});
-    nlohmann::json gj = {{"type", "FeatureCollection"},
-                         {"features", {{{"type", "Feature"},
-                                        {"geometry", {{"type", "LineString"}, {"coordinates", coords}}},
-                                        {"properties", props}}}}};
-    VISVOL_RETURN_IF_ERROR(write_text_file(base + ".geojson", gj.dump(1) + "\n"));
-    written.push_back(base + ".geojson");
+  props["vertex_height_orthometric_m"] = orthometric;
+  return {{"type", "FeatureCollection"},
+          {"features", {{{"type", "Feature"},
+                         {"geometry", {{"type", "LineString"}, {"coordinates", coords}}},
+                         {"properties", props}}}}};
+}
+
+Status write_output(const std::string& file, const std::string& text, std::vector<std::string>& written) {
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(file, text));
+  written.push_back(file);
+  return Status::ok_status();
+}
+
+}  // namespace
+
+Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
+  VISVOL_RETURN_IF_ERROR(validate_report(r));
+  const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt);
+  const Result<GeoidShift> ellipsoidal =
+      geo.ok() ? shift_heights(*geo, true) : Result<GeoidShift>(Status(Errc::unsupported, "no WGS84 positions"));
+  // CSV: always (projected coordinates are enough)
+  VISVOL_RETURN_IF_ERROR(write_output(base + ".csv", csv_text(r, geo, ellipsoidal), written));
+  if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
+  VISVOL_RETURN_IF_ERROR(write_output(base + ".kml", kml_text(r, *geo), written));
+  const Status plan_ground = check_plan_ground(r);
+  if (plan_ground.ok()) VISVOL_RETURN_IF_ERROR(write_output(base + ".plan", qgc_plan(r, *geo).dump(1) + "\n", written));
+  if (ellipsoidal.ok()) {
+    VISVOL_RETURN_IF_ERROR(write_output(base + ".geojson", geojson(r, *geo, *ellipsoidal).dump(1) + "\n", written));
   }
-  // KML
-  {
-    std::ostringstream kml;
-    kml << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-        << "<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>visvol "
-        << r.objective << " path</name>\n<Placemark>\n<name>F_c " << fixed(m.fc, 4) << ", "
-        << fixed(m.length_m / 1000.0, 2) << " km, clearance " << fixed(m.min_clearance_m, 0) << " m</name>\n"
-        << "<LineString>\n<altitudeMode>absolute</altitudeMode>\n<coordinates>\n";
-    for (const Vec3& g : *geo) kml << fixed(g.x(), 8) << ',' << fixed(g.y(), 8) << ',' << fixed(g.z(), 2) << '\n';
-    kml << "</coordinates>\n</LineString>\n</Placemark>\n</Document>\n</kml>\n";
-    VISVOL_RETURN_IF_ERROR(write_text_file(base + ".kml", kml.str()));
-    written.push_back(base + ".kml");
-  }
-  // QGroundControl .plan: waypoints (MAV_CMD_NAV_WAYPOINT, 16) in
-  // MAV_FRAME_GLOBAL (0: altitude above mean sea level), QGC's absolute mode (2).
-  {
-    nlohmann::json items = nlohmann::json::array();
-    int id = 1;
-    for (const Vec3& g : *geo) {
-      items.push_back({{"AMSLAltAboveTerrain", nullptr},
-                       {"Altitude", g.z()},
-                       {"AltitudeMode", 2},
-                       {"autoContinue", true},
-                       {"command", 16},
-                       {"doJumpId", id++},
-                       {"frame", 0},
-                       {"params", {0, 0, 0, nullptr, g.y(), g.x(), g.z()}},
-                       {"type", "SimpleItem"}});
-    }
-    const Vec3& home = geo->front();
-    nlohmann::json plan = {
-        {"fileType", "Plan"},
-        {"geoFence", {{"circles", nlohmann::json::array()}, {"polygons", nlohmann::json::array()}, {"version", 2}}},
-        {"groundStation", "QGroundControl"},
-        {"mission",
-         {{"cruiseSpeed", 15},
-          {"firmwareType", 12},
-          {"globalPlanAltitudeMode", 2},
-          {"hoverSpeed", 5},
-          {"items", items},
-          {"plannedHomePosition", {home.y(), home.x(), home.z()}},
-          {"vehicleType", 1},
-          {"version", 2}}},
-        {"rallyPoints", {{"points", nlohmann::json::array()}, {"version", 2}}},
-        {"version", 1}};
-    VISVOL_RETURN_IF_ERROR(write_text_file(base + ".plan", plan.dump(1) + "\n"));
-    written.push_back(base + ".plan");
-  }
+  if (!plan_ground.ok()) return plan_ground.with_context(".plan not written");
+  if (!ellipsoidal.ok()) return ellipsoidal.status().with_context("GeoJSON not written");
   return Status::ok_status();
 }
 

@@ -1,36 +1,82 @@
-// Paths in and out of `visvol plan` (and into `visvol render`).
+// Paths in and out of `visvol plan` (and into `visvol render`, `visvol check`).
 //
-// In (read_path_file), three formats told apart by their content:
+// Heights. The DEM's heights are orthometric, taken as EGM96 (SRTM's datum;
+// "above mean sea level" to an autopilot). Every output keeps them except the
+// GeoJSON, whose third coordinate is, as RFC 7946 says, the height above the
+// WGS84 ellipsoid: h = H + N, N the EGM96 geoid undulation at the vertex
+// (PROJ, EPSG:4326+5773 to EPSG:4979, the grid us_nga_egm96_15.tif, formerly
+// egm96_15.gtx, from Debian's proj-data). Without that grid the GeoJSON is not
+// written (never orthometric heights labelled ellipsoidal), and a GeoJSON with
+// heights is not read.
+//
+// In (read_path_file), four formats told apart by their content:
 //   - text: points "x y" (lifted to the clearance above the terrain, densely,
 //     as the paper's tracing tool does) or "x y z", in the pack's CRS;
 //     separators are spaces, tabs or commas; '#' starts a comment; a first
 //     line that is not numbers is a header;
-//   - the CSV `visvol plan` writes: a header naming x_m, y_m and z_m (pack
-//     CRS, metres) and optionally fp; other columns are ignored;
-//   - the GeoJSON `visvol plan` writes: one LineString (bare, in a Feature or
-//     in a FeatureCollection), RFC 7946 WGS84 longitude, latitude and optional
-//     height, converted to the pack's CRS with OGR (the reverse of the
-//     writer); heights stay the DEM's. Its properties.vertex_fp, when
-//     present, is the F_p of each vertex.
-// Out: GeoJSON (RFC 7946: WGS84 longitude, latitude, height), CSV (pack CRS and
-// WGS84, per-vertex F_p and clearance), KML (absolute altitudes) and a
-// QGroundControl .plan mission (waypoints in WGS84 with altitudes above mean
-// sea level: the DEM's heights). Heights are the DEM's (its vertical datum,
-// normally mean sea level).
+//   - the CSV `visvol plan` writes: '#' comment lines, then a header naming
+//     x_m, y_m and z_m (pack CRS, metres) and optionally fp; other columns
+//     are ignored;
+//   - GeoJSON: one LineString (bare, in a Feature or in a FeatureCollection),
+//     RFC 7946 WGS84 longitude, latitude and optional ellipsoidal height,
+//     converted to the pack's CRS with OGR and to orthometric heights with
+//     PROJ (the reverse of the writer: a written path reads back to the same
+//     points). A file written by visvol before heights were ellipsoidal (its
+//     properties.height_reference says "the DEM's vertical datum (mean sea
+//     level)") is read with its heights as they are. properties.vertex_fp,
+//     when present, is the F_p of each vertex;
+//   - a QGroundControl .plan (JSON with "fileType": "Plan", version 1): the
+//     path is its NAV_WAYPOINT (16) items in order; takeoff, land, loiter and
+//     DO_ items are not part of it (so a .plan `visvol plan` wrote reads back
+//     to its vertices); a ComplexItem (survey, landing pattern, ...) is
+//     refused, its flown path not being in the file. Frames: MAV_FRAME_GLOBAL
+//     (0, and 5, its _INT twin: altitude above mean sea level, the DEM's
+//     heights) and MAV_FRAME_GLOBAL_RELATIVE_ALT (3, and 6: above the planned
+//     home position, whose altitude is added); any other frame (terrain
+//     frame 10, local frames) is refused naming the item.
+// Out (write_path_outputs): GeoJSON, CSV, KML and a QGroundControl .plan; see
+// there.
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "rt/base/status.hpp"
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/vehicle.hpp"
 
 namespace visvol::cli {
 
 using rt::Vec3;
 
-enum class PathFormat { text, plan_csv, geojson };
+// MAVLink and QGroundControl numbers the .plan writer and reader use.
+namespace mavlink {
+inline constexpr int kCmdNavWaypoint = 16;     // MAV_CMD_NAV_WAYPOINT
+inline constexpr int kCmdNavLand = 21;         // MAV_CMD_NAV_LAND
+inline constexpr int kCmdNavTakeoff = 22;      // MAV_CMD_NAV_TAKEOFF
+inline constexpr int kCmdNavLoiterToAlt = 31;  // MAV_CMD_NAV_LOITER_TO_ALT
+inline constexpr int kCmdDoLandStart = 189;    // MAV_CMD_DO_LAND_START
+inline constexpr int kFrameGlobal = 0;                // MAV_FRAME_GLOBAL: altitude above mean sea level
+inline constexpr int kFrameGlobalRelativeAlt = 3;     // MAV_FRAME_GLOBAL_RELATIVE_ALT: above home
+inline constexpr int kFrameGlobalInt = 5;             // MAV_FRAME_GLOBAL_INT (deprecated twin of 0)
+inline constexpr int kFrameGlobalRelativeAltInt = 6;  // MAV_FRAME_GLOBAL_RELATIVE_ALT_INT (twin of 3)
+inline constexpr int kFrameGlobalTerrainAlt = 10;     // MAV_FRAME_GLOBAL_TERRAIN_ALT: above the terrain
+inline constexpr int kAutopilotArduPilotMega = 3;     // MAV_AUTOPILOT_ARDUPILOTMEGA
+inline constexpr int kAutopilotPx4 = 12;              // MAV_AUTOPILOT_PX4
+inline constexpr int kTypeFixedWing = 1;              // MAV_TYPE_FIXED_WING
+inline constexpr int kTypeQuadrotor = 2;              // MAV_TYPE_QUADROTOR
+}  // namespace mavlink
+namespace qgc {
+inline constexpr int kPlanVersion = 1;             // the file's "version"
+inline constexpr int kMissionVersion = 2;          // mission.version
+inline constexpr int kGeoFenceVersion = 2;         // geoFence.version
+inline constexpr int kRallyPointsVersion = 2;      // rallyPoints.version
+inline constexpr int kAltitudeModeAbsolute = 2;    // QGroundControl's AltMode: MAV_FRAME_GLOBAL
+}  // namespace qgc
+
+enum class PathFormat { text, plan_csv, geojson, qgc_plan };
 
 struct PathFile {
   std::vector<Vec3> points;  // pack CRS, metres (z: the DEM's datum, 0 without heights)
@@ -38,9 +84,10 @@ struct PathFile {
   std::vector<double> fp;    // F_p per point from the file (plan CSV, GeoJSON), or empty
   PathFormat format = PathFormat::text;
 };
-// At least 2 points, all finite. crs_wkt is the pack's CRS: a GeoJSON path
-// needs it (an error names the file otherwise); the other formats ignore it.
-// Errors name the file and the line (or the JSON member) and the problem.
+// At least 2 points, all finite. crs_wkt is the pack's CRS: a GeoJSON or
+// .plan path needs it (an error names the file otherwise); the other formats
+// ignore it. Errors name the file and the line (or the JSON member, or the
+// .plan's item index) and the problem.
 Result<PathFile> read_path_file(const std::string& path, const std::string& crs_wkt = {});
 
 // A 2D polyline lifted to `clearance_m` above the terrain, sampled every `step_m`.
@@ -52,23 +99,63 @@ struct VertexInfo {
   double clearance_m = 0;  // height above the terrain
 };
 
+// The autopilot a .plan is for (its mission.firmwareType).
+enum class Autopilot { px4, ardupilot };
+
 struct PathReport {
   std::vector<Vec3> vertices;         // pack CRS, metres
-  std::vector<VertexInfo> per_vertex;
+  std::vector<VertexInfo> per_vertex;  // one per vertex
   rt::PathMetrics metrics;
   std::string objective, model, pack, crs_wkt;
+  // Terrain heights (the DEM's datum) below the first and the last vertex:
+  // the .plan's home and landing point. Required (finite); a .plan also needs
+  // each not above its vertex.
+  double home_ground_m = std::numeric_limits<double>::quiet_NaN();
+  double land_ground_m = std::numeric_limits<double>::quiet_NaN();
+  rt::VehicleEnvelope vehicle;        // the .plan's vehicle type, speeds, takeoff pitch, loiter radius
+  Autopilot autopilot = Autopilot::px4;
 };
 
 // WGS84 (longitude, latitude, height) of the vertices, or an error when the
-// pack has no CRS to convert from.
+// pack has no CRS to convert from. Heights are kept.
 Result<std::vector<Vec3>> to_wgs84(const std::vector<Vec3>& vertices, const std::string& crs_wkt);
 // The reverse: WGS84 (longitude, latitude, height) to the pack's CRS; heights
 // are kept. An error when there is no CRS or a point does not convert.
 Result<std::vector<Vec3>> from_wgs84(const std::vector<Vec3>& lon_lat_h, const std::string& crs_wkt);
 
-// Writes BASE.geojson, BASE.csv, BASE.kml and BASE.plan (each whole or not at
-// all); `written` lists them. Without a CRS only the CSV is written and the
-// status says why the others are not.
+// Heights at WGS84 (longitude, latitude, height) points: EGM96 orthometric to
+// WGS84 ellipsoidal (h = H + N) and back, through PROJ with the EGM96 grid
+// (no network, no ballpark "no shift" fallback). Longitudes and latitudes are
+// kept. Errc::unsupported naming the grid when it is not installed.
+Result<std::vector<Vec3>> orthometric_to_ellipsoidal(const std::vector<Vec3>& lon_lat_h);
+Result<std::vector<Vec3>> ellipsoidal_to_orthometric(const std::vector<Vec3>& lon_lat_h);
+
+// The GeoJSON's properties.vertical_datum_source.
+inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as EGM96 orthometric)";
+
+// Writes, each whole or not at all, `written` listing them:
+//   BASE.csv: '#' lines naming the CRS and datums, a header row, one row per
+//     vertex: index, x_m, y_m, z_m (pack CRS; z orthometric, the DEM's),
+//     lon_deg, lat_deg (WGS84), h_ellipsoidal_m (WGS84 ellipsoid), fp,
+//     clearance_m;
+//   BASE.kml: a LineString, altitudeMode absolute (orthometric heights);
+//   BASE.plan: a QGroundControl mission (MAV_FRAME_GLOBAL, altitudes above
+//     mean sea level): planned home on the ground below the first vertex,
+//     NAV_TAKEOFF there to the first vertex's altitude, a NAV_WAYPOINT per
+//     vertex; then a multirotor lands (NAV_LAND) on the ground below the last
+//     vertex; a fixed-wing aircraft gets DO_LAND_START, NAV_LOITER_TO_ALT
+//     over the last vertex at its altitude (radius: its turn radius) and
+//     NAV_LAND on the ground below it (the approach from the loiter down is
+//     the autopilot's: visvol knows no runway);
+//   BASE.geojson: RFC 7946 LineString (longitude, latitude, ellipsoidal
+//     height) with the metrics, the datums and per-vertex F_p, clearance and
+//     orthometric height as properties.
+// A report that does not hold together (sizes, non-finite values, vehicle,
+// ground heights not set) writes nothing (Errc::invalid_argument). Without a
+// CRS only the CSV is written and the status says why the others are not;
+// without the geoid grid all but the GeoJSON are (and the CSV has no
+// h_ellipsoidal_m), and the status names the grid; a path whose first or last
+// vertex is below its ground height gets no .plan, and the status says so.
 Status write_path_outputs(const std::string& base, const PathReport& report,
                           std::vector<std::string>& written);
 

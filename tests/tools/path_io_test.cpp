@@ -1,0 +1,518 @@
+// The path files a flight crew loads (tools/visvol/path_io): GeoJSON heights
+// above the WGS84 ellipsoid and read back to the DEM's, the CSV's stated CRS
+// and datums, the QGroundControl .plan's structure for a multirotor and a
+// fixed-wing aircraft, .plan files read as paths, and bad .plan files refused
+// with messages naming the file, the item and the problem.
+#include "path_io.hpp"
+
+#include <gtest/gtest.h>
+#include <ogr_spatialref.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace visvol::cli {
+namespace {
+
+// EGM96's geoid undulation in San Francisco is about -32 m.
+constexpr double kSfUndulationLowM = -34.0, kSfUndulationHighM = -30.0;
+
+std::string utm10n_wkt() {
+  OGRSpatialReference srs;
+  EXPECT_EQ(srs.importFromEPSG(32610), OGRERR_NONE);
+  char* wkt = nullptr;
+  srs.exportToWkt(&wkt);
+  std::string out = wkt != nullptr ? wkt : "";
+  CPLFree(wkt);
+  return out;
+}
+
+std::string slurp(const std::string& file) {
+  std::ifstream in(file);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool exists(const std::string& file) { return std::filesystem::exists(file); }
+
+class PathIo : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = ::testing::TempDir() + "/path_io_" + std::to_string(getpid()) + "_" +
+           ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::filesystem::create_directories(dir_);
+    wkt_ = utm10n_wkt();
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  // A path over San Francisco (UTM 10N): heights above the DEM's datum, the
+  // ground 20 m below the start and 15 m below the end.
+  PathReport report(const rt::VehicleEnvelope& vehicle) const {
+    PathReport r;
+    r.vertices = {{550100, 4182600, 250}, {550400, 4182300, 262.5}, {550700, 4182000, 241}, {551050, 4181700, 230}};
+    for (std::size_t i = 0; i < r.vertices.size(); ++i) r.per_vertex.push_back({0.1 * static_cast<double>(i), 50.0});
+    r.objective = "hide";
+    r.model = "articulated";
+    r.pack = "sf.vvp";
+    r.crs_wkt = wkt_;
+    r.home_ground_m = 230;
+    r.land_ground_m = 215;
+    r.vehicle = vehicle;
+    return r;
+  }
+
+  std::string write(const PathReport& r, const std::string& name = "path") {
+    const std::string base = dir_ + "/" + name;
+    std::vector<std::string> written;
+    const Status s = write_path_outputs(base, r, written);
+    EXPECT_TRUE(s.ok()) << s.message();
+    EXPECT_EQ(written.size(), 4u);
+    return base;
+  }
+
+  std::string file_with(const std::string& name, const std::string& text) const {
+    const std::string f = dir_ + "/" + name;
+    std::ofstream(f) << text;
+    return f;
+  }
+
+  std::string dir_, wkt_;
+};
+
+rt::VehicleEnvelope preset(const char* name) {
+  Result<rt::VehicleEnvelope> v = rt::vehicle_preset(name);
+  EXPECT_TRUE(v.ok());
+  return *v;
+}
+
+void expect_same_points(const std::vector<Vec3>& got, const std::vector<Vec3>& want, double tolerance_m) {
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[i][k], want[i][k], tolerance_m) << "point " << i << ", axis " << k;
+  }
+}
+
+// ---- heights ----
+
+TEST(Geoid, EllipsoidalHeightIsOrthometricPlusTheEgm96Undulation) {
+  // San Francisco: N about -32 m
+  Result<std::vector<Vec3>> sf = orthometric_to_ellipsoidal({{-122.4194, 37.7749, 100.0}});
+  ASSERT_TRUE(sf.ok()) << sf.status().message();
+  EXPECT_GT((*sf)[0].z() - 100.0, kSfUndulationLowM);
+  EXPECT_LT((*sf)[0].z() - 100.0, kSfUndulationHighM);
+  EXPECT_DOUBLE_EQ((*sf)[0].x(), -122.4194);  // longitude and latitude kept
+  EXPECT_DOUBLE_EQ((*sf)[0].y(), 37.7749);
+  // the geoid's low south of India (about -100 m) and its high over New Guinea (about +70 m)
+  Result<std::vector<Vec3>> extremes = orthometric_to_ellipsoidal({{78.0, 5.0, 0.0}, {147.0, -6.0, 0.0}});
+  ASSERT_TRUE(extremes.ok()) << extremes.status().message();
+  EXPECT_LT((*extremes)[0].z(), -90.0);
+  EXPECT_GT((*extremes)[0].z(), -110.0);
+  EXPECT_GT((*extremes)[1].z(), 50.0);
+  EXPECT_LT((*extremes)[1].z(), 90.0);
+  // and back
+  Result<std::vector<Vec3>> back = ellipsoidal_to_orthometric(*sf);
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_NEAR((*back)[0].z(), 100.0, 1e-6);
+}
+
+// PROJ_DATA set for the life of a scope (restored after).
+class ScopedProjData {
+ public:
+  explicit ScopedProjData(const std::string& dir) {
+    if (const char* old = std::getenv("PROJ_DATA")) old_ = old;
+    had_ = std::getenv("PROJ_DATA") != nullptr;
+    setenv("PROJ_DATA", dir.c_str(), 1);
+  }
+  ~ScopedProjData() {
+    if (had_) {
+      setenv("PROJ_DATA", old_.c_str(), 1);
+    } else {
+      unsetenv("PROJ_DATA");
+    }
+  }
+  ScopedProjData(const ScopedProjData&) = delete;
+  ScopedProjData& operator=(const ScopedProjData&) = delete;
+
+ private:
+  std::string old_;
+  bool had_ = false;
+};
+
+// Without the EGM96 grid no height is converted, and the GeoJSON is not
+// written (never orthometric heights labelled ellipsoidal, which is what
+// PROJ's default "ballpark" fallback would do): the message names the grid.
+// PROJ reads its data folder anew for each context: this one has the
+// database but no grid.
+TEST_F(PathIo, MissingGeoidGridIsNamedAndNoGeoJsonIsWritten) {
+  const std::string proj_dir = dir_ + "/proj";
+  std::filesystem::create_directories(proj_dir);
+  std::filesystem::copy_file("/usr/share/proj/proj.db", proj_dir + "/proj.db");
+  const PathReport r = report(preset("multirotor"));
+  const std::string base = dir_ + "/no_grid";
+  Result<std::vector<Vec3>> h = Status(Errc::state, "not run");
+  Status s;
+  std::vector<std::string> written;
+  {
+    ScopedProjData no_grid(proj_dir);
+    h = orthometric_to_ellipsoidal({{-122.4194, 37.7749, 100.0}});
+    s = write_path_outputs(base, r, written);
+  }
+  ASSERT_FALSE(h.ok());
+  EXPECT_EQ(h.status().code(), Errc::unsupported);
+  EXPECT_NE(h.status().message().find("the EGM96 geoid grid us_nga_egm96_15.tif"), std::string::npos)
+      << h.status().message();
+  EXPECT_NE(h.status().message().find("proj-data"), std::string::npos) << h.status().message();
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.message().rfind("GeoJSON not written: the EGM96 geoid grid us_nga_egm96_15.tif", 0), 0u)
+      << s.message();
+  EXPECT_EQ(written.size(), 3u);
+  EXPECT_TRUE(exists(base + ".csv"));
+  EXPECT_TRUE(exists(base + ".kml"));
+  EXPECT_TRUE(exists(base + ".plan"));
+  EXPECT_FALSE(exists(base + ".geojson"));
+  EXPECT_EQ(slurp(base + ".csv").find("h_ellipsoidal_m"), std::string::npos);
+  // nor is a GeoJSON with heights read
+  Result<PathFile> read = Status(Errc::state, "not run");
+  const std::string foreign = file_with("foreign.geojson", R"({"type":"LineString","coordinates":)"
+                                                           R"([[-122.43,37.79,100.0],[-122.42,37.78,120.0]]})");
+  {
+    ScopedProjData no_grid(proj_dir);
+    read = read_path_file(foreign, wkt_);
+  }
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.status().message().find("foreign.geojson: heights: the EGM96 geoid grid"), std::string::npos)
+      << read.status().message();
+  // and with the grid back, all is well
+  EXPECT_TRUE(orthometric_to_ellipsoidal({{-122.4194, 37.7749, 100.0}}).ok());
+}
+
+// ---- GeoJSON ----
+
+TEST_F(PathIo, GeoJsonHeightsAreEllipsoidalWithTheOrthometricOnesAsProperties) {
+  const PathReport r = report(preset("multirotor"));
+  const nlohmann::json gj = nlohmann::json::parse(slurp(write(r) + ".geojson"));
+  const nlohmann::json& feature = gj["features"][0];
+  const nlohmann::json& coords = feature["geometry"]["coordinates"];
+  const nlohmann::json& props = feature["properties"];
+  ASSERT_EQ(coords.size(), r.vertices.size());
+  ASSERT_EQ(props["vertex_height_orthometric_m"].size(), r.vertices.size());
+  EXPECT_EQ(props["vertical_datum_source"], "EGM96 (DEM heights taken as EGM96 orthometric)");
+  EXPECT_EQ(props["vertical_datum"], "WGS 84 ellipsoid (EPSG:4979)");
+  for (std::size_t i = 0; i < r.vertices.size(); ++i) {
+    const double orthometric_m = props["vertex_height_orthometric_m"][i].get<double>();
+    EXPECT_DOUBLE_EQ(orthometric_m, r.vertices[i].z());
+    const double undulation_m = coords[i][2].get<double>() - orthometric_m;
+    EXPECT_GT(undulation_m, kSfUndulationLowM) << i;
+    EXPECT_LT(undulation_m, kSfUndulationHighM) << i;
+    EXPECT_NEAR(coords[i][0].get<double>(), -122.43, 0.05);
+    EXPECT_NEAR(coords[i][1].get<double>(), 37.79, 0.05);
+  }
+}
+
+TEST_F(PathIo, GeoJsonReadsBackToTheSamePointsWithinACentimetre) {
+  const PathReport r = report(preset("fixed-wing"));
+  Result<PathFile> back = read_path_file(write(r) + ".geojson", wkt_);
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->format, PathFormat::geojson);
+  EXPECT_TRUE(back->has_heights);
+  expect_same_points(back->points, r.vertices, 0.01);
+  ASSERT_EQ(back->fp.size(), r.vertices.size());
+  EXPECT_DOUBLE_EQ(back->fp[2], 0.2);
+}
+
+// RFC 7946: another tool's heights are ellipsoidal; they become the DEM's.
+TEST_F(PathIo, ForeignGeoJsonHeightsAreReadAsEllipsoidal) {
+  const std::string f = file_with("foreign.geojson", R"({"type":"LineString","coordinates":)"
+                                                     R"([[-122.43,37.79,100.0],[-122.42,37.78,120.0]]})");
+  Result<PathFile> path = read_path_file(f, wkt_);
+  ASSERT_TRUE(path.ok()) << path.status().message();
+  const double undulation_m = 100.0 - path->points[0].z();
+  EXPECT_GT(undulation_m, kSfUndulationLowM);
+  EXPECT_LT(undulation_m, kSfUndulationHighM);
+  EXPECT_NEAR((120.0 - path->points[1].z()) - undulation_m, 0.0, 0.2);  // the geoid is smooth over a kilometre
+}
+
+// A GeoJSON visvol wrote before heights were ellipsoidal says so: read as it is.
+TEST_F(PathIo, EarlierVisvolGeoJsonWithOrthometricHeightsIsReadAsItIs) {
+  const std::string f = file_with(
+      "old.geojson",
+      R"j({"type":"Feature","properties":{"height_reference":"the DEM's vertical datum (mean sea level)"},)j"
+      R"("geometry":{"type":"LineString","coordinates":[[-122.43,37.79,100.0],[-122.42,37.78,120.0]]}})");
+  Result<PathFile> path = read_path_file(f, wkt_);
+  ASSERT_TRUE(path.ok()) << path.status().message();
+  EXPECT_NEAR(path->points[0].z(), 100.0, 1e-9);
+  EXPECT_NEAR(path->points[1].z(), 120.0, 1e-9);
+}
+
+// ---- CSV ----
+
+TEST_F(PathIo, CsvStatesItsCrsAndDatumsThenAHeaderRowAndReadsBack) {
+  const PathReport r = report(preset("multirotor"));
+  const std::string csv = write(r) + ".csv";
+  std::ifstream in(csv);
+  std::string line, comments;
+  while (std::getline(in, line) && !line.empty() && line[0] == '#') {
+    EXPECT_EQ(line.find(','), std::string::npos) << "a comma splits a spreadsheet's cell: " << line;
+    comments += line + "\n";
+  }
+  EXPECT_NE(comments.find("EPSG:32610"), std::string::npos) << comments;
+  EXPECT_NE(comments.find("WGS 84 / UTM zone 10N"), std::string::npos) << comments;
+  EXPECT_NE(comments.find("z_m: height above the DEM's vertical datum (orthometric"), std::string::npos) << comments;
+  EXPECT_NE(comments.find("lon_deg lat_deg: WGS84"), std::string::npos) << comments;
+  EXPECT_NE(comments.find("h_ellipsoidal_m: height above the WGS84 ellipsoid"), std::string::npos) << comments;
+  // the header row right after the comments, then a row per vertex
+  EXPECT_EQ(line, "index,x_m,y_m,z_m,lon_deg,lat_deg,h_ellipsoidal_m,fp,clearance_m");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    double x = 0, y = 0, z = 0, lon = 0, lat = 0, h = 0;
+    int index = -1;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%lf,%lf,%lf,%lf,%lf,%lf", &index, &x, &y, &z, &lon, &lat, &h), 7) << line;
+    EXPECT_EQ(index, rows);
+    EXPECT_GT(h - z, kSfUndulationLowM);
+    EXPECT_LT(h - z, kSfUndulationHighM);
+    ++rows;
+  }
+  EXPECT_EQ(rows, static_cast<int>(r.vertices.size()));
+  Result<PathFile> back = read_path_file(csv);
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->format, PathFormat::plan_csv);
+  expect_same_points(back->points, r.vertices, 0.001);
+}
+
+TEST_F(PathIo, WithoutACrsOnlyTheCsvIsWrittenInThePacksCoordinates) {
+  PathReport r = report(preset("multirotor"));
+  r.crs_wkt.clear();
+  std::vector<std::string> written;
+  const Status s = write_path_outputs(dir_ + "/bare", r, written);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("GeoJSON, KML and .plan not written"), std::string::npos) << s.message();
+  ASSERT_EQ(written, std::vector<std::string>{dir_ + "/bare.csv"});
+  const std::string csv = slurp(dir_ + "/bare.csv");
+  EXPECT_NE(csv.find("\nindex,x_m,y_m,z_m,fp,clearance_m\n"), std::string::npos) << csv;
+}
+
+// ---- .plan ----
+
+const nlohmann::json& item(const nlohmann::json& plan, std::size_t i) { return plan["mission"]["items"][i]; }
+
+void expect_position(const nlohmann::json& it, const Vec3& lon_lat, double altitude_m) {
+  EXPECT_EQ(it["type"], "SimpleItem");
+  EXPECT_EQ(it["frame"], mavlink::kFrameGlobal);
+  EXPECT_EQ(it["autoContinue"], true);
+  ASSERT_EQ(it["params"].size(), 7u);
+  EXPECT_NEAR(it["params"][4].get<double>(), lon_lat.y(), 1e-9);
+  EXPECT_NEAR(it["params"][5].get<double>(), lon_lat.x(), 1e-9);
+  EXPECT_DOUBLE_EQ(it["params"][6].get<double>(), altitude_m);
+}
+
+TEST_F(PathIo, MultirotorPlanTakesOffAtHomeFliesTheWaypointsAndLandsAtTheEnd) {
+  const PathReport r = report(preset("multirotor"));
+  const nlohmann::json plan = nlohmann::json::parse(slurp(write(r) + ".plan"));
+  Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, wkt_);
+  ASSERT_TRUE(geo.ok());
+  EXPECT_EQ(plan["fileType"], "Plan");
+  EXPECT_EQ(plan["version"], 1);
+  EXPECT_EQ(plan["groundStation"], "QGroundControl");
+  EXPECT_TRUE(plan["geoFence"].is_object());
+  EXPECT_TRUE(plan["rallyPoints"].is_object());
+  const nlohmann::json& m = plan["mission"];
+  EXPECT_EQ(m["version"], 2);
+  EXPECT_EQ(m["firmwareType"], mavlink::kAutopilotPx4);
+  EXPECT_EQ(m["vehicleType"], mavlink::kTypeQuadrotor);
+  EXPECT_DOUBLE_EQ(m["cruiseSpeed"].get<double>(), 8.0);  // the multirotor preset's speed
+  EXPECT_DOUBLE_EQ(m["hoverSpeed"].get<double>(), 8.0);
+  // home: on the ground below the start
+  ASSERT_EQ(m["plannedHomePosition"].size(), 3u);
+  EXPECT_NEAR(m["plannedHomePosition"][0].get<double>(), (*geo)[0].y(), 1e-9);
+  EXPECT_NEAR(m["plannedHomePosition"][1].get<double>(), (*geo)[0].x(), 1e-9);
+  EXPECT_DOUBLE_EQ(m["plannedHomePosition"][2].get<double>(), 230.0);
+  // takeoff, the waypoints in order, land
+  const std::size_t n = r.vertices.size();
+  ASSERT_EQ(m["items"].size(), n + 2);
+  EXPECT_EQ(item(plan, 0)["command"], mavlink::kCmdNavTakeoff);
+  expect_position(item(plan, 0), (*geo)[0], r.vertices[0].z());
+  for (std::size_t i = 0; i < n; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(item(plan, i + 1)["command"], mavlink::kCmdNavWaypoint);
+    expect_position(item(plan, i + 1), (*geo)[i], r.vertices[i].z());
+  }
+  EXPECT_EQ(item(plan, n + 1)["command"], mavlink::kCmdNavLand);
+  expect_position(item(plan, n + 1), (*geo)[n - 1], 215.0);
+  for (std::size_t i = 0; i < n + 2; ++i) EXPECT_EQ(item(plan, i)["doJumpId"], static_cast<int>(i) + 1);
+}
+
+TEST_F(PathIo, FixedWingPlanLoitersOverTheEndThenLands) {
+  rt::VehicleEnvelope v = preset("fixed-wing");
+  v.speed_mps = 23.5;  // the envelope's, not a constant
+  v.min_turn_radius_m = 95.0;
+  PathReport r = report(v);
+  r.autopilot = Autopilot::ardupilot;
+  const nlohmann::json plan = nlohmann::json::parse(slurp(write(r) + ".plan"));
+  Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, wkt_);
+  ASSERT_TRUE(geo.ok());
+  const nlohmann::json& m = plan["mission"];
+  EXPECT_EQ(m["firmwareType"], mavlink::kAutopilotArduPilotMega);
+  EXPECT_EQ(m["vehicleType"], mavlink::kTypeFixedWing);
+  EXPECT_DOUBLE_EQ(m["cruiseSpeed"].get<double>(), 23.5);
+  const std::size_t n = r.vertices.size();
+  ASSERT_EQ(m["items"].size(), n + 4);
+  EXPECT_EQ(item(plan, 0)["command"], mavlink::kCmdNavTakeoff);
+  EXPECT_DOUBLE_EQ(item(plan, 0)["params"][0].get<double>(), v.max_climb_deg);  // takeoff pitch
+  expect_position(item(plan, 0), (*geo)[0], r.vertices[0].z());
+  for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(item(plan, i + 1)["command"], mavlink::kCmdNavWaypoint);
+  EXPECT_EQ(item(plan, n + 1)["command"], mavlink::kCmdDoLandStart);
+  EXPECT_EQ(item(plan, n + 2)["command"], mavlink::kCmdNavLoiterToAlt);
+  expect_position(item(plan, n + 2), (*geo)[n - 1], r.vertices[n - 1].z());
+  EXPECT_DOUBLE_EQ(item(plan, n + 2)["params"][1].get<double>(), 95.0);  // loiter radius: the turn radius
+  EXPECT_EQ(item(plan, n + 3)["command"], mavlink::kCmdNavLand);
+  expect_position(item(plan, n + 3), (*geo)[n - 1], 215.0);
+}
+
+TEST_F(PathIo, PlanReadsBackToItsWaypoints) {
+  for (const char* vehicle : {"multirotor", "fixed-wing"}) {
+    SCOPED_TRACE(vehicle);
+    const PathReport r = report(preset(vehicle));
+    Result<PathFile> back = read_path_file(write(r, vehicle) + ".plan", wkt_);
+    ASSERT_TRUE(back.ok()) << back.status().message();
+    EXPECT_EQ(back->format, PathFormat::qgc_plan);
+    EXPECT_TRUE(back->has_heights);
+    EXPECT_TRUE(back->fp.empty());
+    expect_same_points(back->points, r.vertices, 0.01);
+  }
+}
+
+std::string plan_text(const std::string& items, const std::string& home = "[37.79, -122.43, 10.0]") {
+  return R"({"fileType":"Plan","version":1,"groundStation":"QGroundControl","mission":{"version":2,)"
+         R"("firmwareType":12,"vehicleType":2,"plannedHomePosition":)" +
+         home + R"(,"items":[)" + items + "]}}";
+}
+
+std::string waypoint(int frame, const std::string& lat, const std::string& lon, const std::string& alt,
+                     int command = mavlink::kCmdNavWaypoint) {
+  return R"({"type":"SimpleItem","autoContinue":true,"doJumpId":1,"command":)" + std::to_string(command) +
+         R"(,"frame":)" + std::to_string(frame) + R"(,"params":[0,0,0,null,)" + lat + "," + lon + "," + alt + "]}";
+}
+
+// Another engineer's mission: altitudes above home get home's altitude; the
+// takeoff and land items are not part of the path.
+TEST_F(PathIo, PlanWaypointsAboveHomeAreLiftedByHomesAltitude) {
+  const std::string f = file_with(
+      "relative.plan",
+      plan_text(waypoint(mavlink::kFrameGlobalRelativeAlt, "37.79", "-122.43", "40", mavlink::kCmdNavTakeoff) + "," +
+                waypoint(mavlink::kFrameGlobalRelativeAlt, "37.79", "-122.43", "50") + "," +
+                waypoint(mavlink::kFrameGlobal, "37.78", "-122.42", "70") + "," +
+                waypoint(mavlink::kFrameGlobalRelativeAlt, "37.78", "-122.42", "0", mavlink::kCmdNavLand)));
+  Result<PathFile> path = read_path_file(f, wkt_);
+  ASSERT_TRUE(path.ok()) << path.status().message();
+  ASSERT_EQ(path->points.size(), 2u);
+  EXPECT_NEAR(path->points[0].z(), 60.0, 1e-9);  // 50 above a home at 10
+  EXPECT_NEAR(path->points[1].z(), 70.0, 1e-9);  // above mean sea level
+  Result<std::vector<Vec3>> lon_lat = to_wgs84(path->points, wkt_);
+  ASSERT_TRUE(lon_lat.ok());
+  EXPECT_NEAR((*lon_lat)[0].x(), -122.43, 1e-8);
+  EXPECT_NEAR((*lon_lat)[0].y(), 37.79, 1e-8);
+}
+
+TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
+  const std::string wp = waypoint(mavlink::kFrameGlobal, "37.79", "-122.43", "50");
+  const struct {
+    const char* name;
+    std::string text;
+    const char* message;
+  } cases[] = {
+      {"terrain.plan", plan_text(wp + "," + waypoint(mavlink::kFrameGlobalTerrainAlt, "37.78", "-122.42", "60")),
+       "terrain.plan: mission.items[1] (doJumpId 1): frame 10 (MAV_FRAME_GLOBAL_TERRAIN_ALT, above the terrain) is "
+       "not supported"},
+      {"local.plan", plan_text(wp + "," + waypoint(1, "37.78", "-122.42", "60")),
+       "local.plan: mission.items[1] (doJumpId 1): frame 1 (MAV_FRAME_LOCAL_NED) is not supported"},
+      {"no_items.plan",
+       R"({"fileType":"Plan","version":1,"mission":{"version":2,"plannedHomePosition":[37.79,-122.43,10]}})",
+       "no_items.plan: mission.items is missing or not an array"},
+      {"no_mission.plan", R"({"fileType":"Plan","version":1})", "no_mission.plan: no mission object"},
+      {"latitude.plan", plan_text(wp + "," + waypoint(0, R"("north")", "-122.42", "60")),
+       "latitude.plan: mission.items[1] (doJumpId 1): params[4] (latitude) \"north\" is not a finite number"},
+      {"altitude.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "null")),
+       "altitude.plan: mission.items[1] (doJumpId 1): params[6] (altitude) null is not a finite number"},
+      {"command.plan", plan_text(wp + R"(,{"type":"SimpleItem","command":"waypoint","frame":0,"params":[]})"),
+       "command.plan: mission.items[1]: command \"waypoint\" is not an integer"},
+      {"params.plan", plan_text(wp + R"(,{"type":"SimpleItem","command":16,"frame":0,"params":[1,2,3]})"),
+       "params.plan: mission.items[1]: params is missing or not an array of 7"},
+      {"one.plan", plan_text(wp),
+       "one.plan: 1 NAV_WAYPOINT (16) items in mission.items (of 1); a path needs at least 2"},
+      {"survey.plan", plan_text(wp + R"(,{"type":"ComplexItem","complexItemType":"survey"},)" + wp),
+       "survey.plan: mission.items[1]: a ComplexItem (survey): its flown path is not in the file"},
+      {"home.plan", plan_text(wp + "," + waypoint(3, "37.78", "-122.42", "60"), "[37.79, -122.43]"),
+       "home.plan: mission.items[1] (doJumpId 1): frame 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, above home) needs the home "
+       "altitude: mission.plannedHomePosition is missing or not [latitude, longitude, altitude]"},
+      {"where.plan", plan_text(wp + "," + waypoint(0, "97.5", "-122.42", "60")),
+       "where.plan: mission.items[1] (doJumpId 1): latitude 97.500000, longitude -122.420000 is not a WGS84 position"},
+      {"type.plan", R"({"fileType":"GeoFence","version":1})",
+       "type.plan: fileType \"GeoFence\"; a QGroundControl plan"},
+      {"version.plan", R"({"fileType":"Plan","version":3,"mission":{}})",
+       "version.plan: version 3; this reader knows QGroundControl plan version 1"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    Result<PathFile> path = read_path_file(file_with(c.name, c.text), wkt_);
+    ASSERT_FALSE(path.ok());
+    EXPECT_EQ(path.status().code(), Errc::invalid_argument);
+    EXPECT_NE(path.status().message().find(dir_ + "/" + c.message), std::string::npos) << path.status().message();
+  }
+  // a .plan is in WGS84: without the pack's CRS it cannot become a path
+  Result<PathFile> no_crs = read_path_file(file_with("crs.plan", plan_text(wp + "," + wp)));
+  ASSERT_FALSE(no_crs.ok());
+  EXPECT_NE(no_crs.status().message().find("crs.plan: a .plan is in WGS84"), std::string::npos)
+      << no_crs.status().message();
+}
+
+// ---- the report ----
+
+TEST_F(PathIo, AReportThatDoesNotHoldTogetherWritesNothing) {
+  PathReport unset = report(preset("multirotor"));
+  unset.home_ground_m = std::nan("");
+  PathReport short_info = report(preset("multirotor"));
+  short_info.per_vertex.pop_back();
+  PathReport slow = report(preset("multirotor"));
+  slow.vehicle.speed_mps = 0;
+  const struct {
+    const PathReport* report;
+    const char* message;
+  } cases[] = {{&unset, "home_ground_m is not set"},
+               {&short_info, "3 per-vertex values for 4 vertices"},
+               {&slow, "vehicle multirotor: speed 0.000000 m/s is not above 0"}};
+  for (const auto& c : cases) {
+    std::vector<std::string> written;
+    const Status s = write_path_outputs(dir_ + "/bad", *c.report, written);
+    EXPECT_EQ(s.code(), Errc::invalid_argument);
+    EXPECT_NE(s.message().find(c.message), std::string::npos) << s.message();
+    EXPECT_TRUE(written.empty());
+    EXPECT_FALSE(exists(dir_ + "/bad.csv"));
+  }
+}
+
+// A path starting below its ground would take off downwards: no .plan, the
+// other files still written.
+TEST_F(PathIo, APathStartingBelowTheGroundGetsNoPlan) {
+  PathReport r = report(preset("multirotor"));
+  r.home_ground_m = 300;
+  std::vector<std::string> written;
+  const Status s = write_path_outputs(dir_ + "/under", r, written);
+  EXPECT_NE(s.message().find(".plan not written: home_ground_m 300.00 m is above the first vertex (250.00 m)"),
+            std::string::npos)
+      << s.message();
+  EXPECT_EQ(written.size(), 3u);
+  EXPECT_FALSE(exists(dir_ + "/under.plan"));
+  EXPECT_TRUE(exists(dir_ + "/under.geojson"));
+}
+
+}  // namespace
+}  // namespace visvol::cli

@@ -108,15 +108,15 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
 int run_plan(const PlanOptions& o) {
   Result<PlanningPack> opened = open_planning_pack(o.pack);
   if (!opened.ok()) return fail("plan", opened.status());
-  const PlanningPack& p = *opened;
+  const PlanningPack& planning = *opened;
   std::vector<const PackLevel*> pointers;
-  for (const PackLevel& l : p.levels) pointers.push_back(&l);
-  Result<rt::PlanRequest> request = plan_request(o, p);
+  for (const PackLevel& l : planning.levels) pointers.push_back(&l);
+  Result<rt::PlanRequest> request = plan_request(o, planning);
   if (!request.ok()) return fail("plan", request.status());
   const rt::PlanRequest& r = *request;
-  const auto& levels = p.levels;
+  const auto& levels = planning.levels;
   const fields::FieldSampler<PackLevel> finest(levels.front());
-  const auto& pack = p.pack;
+  const auto& pack = planning.pack;
 
   std::unique_ptr<PlanPublisher> publisher;
   if (o.publish) {
@@ -153,6 +153,8 @@ int run_plan(const PlanOptions& o) {
   report.home_ground_m = finest.height(report.vertices.front().x(), report.vertices.front().y());
   report.land_ground_m = finest.height(report.vertices.back().x(), report.vertices.back().y());
   report.vehicle = r.envelope;
+  report.requirements_met = res->final_check.all_met;
+  report.unmet = res->final_check.unmet();
   for (const rt::Vec3& v : report.vertices) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }
@@ -174,8 +176,8 @@ int run_plan(const PlanOptions& o) {
                         {"converged", res->converged}, {"diverged", res->diverged}, {"wall_s", res->wall_s},
                         {"outputs", written}};
     j.update(check_json(check, r.envelope));
-    j["planning_bounds"] = {{"xmin_m", p.bounds.xmin_m}, {"ymin_m", p.bounds.ymin_m}, {"xmax_m", p.bounds.xmax_m},
-                            {"ymax_m", p.bounds.ymax_m}};
+    const fields::Bounds2D& b = planning.bounds;
+    j["planning_bounds"] = {{"xmin_m", b.xmin_m}, {"ymin_m", b.ymin_m}, {"xmax_m", b.xmax_m}, {"ymax_m", b.ymax_m}};
     if (res->has_global) {
       j["fc_global_search"] = res->global.fc;
       j["global_search_level"] = res->global_level;

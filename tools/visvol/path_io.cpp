@@ -883,7 +883,9 @@ nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const 
                            "the DEM's height (above mean sea level)"},
       {"vertical_datum", "WGS 84 ellipsoid (EPSG:4979)"},
       {"vertical_datum_source", kVerticalDatumSource},
-      {"geoid_grid", ellipsoidal.grid}};
+      {"geoid_grid", ellipsoidal.grid},
+      {"requirements_met", r.requirements_met},
+      {"unmet", r.unmet}};
   nlohmann::json fp = nlohmann::json::array(), clearance = nlohmann::json::array(),
                  orthometric = nlohmann::json::array(), coords = nlohmann::json::array();
   for (std::size_t i = 0; i < geo.size(); ++i) {

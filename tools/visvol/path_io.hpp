@@ -114,6 +114,10 @@ struct PathReport {
   double land_ground_m = std::numeric_limits<double>::quiet_NaN();
   rt::VehicleEnvelope vehicle;        // the .plan's vehicle type, speeds, takeoff pitch, loiter radius
   Autopilot autopilot = Autopilot::px4;
+  // The exact check's verdict (rt::PathCheck), written into the GeoJSON's
+  // properties so that a path that breaks a requirement says so where it goes.
+  bool requirements_met = true;
+  std::vector<std::string> unmet;
 };
 
 // WGS84 (longitude, latitude, height) of the vertices, or an error when the

@@ -1,0 +1,172 @@
+// `visvol plan` as a crew uses it, and `visvol check`: requirements stated,
+// unmet ones named with exit 1, bad input refused with exit 2 naming it.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.hpp"
+
+namespace visvol::test {
+namespace {
+
+class PlanCheck : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    pack_ = new std::string(::testing::TempDir() + "/plan_check_" + std::to_string(getpid()) + ".vvp");
+    const Outcome r = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + *pack_);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Outcome info = visvol("info " + *pack_ + " --json");
+    ASSERT_EQ(info.status, 0) << info.err;
+    bounds_ = new nlohmann::json(nlohmann::json::parse(info.out)["planning_bounds"]);
+  }
+  static void TearDownTestSuite() {
+    std::remove(pack_->c_str());
+    delete pack_;
+    delete bounds_;
+  }
+  static std::string base(const char* name) { return *pack_ + "_" + name; }
+  static void remove_outputs(const std::string& b) {
+    for (const char* ext : {".geojson", ".csv", ".kml", ".plan"}) std::remove((b + ext).c_str());
+  }
+  // ends inside the planning bounds, high enough over these hills
+  static inline const std::string kEnds = " --from 550300 4182450 320 --to 550850 4181850 320";
+  static std::string* pack_;
+  static nlohmann::json* bounds_;
+};
+std::string* PlanCheck::pack_ = nullptr;
+nlohmann::json* PlanCheck::bounds_ = nullptr;
+
+TEST_F(PlanCheck, AHiddenPathStatesEveryRequirementAndItsCheckAgrees) {
+  const std::string b = base("hide");
+  const Outcome r = visvol("plan " + *pack_ + kEnds +
+                           " --objective hide --segments 32 --max-seconds 5 --vehicle multirotor --json -o " + b);
+  ASSERT_EQ(r.status, 0) << r.err << r.out;
+  const nlohmann::json s = nlohmann::json::parse(r.out);
+  for (const char* key : {"fc_start", "fc_end", "constraints", "envelope", "inside_planning_bounds"}) {
+    EXPECT_TRUE(s.contains(key)) << key;
+  }
+  EXPECT_TRUE(s["all_met"].get<bool>());
+  EXPECT_TRUE(s["inside_planning_bounds"].get<bool>());
+  for (const auto& l : s["envelope"]) EXPECT_TRUE(l["met"].get<bool>()) << l.dump();
+  // the written mission, read back by `check`, meets the same requirements
+  for (const char* ext : {".plan", ".geojson", ".csv"}) {
+    const Outcome c = visvol("check " + *pack_ + " " + b + ext + " --vehicle multirotor --json");
+    EXPECT_EQ(c.status, 0) << ext << ": " << c.err << c.out;
+    if (c.status != 0) continue;
+    const nlohmann::json j = nlohmann::json::parse(c.out);
+    EXPECT_TRUE(j["all_met"].get<bool>()) << ext;
+    EXPECT_NEAR(j["length_m"].get<double>(), s["length_m"].get<double>(), 1.0) << ext;
+    EXPECT_GT(j["per_vertex"].size(), 2u);
+  }
+  remove_outputs(b);
+}
+
+TEST_F(PlanCheck, AnUnmetConstraintExitsOneNamingItAndStillWritesThePath) {
+  const std::string b = base("unmet");
+  // an observer beside the start sees it: no path is hidden from it
+  const Outcome r = visvol("plan " + *pack_ + kEnds +
+                           " --objective hide --segments 32 --max-seconds 3 --vehicle multirotor"
+                           " --hidden-from 550330 4182420 0 --json -o " + b);
+  // a point given at 0 m is under these hills: refused by name
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--hidden-from"), std::string::npos) << r.err;
+  // the same observer standing on the ground (its height from `sample`)
+  const Outcome h = visvol("sample " + *pack_ + " --layer height", "550330 4182420 0\n");
+  ASSERT_EQ(h.status, 0) << h.err;
+  const double ground = std::stod(h.out);
+  const Outcome u = visvol("plan " + *pack_ + kEnds +
+                           " --objective hide --segments 32 --max-seconds 3 --vehicle multirotor --hidden-from 550330 "
+                           "4182420 " + std::to_string(ground + 0.5) + " --json -o " + b);
+  EXPECT_EQ(u.status, 1) << u.err;
+  EXPECT_NE(u.err.find("hidden-from"), std::string::npos) << u.err;
+  const nlohmann::json s = nlohmann::json::parse(u.out);
+  EXPECT_FALSE(s["all_met"].get<bool>());
+  ASSERT_EQ(s["constraints"].size(), 1u);
+  EXPECT_FALSE(s["constraints"][0]["met"].get<bool>());
+  EXPECT_LT(s["constraints"][0]["satisfied_fraction"].get<double>(), 1.0);
+  // written, and marked unmet in its properties
+  const nlohmann::json gj = nlohmann::json::parse(slurp(b + ".geojson"));
+  EXPECT_FALSE(gj["features"][0]["properties"]["requirements_met"].get<bool>());
+  remove_outputs(b);
+}
+
+TEST_F(PlanCheck, EnvelopeLimitsHoldOnEverySegment) {
+  const std::string b = base("envelope");
+  const Outcome r = visvol("plan " + *pack_ + kEnds +
+                           " --objective show --segments 32 --max-seconds 5 --max-climb 8 --max-descent 8"
+                           " --min-turn-radius 60 --max-agl 200 --json -o " + b);
+  ASSERT_EQ(r.status, 0) << r.err << r.out;
+  // checked again, from the file, with the same limits
+  const Outcome c = visvol("check " + *pack_ + " " + b + ".csv --max-climb 8 --max-descent 8 --min-turn-radius 60"
+                           " --max-agl 200 --json");
+  ASSERT_EQ(c.status, 0) << c.out;
+  const nlohmann::json j = nlohmann::json::parse(c.out);
+  for (const auto& v : j["per_vertex"]) {
+    EXPECT_LE(std::fabs(v["climb_deg"].get<double>()), 8.0 + 1e-6);
+    EXPECT_LE(v["clearance_m"].get<double>(), 200.0 + 0.01);
+    EXPECT_GE(v["clearance_m"].get<double>(), 30.0 - 0.01);
+  }
+  // a tighter limit than the path was planned for: check says which, exit 1
+  const Outcome tight = visvol("check " + *pack_ + " " + b + ".csv --max-agl 40");
+  EXPECT_EQ(tight.status, 1);
+  EXPECT_NE(tight.out.find("max-agl"), std::string::npos) << tight.out;
+  remove_outputs(b);
+}
+
+TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
+  // a mission as QGroundControl saves it: relative altitudes over a home
+  const std::string plan = base("qgc") + ".plan";
+  nlohmann::json items = nlohmann::json::array();
+  const double points[][3] = {{37.7900, -122.4340, 150}, {37.7880, -122.4320, 150}, {37.7860, -122.4300, 150}};
+  int id = 1;
+  for (const auto& p : points) {
+    items.push_back({{"type", "SimpleItem"}, {"command", 16}, {"frame", 3}, {"autoContinue", true},
+                     {"doJumpId", id++}, {"params", {0, 0, 0, nullptr, p[0], p[1], p[2]}}});
+  }
+  const nlohmann::json mission = {
+      {"fileType", "Plan"}, {"version", 1}, {"groundStation", "QGroundControl"},
+      {"mission", {{"version", 2}, {"firmwareType", 12}, {"vehicleType", 2}, {"cruiseSpeed", 15},
+                   {"hoverSpeed", 5}, {"plannedHomePosition", {37.7900, -122.4340, 150}}, {"items", items}}},
+      {"geoFence", {{"version", 2}, {"polygons", nlohmann::json::array()}, {"circles", nlohmann::json::array()}}},
+      {"rallyPoints", {{"version", 2}, {"points", nlohmann::json::array()}}}};
+  std::ofstream(plan) << mission.dump(2);
+  const Outcome c = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor --json");
+  ASSERT_TRUE(c.status == 0 || c.status == 1) << c.err;
+  const nlohmann::json j = nlohmann::json::parse(c.out);
+  ASSERT_EQ(j["per_vertex"].size(), 3u);
+  // relative to a home 150 m above sea level: 300 m above it
+  EXPECT_NEAR(j["per_vertex"][0]["z_m"].get<double>(), 300.0, 0.5);
+  EXPECT_TRUE(j.contains("duration_s"));
+  std::remove(plan.c_str());
+}
+
+TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
+  const std::string b = base("bad");
+  const std::string vehicle = ::testing::TempDir() + "/vehicle_" + std::to_string(getpid()) + ".toml";
+  std::ofstream(vehicle) << "type = \"fixed-wing\"\nmax-climb = 10\nwingspan = 3\n";
+  struct Case {
+    std::string args, names;
+  } cases[] = {
+      {" --from 549990 4182700 320 --to 550850 4181850 320", "planning bounds"},  // outside the trusted region
+      {" --from 550300 4182450 10 --to 550850 4181850 320", "below the terrain"},
+      {kEnds + " --clearance 100 --max-agl 50", "max-agl"},
+      {kEnds + " --max-climb nan", "max-climb"},
+      {kEnds + " --vehicle " + vehicle, "wingspan"},
+      {kEnds + " --vehicle /nonexistent.toml", "--vehicle"},
+      {kEnds + " --visible-to 1 2 3", "--visible-to"},
+  };
+  for (const Case& c : cases) {
+    const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);
+    EXPECT_EQ(r.status, 2) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.names), std::string::npos) << c.args << ": " << r.err;
+  }
+  EXPECT_NE(access((b + ".csv").c_str(), F_OK), 0);
+  std::remove(vehicle.c_str());
+}
+
+}  // namespace
+}  // namespace visvol::test

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <ctime>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "fields/pyramid.hpp"
 #include "fields/worker_pool.hpp"
@@ -150,20 +151,54 @@ std::string utc_now() {
   return buf;
 }
 
+// The planning bounds the pack records, or why it cannot have any: a margin
+// that is not a finite number >= 0, or one that leaves nothing of the grid.
+Result<PlanningBounds> planning_bounds_for(const fields::VolumeGeometry& finest, const PackBuildParams& p) {
+  std::ostringstream msg;
+  const std::optional<double>& given = p.planning_margin_m;
+  if (given && !(std::isfinite(*given) && *given >= 0)) {
+    msg << "planning margin: " << *given << " m is not a finite number >= 0 (--planning-margin)";
+    return invalid_argument(msg.str());
+  }
+  const fields::RangeShape shape = p.field.range_shape;
+  const PlanningBounds bounds = planning_bounds_rule(finest, shape, p.field.range_posts, given);
+  if (!bounds.box.empty()) return bounds;
+  const fields::Bounds2D extent = post_extent(finest);
+  msg << "planning bounds: ";
+  if (given) {
+    msg << "the --planning-margin of " << bounds.margin_m << " m";
+  } else if (shape == fields::RangeShape::none) {
+    msg << "the default margin of " << bounds.margin_m << " m";
+  } else {
+    msg << "the margin of the range, " << bounds.margin_m << " m (" << p.field.range_posts << " posts of "
+        << finest.spacing_m << " m),";
+  }
+  msg << " on every side leaves nothing of the DEM's " << extent.xmax_m - extent.xmin_m << " x "
+      << extent.ymax_m - extent.ymin_m << " m of posts; give a DEM wider than twice the margin"
+      << (given ? ", or a smaller --planning-margin" : ", or a smaller --planning-margin or --range");
+  return invalid_argument(msg.str());
+}
+
+nlohmann::json planning_json(const PlanningBounds& b) {
+  return {{"xmin_m", b.box.xmin_m}, {"ymin_m", b.box.ymin_m}, {"xmax_m", b.box.xmax_m},
+          {"ymax_m", b.box.ymax_m}, {"margin_m", b.margin_m}};
+}
+
 std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std::string& source_json,
-                     const std::vector<fields::LodInput>& inputs, const std::string& crs_name) {
+                     const std::vector<fields::LodInput>& inputs, const PlanningBounds& planning) {
   nlohmann::json j;
   j["format"] = "visvol field pack";
   j["version"] = kPackVersion;
   j["tool"] = std::string("visvol ") + tool_version();
   j["created_utc"] = utc_now();
   j["crs_wkt"] = hf.crs_wkt;
-  j["crs_name"] = crs_name;
+  j["crs_name"] = p.crs_name;
   // GDAL geotransform of level 0's pixels (post (0, 0) is the first pixel's centre).
   j["geotransform"] = {hf.origin_x - 0.5 * hf.spacing_m, hf.spacing_m, 0.0,
                        hf.origin_y + 0.5 * hf.spacing_m, 0.0, -hf.spacing_m};
   j["vertical_unit"] = "metre";
   j["source"] = source_json.empty() ? nlohmann::json::object() : nlohmann::json::parse(source_json);
+  j["planning_bounds"] = planning_json(planning);
   const fields::FieldParams& f = p.field;
   j["build"] = {{"nz", f.nz},
                 {"ceiling_m", f.ceiling_m},
@@ -227,6 +262,9 @@ Status build_pack(const Heightfield& hf, const PackBuildParams& params,
     e.dz_m = g.dz_m;
     layout.levels.push_back(e);
   }
+  Result<PlanningBounds> planning =
+      planning_bounds_for(fields::volume_geometry(inputs->front().terrain, inputs->front().params), params);
+  if (!planning.ok()) return planning.status();
   Result<std::unique_ptr<PackWriter>> writer = PackWriter::create(out_path, layout);
   if (!writer.ok()) return writer.status();
   PackWriter& w = **writer;
@@ -257,8 +295,10 @@ Status build_pack(const Heightfield& hf, const PackBuildParams& params,
     done += share;
     if (progress) progress(done);
   }
-  VISVOL_RETURN_IF_ERROR(w.finish(metadata(hf, params, source_json, *inputs, params.crs_name)));
+  VISVOL_RETURN_IF_ERROR(w.finish(metadata(hf, params, source_json, *inputs, *planning)));
   local.file_bytes = w.file_bytes();
+  local.planning = *planning;
+  local.planning.recorded = true;
   local.wall_s = seconds_since(t0);
   if (report) *report = local;
   return Status::ok_status();

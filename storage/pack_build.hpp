@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "fields/visibility_builder.hpp"
 #include "rt/base/status.hpp"
 #include "storage/pack_format.hpp"
+#include "storage/planning_bounds.hpp"
 
 namespace visvol::storage {
 
@@ -25,6 +27,8 @@ struct PackBuildParams {
   VisibilityEncoding encoding = VisibilityEncoding::uint16;
   fields::TffParams tff;
   std::string crs_name;  // recorded beside the WKT for people reading `visvol info`
+  // Planning margin, m (>= 0): overrides the rule's margin (planning_bounds.hpp).
+  std::optional<double> planning_margin_m;
 };
 
 struct PackBuildReport {
@@ -32,13 +36,16 @@ struct PackBuildReport {
   double tff_s = 0;                        // terrain force field, all levels
   double wall_s = 0;
   std::uint64_t file_bytes = 0;
+  PlanningBounds planning;                 // as recorded in the metadata
 };
 
 // The project's version string, recorded in every pack.
 const char* tool_version();
 
 // `source_json` is a JSON object describing where the terrain came from (path,
-// hash, import options); it is stored in the metadata under "source".
+// hash, import options); it is stored in the metadata under "source". The
+// planning bounds are recorded under "planning_bounds"; a build whose bounds
+// would be empty is refused before anything is written.
 Status build_pack(const fields::Heightfield& hf, const PackBuildParams& params,
                   const std::string& source_json, const std::string& out_path,
                   const fields::ProgressFn& progress = {}, PackBuildReport* report = nullptr);

@@ -46,7 +46,73 @@ std::uint32_t checksum(const void* data, std::size_t bytes) {
   return crc;
 }
 
+// A finite number under `key` of `object`, or why there is none.
+Result<double> finite_number(const nlohmann::json& object, const char* key, const std::string& where) {
+  const auto it = object.find(key);
+  if (it == object.end()) return corrupt(where + key + " is missing");
+  if (!it->is_number() || !std::isfinite(it->get<double>())) {
+    std::string value = it->dump();
+    if (value.size() > 40) value = value.substr(0, 40) + "...";
+    return corrupt(where + key + " is " + value + ", not a finite number");
+  }
+  return it->get<double>();
+}
+
+// The planning bounds a pack records: five finite numbers, a box that is not
+// empty and lies within level 0's posts, a margin >= 0.
+Result<PlanningBounds> recorded_planning_bounds(const nlohmann::json& object,
+                                                const fields::VolumeGeometry& finest,
+                                                const std::string& where) {
+  if (!object.is_object()) return corrupt(where + "is not a JSON object");
+  double values[5];
+  const char* keys[5] = {"xmin_m", "ymin_m", "xmax_m", "ymax_m", "margin_m"};
+  for (int n = 0; n < 5; ++n) {
+    Result<double> v = finite_number(object, keys[n], where);
+    if (!v.ok()) return v.status();
+    values[n] = *v;
+  }
+  PlanningBounds p;
+  p.box = {values[0], values[1], values[2], values[3]};
+  p.margin_m = values[4];
+  p.recorded = true;
+  if (p.margin_m < 0) return corrupt(where + "margin_m " + std::to_string(p.margin_m) + " is negative");
+  if (p.box.empty()) return corrupt(where + describe(p.box) + " is empty");
+  // The writer records exactly the rule's box; allow for nothing but rounding.
+  const fields::Bounds2D grid = post_extent(finest);
+  const double slack_m = 1e-6 * finest.spacing_m;
+  if (p.box.xmin_m < grid.xmin_m - slack_m || p.box.xmax_m > grid.xmax_m + slack_m ||
+      p.box.ymin_m < grid.ymin_m - slack_m || p.box.ymax_m > grid.ymax_m + slack_m) {
+    return corrupt(where + describe(p.box) + " is outside level 0's posts, " + describe(grid));
+  }
+  return p;
+}
+
+// The planning bounds of a pack built before they were recorded: the rule on
+// level 0 and the range shape its build parameters name (when they name none,
+// the shape the level's range implies).
+Result<PlanningBounds> derived_planning_bounds(const nlohmann::json& metadata, const LevelEntry& finest,
+                                               const fields::VolumeGeometry& geometry,
+                                               const std::string& where) {
+  fields::RangeShape shape = finest.range_posts > 0 ? fields::RangeShape::cube : fields::RangeShape::none;
+  const auto build = metadata.find("build");
+  if (build != metadata.end() && build->is_object() && build->contains("range_shape")) {
+    const nlohmann::json& name = (*build)["range_shape"];
+    Result<fields::RangeShape> parsed =
+        name.is_string() ? fields::parse_range_shape(name.get<std::string>())
+                         : Result<fields::RangeShape>(invalid_argument("is not a string"));
+    if (!parsed.ok()) return corrupt(where + "build.range_shape: " + parsed.status().message());
+    shape = *parsed;
+  }
+  if (shape != fields::RangeShape::none && finest.range_posts < 1) {
+    return corrupt(where + "level 0 has a range of " + std::to_string(finest.range_posts) + " posts for a " +
+                   fields::to_string(shape) + " range; cannot derive planning bounds");
+  }
+  return planning_bounds_rule(geometry, shape, finest.range_posts);
+}
+
 }  // namespace
+
+fields::Bounds2D planning_bounds(const Pack& pack) { return pack.metadata().planning.box; }
 
 Pack::~Pack() {
   if (base_) ::munmap(const_cast<std::uint8_t*>(base_), static_cast<std::size_t>(size_));
@@ -211,6 +277,13 @@ Status Pack::parse_metadata() {
       if (s.contains("path") && s["path"].is_string()) metadata_.source_path = s["path"];
       if (s.contains("sha256") && s["sha256"].is_string()) metadata_.source_sha256 = s["sha256"];
     }
+    const auto recorded = j.find("planning_bounds");
+    Result<PlanningBounds> planning =
+        recorded != j.end()
+            ? recorded_planning_bounds(*recorded, geometry(0), path_ + ": metadata planning_bounds: ")
+            : derived_planning_bounds(j, levels_[0], geometry(0), path_ + ": metadata: ");
+    if (!planning.ok()) return planning.status();
+    metadata_.planning = *planning;
   } catch (const nlohmann::json::exception& e) {
     return corrupt(path_ + ": metadata is not valid JSON: " + e.what());
   }

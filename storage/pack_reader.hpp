@@ -22,6 +22,7 @@
 #include "fields/volume.hpp"
 #include "rt/base/status.hpp"
 #include "storage/pack_format.hpp"
+#include "storage/planning_bounds.hpp"
 
 namespace visvol::storage {
 
@@ -33,6 +34,11 @@ struct PackMetadata {
   std::string tool;
   std::string source_path;
   std::string source_sha256;
+  // The trusted region: "planning_bounds" as recorded, or for a pack built
+  // before they were recorded, derived by the rule of planning_bounds.hpp from
+  // level 0 and the range shape of "build" (then empty for a grid no wider
+  // than twice its margin). Malformed values fail open().
+  PlanningBounds planning;
 };
 
 class Pack {
@@ -86,6 +92,11 @@ class Pack {
   const TileEntry* tiles_ = nullptr;
   PackMetadata metadata_;
 };
+
+// The pack's planning bounds (world metres in its CRS): paths are trusted
+// inside them. Recorded or derived; see PackMetadata::planning for which, and
+// for the margin. Check empty() on packs built before they were recorded.
+fields::Bounds2D planning_bounds(const Pack& pack);
 
 // One level of detail of a pack as the field sampler reads it: heights, F_p
 // and the terrain force field band, through per-tile pointers resolved once.

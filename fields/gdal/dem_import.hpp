@@ -48,4 +48,28 @@ std::string utm_srs_for(double lon_deg, double lat_deg);
 Result<Heightfield> import_dem(const std::string& path, const ImportOptions& options,
                                ImportReport* report = nullptr);
 
+// The grid import_dem makes of a whole DEM (options.crop ignored), known from
+// its header alone: nothing is warped or read.
+struct ImportGrid {
+  double spacing_m = 0;  // post spacing of the import
+  // True when import keeps the source's pixels (no reprojection, no
+  // resampling): a crop then keeps whole pixels, on pixel edges at
+  // edge_x + n * pixel_x_m and edge_y - n * pixel_y_m. False: the warp puts
+  // the grid's north-west corner on the crop's and lays whole posts from it.
+  bool aligned = false;
+  double edge_x = 0, edge_y = 0;          // a pixel corner of the source (aligned only)
+  double pixel_x_m = 0, pixel_y_m = 0;    // pixel size (aligned only)
+  // The largest north-up box inside the DEM's footprint in the output CRS,
+  // metres (pixel edges): a crop inside it has data everywhere.
+  BoundingBox covered{0, 0, 0, 0};
+};
+Result<ImportGrid> import_grid(const std::string& path, const ImportOptions& options);
+
+// The crop (pixel edges, output CRS metres) whose posts cover `area` grown by
+// `margin_m` on every side, in whole pixels of `grid`. Refuses an area that is
+// not a box (message names `option`), and one the DEM does not cover with its
+// margin, naming each short side and by how many metres.
+Result<BoundingBox> crop_for_area(const ImportGrid& grid, const BoundingBox& area, double margin_m,
+                                  const std::string& option = "--area");
+
 }  // namespace visvol::fields

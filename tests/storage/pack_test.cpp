@@ -263,7 +263,7 @@ TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
 }
 
 TEST(PackWriter, AbandonedWriteLeavesTheOldPackAndNoTemporary) {
-  const Heightfield hf = fractal(20, 3);
+  const Heightfield hf = fractal(24, 3);
   const std::string path = temp_path("abandoned");
   ASSERT_TRUE(build_pack(hf, small_params(), "", path).ok());
   const std::vector<char> before = read_file(path);
@@ -350,7 +350,7 @@ TEST(PackWriter, RejectsInvalidLayouts) {
 }
 
 TEST(PackBuild, Float32EncodingIsExact) {
-  const Heightfield hf = fractal(20, 6);
+  const Heightfield hf = fractal(24, 6);
   const std::string path = temp_path("float32");
   const PackBuildParams p = small_params(VisibilityEncoding::float32);
   ASSERT_TRUE(build_pack(hf, p, "", path).ok());
@@ -370,7 +370,7 @@ TEST(PackBuild, Float32EncodingIsExact) {
 }
 
 TEST(PackBuild, RefusesBadParametersBeforeWriting) {
-  const Heightfield hf = fractal(20, 6);
+  const Heightfield hf = fractal(24, 6);
   const std::string path = temp_path("refused");
   PackBuildParams p = small_params();
   p.tff.band_offset_m = 1000;

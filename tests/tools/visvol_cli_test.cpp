@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_runner.hpp"
 
@@ -82,6 +83,25 @@ TEST_F(Cli, InfoJsonHasTheGeoreference) {
   EXPECT_EQ(j["build"]["range_posts"], 8);
   for (const char* key : {"z0_m", "dz_m", "source"}) EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["source"]["sha256"].get<std::string>().size(), 64u);
+}
+
+// The suite's pack: 40 x 40 posts of 30 m from (549990, 4182750), range 8
+// posts: planning bounds 240 m inside the posts.
+TEST_F(Cli, InfoShowsTheRecordedPlanningBounds) {
+  const Outcome r = visvol("info " + *pack_ + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json b = nlohmann::json::parse(r.out)["planning_bounds"];
+  EXPECT_DOUBLE_EQ(b["xmin_m"].get<double>(), 550230.0);
+  EXPECT_DOUBLE_EQ(b["ymin_m"].get<double>(), 4181820.0);
+  EXPECT_DOUBLE_EQ(b["xmax_m"].get<double>(), 550920.0);
+  EXPECT_DOUBLE_EQ(b["ymax_m"].get<double>(), 4182510.0);
+  EXPECT_DOUBLE_EQ(b["margin_m"].get<double>(), 240.0);
+  EXPECT_EQ(b["recorded"], true);
+  const Outcome text = visvol("info " + *pack_);
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("planning   x 550230.00..550920.00, y 4181820.00..4182510.00 (margin 240 m)\n"),
+            std::string::npos)
+      << text.out;
 }
 
 TEST_F(Cli, InfoDescribesADem) {
@@ -224,6 +244,114 @@ TEST_F(Cli, PlanRefusesBadRequests) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
   }
   EXPECT_NE(access((base + ".csv").c_str(), F_OK), 0);
+}
+
+// `build --area`: the pack's planning bounds hold the area, and the DEM is
+// cropped to little more than the area and its margin.
+class CliArea : public ::testing::Test {
+ protected:
+  static constexpr double kArea[4] = {550100, 4181300, 550900, 4182100};
+  static std::string area() { return " --area 550100 4181300 550900 4182100"; }
+  static std::string options() {
+    return " --fill-nodata --levels 16 --lod 1 --range 8 --tff-offset 60 --tff-levels 6";
+  }
+
+  // Builds with `args`, returns `info --json` of the pack.
+  nlohmann::json build_and_info(const std::string& args) {
+    const Outcome r = visvol("build " + kDem + options() + args + " -o " + pack_);
+    EXPECT_EQ(r.status, 0) << args << ": " << r.err;
+    const Outcome info = visvol("info " + pack_ + " --json");
+    EXPECT_EQ(info.status, 0) << info.err;
+    std::remove(pack_.c_str());
+    return info.status == 0 ? nlohmann::json::parse(info.out) : nlohmann::json::object();
+  }
+  static void expect_holds_area(const nlohmann::json& b) {
+    EXPECT_EQ(b["recorded"], true);
+    EXPECT_LE(b["xmin_m"].get<double>(), kArea[0]);
+    EXPECT_LE(b["ymin_m"].get<double>(), kArea[1]);
+    EXPECT_GE(b["xmax_m"].get<double>(), kArea[2]);
+    EXPECT_GE(b["ymax_m"].get<double>(), kArea[3]);
+  }
+  // Posts a side the area and its margin need, and at most two more.
+  static void expect_snug(const nlohmann::json& info, double margin_m) {
+    const double spacing_m = info["cell_size_m"].get<double>();
+    const double need = (kArea[2] - kArea[0] + 2 * margin_m) / spacing_m + 1;
+    EXPECT_GE(info["nx"].get<double>(), need);
+    EXPECT_LE(info["nx"].get<double>(), need + 2);
+    EXPECT_GE(info["ny"].get<double>(), need);
+    EXPECT_LE(info["ny"].get<double>(), need + 2);
+  }
+
+  const std::string pack_ = ::testing::TempDir() + "/cli_area_" + std::to_string(getpid()) + ".vvp";
+};
+
+TEST_F(CliArea, PlanningBoundsHoldTheAreaWithTheRangeMargin) {
+  const nlohmann::json info = build_and_info(area());
+  const nlohmann::json& b = info["planning_bounds"];
+  EXPECT_DOUBLE_EQ(b["margin_m"].get<double>(), 240.0);  // 8 posts of 30 m
+  expect_holds_area(b);
+  expect_snug(info, 240.0);
+  EXPECT_EQ(info["source"]["import"]["area"], nlohmann::json(std::vector<double>(kArea, kArea + 4)));
+}
+
+TEST_F(CliArea, ResampledAndReprojectedImportsHoldTheAreaToo) {
+  const nlohmann::json resampled = build_and_info(area() + " --spacing 60");
+  EXPECT_DOUBLE_EQ(resampled["cell_size_m"].get<double>(), 60.0);
+  EXPECT_DOUBLE_EQ(resampled["planning_bounds"]["margin_m"].get<double>(), 480.0);
+  expect_holds_area(resampled["planning_bounds"]);
+  expect_snug(resampled, 480.0);
+  const nlohmann::json projected = build_and_info(area() + " --t-srs EPSG:32610");  // NAD27 to WGS 84
+  EXPECT_NE(projected["crs_name"].get<std::string>().find("WGS 84"), std::string::npos);
+  expect_holds_area(projected["planning_bounds"]);
+}
+
+TEST_F(CliArea, GivenAndUnrangedMarginsAreRecorded) {
+  const nlohmann::json given = build_and_info(area() + " --planning-margin 100");
+  EXPECT_DOUBLE_EQ(given["planning_bounds"]["margin_m"].get<double>(), 100.0);
+  expect_holds_area(given["planning_bounds"]);
+  expect_snug(given, 100.0);
+  // none: an eighth of the DEM's smaller side, which the crop makes a sixth of the area's
+  const nlohmann::json none = build_and_info(area() + " --range-shape none");
+  const nlohmann::json& b = none["planning_bounds"];
+  EXPECT_NEAR(b["margin_m"].get<double>(), 800.0 / 6.0, 1e-9);
+  expect_holds_area(b);
+  const double smaller_side_m = (std::min(none["nx"].get<int>(), none["ny"].get<int>()) - 1) * 30.0;
+  // the crop is snapped to whole pixels: two posts more at most
+  EXPECT_NEAR(b["margin_m"].get<double>(), smaller_side_m / 8.0, 2 * 30.0 / 8.0);
+}
+
+// Exit 2 with one line that names the problem; no pack written.
+void expect_refused(const std::string& args, const std::vector<std::string>& named) {
+  const std::string out = ::testing::TempDir() + "/cli_refused_" + std::to_string(getpid()) + ".vvp";
+  const Outcome r = visvol("build " + kDem + " --fill-nodata --levels 16 --lod 1" + args + " -o " + out);
+  EXPECT_EQ(r.status, 2) << args << ": " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
+  for (const std::string& n : named) EXPECT_NE(r.err.find(n), std::string::npos) << args << ": " << r.err;
+  EXPECT_NE(access(out.c_str(), F_OK), 0) << args;
+}
+
+TEST(CliBuildRefuses, AreaWithCropOrNotABox) {
+  expect_refused(" --range 8 --area 550100 4181300 550900 4182100 " + kCrop, {"--area and --crop"});
+  expect_refused(" --range 8 --area 550900 4181300 550100 4182100", {"--area", "not a box"});
+  expect_refused(" --range 8 --area 550100 nan 550900 4182100", {"--area", "finite"});
+  expect_refused(" --range 8 --area 550100 4181300 inf 4182100", {"--area", "finite"});
+}
+
+TEST(CliBuildRefuses, AreaTheDemDoesNotCover) {
+  // The DEM's posts end at x 555060: the area needs them to 554900 + 240 m.
+  expect_refused(" --range 8 --area 554100 4181300 554900 4182100",
+                 {"--area", "80.0 m short on the east side"});
+  expect_refused(" --range 8 --area 543000 4170000 544000 4192500",
+                 {"m short on the west side", "m short on the south side", "m short on the north side"});
+}
+
+TEST(CliBuildRefuses, BadMarginsAndEmptyBounds) {
+  expect_refused(" --range 8 " + kCrop + " --planning-margin -1", {"--planning-margin", "-1"});
+  expect_refused(" --range 8 " + kCrop + " --planning-margin nan", {"--planning-margin"});
+  // 20 posts of range leave nothing of the 1170 m of posts of the crop
+  expect_refused(" " + kCrop + " --range 20", {"1170 x 1170 m", "--planning-margin", "--range"});
+  expect_refused(" " + kCrop + " --range-shape none --planning-margin 585",
+                 {"1170 x 1170 m", "--planning-margin"});
 }
 
 TEST(CliViewshed, WritesAGeoTiff) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "cli.hpp"
 #include "commands.hpp"
@@ -12,6 +13,7 @@
 #include "fields/sampler.hpp"
 #include "import_cli.hpp"
 #include "storage/pack_build.hpp"
+#include "storage/planning_bounds.hpp"
 
 namespace visvol::cli {
 
@@ -39,6 +41,8 @@ struct BuildOptions {
   int threads = 0;
   int exact_rings = 16;
   double max_memory_mib = 8192.0;
+  std::vector<double> area;  // xmin ymin xmax ymax, output CRS metres
+  std::optional<double> planning_margin_m;
   bool json = false;
   std::string json_file;
 };
@@ -121,6 +125,83 @@ Result<FieldParams> make_params(const BuildOptions& o, const Heightfield& hf) {
   }
   VISVOL_RETURN_IF_ERROR(fields::validate(p, hf));
   return p;
+}
+
+// What the build imports and records: the import options (--crop as given,
+// or the crop --area needs) and the planning margin to record, if not the rule's.
+struct BuildInput {
+  ImportCli import;
+  std::optional<double> planning_margin_m;
+};
+
+std::string number_text(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
+Status check_planning_margin(const std::optional<double>& margin_m) {
+  if (!margin_m || (std::isfinite(*margin_m) && *margin_m >= 0)) return Status::ok_status();
+  return invalid_argument("--planning-margin: " + number_text(*margin_m) + " m is not a finite number >= 0");
+}
+
+// The margin an --area build crops for: --planning-margin, or the range in
+// metres, or for --range-shape none a sixth of the area's smaller side (an
+// eighth of the DEM that results, as the rule wants).
+double area_margin_m(const BuildOptions& o, fields::RangeShape shape, const fields::BoundingBox& area,
+                     double spacing_m) {
+  if (o.planning_margin_m) return *o.planning_margin_m;
+  if (shape != fields::RangeShape::none) return std::max(0, o.range_posts) * spacing_m;
+  const double smaller_side_m = std::min(area.xmax - area.xmin, area.ymax - area.ymin);
+  return smaller_side_m / (storage::kUnrangedMarginDivisor - 2.0);
+}
+
+Result<BuildInput> build_input(const BuildOptions& o) {
+  VISVOL_RETURN_IF_ERROR(check_planning_margin(o.planning_margin_m));
+  BuildInput in{o.import, o.planning_margin_m};
+  if (o.area.empty()) return in;
+  if (!o.import.crop.empty()) {
+    return invalid_argument("--area and --crop: give one (--area crops to the area and its planning margin)");
+  }
+  const fields::BoundingBox area{o.area[0], o.area[1], o.area[2], o.area[3]};
+  Result<fields::RangeShape> shape = fields::parse_range_shape(o.range_shape);
+  if (!shape.ok()) return shape.status();
+  Result<fields::ImportGrid> grid = fields::import_grid(o.dem, import_options(o.import));
+  if (!grid.ok()) return grid.status();
+  const double margin_m = area_margin_m(o, *shape, area, grid->spacing_m);
+  Result<fields::BoundingBox> crop = fields::crop_for_area(*grid, area, margin_m, "--area");
+  if (!crop.ok()) return crop.status();
+  in.import.crop = {crop->xmin, crop->ymin, crop->xmax, crop->ymax};
+  // A warp to a crop picks its own spacing unless told: keep the one the margin was measured in.
+  if (!grid->aligned) in.import.spacing_m = grid->spacing_m;
+  if (*shape == fields::RangeShape::none) in.planning_margin_m = margin_m;
+  return in;
+}
+
+// The planning bounds of an --area build hold the area: the crop makes them
+// so, and this says so loudly, before building, if GDAL ever laid the grid
+// otherwise.
+Status check_area_inside(const BuildOptions& o, const BuildInput& in, const Heightfield& hf,
+                         const FieldParams& params) {
+  if (o.area.empty()) return Status::ok_status();
+  const fields::VolumeGeometry finest = fields::volume_geometry(hf, params);
+  const fields::Bounds2D b =
+      storage::planning_bounds_rule(finest, params.range_shape, params.range_posts, in.planning_margin_m).box;
+  const double rounding_m = 1e-6;
+  if (b.xmin_m <= o.area[0] + rounding_m && b.ymin_m <= o.area[1] + rounding_m &&
+      b.xmax_m >= o.area[2] - rounding_m && b.ymax_m >= o.area[3] - rounding_m) {
+    return Status::ok_status();
+  }
+  return Status(Errc::state, "--area: the planning bounds " + storage::describe(b) +
+                                 " of the imported grid do not hold the area; this is a bug");
+}
+
+// The source description, with the area the crop came from.
+std::string build_source_json(const BuildOptions& o, const BuildInput& in,
+                              const fields::ImportReport& imported) {
+  nlohmann::json j = nlohmann::json::parse(source_json(o.dem, in.import, imported));
+  if (!o.area.empty()) j["import"]["area"] = o.area;
+  return j.dump();
 }
 
 void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
@@ -230,36 +311,44 @@ void print_pack_summary(const BuildOptions& o, const Heightfield& hf, const Fiel
   }
   std::printf("\nterrain force field %.2f s (band +-%.0f m, %d levels)\n", report.tff_s,
               o.tff_offset_m, o.tff_levels);
+  std::printf("planning   %s\n", storage::describe(report.planning).c_str());
   std::printf("pack       %s, %.1f MiB, written in %.2f s\n", o.out.c_str(),
               static_cast<double>(report.file_bytes) / (1024.0 * 1024.0), report.wall_s);
 }
 
+int run_pack_build(const BuildOptions& o, const BuildInput& in, const Heightfield& hf,
+                   const FieldParams& params, const fields::ImportReport& imported) {
+  storage::PackBuildParams pp;
+  pp.field = params;
+  pp.lod_levels = o.lod;
+  pp.encoding = o.encoding == "float32" ? storage::VisibilityEncoding::float32
+                                        : storage::VisibilityEncoding::uint16;
+  pp.tff.band_offset_m = o.tff_offset_m;
+  pp.tff.band_levels = o.tff_levels;
+  pp.crs_name = fields::crs_name(hf.crs_wkt);
+  pp.planning_margin_m = in.planning_margin_m;
+  storage::PackBuildReport report;
+  Progress progress("building " + o.out);
+  const Status st = storage::build_pack(hf, pp, build_source_json(o, in, imported), o.out,
+                                        [&](double f) { progress.update(f); }, &report);
+  if (!st.ok()) return fail("build", st);
+  progress.finish();
+  print_pack_summary(o, hf, params, imported, report);
+  return kExitOk;
+}
+
 int run_build(const BuildOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
+  Result<BuildInput> in = build_input(o);
+  if (!in.ok()) return fail("build", in.status());
   fields::ImportReport imported;
-  Result<Heightfield> hf = import(o.dem, o.import, &imported);
+  Result<Heightfield> hf = import(o.dem, in->import, &imported);
   if (!hf.ok()) return fail("build", hf.status());
   Result<FieldParams> params = make_params(o, *hf);
   if (!params.ok()) return fail("build", params.status());
-
-  if (!o.out.empty()) {
-    storage::PackBuildParams pp;
-    pp.field = *params;
-    pp.lod_levels = o.lod;
-    pp.encoding = o.encoding == "float32" ? storage::VisibilityEncoding::float32
-                                          : storage::VisibilityEncoding::uint16;
-    pp.tff.band_offset_m = o.tff_offset_m;
-    pp.tff.band_levels = o.tff_levels;
-    pp.crs_name = fields::crs_name(hf->crs_wkt);
-    storage::PackBuildReport report;
-    Progress progress("building " + o.out);
-    const Status st = storage::build_pack(*hf, pp, source_json(o.dem, o.import, imported), o.out,
-                                          [&](double f) { progress.update(f); }, &report);
-    if (!st.ok()) return fail("build", st);
-    progress.finish();
-    print_pack_summary(o, *hf, *params, imported, report);
-    return kExitOk;
-  }
+  const Status inside = check_area_inside(o, *in, *hf, *params);
+  if (!inside.ok()) return fail("build", inside);
+  if (!o.out.empty()) return run_pack_build(o, *in, *hf, *params, imported);
 
   std::vector<fields::BuildStats> stats;
   Result<std::vector<LodLevel>> levels = [&] {
@@ -321,6 +410,13 @@ Runner add_build_command(CLI::App& app) {
   c->add_option("--tff-levels", o->tff_levels, "Terrain force field samples per column")
       ->capture_default_str();
   add_import_options(c, o->import);
+  c->add_option("--area", o->area,
+                "Plan over the box XMIN YMIN XMAX YMAX (output CRS, m): import it with the planning "
+                "margin around it, so that it lies inside the pack's planning bounds (not with --crop)")
+      ->expected(4);
+  c->add_option("--planning-margin", o->planning_margin_m,
+                "Planning bounds: this far inside the DEM's posts on every side, m (default: the range "
+                "in metres; for --range-shape none, 1/8 of the DEM's smaller side)");
   c->add_option("--max-memory", o->max_memory_mib, "Refuse builds needing more working memory, MiB")
       ->capture_default_str();
   c->add_flag("--json", o->json, "Print the summary as one JSON object");

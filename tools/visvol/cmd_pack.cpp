@@ -30,8 +30,31 @@ bool is_pack(const std::string& path) {
   return in.gcount() == 8 && std::memcmp(magic, storage::kPackMagic, 8) == 0;
 }
 
+// A member of the metadata, or `fallback` when it is missing or of another type.
+nlohmann::json member(const nlohmann::json& meta, const char* key, const nlohmann::json& fallback) {
+  const auto it = meta.find(key);
+  return it != meta.end() && it->type() == fallback.type() ? *it : fallback;
+}
+
+nlohmann::json planning_json(const storage::PlanningBounds& p) {
+  return {{"xmin_m", p.box.xmin_m}, {"ymin_m", p.box.ymin_m}, {"xmax_m", p.box.xmax_m},
+          {"ymax_m", p.box.ymax_m}, {"margin_m", p.margin_m}, {"recorded", p.recorded}};
+}
+
+// "planning   x A..B, y C..D (margin M m)", saying so when derived or empty.
+void print_planning(const storage::PlanningBounds& p) {
+  if (p.box.empty()) {
+    std::printf("planning   none: a margin of %.0f m leaves nothing of the grid (derived; the pack "
+                "predates recorded bounds)\n", p.margin_m);
+    return;
+  }
+  std::printf("planning   %s%s\n", storage::describe(p).c_str(),
+              p.recorded ? "" : ", derived: the pack predates recorded bounds");
+}
+
 nlohmann::json pack_info_json(const Pack& pack) {
-  nlohmann::json meta = nlohmann::json::parse(pack.metadata().json);
+  // Pack::open checked that the metadata is a JSON object.
+  const nlohmann::json meta = nlohmann::json::parse(pack.metadata().json);
   const storage::LevelEntry& l0 = pack.level(0);
   nlohmann::json j;
   j["path"] = pack.path();
@@ -52,10 +75,11 @@ nlohmann::json pack_info_json(const Pack& pack) {
   j["tff_band_offset_m"] = pack.header().band_offset_m;
   j["tff_band_levels"] = pack.header().band_levels;
   j["tiles"] = pack.tile_count();
-  j["build"] = meta.value("build", nlohmann::json::object());
-  j["source"] = meta.value("source", nlohmann::json::object());
-  j["tool"] = meta.value("tool", "");
-  j["created_utc"] = meta.value("created_utc", "");
+  j["planning_bounds"] = planning_json(pack.metadata().planning);
+  j["build"] = member(meta, "build", nlohmann::json::object());
+  j["source"] = member(meta, "source", nlohmann::json::object());
+  j["tool"] = pack.metadata().tool;
+  j["created_utc"] = member(meta, "created_utc", "");
   for (int l = 0; l < pack.level_count(); ++l) {
     const storage::LevelEntry& e = pack.level(l);
     j["levels"].push_back({{"nx", e.nx}, {"ny", e.ny}, {"nz", e.nz}, {"spacing_m", e.spacing_m},
@@ -80,6 +104,7 @@ void print_pack_info(const Pack& pack) {
               l0.z0_m + (l0.nz - 1) * l0.dz_m);
   std::printf("tff band   +-%.1f m, %u samples a column\n", pack.header().band_offset_m,
               pack.header().band_levels);
+  print_planning(pack.metadata().planning);
   std::printf("build      %s\n", j["build"].dump().c_str());
   std::printf("source     %s\n", j["source"].dump().c_str());
   std::printf("levels of detail:\n");

@@ -26,8 +26,7 @@ void add_import_options(CLI::App* app, ImportCli& o) {
       ->capture_default_str();
 }
 
-Result<fields::Heightfield> import(const std::string& path, const ImportCli& o,
-                                   fields::ImportReport* report) {
+fields::ImportOptions import_options(const ImportCli& o) {
   fields::ImportOptions options;
   options.nodata = o.fill_nodata ? fields::NodataPolicy::fill : fields::NodataPolicy::refuse;
   options.target_srs = o.t_srs;
@@ -35,7 +34,12 @@ Result<fields::Heightfield> import(const std::string& path, const ImportCli& o,
   options.spacing_m = o.spacing_m;
   options.resampling = o.resampling;
   if (!o.crop.empty()) options.crop = fields::BoundingBox{o.crop[0], o.crop[1], o.crop[2], o.crop[3]};
-  return fields::import_dem(path, options, report);
+  return options;
+}
+
+Result<fields::Heightfield> import(const std::string& path, const ImportCli& o,
+                                   fields::ImportReport* report) {
+  return fields::import_dem(path, import_options(o), report);
 }
 
 Result<std::string> sha256_file(const std::string& path) {

@@ -20,6 +20,9 @@ struct ImportCli {
 
 void add_import_options(CLI::App* app, ImportCli& o);
 
+// The library's import options for the command-line ones.
+fields::ImportOptions import_options(const ImportCli& o);
+
 // Imports `path` with the options, naming the file in errors.
 Result<fields::Heightfield> import(const std::string& path, const ImportCli& o,
                                    fields::ImportReport* report);

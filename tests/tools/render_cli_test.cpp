@@ -81,7 +81,7 @@ class RenderCli : public ::testing::Test {
     ASSERT_EQ(build.status, 0) << build.err;
     // a short real plan: its CSV is what operators hand to render
     const Outcome plan = visvol("plan " + *pack_ +
-                                " --from 550100 4182600 200 --to 551100 4181700 200 --objective hide"
+                                " --from 550300 4182450 320 --to 550850 4181850 320 --objective hide --vehicle multirotor"
                                 " --segments 16 --max-seconds 2 -o " + *dir_ + "/plan");
     ASSERT_EQ(plan.status, 0) << plan.err;
     std::ofstream(*dir_ + "/points.txt") << "# x y z\n550200 4182500 180\n550600 4182100 160\n551000 4181800 170\n";

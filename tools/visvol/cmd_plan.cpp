@@ -176,8 +176,9 @@ int run_plan(const PlanOptions& o) {
                         {"converged", res->converged}, {"diverged", res->diverged}, {"wall_s", res->wall_s},
                         {"outputs", written}};
     j.update(check_json(check, r.envelope));
-    const fields::Bounds2D& b = planning.bounds;
-    j["planning_bounds"] = {{"xmin_m", b.xmin_m}, {"ymin_m", b.ymin_m}, {"xmax_m", b.xmax_m}, {"ymax_m", b.ymax_m}};
+    const fields::Bounds2D& box = planning.bounds;
+    j["planning_bounds"] = {{"xmin_m", box.xmin_m}, {"ymin_m", box.ymin_m}, {"xmax_m", box.xmax_m},
+                            {"ymax_m", box.ymax_m}};
     if (res->has_global) {
       j["fc_global_search"] = res->global.fc;
       j["global_search_level"] = res->global_level;

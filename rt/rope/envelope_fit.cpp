@@ -13,12 +13,6 @@ constexpr double kRadPerDeg = 0.017453292519943295;
 constexpr int kTurnPasses = 400;
 constexpr int kHeightPasses = 60;
 
-double ground_m(const fields::Heightfield& t, double x, double y) {
-  const double i = std::clamp(t.i_of(x), 0.0, double(t.nx - 1));
-  const double j = std::clamp(t.j_of(y), 0.0, double(t.ny - 1));
-  return fields::bilinear_height(t, i, j);
-}
-
 struct Band {
   double lo = 0, hi = 0;
 };
@@ -28,7 +22,7 @@ struct Band {
 // visible-to hull).
 Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, double y) {
   const VehicleEnvelope& e = s.envelope;
-  const double g = ground_m(t, x, y);
+  const double g = fields::bilinear_height(t, t.i_of(x), t.j_of(y));  // clamped to the grid
   Band b;
   b.lo = g + e.clearance_m + s.margin_m;
   b.hi = std::min({g + e.max_agl_m - s.margin_m, e.max_altitude_m - s.margin_m, s.top_m});

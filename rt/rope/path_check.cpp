@@ -139,9 +139,7 @@ Result<PathChecker> PathChecker::create(fields::Heightfield terrain, const PathF
 }
 
 double PathChecker::ground_m(double x, double y) const {
-  const double i = std::clamp(terrain_.i_of(x), 0.0, double(terrain_.nx - 1));
-  const double j = std::clamp(terrain_.j_of(y), 0.0, double(terrain_.ny - 1));
-  return fields::bilinear_height(terrain_, i, j);
+  return fields::bilinear_height(terrain_, terrain_.i_of(x), terrain_.j_of(y));  // clamped to the grid
 }
 
 bool PathChecker::sees(const ConstraintPoint& c, const Vec3& p) const {
@@ -164,7 +162,9 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
   double lowest = std::numeric_limits<double>::infinity(), highest_agl = -lowest, highest = -lowest;
   double steepest_climb = 0, steepest_descent = 0, tightest = std::numeric_limits<double>::infinity();
 
-  auto sample = [&](const Vec3& p, double w) {
+  std::vector<std::vector<bool>> vertex_seen(static_cast<std::size_t>(count), std::vector<bool>(nc));
+  // `seen` (or null): where the sight lines of a vertex's sample go
+  auto sample = [&](const Vec3& p, double w, std::vector<bool>* seen_out) {
     const double ground = ground_m(p.x(), p.y());
     const double h = p.z() - ground;
     lowest = std::min(lowest, h);
@@ -176,6 +176,7 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
     bounds.add(!spec_.planning_bounds || spec_.planning_bounds->contains(p.x(), p.y()), w);
     for (std::size_t c = 0; c < nc; ++c) {
       const bool seen = sees(spec_.constraints[c], p);
+      if (seen_out) (*seen_out)[c] = seen;
       if (seen) seen_m[c] += w;
       constraint_tally[c].add(seen == (spec_.constraints[c].kind == ConstraintKind::visible_to), w);
     }
@@ -189,7 +190,12 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
     const int m = std::max(1, static_cast<int>(std::ceil(len / spec_.sample_step_m)));
     for (int k = 0; k <= m; ++k) {
       const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);
-      sample(Vec3(a + (b - a) * (static_cast<double>(k) / m)), w);
+      // the segment's ends are the vertices themselves
+      const Vec3 p = k == 0 ? a : k == m ? b : Vec3(a + (b - a) * (static_cast<double>(k) / m));
+      std::vector<bool>* at_vertex = k == 0 ? &vertex_seen[static_cast<std::size_t>(s)]
+                                     : k == m ? &vertex_seen[static_cast<std::size_t>(s + 1)]
+                                              : nullptr;
+      sample(p, w, at_vertex);
     }
     const double horizontal = std::hypot(b.x() - a.x(), b.y() - a.y());
     const double angle = len > 1e-9 ? std::atan2(b.z() - a.z(), horizontal) * kDegPerRad : 0.0;
@@ -217,8 +223,7 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
       const double w = 0.5 * ((v[i] - v[i - 1]).norm() + (v[i + 1] - v[i]).norm());
       turn.add(vc.turn_radius_m >= e.min_turn_radius_m - 1e-6, w);
     }
-    vc.seen_by.resize(nc);
-    for (std::size_t c = 0; c < nc; ++c) vc.seen_by[c] = sees(spec_.constraints[c], v[i]);
+    vc.seen_by = std::move(vertex_seen[static_cast<std::size_t>(i)]);
   }
 
   out.fc = field_ ? path_fc(v, count, *field_, 256) : 0.0;

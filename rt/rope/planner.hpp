@@ -210,12 +210,9 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   };
 
   // the start
-  std::vector<Vec3> start_path;
-  switch (request.init) {
-    case InitialPath::straight: start_path = {request.from, request.to}; break;
-    case InitialPath::polyline: start_path = request.polyline; break;
-    case InitialPath::global: start_path = {request.from, request.to}; break;
-  }
+  // the straight line stands for a global search that finds nothing better
+  std::vector<Vec3> start_path = request.init == InitialPath::polyline ? request.polyline
+                                                                        : std::vector<Vec3>{request.from, request.to};
   consider(start_path.data(), static_cast<int>(start_path.size()), "start");
   if (request.init == InitialPath::global) {
     GlobalSearchParams gp;

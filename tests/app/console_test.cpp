@@ -101,7 +101,14 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   EXPECT_NE(r.out.find("outputs: "), std::string::npos);
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_GT(s["loop"]["ticks"].get<int>(), 1000);
+  // Once settled the loop thread touches only pages it touched before: no
+  // fault at all in the optimised build. Under AddressSanitizer the shadow of
+  // newly touched memory is mapped lazily, and such a fault that retries
+  // behind another thread's mmap is counted as major without any disk I/O.
+#if !defined(__SANITIZE_ADDRESS__)
   EXPECT_EQ(s["loop"]["major_faults_after_settle"].get<int>(), 0);
+  EXPECT_EQ(s["loop"]["minor_faults_after_settle"].get<int>(), 0);
+#endif
   EXPECT_LE(s["path"]["fc_end"].get<double>(), s["path"]["fc_start"].get<double>());
   EXPECT_EQ(s["device"]["state"], "operational");
   EXPECT_EQ(s["device"]["grasps"].get<int>(), 1);

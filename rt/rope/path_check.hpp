@@ -119,17 +119,4 @@ class PathChecker {
   PathCheckSpec spec_;
 };
 
-// The fillet radius at vertex b between segments a-b and b-c (horizontal
-// plane) when each fillet may use half of each segment, infinite for a
-// straight continuation.
-double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c);
-
-// The largest turn radius flyable at each vertex of a path (horizontal
-// plane): a fillet of radius R at a vertex turning by theta starts
-// R tan(theta / 2) before it, and two fillets may not overlap, so every
-// segment i of horizontal length L_i needs R (t_i + t_(i+1)) <= L_i with
-// t = tan(theta / 2). A vertex's radius is the smaller of its two segments'
-// bounds; straight vertices and the ends are infinite.
-std::vector<double> turn_radii_m(const Vec3* vertices, int count);
-
 }  // namespace visvol::rt

@@ -69,14 +69,40 @@ PathMetrics path_metrics(const Vec3* v, int count, const PathField& field, int s
     m.max_descent_deg = std::max(m.max_descent_deg, -angle);
   }
   m.min_turn_radius_m = std::numeric_limits<double>::infinity();
-  for (int i = 1; i + 1 < count; ++i) {
-    // radius of the circle through three points: abc / (4 * area)
-    const double a = (v[i] - v[i - 1]).norm(), b = (v[i + 1] - v[i]).norm(), c = (v[i + 1] - v[i - 1]).norm();
-    const double area2 = (v[i] - v[i - 1]).cross(v[i + 1] - v[i - 1]).norm();  // twice the area
-    if (area2 < 1e-12) continue;  // straight
-    m.min_turn_radius_m = std::min(m.min_turn_radius_m, a * b * c / (2.0 * area2));
-  }
+  for (double r : turn_radii_m(v, count)) m.min_turn_radius_m = std::min(m.min_turn_radius_m, r);
   return m;
+}
+
+double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Eigen::Vector2d u(b.x() - a.x(), b.y() - a.y()), w(c.x() - b.x(), c.y() - b.y());
+  const double lu = u.norm(), lw = w.norm();
+  if (lu < 1e-9 || lw < 1e-9) return std::numeric_limits<double>::infinity();
+  const double cos_turn = std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0);
+  const double turn = std::acos(cos_turn);
+  if (turn < 1e-9) return std::numeric_limits<double>::infinity();
+  return 0.5 * std::min(lu, lw) / std::tan(0.5 * turn);
+}
+
+std::vector<double> turn_radii_m(const Vec3* v, int count) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::size_t n = count > 0 ? static_cast<std::size_t>(count) : 0;
+  std::vector<double> t(n, 0.0), radius(n, inf);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const Eigen::Vector2d u(v[i].x() - v[i - 1].x(), v[i].y() - v[i - 1].y()),
+        w(v[i + 1].x() - v[i].x(), v[i + 1].y() - v[i].y());
+    const double lu = u.norm(), lw = w.norm();
+    if (lu < 1e-9 || lw < 1e-9) continue;  // a vertical segment: climb limits judge it
+    const double turn = std::acos(std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0));
+    t[i] = turn > 1e-9 ? std::tan(0.5 * std::min(turn, M_PI - 1e-9)) : 0.0;
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double tangents = t[i] + t[i + 1];
+    if (tangents <= 0) continue;
+    const double bound = std::hypot(v[i + 1].x() - v[i].x(), v[i + 1].y() - v[i].y()) / tangents;
+    if (t[i] > 0) radius[i] = std::min(radius[i], bound);
+    if (t[i + 1] > 0) radius[i + 1] = std::min(radius[i + 1], bound);
+  }
+  return radius;
 }
 
 }  // namespace visvol::rt

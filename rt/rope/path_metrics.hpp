@@ -8,6 +8,7 @@
 #pragma once
 
 #include <functional>
+#include <vector>
 
 #include "rt/rope/rope.hpp"
 
@@ -27,7 +28,7 @@ struct PathMetrics {
   double min_clearance_m = 0;      // lowest height above the terrain (sampled)
   double max_climb_deg = 0;        // steepest ascent of a segment
   double max_descent_deg = 0;      // steepest descent of a segment (positive)
-  double min_turn_radius_m = 0;    // smallest radius of the circle through three neighbouring vertices
+  double min_turn_radius_m = 0;    // tightest turn an autopilot flies at a waypoint (turn_radii_m)
 };
 
 // Importance along the path, t in [0, 1] by arc length; nullptr means 1.
@@ -38,7 +39,21 @@ double path_fc(const Vec3* vertices, int count, const PathField& field, int samp
                Importance importance = nullptr);
 
 // Every metric; clearance is sampled every `clearance_step_m` along the path.
+// Offline: allocates (turn_radii_m).
 PathMetrics path_metrics(const Vec3* vertices, int count, const PathField& field, int samples,
                          double clearance_step_m, Importance importance = nullptr);
+
+// The fillet radius at vertex b between segments a-b and b-c (horizontal
+// plane) when each fillet may use half of each segment, infinite for a
+// straight continuation.
+double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c);
+
+// The largest turn radius flyable at each vertex of a path (horizontal
+// plane): a fillet of radius R at a vertex turning by theta starts
+// R tan(theta / 2) before it, and two fillets may not overlap, so every
+// segment i of horizontal length L_i needs R (t_i + t_(i+1)) <= L_i with
+// t = tan(theta / 2). A vertex's radius is the smaller of its two segments'
+// bounds; straight vertices and the ends are infinite.
+std::vector<double> turn_radii_m(const Vec3* vertices, int count);
 
 }  // namespace visvol::rt

@@ -43,14 +43,15 @@ TEST(PathMetrics, LengthClearanceAnglesAndTurnRadius) {
   EXPECT_NEAR(m.min_clearance_m, 50.0, 1e-9);
   EXPECT_NEAR(m.max_climb_deg, 45.0, 1e-9);
   EXPECT_NEAR(m.max_descent_deg, 30.0, 1e-9);
-  // vertices on a circle of radius 500: the turn radius is 500
+  // vertices on a circle of radius 500, 0.1 rad apart: fillets that may not
+  // overlap fit a radius of 500 cos(0.05) (turn_radii_m), just inside the circle
   std::vector<Vec3> arc;
   for (int i = 0; i <= 12; ++i) {
     const double a = i * 0.1;
     arc.push_back({500 * std::cos(a), 500 * std::sin(a), 100});
   }
   m = path_metrics(arc.data(), static_cast<int>(arc.size()), f, 64, 1.0);
-  EXPECT_NEAR(m.min_turn_radius_m, 500.0, 1e-6);
+  EXPECT_NEAR(m.min_turn_radius_m, 500.0 * std::cos(0.05), 1e-6);
   // a straight path has no finite turn radius
   const std::vector<Vec3> line = {{0, 0, 10}, {1, 0, 10}, {2, 0, 10}};
   m = path_metrics(line.data(), 3, f, 16, 1.0);

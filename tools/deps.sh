@@ -5,7 +5,7 @@
 set -euo pipefail
 
 build_packages=(
-  cmake g++ make pkg-config
+  cmake g++ make ninja-build pkg-config
   libeigen3-dev          # vectors and matrices (rope, sampler, servo)
   libgdal-dev            # DEM import and GeoTIFF output (offline tools only)
   libproj-dev proj-data  # path files: DEM (EGM96) heights to WGS84 ellipsoidal ones for GeoJSON (the EGM96 grid)

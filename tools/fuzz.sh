@@ -8,8 +8,10 @@ cd "$(dirname "$0")/.."
 seconds=${VISVOL_FUZZ_SECONDS:-60}
 
 tools/deps.sh build storage dds fuzz
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -DVISVOL_FUZZ=ON \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+generator=()
+[[ -f build-fuzz/CMakeCache.txt ]] || generator=(-G Ninja)
+CC=clang CXX=clang++ cmake "${generator[@]}" -S . -B build-fuzz -DVISVOL_FUZZ=ON \
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISVOL_DEBUG_INFO=-g1 >/dev/null
 cmake --build build-fuzz --target fuzzers -j "$(nproc)"
 
 mkdir -p build-fuzz/artifacts

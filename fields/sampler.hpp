@@ -35,6 +35,11 @@
 
 namespace visvol::fields {
 
+// v clamped to [lo, hi], NaN to lo: a query at a non-finite point reads the
+// grid's corner instead of indexing outside it (the rope's state guard,
+// rt/rope, catches the NaN itself).
+inline double clamp_index(double v, double lo, double hi) { return v > lo ? (v < hi ? v : hi) : lo; }
+
 // What a force model reads at one point (FieldSampler::sample): the terrain
 // height, and where asked for, grad F_p and the terrain force sample.
 struct PointSample {
@@ -136,8 +141,8 @@ class FieldSampler {
   };
   Cell cell(double x, double y) const {
     const VolumeGeometry& g = level_.geometry();
-    const double gi = std::clamp((x - g.origin_x) / g.spacing_m, 0.0, double(g.nx - 1));
-    const double gj = std::clamp((g.origin_y - y) / g.spacing_m, 0.0, double(g.ny - 1));
+    const double gi = clamp_index((x - g.origin_x) / g.spacing_m, 0.0, double(g.nx - 1));
+    const double gj = clamp_index((g.origin_y - y) / g.spacing_m, 0.0, double(g.ny - 1));
     const int i = std::min(static_cast<int>(gi), g.nx - 2);
     const int j = std::min(static_cast<int>(gj), g.ny - 2);
     return {i, j, gi - i, gj - j};
@@ -156,7 +161,7 @@ class FieldSampler {
     const double gk = (z - g.z0_m) / g.dz_m;
     if (gk < 0) return 0.0;
     const Cell c = cell(x, y);
-    const double kc = std::min(gk, static_cast<double>(g.nz - 1));
+    const double kc = clamp_index(gk, 0.0, static_cast<double>(g.nz - 1));
     const int k = std::min(static_cast<int>(kc), g.nz - 2);
     const double fk = kc - k;
     const Column c00 = column(c.i, c.j), c10 = column(c.i + 1, c.j);
@@ -295,7 +300,7 @@ class FieldSampler {
     if (z <= ground_m) return Eigen::Vector3d::Zero();
     const double gk = (z - g.z0_m) / g.dz_m;
     if (gk < 0) return Eigen::Vector3d::Zero();
-    const double kc = std::min(gk, static_cast<double>(g.nz - 1));
+    const double kc = clamp_index(gk, 0.0, static_cast<double>(g.nz - 1));
     const int k = std::min(static_cast<int>(kc), g.nz - 2);
     const double fk = kc - k;
     read_ring(c, block);
@@ -335,7 +340,7 @@ class FieldSampler {
         if (w == 0) continue;
         const float post_m = block.post[1 + dj][1 + di];
         const Column& col = block.col[1 + dj][1 + di];
-        const double b = std::clamp((z - post_m + p.band_offset_m) / step, 0.0,
+        const double b = clamp_index((z - post_m + p.band_offset_m) / step, 0.0,
                                     static_cast<double>(p.band_levels - 1));
         const int b0 = std::min(static_cast<int>(b), p.band_levels - 2);
         const double fb = b - b0;

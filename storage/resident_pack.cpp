@@ -253,8 +253,13 @@ void ResidentPack::plan(const WorldBox& box, std::uint64_t budget_left) {
     const fields::VolumeGeometry& g = levels_[static_cast<std::size_t>(l)].geometry();
     const double brick_m = kBrickPosts * g.spacing_m;
     const double m = config_.margin_m;
-    auto col = [&](double x) { return static_cast<int>(std::floor((x - g.origin_x) / brick_m)); };
-    auto row = [&](double y) { return static_cast<int>(std::floor((g.origin_y - y) / brick_m)); };
+    // clamped before the conversion: a far-off focus is a brick beyond the edge
+    auto col = [&](double x) {
+      return static_cast<int>(std::clamp(std::floor((x - g.origin_x) / brick_m), -1.0, double(s.bricks_x)));
+    };
+    auto row = [&](double y) {
+      return static_cast<int>(std::clamp(std::floor((g.origin_y - y) / brick_m), -1.0, double(s.bricks_y)));
+    };
     const int bx0 = std::max(0, col(box.x0_m - m)), bx1 = std::min(s.bricks_x - 1, col(box.x1_m + m));
     const int by0 = std::max(0, row(box.y1_m + m)), by1 = std::min(s.bricks_y - 1, row(box.y0_m - m));
     const double cx = 0.5 * (box.x0_m + box.x1_m), cy = 0.5 * (box.y0_m + box.y1_m);
@@ -286,7 +291,9 @@ void ResidentPack::plan(const WorldBox& box, std::uint64_t budget_left) {
 
 Status ResidentPack::update() {
   std::lock_guard<std::mutex> guard(update_mutex_);
-  if (const WorldBox* box = focus_.take()) {
+  const WorldBox* box = focus_.take();
+  // a focus that is not finite (a rope gone bad) keeps the last one
+  if (box != nullptr && std::isfinite(box->x0_m + box->y0_m + box->x1_m + box->y1_m)) {
     last_focus_ = *box;
     have_focus_ = true;
   }

@@ -25,9 +25,23 @@ dds::DeviceState device_state_of(haptic::DeviceState s, bool forces) {
   return dds::DeviceState::unknown;
 }
 
+// Finite and over the grid: what every endpoint must be (real-time safe).
+bool inside(const Vec3& p, const fields::VolumeGeometry& g) {
+  const double x1 = g.origin_x + (g.nx - 1) * g.spacing_m, y0 = g.origin_y - (g.ny - 1) * g.spacing_m;
+  return p.allFinite() && p.x() >= g.origin_x && p.x() <= x1 && p.y() >= y0 && p.y() <= g.origin_y;
+}
+
+// Whether every vertex of a rope is finite (real-time safe, O(vertices)).
+bool finite_rope(const Rope& rope) {
+  const Vec3* v = rope.vertices();
+  double sum = 0;
+  for (int i = 0; i <= rope.segments(); ++i) sum += v[i].x() + v[i].y() + v[i].z();
+  return std::isfinite(sum);
+}
+
 Status check_point(const char* name, const Vec3& p, const fields::VolumeGeometry& g, double ground_m) {
   const double x1 = g.origin_x + (g.nx - 1) * g.spacing_m, y0 = g.origin_y - (g.ny - 1) * g.spacing_m;
-  if (!p.allFinite() || p.x() < g.origin_x || p.x() > x1 || p.y() < y0 || p.y() > g.origin_y) {
+  if (!inside(p, g)) {
     return invalid_argument(std::string(name) + ": (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
                             ") is outside the pack (x " + std::to_string(g.origin_x) + ".." + std::to_string(x1) +
                             ", y " + std::to_string(y0) + ".." + std::to_string(g.origin_y) + ")");
@@ -90,6 +104,8 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   const storage::ResidentSampler& sampler = forces_->sampler();
   VISVOL_RETURN_IF_ERROR(check_point("start", c.start_m, g, sampler.height(c.start_m.x(), c.start_m.y())));
   VISVOL_RETURN_IF_ERROR(check_point("end", c.end_m, g, sampler.height(c.end_m.x(), c.end_m.y())));
+  const Vec3 ends[2] = {c.start_m, c.end_m};
+  VISVOL_RETURN_IF_ERROR(describe_polyline(ends, 2, c.segments, 2, c.max_segments).with_context("executive: start to end"));
 
   start_m_ = c.start_m;
   end_m_ = c.end_m;
@@ -183,6 +199,8 @@ Errc Executive::start_run() {
   lay_with_slack([&](int i) { return Vec3(a + (static_cast<double>(i) / n) * (b - a)); }, n, 1, length,
                  forces_->gains().clearance_m + 20.0, s.level().geometry(),
                  [&](double x, double y) { return s.height(x, y); }, scratch_.get());
+  // checked first: a refusal from reset() would build a message on this thread
+  if (check_polyline(scratch_.get(), n + 1, n, 2, config_.max_segments) != Errc::ok) return Errc::invalid_argument;
   const Errc e = rope_->set_params(params_for(rope_->model(), n, std::max(length / n, 1e-3)));
   if (e != Errc::ok) return e;
   if (!rope_->reset(scratch_.get(), n + 1, n).ok()) return Errc::invalid_argument;
@@ -199,6 +217,7 @@ Errc Executive::start_run() {
 
 Errc Executive::restart_rope(const Vec3* polyline, int points, int segments, RopeModel model) {
   Rope* next = ropes_[index_of(model)].get();
+  if (check_polyline(polyline, points, segments, 2, config_.max_segments) != Errc::ok) return Errc::invalid_argument;
   const double length = polyline_length_m(polyline, points);
   const Errc e = next->set_params(params_for(model, segments, std::max(length / segments, 1e-3)));
   if (e != Errc::ok) return e;
@@ -260,17 +279,25 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
     case dds::CommandKind::set_endpoints: {
       const Vec3 a(c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m);
       const Vec3 b(c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m);
+      const fields::VolumeGeometry& g = s.level().geometry();
+      if (!inside(a, g) || !inside(b, g)) {
+        reason = "an endpoint is outside the pack or not finite";
+        return Errc::invalid_argument;
+      }
       if (a.z() < s.height(a.x(), a.y()) || b.z() < s.height(b.x(), b.y())) {
         reason = "an endpoint is below the terrain";
         return Errc::invalid_argument;
       }
-      if ((b - a).norm() < 1.0) {
-        reason = "the endpoints are less than 1 m apart";
+      if ((b - a).norm() < segments_ * kMinSegmentM) {
+        reason = "the endpoints are too close for the rope's segment count (0.5 m a segment at least)";
         return Errc::invalid_argument;
       }
+      const Vec3 old_start = start_m_, old_end = end_m_;
       start_m_ = a;
       end_m_ = b;
       if (start_run() != Errc::ok) {
+        start_m_ = old_start;
+        end_m_ = old_end;
         reason = "the rope could not be laid between the endpoints";
         return Errc::invalid_argument;
       }
@@ -293,10 +320,13 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       return Errc::ok;
     }
     case dds::CommandKind::set_stiffness: {
+      const auto old_stretch = stretch_override_, old_bend = bend_override_;
       stretch_override_ = c.stiffness.stretch_n_per_m;
       bend_override_ = c.stiffness.bend_n_m_per_rad;
       const double segment_m = std::max(rope_->length_m() / rope_->segments(), 1e-3);
       if (rope_->set_params(params_for(rope_->model(), rope_->segments(), segment_m)) != Errc::ok) {
+        stretch_override_ = old_stretch;  // not kept for later starts either
+        bend_override_ = old_bend;
         reason = "the rope refused these stiffness values";
         return Errc::invalid_argument;
       }
@@ -517,6 +547,7 @@ void Executive::tick(const TickTime& time) {
   if (counters_.running) {                                 // 5
     rope_->step(config_.period_s, *forces_);
     counters_.run_s += config_.period_s;
+    if (!finite_rope(*rope_)) recover_rope();
   }
   if (driver_) {                                           // 6
     const Errc sent = driver_->command({out_.device_force_n.x(), out_.device_force_n.y(), out_.device_force_n.z()},
@@ -537,6 +568,18 @@ void Executive::tick(const TickTime& time) {
   }
   if (n % static_cast<std::uint64_t>(config_.focus_every_ticks) == 0) hand_off_focus();
   field_.tick_done();
+}
+
+// A rope whose state stopped being finite is laid again between its ends and
+// let go of (MuJoCo resets on bad numbers likewise); it stops when even that
+// fails. Counted, never logged: this runs on the loop thread.
+void Executive::recover_rope() {
+  ++counters_.rope_resets;
+  if (start_run() != Errc::ok) {
+    counters_.running = false;
+    return;
+  }
+  --counters_.runs;  // the same run, laid again
 }
 
 void Executive::measure() {

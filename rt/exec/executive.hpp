@@ -105,6 +105,7 @@ struct ExecutiveCounters {
   std::uint64_t send_failures = 0;      // device commands the bus refused
   std::uint64_t runs = 0;               // planning runs started
   std::uint64_t hull_sets = 0;          // hidden-from / visible-to hull sets put in force
+  std::uint64_t rope_resets = 0;        // the rope's state stopped being finite and was laid again
   bool running = false;                 // the rope is stepping
   bool converged = false;
   double fc = 0.0;
@@ -178,6 +179,7 @@ class Executive final : public PeriodicTask {
   void haptics(std::int64_t now_ns, double t_s);
   void step_rope();
   void measure();
+  void recover_rope();
   void hand_off_path(std::int64_t stamp_ns);
   void hand_off_device(std::int64_t stamp_ns);
   void hand_off_focus();

@@ -73,9 +73,8 @@ ArticulatedRope::ArticulatedRope(const RopeParams& params) : p_(params) {
 }
 
 Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
-  if (segments < 1 || segments > p_.max_segments) {
-    return invalid_argument("rope: " + std::to_string(segments) + " segments is outside 1.." +
-                            std::to_string(p_.max_segments));
+  if (check_polyline(polyline, points, segments, 1, p_.max_segments) != Errc::ok) {
+    return describe_polyline(polyline, points, segments, 1, p_.max_segments);
   }
   VISVOL_RETURN_IF_ERROR(resample_polyline(polyline, points, segments, vertices_.data()));
   n_ = segments;

@@ -254,8 +254,8 @@ class FieldForces final : public RopeEnvironment, public PathField {
 // ---- implementation of the templates ------------------------------------------
 
 inline double PointHull::at(double x, double y) const {
-  const double gi = std::clamp((x - origin_x) / spacing_m, 0.0, double(nx - 1));
-  const double gj = std::clamp((origin_y - y) / spacing_m, 0.0, double(ny - 1));
+  const double gi = fields::clamp_index((x - origin_x) / spacing_m, 0.0, double(nx - 1));
+  const double gj = fields::clamp_index((origin_y - y) / spacing_m, 0.0, double(ny - 1));
   const int i = std::min(static_cast<int>(gi), nx - 2), j = std::min(static_cast<int>(gj), ny - 2);
   const double fi = gi - i, fj = gj - j;
   auto h = [&](int a, int b) {

@@ -1,5 +1,6 @@
 #include "rt/rope/planner.hpp"
 
+#include <cmath>
 #include <sstream>
 
 namespace visvol::rt {
@@ -12,6 +13,18 @@ Status validate(const PlanRequest& r) {
   if ((r.from - r.to).norm() < 1e-6) return invalid_argument("plan: --from and --to are the same point");
   if (r.segments < 2 || r.segments > 100000) {
     msg << "plan: " << r.segments << " segments is outside 2..100000";
+    return invalid_argument(msg.str());
+  }
+  const double apart_m = (r.from - r.to).norm();
+  if (apart_m / r.segments < kMinSegmentM) {
+    const int most = static_cast<int>(std::floor(apart_m / kMinSegmentM));
+    msg << "plan: --from and --to are " << apart_m << " m apart: ";
+    if (most < 2) {
+      msg << "a path needs them at least " << 2 * kMinSegmentM << " m apart";
+    } else {
+      msg << r.segments << " --segments would be shorter than " << kMinSegmentM << " m; use at most " << most
+          << " segments, or ends farther apart";
+    }
     return invalid_argument(msg.str());
   }
   const struct {

@@ -1,9 +1,11 @@
 #include "rt/rope/rope.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <sstream>
+#include <string>
 
 #include "rt/rope/articulated_rope.hpp"
 #include "rt/rope/spring_mass_rope.hpp"
@@ -86,6 +88,43 @@ Result<std::unique_ptr<Rope>> make_rope(const RopeParams& params) {
     rope = std::make_unique<SpringMassRope>(params);
   }
   return rope;
+}
+
+namespace {
+
+double polyline_length_or_nan(const Vec3* polyline, int points) {
+  double total = 0;
+  for (int i = 1; i < points; ++i) total += (polyline[i] - polyline[i - 1]).norm();
+  return total;  // NaN or infinite when a point is not finite
+}
+
+}  // namespace
+
+Errc check_polyline(const Vec3* polyline, int points, int segments, int min_segments, int max_segments) {
+  if (polyline == nullptr || points < 2 || segments < min_segments || segments > max_segments) {
+    return Errc::invalid_argument;
+  }
+  const double total = polyline_length_or_nan(polyline, points);
+  if (!std::isfinite(total) || !polyline[0].allFinite()) return Errc::invalid_argument;
+  return total / segments >= kMinSegmentM ? Errc::ok : Errc::invalid_argument;
+}
+
+Status describe_polyline(const Vec3* polyline, int points, int segments, int min_segments, int max_segments) {
+  if (check_polyline(polyline, points, segments, min_segments, max_segments) == Errc::ok) return Status::ok_status();
+  if (segments < min_segments || segments > max_segments) {
+    return invalid_argument("rope: " + std::to_string(segments) + " segments is outside " +
+                            std::to_string(min_segments) + ".." + std::to_string(max_segments));
+  }
+  if (polyline == nullptr || points < 2) return invalid_argument("rope: a path needs at least 2 points");
+  for (int i = 0; i < points; ++i) {
+    if (!polyline[i].allFinite()) return invalid_argument("rope: path point " + std::to_string(i) + " is not finite");
+  }
+  const double total = polyline_length_or_nan(polyline, points);
+  if (!(total > 0)) return invalid_argument("rope: the path has no length");
+  std::ostringstream s;
+  s << "rope: a path of " << total << " m in " << segments << " segments makes them shorter than " << kMinSegmentM
+    << " m; use at most " << std::max(0, static_cast<int>(std::floor(total / kMinSegmentM))) << " segments";
+  return invalid_argument(s.str());
 }
 
 Status resample_polyline(const Vec3* polyline, int points, int segments, Vec3* out) {

@@ -78,9 +78,11 @@ class Rope {
   virtual ~Rope() = default;
 
   // Lays the rope along a polyline, resampled by arc length into `segments`
-  // equal segments (1..max_segments), at rest. The polyline's ends become the
-  // rope's ends. Errors (Errc::invalid_argument) for too few points, non-finite
-  // points, a zero-length polyline or too many segments; the rope is unchanged.
+  // equal segments (1..max_segments, 2.. for the spring-mass model), at rest.
+  // The polyline's ends become the rope's ends. Errors
+  // (Errc::invalid_argument) for what check_polyline() refuses; the rope is
+  // unchanged. Only a refusal builds a message: real-time callers ask
+  // check_polyline() first.
   virtual Status reset(const Vec3* polyline, int points, int segments) = 0;
 
   virtual void set_ends(const RopeEnds& ends) = 0;
@@ -119,8 +121,19 @@ class Rope {
 // A rope of the given model with capacity params.max_segments (validated).
 Result<std::unique_ptr<Rope>> make_rope(const RopeParams& params);
 
+// Shortest segment a rope may have, m: shorter ones are finer than any field
+// and unstable at a 1 ms step (ends 1 m apart with 256 segments diverged).
+inline constexpr double kMinSegmentM = 0.5;
+
+// Whether a rope of `segments` segments (min_segments..max_segments) can be
+// laid along `polyline`: at least 2 points, all finite, and segments of at
+// least kMinSegmentM. Errc::invalid_argument when not; real-time safe.
+Errc check_polyline(const Vec3* polyline, int points, int segments, int min_segments, int max_segments);
+// The same check with a message naming the problem (offline, allocates).
+Status describe_polyline(const Vec3* polyline, int points, int segments, int min_segments, int max_segments);
+
 // Lays `segments` + 1 points along `polyline` at equal arc-length spacing into
-// `out` (capacity segments + 1). Real-time safe.
+// `out` (capacity segments + 1). Real-time safe once check_polyline() passed.
 Status resample_polyline(const Vec3* polyline, int points, int segments, Vec3* out);
 
 }  // namespace visvol::rt

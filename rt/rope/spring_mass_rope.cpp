@@ -14,9 +14,8 @@ SpringMassRope::SpringMassRope(const RopeParams& params) : p_(params) {
 }
 
 Status SpringMassRope::reset(const Vec3* polyline, int points, int segments) {
-  if (segments < 2 || segments > p_.max_segments) {
-    return invalid_argument("rope: " + std::to_string(segments) + " segments is outside 2.." +
-                            std::to_string(p_.max_segments) + " for the spring-mass model");
+  if (check_polyline(polyline, points, segments, 2, p_.max_segments) != Errc::ok) {
+    return describe_polyline(polyline, points, segments, 2, p_.max_segments);
   }
   VISVOL_RETURN_IF_ERROR(resample_polyline(polyline, points, segments, x_.data()));
   n_ = segments;

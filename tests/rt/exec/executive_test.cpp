@@ -216,6 +216,78 @@ TEST_F(ExecutiveTest, CommandsAreAppliedOrFailWithAReason) {
   EXPECT_EQ(e->counters().runs, 2u);
 }
 
+// Red-team findings (issue 14): ends too close for the segments, or not
+// finite, are refused and change nothing; a refused stiffness is not kept.
+TEST_F(ExecutiveTest, EndpointsTooCloseOrNotFiniteAreRefusedAndChangeNothing) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  auto endpoints = [&](std::uint64_t sequence, const Vec3& a, const Vec3& b) {
+    dds::Command c = command(dds::CommandKind::set_endpoints, sequence);
+    c.endpoints.start = {a.x(), a.y(), a.z()};
+    c.endpoints.end = {b.x(), b.y(), b.z()};
+    return c;
+  };
+  const Vec3 a = config_.start_m;
+  ASSERT_TRUE(commands_.try_push(endpoints(1, a, a + Vec3(1, 0, 0))));  // 32 segments in 1 m
+  ASSERT_TRUE(commands_.try_push(endpoints(2, a, Vec3(std::nan(""), a.y(), a.z()))));
+  ASSERT_TRUE(commands_.try_push(endpoints(3, a, a + Vec3(1e300, 0, 0))));
+  dds::Command stiff = command(dds::CommandKind::set_stiffness, 4);
+  stiff.stiffness.stretch_n_per_m = -5;  // refused by the rope
+  stiff.stiffness.bend_n_m_per_rad = 1;
+  ASSERT_TRUE(commands_.try_push(stiff));
+  dds::Command more = command(dds::CommandKind::set_segment_count, 5);
+  more.segment_count = 40;
+  ASSERT_TRUE(commands_.try_push(more));
+  run(*e, 1);
+  dds::CommandAck ack = next_ack();
+  EXPECT_EQ(ack.result, dds::AckResult::failed);
+  EXPECT_NE(std::string(ack.reason).find("too close"), std::string::npos) << ack.reason;
+  for (int k = 0; k < 2; ++k) {
+    ack = next_ack();
+    EXPECT_EQ(ack.result, dds::AckResult::failed);
+    EXPECT_NE(std::string(ack.reason).find("outside the pack or not finite"), std::string::npos) << ack.reason;
+  }
+  EXPECT_EQ(next_ack().result, dds::AckResult::failed);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied) << "a refused stiffness must not spoil later rope changes";
+  EXPECT_EQ(e->rope().segments(), 40);
+  EXPECT_EQ(e->rope().ends().start_m, config_.start_m);
+  EXPECT_EQ(e->rope().ends().end_m, config_.end_m);
+}
+
+// A rope driven unstable (springs far too stiff for the 1 ms step) is laid
+// again whenever its state stops being finite: nothing non-finite is ever
+// handed off, and the resets are counted.
+TEST_F(ExecutiveTest, ARopeWhoseStateStopsBeingFiniteIsLaidAgain) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  dds::Command spring = command(dds::CommandKind::set_model, 1);
+  spring.model = dds::RopeModel::spring_mass;  // explicit springs: a stiff one diverges
+  ASSERT_TRUE(commands_.try_push(spring));
+  dds::Command stiff = command(dds::CommandKind::set_stiffness, 2);
+  stiff.stiffness.stretch_n_per_m = 1e15;
+  stiff.stiffness.bend_n_m_per_rad = 1e15;
+  ASSERT_TRUE(commands_.try_push(stiff));
+  // refusals and resets alike allocate nothing on the loop thread
+  const std::uint64_t allocations = visvol::testing::thread_allocation_count();
+  dds::Command close = command(dds::CommandKind::set_endpoints, 3);
+  close.endpoints.start = {config_.start_m.x(), config_.start_m.y(), config_.start_m.z()};
+  close.endpoints.end = {config_.start_m.x() + 1, config_.start_m.y(), config_.start_m.z()};
+  ASSERT_TRUE(commands_.try_push(close));
+  for (int k = 0; k < 500; ++k) {
+    run(*e, 20);
+    for (int i = 0; i <= e->rope().segments(); ++i) ASSERT_TRUE(e->rope().vertices()[i].allFinite()) << k;
+    if (const dds::PathSample* p = paths_.take()) {
+      for (std::uint32_t i = 0; i < p->vertex_count; ++i) {
+        ASSERT_TRUE(std::isfinite(p->vertices[i].position.z_m + p->vertices[i].visibility)) << k;
+      }
+      ASSERT_TRUE(std::isfinite(p->f_c));
+    }
+  }
+  EXPECT_EQ(visvol::testing::thread_allocation_count() - allocations, 0u);
+  EXPECT_GT(e->counters().rope_resets, 0u) << "these springs should have driven the rope unstable";
+  EXPECT_TRUE(e->counters().running);
+}
+
 // The hand grabs the rope in the middle of the workspace and pulls east.
 const char* kPullScript =
     "0.5 move 0 0 0 0.2\n"

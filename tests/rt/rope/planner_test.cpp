@@ -361,6 +361,11 @@ TEST_F(RealTerrain, BadRequestsAreRefusedByName) {
   r = hide_request(RopeModel::articulated);
   r.segments = 0;
   EXPECT_NE(plan(levels, r).status().message().find("segments"), std::string::npos);
+  // ends 1 m apart in 256 segments: the rope would diverge (red team, issue 14)
+  r = hide_request(RopeModel::articulated);
+  r.to = r.from + Vec3(1, 0, 0);
+  r.segments = 256;
+  EXPECT_NE(plan(levels, r).status().message().find("use at most 2 segments"), std::string::npos);
   r = hide_request(RopeModel::articulated);
   r.init = InitialPath::polyline;
   r.polyline = {r.from};

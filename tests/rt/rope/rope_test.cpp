@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -83,7 +85,30 @@ TEST(Rope, ResetRefusesBadPaths) {
   EXPECT_FALSE(rope->reset(same, 2, 4).ok());
   const Vec3 nan[2] = {{0, 0, 0}, {std::nan(""), 0, 0}};
   EXPECT_NE(rope->reset(nan, 2, 4).message().find("not finite"), std::string::npos);
+  // ends 1 m apart in 4 segments: each shorter than kMinSegmentM
+  const Vec3 close[2] = {{0, 0, 0}, {1, 0, 0}};
+  const Status s = rope->reset(close, 2, 4);
+  EXPECT_NE(s.message().find("use at most 2 segments"), std::string::npos) << s.message();
   EXPECT_EQ(rope->segments(), 8);  // unchanged by the refusals
+  for (int i = 0; i <= 8; ++i) EXPECT_TRUE(rope->vertices()[i].allFinite());
+}
+
+// check_polyline, the real-time form of reset()'s check, agrees with the
+// message form on every case and refuses segments shorter than kMinSegmentM.
+TEST(Rope, CheckPolylineAgreesWithItsDescription) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const Vec3 paths[][2] = {{{0, 0, 0}, {100, 0, 0}}, {{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 0, 0}},
+                           {{0, 0, 0}, {inf, 0, 0}}, {{std::nan(""), 0, 0}, {1, 0, 0}}};
+  for (const auto& path : paths) {
+    for (int segments : {0, 1, 2, 8, 200, 201, 1000}) {
+      const Errc e = check_polyline(path, 2, segments, 1, 500);
+      const Status s = describe_polyline(path, 2, segments, 1, 500);
+      EXPECT_EQ(e == Errc::ok, s.ok()) << s.message();
+      const double length = (path[1] - path[0]).norm();
+      const bool ok = std::isfinite(length) && segments >= 1 && length / segments >= kMinSegmentM;
+      EXPECT_EQ(e == Errc::ok, ok) << segments << " segments over " << length << " m";
+    }
+  }
 }
 
 TEST(Rope, ResampleSpacesPointsEquallyAlongThePath) {

@@ -3,9 +3,9 @@
 // 1. A start: the straight segment, a polyline (a 2D one lifted to the
 //    clearance above the terrain, or a 3D one), or the global graph search
 //    (rt/rope/global_search.hpp), which treats hidden-from and visible-to as
-//    forbidden volume and the envelope as limits; when its path breaks a
-//    constraint on the coarsest level, it searches the next finer one (up to
-//    `max_search_voxels`).
+//    forbidden volume and the envelope as limits: on the coarsest level, then
+//    on the finest level of at most `max_search_voxels` (its optimum is the
+//    bar the answer must clear).
 // 2. A rope laid on the start settles in the field, coarse level of detail
 //    first, then the finer ones, until it reaches equilibrium on the finest.
 //    An inextensible (articulated) rope gets `slack` extra length, bent
@@ -68,7 +68,7 @@ struct PlanRequest {
   double dt_s = 0.001;
   double max_seconds_per_level = 40.0;
   double candidate_interval_s = 0.25;  // rope states judged this often on the finest level
-  std::size_t max_search_voxels = 8000000;  // the finest level the global search may refine to
+  std::size_t max_search_voxels = 8000000;  // the finest level the global search may run on
   int fc_samples = 256;
 };
 
@@ -224,20 +224,29 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     gp.max_climb_deg = envelope.max_climb_deg;
     gp.max_descent_deg = envelope.max_descent_deg;
     gp.bounds = request.planning_bounds;
-    // coarsest first; finer while a constraint is broken and the level is small enough
-    for (int l = static_cast<int>(levels.size()) - 1; l >= 0; --l) {
+    // The coarsest level (cheap, always), then the finest level small enough
+    // to search: its optimum is what the rope must at least match, and it finds
+    // corridors the coarse lattice is too blunt for.
+    const int coarsest = static_cast<int>(levels.size()) - 1;
+    int fine = coarsest;
+    for (int l = 0; l < coarsest; ++l) {
+      if (levels[static_cast<std::size_t>(l)]->geometry().voxel_count() <= request.max_search_voxels) {
+        fine = l;
+        break;
+      }
+    }
+    for (int l : {coarsest, fine}) {
       const Level& level = *levels[static_cast<std::size_t>(l)];
-      if (l != static_cast<int>(levels.size()) - 1 && level.geometry().voxel_count() > request.max_search_voxels) break;
       gp.hidden_from = detail::hulls_of(hulls[static_cast<std::size_t>(l)], request.constraints, ConstraintKind::hidden_from);
       gp.visible_to = detail::hulls_of(hulls[static_cast<std::size_t>(l)], request.constraints, ConstraintKind::visible_to);
       Result<GlobalPath> gpath = global_search(level, request.from, request.to, gp);
-      if (!gpath.ok()) break;  // no lattice path inside the envelope: the straight start stays
-      if (consider(gpath->points.data(), static_cast<int>(gpath->points.size()), "global search")) {
+      // no lattice path inside the envelope on this level: the others may have one
+      if (gpath.ok() && consider(gpath->points.data(), static_cast<int>(gpath->points.size()), "global search")) {
         result.global_path = best;
         result.global_level = l;
         result.has_global = true;
       }
-      if (request.constraints.empty() || last_check.all_met) break;
+      if (fine == coarsest) break;
     }
   }
   start_path = best;

@@ -2,27 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 
-#include <atomic>
-#include <cmath>
-#include <cstdlib>
-#include <new>
-
+#include "rt/base/alloc_counter.hpp"
 #include "rt/rope/articulated_rope.hpp"
 #include "rt/rope/planner.hpp"
 #include "rt/rope/spring_mass_rope.hpp"
-
-// Counts heap allocations while `g_counting` is set: the rope's step must make none.
-static std::atomic<bool> g_counting{false};
-static std::atomic<long> g_allocations{0};
-void* operator new(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace visvol::rt {
 namespace {
@@ -192,16 +178,14 @@ TEST(Rope, StepAllocatesNothing) {
     auto rope = laid_rope(model, 128, 0.3);
     Wavy field;
     rope->step(0.001, field);  // warm up
-    g_allocations = 0;
-    g_counting = true;
+    const std::uint64_t before = visvol::testing::thread_allocation_count();
     for (int t = 0; t < 2000; ++t) {
       rope->step(0.001, field);
       rope->set_point_force(10, 0.5, Vec3(1, 2, 3));
       (void)rope->point(10, 0.5);
       (void)rope->kinetic_energy_j();
     }
-    g_counting = false;
-    EXPECT_EQ(g_allocations.load(), 0) << to_string(model);
+    EXPECT_EQ(visvol::testing::thread_allocation_count() - before, 0u) << to_string(model);
   }
 }
 

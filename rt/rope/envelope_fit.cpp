@@ -161,8 +161,12 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
   if (spec.planning_bounds) clamp_to_bounds(p, *spec.planning_bounds);
   relax_turns(p, spec.envelope.min_turn_radius_m);
   const double step = spec.step_m > 0 ? spec.step_m : 0.25 * terrain.spacing_m;
-  const double climb = std::tan(std::min(spec.envelope.max_climb_deg, 89.99) * kRadPerDeg);
-  const double descent = std::tan(std::min(spec.envelope.max_descent_deg, 89.99) * kRadPerDeg);
+  auto slope = [&](double limit_deg) {
+    const double aim_deg = limit_deg > 2 * spec.angle_margin_deg ? limit_deg - spec.angle_margin_deg : limit_deg;
+    return std::tan(std::min(aim_deg, 89.99) * kRadPerDeg);
+  };
+  const double climb = slope(spec.envelope.max_climb_deg);
+  const double descent = slope(spec.envelope.max_descent_deg);
   const std::size_t max_points = 4 * p.size() + 64;
 
   std::vector<double> lo(p.size()), hi(p.size()), z;

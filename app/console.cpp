@@ -21,6 +21,7 @@
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
 #include "rt/exec/simulated_device.hpp"
+#include "rt/rope/path_check.hpp"
 #include "storage/pack_identity.hpp"
 #include "storage/resident_pack.hpp"
 
@@ -45,16 +46,87 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Hidden-from / visible-to hull sets built, refused and put in force.
-nlohmann::json constraints_json(const rt::ConstraintHulls* hulls, const rt::ExecutiveCounters& c) {
-  if (hulls == nullptr) return {{"hull_builder", false}};
+nlohmann::json height(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json point(const rt::Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); }
+
+// The observers of a built set, as the planner names them.
+std::vector<rt::ConstraintPoint> observers_of(const rt::HullSet* set) {
+  std::vector<rt::ConstraintPoint> out;
+  if (set == nullptr) return out;
+  const rt::HullRequest& r = set->request;
+  for (int k = 0; k < r.hidden_count; ++k) {
+    out.push_back({rt::ConstraintKind::hidden_from, rt::HullRequest::point(r.hidden_from_m[k]), r.eye_height_m});
+  }
+  for (int k = 0; k < r.visible_count; ++k) {
+    out.push_back({rt::ConstraintKind::visible_to, rt::HullRequest::point(r.visible_to_m[k]), r.eye_height_m});
+  }
+  return out;
+}
+
+// The constraints in force at the end (clearance, ceiling, observers), and
+// the hull builder's counts: sets built, refused and put in force.
+nlohmann::json constraints_json(const rt::Executive& e, const rt::ConstraintHulls* hulls,
+                                const rt::ExecutiveCounters& c) {
+  const rt::ForceGains& g = e.forces().gains();
+  nlohmann::json j = {{"clearance_m", g.clearance_m},
+                      {"max_agl_m", height(g.max_agl_m)},
+                      {"max_altitude_m", height(g.max_altitude_m)},
+                      {"eye_height_m", e.config().eye_height_m},
+                      {"hidden_from", nlohmann::json::array()},
+                      {"visible_to", nlohmann::json::array()},
+                      {"hull_builder", hulls != nullptr}};
+  for (const rt::ConstraintPoint& p : observers_of(e.hulls_in_force())) {
+    j[p.kind == rt::ConstraintKind::hidden_from ? "hidden_from" : "visible_to"].push_back(point(p.point_m));
+  }
+  if (hulls == nullptr) return j;
   const rt::HullStats s = hulls->stats();
-  return {{"hull_builder", true},
-          {"built", s.built},
-          {"refused", s.failed},
-          {"in_force", c.hull_sets},
-          {"last_build_ms", s.last_build_ms},
-          {"last_error", s.last_error}};
+  j["max_observers"] = hulls->max_observers();
+  j["pending"] = e.hulls_pending();  // a newer set asked for was not built in time
+  j["built"] = s.built;
+  j["refused"] = s.failed;
+  j["sets_in_force"] = c.hull_sets;
+  j["last_build_ms"] = s.last_build_ms;
+  j["last_error"] = s.last_error;
+  return j;
+}
+
+// build.curvature_coeff of the pack's metadata (0: none recorded).
+double pack_curvature(const storage::Pack& pack) {
+  const nlohmann::json meta = nlohmann::json::parse(pack.metadata().json, nullptr, false);
+  if (!meta.is_object() || !meta.contains("build") || !meta["build"].is_object()) return 0.0;
+  const nlohmann::json& c = meta["build"].value("curvature_coeff", nlohmann::json(0.0));
+  return c.is_number() && c.get<double>() >= 0 && c.get<double>() <= 1 ? c.get<double>() : 0.0;
+}
+
+// The check's members: per constraint and for the clearance and the ceiling
+// (the console holds no climb or turn limits), and whether all are met.
+nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
+  nlohmann::json j = {{"terrain", "level 0 (finest), exact sight lines (R3)"},
+                      {"sample_step_m", sample_step_m},
+                      {"length_m", c.length_m},
+                      {"constraints", nlohmann::json::array()},
+                      {"envelope", nlohmann::json::array()},
+                      {"all_met", c.all_met},
+                      {"unmet", c.unmet()}};
+  for (const rt::ConstraintResult& r : c.constraints) {
+    j["constraints"].push_back({{"kind", rt::to_string(r.constraint.kind)},
+                                {"point", point(r.constraint.point_m)},
+                                {"eye_m", point(r.constraint.eye_m())},
+                                {"satisfied_fraction", r.satisfied_fraction},
+                                {"seen_m", r.seen_m},
+                                {"met", r.met}});
+  }
+  for (const rt::LimitResult& l : c.envelope) {
+    if (l.name != "clearance" && l.name != "max-agl" && l.name != "max-altitude") continue;
+    j["envelope"].push_back({{"name", l.name},
+                             {"unit", l.unit},
+                             {"limit", height(l.limit)},
+                             {"worst", height(l.worst)},
+                             {"satisfied_fraction", l.satisfied_fraction},
+                             {"met", l.met}});
+  }
+  return j;
 }
 
 dds::TimingSummary summary_of(const rt::DurationHistogram& h) {
@@ -86,7 +158,8 @@ struct Console::Impl {
   std::unique_ptr<rt::SimulatedDevice> sim;
   std::unique_ptr<can::SocketCanBus> socket_bus;
   std::unique_ptr<ThumbnailThread> thumbs;
-  std::unique_ptr<rt::ConstraintHulls> hulls;  // with DDS: hidden-from / visible-to commands
+  std::unique_ptr<rt::ConstraintHulls> hulls;  // with DDS or observers given: hidden-from / visible-to
+  int observers = 0;                           // hulls reserved for (observers_reserved())
   std::unique_ptr<rt::Executive> exec;
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
@@ -99,6 +172,10 @@ struct Console::Impl {
   std::string out_dir() const;
   Status start_dds(const fields::VolumeGeometry& g);
   Status start_thumbnails();
+  int observers_reserved(const fields::VolumeGeometry& g) const;
+  Status start_hulls();
+  rt::ExecutiveConfig executive_config(const fields::VolumeGeometry& g) const;
+  nlohmann::json check_path(std::string& line) const;
   void release_pack_pages();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   dds::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
@@ -134,9 +211,12 @@ std::optional<ConsoleOptions> Console::next_session() const {
     if (left < 1.0) return std::nullopt;  // the time is up
     next.seconds = left;
   }
-  // the endpoints were in the old pack's area: the new one's default
+  // the endpoints and observers were in the old pack's area: the new one's
+  // default endpoints, no observers (commands may set them there)
   next.from.clear();
   next.to.clear();
+  next.hidden_from.clear();
+  next.visible_to.clear();
   next.session = m.o.session + 1;
   next.switched_from = m.pack_id;
   return next;
@@ -160,6 +240,7 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   ic.limits.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
   ic.limits.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m() + 10000.0};
   ic.limits.max_segments = static_cast<std::uint32_t>(o.max_segments);
+  ic.limits.max_observers = static_cast<std::uint32_t>(observers);
   VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
   for (const auto& t : terrains) VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, t.first));
   auto in = dds::CommandIntake::start(*participant, ic, commands, &acks);
@@ -217,6 +298,7 @@ Status Console::Impl::start() {
   rtc.cpu = o.cpu;
   rtc.lock_memory = o.lock_memory;
   rt::lock_process_memory(rtc, realtime);
+  observers = observers_reserved(g);
   if (o.dds) VISVOL_RETURN_IF_ERROR(start_dds(pack->geometry(0)));
 
   // the budget: what runs already, what the loop reserves, the tiles get the rest
@@ -235,10 +317,9 @@ Status Console::Impl::start() {
   budget.reserve("loop (histograms, reports)", sizeof(rt::LoopReport) * 3 + sizeof(rt::LoopRun) * 2);
   budget.reserve("loop stack (prefaulted)", rtc.stack_prefault_bytes);
   if (o.device == "sim") budget.reserve("simulated device and bus", 2 * 4096 * sizeof(can::CanFrame) + 64 * 1024);
-  if (o.dds) {
-    const fields::VolumeGeometry& hg = pack->geometry(o.level);
-    budget.reserve("constraint hulls (3 sets, one build)",
-                   rt::ConstraintHulls::reserved_bytes(hg) + rt::ConstraintHulls::build_bytes(hg));
+  if (observers > 0) {
+    budget.reserve("constraint hulls (3 sets of " + std::to_string(observers) + ", one build)",
+                   rt::ConstraintHulls::reserved_bytes(g, observers) + rt::ConstraintHulls::build_bytes(g));
   }
   VISVOL_RETURN_IF_ERROR(budget.check(1, "tiles"));
   storage::ResidentConfig rc;
@@ -279,26 +360,7 @@ Status Console::Impl::start() {
   }
 
   // the executive
-  rt::ExecutiveConfig ec;
-  auto ground = [&](double x, double y) {
-    return fields::FieldSampler<storage::ResidentLevel>(field->level(o.level)).height(x, y);
-  };
-  const double ymid = g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m;
-  const double xw = g.origin_x + 0.1 * (g.nx - 1) * g.spacing_m, xe = g.origin_x + 0.9 * (g.nx - 1) * g.spacing_m;
-  ec.start_m = o.from.empty() ? rt::Vec3(xw, ymid, ground(xw, ymid) + 150) : rt::Vec3(o.from[0], o.from[1], o.from[2]);
-  ec.end_m = o.to.empty() ? rt::Vec3(xe, ymid, ground(xe, ymid) + 150) : rt::Vec3(o.to[0], o.to[1], o.to[2]);
-  ec.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
-  ec.model = o.model == "spring" ? rt::RopeModel::spring : rt::RopeModel::articulated;
-  ec.segments = o.segments;
-  ec.max_segments = o.max_segments;
-  ec.gains.k1_visibility = o.k1;
-  ec.gains.k2_terrain = o.k2;
-  ec.gains.clearance_m = o.clearance_m;
-  ec.k3_user = o.k3;
-  ec.level = o.level;
-  ec.period_s = o.period_us * 1e-6;
-  ec.driver.node_id = static_cast<std::uint8_t>(o.node);
-  dds::copy_text(ec.pack_id, pack_id);
+  const rt::ExecutiveConfig ec = executive_config(g);
   rt::ExecutiveOutputs out;
   if (publisher) {
     out.path = &publisher->path();
@@ -310,11 +372,7 @@ Status Console::Impl::start() {
   if (!e.ok()) return e.status();
   exec = std::move(*e);
   fc_start = exec->counters().fc;
-  if (o.dds) {
-    hulls = rt::ConstraintHulls::create(field->level(o.level));
-    VISVOL_RETURN_IF_ERROR(exec->set_constraint_hulls(hulls.get()));
-    hulls->start();
-  }
+  VISVOL_RETURN_IF_ERROR(start_hulls());
 
   // the loop and the pager
   loop_config.period_ns = static_cast<std::int64_t>(std::llround(o.period_us * 1000));
@@ -325,6 +383,90 @@ Status Console::Impl::start() {
   field->start_pager();
   loop = std::make_unique<rt::PeriodicLoop>(*exec);
   return loop->start(loop_config);
+}
+
+// Hulls for the observers given and, with DDS, for those commands may
+// send: --max-observers, or 16 where three sets of 16 take at most a quarter
+// of the budget, fewer where they would take more (never fewer than given).
+int Console::Impl::observers_reserved(const fields::VolumeGeometry& g) const {
+  const int given = static_cast<int>(o.hidden_from.size() + o.visible_to.size());
+  if (o.max_observers >= 0) return o.max_observers;
+  if (!o.dds) return given;
+  const auto quarter = static_cast<std::uint64_t>(o.budget_mib * kMiB / 4);
+  return std::max(given, rt::ConstraintHulls::observers_within(g, quarter));
+}
+
+// The hull builder beside the loop, with the observers given in force first.
+Status Console::Impl::start_hulls() {
+  if (!o.dds && observers == 0) return {};
+  auto h = rt::ConstraintHulls::create(field->level(o.level), observers);
+  if (!h.ok()) return h.status();
+  hulls = std::move(*h);
+  VISVOL_RETURN_IF_ERROR(exec->set_constraint_hulls(hulls.get()));
+  hulls->start();
+  return {};
+}
+
+// The planning problem of the options; endpoints by default at the west and
+// east edges 150 m up, or half way between the clearance and a lower ceiling.
+rt::ExecutiveConfig Console::Impl::executive_config(const fields::VolumeGeometry& g) const {
+  rt::ExecutiveConfig ec;
+  ec.gains.clearance_m = o.clearance_m;
+  ec.gains.max_agl_m = o.max_agl_m.value_or(INFINITY);
+  ec.gains.max_altitude_m = o.max_altitude_m.value_or(INFINITY);
+  const fields::FieldSampler<storage::ResidentLevel> ground(field->level(o.level));
+  auto end_at = [&](double x, double y) {
+    const double z0 = ground.height(x, y);
+    const double top = std::min(z0 + ec.gains.max_agl_m, ec.gains.max_altitude_m);
+    // no room under the ceiling: left above it, for the executive to refuse naming it
+    const bool lower = z0 + 150 > top && top > z0 + o.clearance_m;
+    return rt::Vec3(x, y, lower ? 0.5 * (z0 + o.clearance_m + top) : z0 + 150);
+  };
+  const double ymid = g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m;
+  const double xw = g.origin_x + 0.1 * (g.nx - 1) * g.spacing_m, xe = g.origin_x + 0.9 * (g.nx - 1) * g.spacing_m;
+  ec.start_m = o.from.empty() ? end_at(xw, ymid) : rt::Vec3(o.from[0], o.from[1], o.from[2]);
+  ec.end_m = o.to.empty() ? end_at(xe, ymid) : rt::Vec3(o.to[0], o.to[1], o.to[2]);
+  ec.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
+  ec.model = o.model == "spring" ? rt::RopeModel::spring : rt::RopeModel::articulated;
+  ec.segments = o.segments;
+  ec.max_segments = o.max_segments;
+  ec.gains.k1_visibility = o.k1;
+  ec.gains.k2_terrain = o.k2;
+  ec.k3_user = o.k3;
+  ec.level = o.level;
+  ec.period_s = o.period_us * 1e-6;
+  ec.driver.node_id = static_cast<std::uint8_t>(o.node);
+  ec.eye_height_m = o.eye_height_m;
+  for (const std::vector<double>& p : o.hidden_from) ec.observers.add_hidden_from(rt::Vec3(p[0], p[1], p[2]));
+  for (const std::vector<double>& p : o.visible_to) ec.observers.add_visible_to(rt::Vec3(p[0], p[1], p[2]));
+  dds::copy_text(ec.pack_id, pack_id);
+  return ec;
+}
+
+// The final path against the constraints in force, by exact sight lines on
+// the finest terrain (rt::PathChecker), after the loop stopped. `line` gets
+// the verdict for the operator.
+nlohmann::json Console::Impl::check_path(std::string& line) const {
+  const rt::ForceGains& g = exec->forces().gains();
+  rt::PathCheckSpec spec;
+  spec.envelope.name = "console";
+  spec.envelope.clearance_m = g.clearance_m;
+  spec.envelope.max_agl_m = g.max_agl_m;
+  spec.envelope.max_altitude_m = g.max_altitude_m;
+  spec.envelope.max_climb_deg = spec.envelope.max_descent_deg = 90;  // the console holds none
+  spec.envelope.min_turn_radius_m = 0;
+  spec.constraints = observers_of(exec->hulls_in_force());
+  spec.curvature_coeff = pack_curvature(*pack);
+  Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(field->level(0)), nullptr, spec);
+  if (!checker.ok()) {
+    line = "check: " + checker.status().message();
+    return {{"error", checker.status().message()}};
+  }
+  const rt::Rope& rope = exec->rope();
+  const rt::PathCheck c = checker->check(rope.vertices(), rope.segments() + 1);
+  line = c.all_met ? "all met" : "NOT MET:";
+  for (const std::string& u : c.unmet()) line += " " + u + ";";
+  return check_json(c, checker->spec().sample_step_m);
 }
 
 // The renderer reads the pack's finest level once (mesh, F_p texture) and,
@@ -468,6 +610,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
 
   const rt::ExecutiveCounters& c = exec->counters();
   const storage::ResidentStats ts = field->stats();
+  std::string verdict;
+  const nlohmann::json check = check_path(verdict);
   auto timing = [](const rt::DurationHistogram& h) {
     return nlohmann::json{{"p50_us", h.percentile_us(0.5)}, {"p99_us", h.percentile_us(0.99)},
                           {"p999_us", h.percentile_us(0.999)}, {"max_us", h.max_us()}, {"mean_us", h.mean_us()},
@@ -516,7 +660,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
         {"grasps", c.grasps},
         {"send_failures", c.send_failures}}},
       {"commands", {{"applied", c.commands_applied}, {"failed", c.commands_failed}}},
-      {"constraints", constraints_json(hulls.get(), c)},
+      {"constraints", constraints_json(*exec, hulls.get(), c)},
+      {"check", check},
       {"memory",
        {{"budget_mib", o.budget_mib},
         {"rss_peak_mib", static_cast<double>(rss_peak) / kMiB},
@@ -559,6 +704,13 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   std::printf("memory: peak RSS %.1f MiB of a %.0f MiB budget; tiles %.1f of %.1f MiB (pack %.1f MiB)\n",
               static_cast<double>(rss_peak) / kMiB, o.budget_mib, static_cast<double>(ts.resident_bytes) / kMiB,
               static_cast<double>(ts.budget_bytes) / kMiB, static_cast<double>(ts.pack_bytes) / kMiB);
+  const rt::ForceGains& g = exec->forces().gains();
+  const rt::HullSet* set = exec->hulls_in_force();
+  auto limit = [](double v) { return std::isfinite(v) ? std::to_string(std::lround(v)) + " m" : std::string("none"); };
+  std::printf("constraints: clearance %s, max-agl %s, max-altitude %s, %d hidden-from, %d visible-to%s; %s\n",
+              limit(g.clearance_m).c_str(), limit(g.max_agl_m).c_str(), limit(g.max_altitude_m).c_str(),
+              set ? set->hidden_count() : 0, set ? set->visible_count() : 0,
+              exec->hulls_pending() ? " (a newer set not built yet)" : "", verdict.c_str());
   if (thumbs) {
     const ThumbnailStats t = thumbs->stats();
     std::printf("thumbnails: %llu %s %s (last %.0f ms to render and encode), %llu failed\n",

@@ -21,6 +21,21 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--segments", o.segments, "Rope segments at start")->capture_default_str();
   app.add_option("--max-segments", o.max_segments, "Rope segments reserved (set-segments may go up to this)")->capture_default_str();
   app.add_option("--clearance", o.clearance_m, "Least height above the terrain, m")->capture_default_str();
+  app.add_option("--max-agl", o.max_agl_m, "Highest height above the terrain, m (default: none)");
+  app.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m (default: none)");
+  app.add_option("--hidden-from", o.hidden_from,
+                 "Stay hidden from an observer standing at X Y Z (pack CRS, m; at or above the terrain); repeatable, "
+                 "at most 8")
+      ->expected(3)
+      ->allow_extra_args(false);
+  app.add_option("--visible-to", o.visible_to, "Stay visible to an observer at X Y Z; repeatable, at most 8")
+      ->expected(3)
+      ->allow_extra_args(false);
+  app.add_option("--eye-height", o.eye_height_m, "Observers' eyes above the points named (options and commands), m")
+      ->capture_default_str();
+  app.add_option("--max-observers", o.max_observers,
+                 "Hidden-from and visible-to points reserved for (three hulls of the rope's level each), 0..16 "
+                 "(default: 16, or as many as fit in a quarter of --budget-mib)");
   app.add_option("--k1", o.k1, "Visibility gain (sign from the objective)")->capture_default_str();
   app.add_option("--k2", o.k2, "Terrain force field gain")->capture_default_str();
   app.add_option("--k3", o.k3, "Operator pull gain")->capture_default_str();
@@ -61,6 +76,57 @@ Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text) {
   return std::pair{w, h};
 }
 
+namespace {
+
+std::string metres(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g m", v);
+  return text;
+}
+
+// The ceiling: finite, above the clearance (as the planner's vehicle check).
+Status validate_envelope(const ConsoleOptions& o) {
+  if (o.max_agl_m) {
+    const double v = *o.max_agl_m;
+    if (!(std::isfinite(v) && v > 0 && v <= 10000)) return invalid_argument("--max-agl: must be in (0, 10000] m");
+    if (!(v > o.clearance_m)) {
+      return invalid_argument("--max-agl: " + metres(v) + " is not above --clearance " + metres(o.clearance_m) +
+                              ": no height is allowed");
+    }
+  }
+  if (o.max_altitude_m && !(std::isfinite(*o.max_altitude_m) && std::fabs(*o.max_altitude_m) <= 1e5)) {
+    return invalid_argument("--max-altitude: must be a height in -100000..100000 m");
+  }
+  return {};
+}
+
+// The observers: X Y Z each, finite, at most 8 of a kind and no more than
+// --max-observers reserves (where/whether inside the pack: at start-up).
+Status validate_observers(const ConsoleOptions& o) {
+  for (const auto& [name, points] : {std::pair{"--hidden-from", &o.hidden_from}, {"--visible-to", &o.visible_to}}) {
+    if (points->size() > 8) return invalid_argument(std::string(name) + ": at most 8 points");
+    for (const std::vector<double>& p : *points) {
+      if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+        return invalid_argument(std::string(name) + ": needs X Y Z, three finite numbers (m)");
+      }
+    }
+  }
+  if (!(std::isfinite(o.eye_height_m) && o.eye_height_m >= 0 && o.eye_height_m <= 10000)) {
+    return invalid_argument("--eye-height: must be in 0..10000 m");
+  }
+  if (o.max_observers < -1 || o.max_observers > kMaxObservers) {
+    return invalid_argument("--max-observers: must be in 0.." + std::to_string(kMaxObservers));
+  }
+  const std::size_t given = o.hidden_from.size() + o.visible_to.size();
+  if (o.max_observers >= 0 && given > static_cast<std::size_t>(o.max_observers)) {
+    return invalid_argument("--max-observers: " + std::to_string(o.max_observers) + " is fewer than the " +
+                            std::to_string(given) + " --hidden-from and --visible-to points given");
+  }
+  return {};
+}
+
+}  // namespace
+
 Status validate(const ConsoleOptions& o) {
   auto bad = [](const std::string& what) { return invalid_argument(what); };
   if (!(o.seconds >= 0 && o.seconds <= 1e7)) return bad("--seconds: must be in 0..1e7 s");
@@ -70,6 +136,8 @@ Status validate(const ConsoleOptions& o) {
   }
   if (o.max_segments < 2 || o.max_segments > 4096) return bad("--max-segments: must be in 2..4096");
   if (!(o.clearance_m >= 0 && o.clearance_m <= 10000)) return bad("--clearance: must be in 0..10000 m");
+  VISVOL_RETURN_IF_ERROR(validate_envelope(o));
+  VISVOL_RETURN_IF_ERROR(validate_observers(o));
   for (const auto& [name, v] : {std::pair{"--k1", o.k1}, {"--k2", o.k2}, {"--k3", o.k3}}) {
     if (!(std::isfinite(v) && v >= 0 && v <= 1e6)) return bad(std::string(name) + ": must be in 0..1e6");
   }

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +25,14 @@ struct ConsoleOptions {
   int segments = 128;
   int max_segments = 256;
   double clearance_m = 30;
+  // The envelope and the observers, as `visvol plan` names them (pack CRS,
+  // metres): a ceiling above the terrain and above the datum (none when
+  // absent), points to stay hidden from and visible to (X Y Z each, at most 8
+  // of a kind), their observers' eyes above them.
+  std::optional<double> max_agl_m, max_altitude_m;
+  std::vector<std::vector<double>> hidden_from, visible_to;
+  double eye_height_m = 2.0;
+  int max_observers = -1;             // hulls reserved for commands; -1: as the budget allows (see add_console_options)
   double k1 = 1, k2 = 1, k3 = 1;
   // Real time.
   double budget_mib = 256;
@@ -61,5 +70,8 @@ Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text);
 void add_console_options(CLI::App& app, ConsoleOptions& o);
 // Checks what CLI11 cannot: combinations and ranges. Names the option.
 Status validate(const ConsoleOptions& o);
+
+// Most observers (hidden-from and visible-to points together) a console holds.
+inline constexpr int kMaxObservers = 16;
 
 }  // namespace visvol::app

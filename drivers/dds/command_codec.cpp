@@ -36,6 +36,9 @@ static_assert(static_cast<int>(ConstraintKind::visible_to) ==
               visvol_msgs_msg_dds__CONSTRAINT_VISIBLE_TO);
 static_assert(static_cast<int>(ConstraintKind::clearance) ==
               visvol_msgs_msg_dds__CONSTRAINT_CLEARANCE);
+static_assert(static_cast<int>(ConstraintKind::max_agl) == visvol_msgs_msg_dds__CONSTRAINT_MAX_AGL);
+static_assert(static_cast<int>(ConstraintKind::max_altitude) ==
+              visvol_msgs_msg_dds__CONSTRAINT_MAX_ALTITUDE);
 static_assert(static_cast<int>(AckResult::accepted) == visvol_msgs_msg_dds__ACK_ACCEPTED);
 static_assert(static_cast<int>(AckResult::rejected) == visvol_msgs_msg_dds__ACK_REJECTED);
 static_assert(static_cast<int>(AckResult::applied) == visvol_msgs_msg_dds__ACK_APPLIED);
@@ -119,13 +122,91 @@ Status decode_constraints(const visvol_msgs_msg_dds__Command_& msg, Command& out
     const visvol_msgs_msg_dds__Constraint_& c = msg.constraints._buffer[i];
     const std::string field = "constraints[" + std::to_string(i) + "]";
     if (c.kind < static_cast<std::uint8_t>(ConstraintKind::hidden_from) ||
-        c.kind > static_cast<std::uint8_t>(ConstraintKind::clearance)) {
+        c.kind > static_cast<std::uint8_t>(ConstraintKind::max_altitude)) {
       return reject(field + ".kind", std::to_string(c.kind) +
                                          " is not a known constraint (1 hidden-from, "
-                                         "2 visible-to, 3 clearance)");
+                                         "2 visible-to, 3 clearance, 4 max-agl, 5 max-altitude)");
     }
     out.constraints.items[i] =
-        Constraint{static_cast<ConstraintKind>(c.kind), to_world(c.position_m), c.clearance_m};
+        Constraint{static_cast<ConstraintKind>(c.kind), to_world(c.position_m), c.height_m};
+  }
+  return Status();
+}
+
+// The most of each envelope kind in a command (one), and where it was.
+struct EnvelopeItems {
+  int clearance = -1, max_agl = -1, max_altitude = -1;  // item index, -1: absent
+};
+
+std::string item(std::uint32_t i) { return "constraints[" + std::to_string(i) + "]"; }
+
+// One item's own values.
+Status validate_item(const Constraint& k, std::uint32_t i, const CommandLimits& limits) {
+  const std::string height = item(i) + ".height_m";
+  switch (k.kind) {
+    case ConstraintKind::hidden_from:
+    case ConstraintKind::visible_to:
+      return check_inside(item(i) + ".position_m", k.position, limits);
+    case ConstraintKind::clearance:
+      return check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m");
+    case ConstraintKind::max_agl:
+      VISVOL_RETURN_IF_ERROR(check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m"));
+      if (k.height_m == 0.0) return reject(height, "a max-agl of 0 m leaves no height to fly (> 0)");
+      return Status();
+    case ConstraintKind::max_altitude:
+      return check_range(height, k.height_m, limits.min.z_m, limits.max.z_m,
+                         " m (the pack's heights)");
+  }
+  return reject(item(i) + ".kind", "unknown");  // decode checked it
+}
+
+// Where item i's kind is an envelope limit: it must be the only one of its kind.
+Status note_envelope_item(const Constraint& k, std::uint32_t i, EnvelopeItems& seen) {
+  int* slot = k.kind == ConstraintKind::clearance ? &seen.clearance
+              : k.kind == ConstraintKind::max_agl ? &seen.max_agl
+              : k.kind == ConstraintKind::max_altitude ? &seen.max_altitude
+                                                       : nullptr;
+  if (slot == nullptr) return Status();
+  if (*slot >= 0) {
+    return reject(item(i) + ".kind", std::string("a second ") + to_string(k.kind) + " (the first is " +
+                                         item(static_cast<std::uint32_t>(*slot)) + ")");
+  }
+  *slot = static_cast<int>(i);
+  return Status();
+}
+
+Status validate_constraints(const Command::Constraints& cs, const CommandLimits& limits) {
+  if (cs.count > limits.max_constraints) {
+    return reject("constraints", std::to_string(cs.count) + " given, at most " +
+                                     std::to_string(limits.max_constraints) + " reserved");
+  }
+  const std::uint32_t n = cs.count < kMaxConstraints ? cs.count : static_cast<std::uint32_t>(kMaxConstraints);
+  EnvelopeItems seen;
+  std::size_t hidden = 0, visible = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const Constraint& k = cs.items[i];
+    VISVOL_RETURN_IF_ERROR(validate_item(k, i, limits));
+    VISVOL_RETURN_IF_ERROR(note_envelope_item(k, i, seen));
+    hidden += k.kind == ConstraintKind::hidden_from;
+    visible += k.kind == ConstraintKind::visible_to;
+  }
+  if (hidden > kMaxObserversPerKind || visible > kMaxObserversPerKind) {
+    return reject("constraints", std::to_string(hidden) + " hidden-from and " + std::to_string(visible) +
+                                     " visible-to points, at most " +
+                                     std::to_string(kMaxObserversPerKind) + " of a kind");
+  }
+  if (hidden + visible > limits.max_observers) {
+    return reject("constraints", std::to_string(hidden + visible) +
+                                     " hidden-from and visible-to points, the console reserved hulls for " +
+                                     std::to_string(limits.max_observers));
+  }
+  if (seen.clearance >= 0 && seen.max_agl >= 0) {
+    const double clearance = cs.items[seen.clearance].height_m, ceiling = cs.items[seen.max_agl].height_m;
+    if (!(ceiling > clearance)) {
+      return reject(item(static_cast<std::uint32_t>(seen.max_agl)) + ".height_m",
+                    "max-agl " + number(ceiling) + " m is not above the clearance " + number(clearance) +
+                        " m of " + item(static_cast<std::uint32_t>(seen.clearance)) + ": no height is allowed");
+    }
   }
   return Status();
 }
@@ -175,6 +256,10 @@ Status validate_limits(const CommandLimits& l) {
   if (l.max_segments > kMaxPathVertices - 1) {
     return bad("max_segments " + std::to_string(l.max_segments) + " above the " +
                std::to_string(kMaxPathVertices - 1) + " a path sample holds");
+  }
+  if (l.max_observers > 2 * kMaxObserversPerKind) {
+    return bad("max_observers " + std::to_string(l.max_observers) + " above the " +
+               std::to_string(2 * kMaxObserversPerKind) + " a command holds");
   }
   if (l.max_constraints > kMaxConstraints) {
     return bad("max_constraints " + std::to_string(l.max_constraints) + " above the " +
@@ -297,22 +382,7 @@ Status validate_command(const Command& c, const CommandLimits& limits) {
       }
       return Status();
     case CommandKind::set_constraints:
-      if (c.constraints.count > limits.max_constraints) {
-        return reject("constraints", std::to_string(c.constraints.count) + " given, at most " +
-                                         std::to_string(limits.max_constraints) +
-                                         " reserved");
-      }
-      for (std::uint32_t i = 0; i < c.constraints.count && i < kMaxConstraints; ++i) {
-        const Constraint& k = c.constraints.items[i];
-        const std::string field = "constraints[" + std::to_string(i) + "]";
-        if (k.kind == ConstraintKind::clearance) {
-          VISVOL_RETURN_IF_ERROR(check_range(field + ".clearance_m", k.clearance_m, 0.0,
-                                             limits.max_clearance_m, " m"));
-        } else {
-          VISVOL_RETURN_IF_ERROR(check_inside(field + ".position_m", k.position, limits));
-        }
-      }
-      return Status();
+      return validate_constraints(c.constraints, limits);
     case CommandKind::switch_terrain: {
       const std::string_view id = text_of(c.pack_id);
       if (limits.pack_count == 0) {
@@ -366,7 +436,7 @@ const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const Command& c) {
     const Constraint& k = c.constraints.items[i];
     constraints_[i] = visvol_msgs_msg_dds__Constraint_{
         static_cast<std::uint8_t>(k.kind), {k.position.x_m, k.position.y_m, k.position.z_m},
-        k.clearance_m};
+        k.height_m};
   }
   msg_.constraints._buffer = constraints_;
   msg_.constraints._length = n;

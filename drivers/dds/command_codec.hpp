@@ -34,10 +34,13 @@ struct CommandLimits {
   std::uint32_t min_segments = 2;
   std::uint32_t max_segments = kMaxPathVertices - 1;  // rope segments reserved
   std::uint32_t max_constraints = kMaxConstraints;    // constraints reserved
+  // hidden-from and visible-to points together: the hulls the console reserved
+  std::uint32_t max_observers = 2 * kMaxObserversPerKind;
   double max_weight = 1e6;                            // each of k1..k4 in [0, max]
   double max_stretch_stiffness_n_per_m = 1e6;         // in (0, max]
   double max_bend_stiffness_n_m_per_rad = 1e6;        // in [0, max]
-  double max_clearance_m = 10000.0;                   // clearance constraints in [0, max]
+  double max_clearance_m = 10000.0;                   // clearance in [0, max], max-agl in (0, max];
+                                                      // max-altitude within the pack's z range
   std::uint32_t pack_count = 0;                       // packs a terrain switch may name
   char packs[kMaxKnownPacks][kPackIdCapacity] = {};
 };
@@ -57,7 +60,10 @@ Status check_pack_id(std::string_view field, std::string_view pack_id);
 // values. Fills `out` (zeroed first: fields of other kinds stay zero).
 Status decode_command(const visvol_msgs_msg_dds__Command_& msg, Command& out);
 // Values: finite numbers, positions inside the pack, counts within what was
-// reserved, ranges of the limits, a pack the console has.
+// reserved, ranges of the limits, a pack the console has. set-constraints:
+// at most one each of clearance, max-agl and max-altitude, a max-agl above
+// the clearance given with it, at most kMaxObserversPerKind observers of a
+// kind and max_observers in all.
 Status validate_command(const Command& command, const CommandLimits& limits);
 // Both, as command intake applies them.
 Status decode_and_validate(const visvol_msgs_msg_dds__Command_& msg,

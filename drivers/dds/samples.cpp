@@ -21,6 +21,8 @@ const char* to_string(ConstraintKind value) {
     case ConstraintKind::hidden_from: return "hidden-from";
     case ConstraintKind::visible_to: return "visible-to";
     case ConstraintKind::clearance: return "clearance";
+    case ConstraintKind::max_agl: return "max-agl";
+    case ConstraintKind::max_altitude: return "max-altitude";
   }
   return nullptr;
 }

@@ -28,6 +28,9 @@ namespace visvol::dds {
 // for more is rejected with a reason.
 inline constexpr std::size_t kMaxPathVertices = 512;
 inline constexpr std::size_t kMaxConstraints = 16;
+// Observers (hidden-from and visible-to points) of one kind in a command at
+// most: what the rope's forces hold (rt::kMaxConstraintHulls).
+inline constexpr std::size_t kMaxObserversPerKind = 8;
 inline constexpr std::size_t kMaxThumbnailBytes = 256 * 1024;  // PNG file bytes
 inline constexpr std::size_t kPackIdCapacity = 64;      // bytes with the NUL
 inline constexpr std::size_t kSourceCapacity = 64;
@@ -40,7 +43,13 @@ inline constexpr std::size_t kCrsWktCapacity = 4096;    // WKT of a projected CR
 // by static_assert in the codecs).
 enum class Objective : std::uint8_t { hide = 1, show = 2 };
 enum class RopeModel : std::uint8_t { spring_mass = 1, articulated = 2 };
-enum class ConstraintKind : std::uint8_t { hidden_from = 1, visible_to = 2, clearance = 3 };
+enum class ConstraintKind : std::uint8_t {
+  hidden_from = 1,
+  visible_to = 2,
+  clearance = 3,     // least height above the terrain
+  max_agl = 4,       // most height above the terrain
+  max_altitude = 5,  // most height above the datum
+};
 enum class CommandKind : std::uint8_t {
   set_endpoints = 1,
   set_objective = 2,
@@ -187,8 +196,8 @@ struct Weights {
 
 struct Constraint {
   ConstraintKind kind;
-  WorldPoint position;  // observer (hidden_from, visible_to)
-  double clearance_m;   // clearance
+  WorldPoint position;  // where the observer stands (hidden_from, visible_to)
+  double height_m;      // clearance, max_agl (above the terrain), max_altitude (above the datum)
 };
 
 // A validated command for the real-time thread: a tag and the parameters of

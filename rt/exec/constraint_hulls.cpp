@@ -30,23 +30,50 @@ void copy_hull(const PointHull& from, PointHull& to) {
   std::copy(from.height_m.begin(), from.height_m.end(), to.height_m.begin());
 }
 
-}  // namespace
-
-ConstraintHulls::ConstraintHulls(const storage::ResidentLevel& level) : level_(&level) {
-  for (HullSet& s : sets_) {
-    size_hull(s.hidden, level.geometry());
-    size_hull(s.visible, level.geometry());
-  }
+// The observer's eye: above its point, and at least on the level's terrain
+// (a coarser level's post may stand higher than the finest terrain).
+template <class Level>
+Vec3 eye_on(const Level& level, const double (&point)[3], double eye_height_m) {
+  Vec3 eye = HullRequest::point(point) + Vec3(0, 0, eye_height_m);
+  int i = 0, j = 0;
+  if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
+  return eye;
 }
 
-std::unique_ptr<ConstraintHulls> ConstraintHulls::create(const storage::ResidentLevel& level) {
-  return std::unique_ptr<ConstraintHulls>(new ConstraintHulls(level));
+}  // namespace
+
+ConstraintHulls::ConstraintHulls(const storage::ResidentLevel& level, int max_observers)
+    : level_(&level), max_observers_(max_observers) {
+  for (HullSet& s : sets_) s = reserve_set();
+}
+
+Result<std::unique_ptr<ConstraintHulls>> ConstraintHulls::create(const storage::ResidentLevel& level,
+                                                                 int max_observers) {
+  if (max_observers < 0 || max_observers > kMaxObservers) {
+    return invalid_argument("constraint hulls: " + std::to_string(max_observers) + " observers, not 0.." +
+                            std::to_string(kMaxObservers));
+  }
+  return std::unique_ptr<ConstraintHulls>(new ConstraintHulls(level, max_observers));
 }
 
 ConstraintHulls::~ConstraintHulls() { stop(); }
 
-std::uint64_t ConstraintHulls::reserved_bytes(const fields::VolumeGeometry& g) {
-  return 3 * 2 * posts(g) * sizeof(float);
+HullSet ConstraintHulls::reserve_set() const {
+  HullSet s;
+  s.hulls.resize(static_cast<std::size_t>(max_observers_));
+  for (PointHull& h : s.hulls) size_hull(h, level_->geometry());
+  return s;
+}
+
+std::uint64_t ConstraintHulls::reserved_bytes(const fields::VolumeGeometry& g, int max_observers) {
+  const std::uint64_t n = max_observers > 0 ? static_cast<std::uint64_t>(max_observers) : 0;
+  return 3 * n * posts(g) * sizeof(float);
+}
+
+int ConstraintHulls::observers_within(const fields::VolumeGeometry& g, std::uint64_t bytes) {
+  const std::uint64_t one = reserved_bytes(g, 1);
+  if (one == 0) return kMaxObservers;
+  return static_cast<int>(std::min<std::uint64_t>(bytes / one, kMaxObservers));
 }
 
 std::uint64_t ConstraintHulls::build_bytes(const fields::VolumeGeometry& g) {
@@ -99,22 +126,25 @@ HullStats ConstraintHulls::stats() const {
 }
 
 Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
-  out.sequence = r.sequence;
-  out.has_hidden = out.has_visible = false;
-  if (r.hidden) {
-    const Vec3 p(r.hidden_from_m[0], r.hidden_from_m[1], r.hidden_from_m[2]);
-    Result<PointHull> h = point_hull(*level_, p, "hidden-from point");
-    if (!h.ok()) return h.status();
-    copy_hull(*h, out.hidden);
-    out.has_hidden = true;
+  const int n = r.hidden_count + r.visible_count;
+  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxConstraintHulls ||
+      r.visible_count > kMaxConstraintHulls || n > static_cast<int>(out.hulls.size())) {
+    return invalid_argument(std::to_string(r.hidden_count) + " hidden-from and " + std::to_string(r.visible_count) +
+                            " visible-to points: hulls are reserved for " + std::to_string(out.hulls.size()) +
+                            " (at most " + std::to_string(kMaxConstraintHulls) + " of a kind)");
   }
-  if (r.visible) {
-    const Vec3 p(r.visible_to_m[0], r.visible_to_m[1], r.visible_to_m[2]);
-    Result<PointHull> h = point_hull(*level_, p, "visible-to point");
+  for (int k = 0; k < n; ++k) {
+    const bool hidden = k < r.hidden_count;
+    const double(&p)[3] = hidden ? r.hidden_from_m[k] : r.visible_to_m[k - r.hidden_count];
+    Result<PointHull> h = point_hull(*level_, eye_on(*level_, p, r.eye_height_m),
+                                     hidden ? "hidden-from point" : "visible-to point");
     if (!h.ok()) return h.status();
-    copy_hull(*h, out.visible);
-    out.has_visible = true;
+    PointHull& slot = out.hulls[static_cast<std::size_t>(k)];
+    copy_hull(*h, slot);
+    (hidden ? out.hidden[static_cast<std::size_t>(k)] : out.visible[static_cast<std::size_t>(k - r.hidden_count)]) =
+        &slot;
   }
+  out.request = r;
   return Status::ok_status();
 }
 

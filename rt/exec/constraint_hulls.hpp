@@ -1,16 +1,24 @@
 // Hidden-from and visible-to constraints for the executive: the hull of each
-// point (rt/rope/field_forces.hpp, point_hull) is built on a thread of its
+// observer (rt/rope/field_forces.hpp, point_hull) is built on a thread of its
 // own, never the real-time one, and handed to the loop whole.
 //
 //   loop thread                     builder thread
-//   request(points)   --latest-->   builds both hulls into a free set
+//   request(points)   --latest-->   builds every hull into a free set
 //   take() at a tick's start <--    publishes the set
 //
 // Both hand-offs are triple buffers (rt/base/handoff.hpp): wait-free for the
 // loop, the newest value wins, and a set the loop has taken is never written
-// until the loop takes another. The three sets are sized at create() (two
-// hulls of the level's posts each); a build allocates only on the builder
-// thread (the padded terrain and horizon of point_hull, transient).
+// until the loop takes another. The three sets are sized at create(): each
+// holds `max_observers` hulls of the level's posts (hidden-from and
+// visible-to together, at most kMaxConstraintHulls of a kind). A request for
+// more is refused, with a reason, by the executive before it gets here (and
+// by build() again). A build allocates only on the builder thread (the padded
+// terrain and horizon of point_hull, transient, one hull at a time).
+//
+// Observers are as the planner takes them (rt/rope/path_check.hpp,
+// ConstraintPoint): a point standing at or above the terrain, the eye
+// `eye_height_m` above it, lifted onto the level's terrain where that is
+// coarser and higher.
 //
 // Thread-safety: request() and take() on the loop thread only; stats() from
 // any thread; start() and stop() from the owner.
@@ -24,6 +32,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "rt/base/handoff.hpp"
 #include "rt/base/status.hpp"
@@ -32,40 +41,72 @@
 
 namespace visvol::rt {
 
-// What the loop asks for: either point may be absent (that constraint off).
+// What the loop asks for: up to kMaxConstraintHulls observers of each kind
+// (none: that kind off). Plain data, for LatestValue.
 struct HullRequest {
-  std::uint64_t sequence = 0;  // the command's
-  bool hidden = false, visible = false;
-  double hidden_from_m[3] = {0, 0, 0};  // world metres of the pack's CRS
-  double visible_to_m[3] = {0, 0, 0};
+  std::uint64_t sequence = 0;   // the command's
+  int hidden_count = 0, visible_count = 0;
+  double eye_height_m = 2.0;    // the observers' eyes above their points
+  double hidden_from_m[kMaxConstraintHulls][3] = {};  // standing points, world metres of the pack's CRS
+  double visible_to_m[kMaxConstraintHulls][3] = {};
+
+  // Appends an observer; false when that kind is full. Real-time safe.
+  bool add_hidden_from(const Vec3& p) { return add(hidden_from_m, hidden_count, p); }
+  bool add_visible_to(const Vec3& p) { return add(visible_to_m, visible_count, p); }
+  int observers() const { return hidden_count + visible_count; }
+  static Vec3 point(const double (&p)[3]) { return Vec3(p[0], p[1], p[2]); }
+
+ private:
+  static bool add(double (&to)[kMaxConstraintHulls][3], int& count, const Vec3& p) {
+    if (count >= kMaxConstraintHulls) return false;
+    double* d = to[count++];
+    d[0] = p.x();
+    d[1] = p.y();
+    d[2] = p.z();
+    return true;
+  }
 };
 
-// A built pair of hulls; `has_*` false for a constraint that is off.
+// A built set: the request it answers and a hull per observer, hidden-from
+// first. hidden[0..hidden_count) and visible[0..visible_count) point into
+// `hulls` (reserved at create(), never reallocated).
 struct HullSet {
-  std::uint64_t sequence = 0;
-  bool has_hidden = false, has_visible = false;
-  PointHull hidden, visible;
+  HullRequest request;
+  std::vector<PointHull> hulls;
+  std::array<const PointHull*, kMaxConstraintHulls> hidden{}, visible{};
+  std::uint64_t sequence() const { return request.sequence; }
+  int hidden_count() const { return request.hidden_count; }
+  int visible_count() const { return request.visible_count; }
 };
 
 struct HullStats {
   std::uint64_t built = 0;     // sets published
-  std::uint64_t failed = 0;    // requests refused by point_hull (the previous set stays)
+  std::uint64_t failed = 0;    // requests refused (the previous set stays)
   double last_build_ms = 0;    // wall time of the last build, refused or not
   std::string last_error;
 };
 
 class ConstraintHulls {
  public:
-  // Reserves three sets of two hulls over `level`'s posts.
-  static std::unique_ptr<ConstraintHulls> create(const storage::ResidentLevel& level);
+  // The most observers a set may hold (kMaxConstraintHulls of each kind).
+  static constexpr int kMaxObservers = 2 * kMaxConstraintHulls;
+
+  // Reserves three sets of `max_observers` (0..kMaxObservers) hulls over
+  // `level`'s posts; invalid_argument outside that range.
+  static Result<std::unique_ptr<ConstraintHulls>> create(const storage::ResidentLevel& level, int max_observers);
   ~ConstraintHulls();
   ConstraintHulls(const ConstraintHulls&) = delete;
   ConstraintHulls& operator=(const ConstraintHulls&) = delete;
 
-  // What create() reserves, and the most a build adds on the builder thread,
-  // for a level of this geometry (bytes): for the memory budget.
-  static std::uint64_t reserved_bytes(const fields::VolumeGeometry& g);
+  // What create() reserves for a level of this geometry and `max_observers`
+  // (3 sets x max_observers hulls x 4 bytes a post), and the most a build
+  // adds on the builder thread (bytes): for the memory budget.
+  static std::uint64_t reserved_bytes(const fields::VolumeGeometry& g, int max_observers);
   static std::uint64_t build_bytes(const fields::VolumeGeometry& g);
+  // The most observers whose sets fit in `bytes` (0..kMaxObservers).
+  static int observers_within(const fields::VolumeGeometry& g, std::uint64_t bytes);
+
+  int max_observers() const { return max_observers_; }
 
   void start();  // the builder thread
   void stop();   // joins it; a request not yet built is dropped
@@ -83,16 +124,19 @@ class ConstraintHulls {
   HullStats stats() const;
   const storage::ResidentLevel& level() const { return *level_; }
 
-  // Builds what `r` asks for into `out` (its hulls already sized). The
-  // builder thread's work, public for tests.
+  // Builds what `r` asks for into `out`, one of this object's sets (or one
+  // from reserve_set()). The builder thread's work, public for tests.
   Status build(const HullRequest& r, HullSet& out) const;
+  // A set sized as create() sizes them (allocates).
+  HullSet reserve_set() const;
 
  private:
-  explicit ConstraintHulls(const storage::ResidentLevel& level);
+  ConstraintHulls(const storage::ResidentLevel& level, int max_observers);
   void run();
   void publish_set();
 
   const storage::ResidentLevel* level_;
+  int max_observers_;
   LatestValue<HullRequest> requests_;
   // triple buffer of sets, as LatestValue (which holds plain data only)
   std::array<HullSet, 3> sets_;

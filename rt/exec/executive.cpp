@@ -13,6 +13,11 @@ namespace visvol::rt {
 
 namespace {
 
+static_assert(dds::kMaxObserversPerKind == static_cast<std::size_t>(kMaxConstraintHulls),
+              "a command's observers of a kind are what the forces hold");
+
+constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt::PathChecker)
+
 std::size_t index_of(RopeModel m) { return m == RopeModel::articulated ? 1 : 0; }
 
 dds::DeviceState device_state_of(haptic::DeviceState s, bool forces) {
@@ -48,6 +53,22 @@ Status check_point(const char* name, const Vec3& p, const fields::VolumeGeometry
   }
   if (p.z() < ground_m) {
     return invalid_argument(std::string(name) + ": " + std::to_string(ground_m - p.z()) + " m below the terrain");
+  }
+  return {};
+}
+
+// The clearance and ceiling themselves: finite where they must be, a ceiling
+// above the clearance.
+Status check_envelope(const ForceGains& g) {
+  if (!(std::isfinite(g.clearance_m) && g.clearance_m >= 0 && g.clearance_m <= 1e4)) {
+    return invalid_argument("executive: clearance " + std::to_string(g.clearance_m) + " m is outside [0, 10000]");
+  }
+  if (!(g.max_agl_m > g.clearance_m)) {  // NaN too
+    return invalid_argument("executive: max-agl " + std::to_string(g.max_agl_m) + " m is not above the clearance " +
+                            std::to_string(g.clearance_m) + " m");
+  }
+  if (std::isnan(g.max_altitude_m) || g.max_altitude_m == -INFINITY) {
+    return invalid_argument("executive: max-altitude must be a height (or infinite: none)");
   }
   return {};
 }
@@ -92,6 +113,10 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   if (!(c.workspace_half_mm > 1 && c.workspace_half_mm < 1000)) {
     return invalid_argument("executive: workspace half-size must be in (1, 1000) mm");
   }
+  VISVOL_RETURN_IF_ERROR(check_envelope(c.gains));
+  if (!(std::isfinite(c.eye_height_m) && c.eye_height_m >= 0 && c.eye_height_m <= 1e4)) {
+    return invalid_argument("executive: eye height must be in [0, 10000] m");
+  }
 
   // the region around the endpoints resident before anything samples it
   const storage::ResidentLevel& level = field_.level(c.level);
@@ -106,6 +131,11 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   VISVOL_RETURN_IF_ERROR(check_point("end", c.end_m, g, sampler.height(c.end_m.x(), c.end_m.y())));
   const Vec3 ends[2] = {c.start_m, c.end_m};
   VISVOL_RETURN_IF_ERROR(describe_polyline(ends, 2, c.segments, 2, c.max_segments).with_context("executive: start to end"));
+  finest_ = fields::FieldSampler<storage::ResidentLevel>(field_.level(0));
+  VISVOL_RETURN_IF_ERROR(check_ceiling("start", c.start_m, c.gains));
+  VISVOL_RETURN_IF_ERROR(check_ceiling("end", c.end_m, c.gains));
+  config_.observers.eye_height_m = c.eye_height_m;
+  VISVOL_RETURN_IF_ERROR(check_observers(config_.observers));
 
   start_m_ = c.start_m;
   end_m_ = c.end_m;
@@ -196,8 +226,11 @@ Errc Executive::start_run() {
   const double length = rope_->model() == RopeModel::articulated ? straight * (1.0 + config_.slack) : straight;
   const storage::ResidentSampler& s = forces_->sampler();
   const Vec3 a = start_m_, b = end_m_;
+  // 20 m above the clearance, or half way up to a lower ceiling
+  const ForceGains& gains = forces_->gains();
+  const double lay_agl_m = std::min(gains.clearance_m + 20.0, 0.5 * (gains.clearance_m + gains.max_agl_m));
   lay_with_slack([&](int i) { return Vec3(a + (static_cast<double>(i) / n) * (b - a)); }, n, 1, length,
-                 forces_->gains().clearance_m + 20.0, s.level().geometry(),
+                 lay_agl_m, s.level().geometry(),
                  [&](double x, double y) { return s.height(x, y); }, scratch_.get());
   // checked first: a refusal from reset() would build a message on this thread
   if (check_polyline(scratch_.get(), n + 1, n, 2, config_.max_segments) != Errc::ok) return Errc::invalid_argument;
@@ -290,6 +323,10 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       }
       if ((b - a).norm() < segments_ * kMinSegmentM) {
         reason = "the endpoints are too close for the rope's segment count (0.5 m a segment at least)";
+        return Errc::invalid_argument;
+      }
+      if (!under_ceiling(a, forces_->gains()) || !under_ceiling(b, forces_->gains())) {
+        reason = "an endpoint is above the ceiling in force (max-agl or max-altitude)";
         return Errc::invalid_argument;
       }
       const Vec3 old_start = start_m_, old_end = end_m_;
@@ -396,48 +433,84 @@ Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
   if (hulls != nullptr && &hulls->level() != &field_.level(config_.level)) {
     return Status(Errc::invalid_argument, "constraint hulls: built on another level than the executive's");
   }
+  const HullRequest& r = config_.observers;
+  if (r.observers() > 0 && hulls == nullptr) {
+    return invalid_argument("executive: hidden-from and visible-to points need the hull builder");
+  }
+  if (hulls != nullptr && r.observers() > hulls->max_observers()) {
+    return invalid_argument("executive: " + std::to_string(r.observers()) +
+                            " hidden-from and visible-to points, hulls are reserved for " +
+                            std::to_string(hulls->max_observers()));
+  }
   hulls_ = hulls;
+  if (hulls_ != nullptr && r.observers() > 0) {
+    HullRequest first = r;
+    first.sequence = ++hull_requests_;
+    hull_pending_ = first.sequence;
+    hulls_->request(first);
+  }
   return Status::ok_status();
 }
 
-// set-constraints replaces the whole set: the clearance at once, the
-// hidden-from and visible-to hulls once the builder has them (the newest of
-// each kind in the command; an empty list clears them).
-Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
-  double clearance = forces_->gains().clearance_m;
-  HullRequest r;
-  const storage::ResidentLevel& level = field_.level(config_.level);
-  const fields::VolumeGeometry& g = level.geometry();
-  for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
-    const dds::Constraint& k = c.constraints.items[i];
-    if (k.kind == dds::ConstraintKind::clearance) {
-      clearance = k.clearance_m;
-      continue;
-    }
-    if (hulls_ == nullptr) {
-      reason = "hidden-from and visible-to constraints are not supported without the console's hull builder "
-               "(visvol plan --hidden-from/--visible-to)";
-      return Errc::unsupported;
-    }
-    // point_hull's own test, on the nearest post (heights are always resident)
-    int pi = 0, pj = 0;
-    if (!hull_post(g, Vec3(k.position.x_m, k.position.y_m, k.position.z_m), pi, pj)) {
-      reason = "a hidden-from or visible-to point is outside the pack";
-      return Errc::invalid_argument;
-    }
-    if (!std::isfinite(k.position.z_m) || k.position.z_m < level.post(pi, pj)) {
-      reason = "a hidden-from or visible-to point is below the terrain";
-      return Errc::invalid_argument;
-    }
-    const bool hidden = k.kind == dds::ConstraintKind::hidden_from;
-    double* to = hidden ? r.hidden_from_m : r.visible_to_m;
-    (hidden ? r.hidden : r.visible) = true;
-    to[0] = k.position.x_m;
-    to[1] = k.position.y_m;
-    to[2] = k.position.z_m;
+// The configured observers: at most kMaxConstraintHulls of a kind, each
+// inside the pack and at or above the finest terrain.
+Status Executive::check_observers(const HullRequest& r) const {
+  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxConstraintHulls ||
+      r.visible_count > kMaxConstraintHulls) {
+    return invalid_argument("executive: at most " + std::to_string(kMaxConstraintHulls) +
+                            " hidden-from and as many visible-to points");
   }
+  const fields::VolumeGeometry& g = field_.level(0).geometry();
+  for (int k = 0; k < r.observers(); ++k) {
+    const bool hidden = k < r.hidden_count;
+    const Vec3 p = HullRequest::point(hidden ? r.hidden_from_m[k] : r.visible_to_m[k - r.hidden_count]);
+    const std::string name = std::string(hidden ? "hidden-from point " : "visible-to point ") +
+                             std::to_string(1 + (hidden ? k : k - r.hidden_count));
+    VISVOL_RETURN_IF_ERROR(check_point(name.c_str(), p, g, finest_.height(p.x(), p.y()) - kHeightTolM));
+  }
+  return {};
+}
+
+// An endpoint under the ceiling of `g` (on the finest terrain).
+bool Executive::under_ceiling(const Vec3& p, const ForceGains& g) const {
+  const double agl = p.z() - finest_.height(p.x(), p.y());
+  return agl <= g.max_agl_m + kHeightTolM && p.z() <= g.max_altitude_m + kHeightTolM;
+}
+
+Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGains& g) const {
+  if (under_ceiling(p, g)) return {};
+  const double agl = p.z() - finest_.height(p.x(), p.y());
+  return invalid_argument(std::string(name) + ": " + std::to_string(agl) + " m above the terrain and " +
+                          std::to_string(p.z()) + " m high, above the ceiling (max-agl " +
+                          std::to_string(g.max_agl_m) + " m, max-altitude " + std::to_string(g.max_altitude_m) +
+                          " m)");
+}
+
+// Why an observer of a command cannot be had (null: it can). Real-time safe.
+const char* Executive::observer_problem(const dds::Constraint& k) const {
+  const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
+  int pi = 0, pj = 0;
+  if (!p.allFinite() || !hull_post(field_.level(0).geometry(), p, pi, pj)) {
+    return "a hidden-from or visible-to point is outside the pack";
+  }
+  if (p.z() < finest_.height(p.x(), p.y()) - kHeightTolM) return "a hidden-from or visible-to point is below the terrain";
+  return nullptr;
+}
+
+// set-constraints: the observers are replaced (none given clears them; in
+// force once the builder has their hulls); the clearance and the ceiling
+// change, at once, where the command gives them. All or nothing: a command
+// refused for any item changes nothing.
+Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
   ForceGains gains = forces_->gains();
-  gains.clearance_m = clearance;
+  HullRequest r;
+  r.eye_height_m = config_.eye_height_m;
+  const Errc e = read_constraints(c, gains, r, reason);
+  if (e != Errc::ok) return e;
+  if (const char* problem = constraints_problem(gains, r)) {
+    reason = problem;
+    return Errc::invalid_argument;
+  }
   forces_->set_gains(gains);
   if (hulls_ != nullptr) {
     // until the hulls are in force (or refused) the path is not at rest under them
@@ -450,6 +523,56 @@ Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
   return Errc::ok;
 }
 
+// The command's items into `gains` (clearance, ceiling) and `r` (observers,
+// each checked on its own).
+Errc Executive::read_constraints(const dds::Command& c, ForceGains& gains, HullRequest& r,
+                                 const char*& reason) const {
+  const std::uint32_t n = std::min<std::uint32_t>(c.constraints.count, static_cast<std::uint32_t>(dds::kMaxConstraints));
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const dds::Constraint& k = c.constraints.items[i];
+    switch (k.kind) {
+      case dds::ConstraintKind::clearance: gains.clearance_m = k.height_m; continue;
+      case dds::ConstraintKind::max_agl: gains.max_agl_m = k.height_m; continue;
+      case dds::ConstraintKind::max_altitude: gains.max_altitude_m = k.height_m; continue;
+      case dds::ConstraintKind::hidden_from:
+      case dds::ConstraintKind::visible_to: break;
+    }
+    if (hulls_ == nullptr) {
+      reason = "hidden-from and visible-to constraints are not supported without the console's hull builder "
+               "(visvol plan --hidden-from/--visible-to)";
+      return Errc::unsupported;
+    }
+    if (const char* problem = observer_problem(k)) {
+      reason = problem;
+      return Errc::invalid_argument;
+    }
+    const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
+    if (!(k.kind == dds::ConstraintKind::hidden_from ? r.add_hidden_from(p) : r.add_visible_to(p))) {
+      static_assert(kMaxConstraintHulls == 8, "the reason names the number");
+      reason = "more than 8 hidden-from or 8 visible-to points";
+      return Errc::invalid_argument;
+    }
+  }
+  return Errc::ok;
+}
+
+// Why a whole set cannot be had (null: it can): more observers than
+// reserved, a clearance or ceiling that is no height, a ceiling not above
+// the clearance or under the rope's ends. Real-time safe.
+const char* Executive::constraints_problem(const ForceGains& g, const HullRequest& r) const {
+  if (hulls_ != nullptr && r.observers() > hulls_->max_observers()) {
+    return "more hidden-from and visible-to points than the console reserved hulls for (--max-observers)";
+  }
+  if (!(std::isfinite(g.clearance_m) && g.clearance_m >= 0) || std::isnan(g.max_agl_m) || std::isnan(g.max_altitude_m)) {
+    return "a clearance or ceiling is not a height";
+  }
+  if (!(g.max_agl_m > g.clearance_m)) return "max-agl is not above the clearance: no height is allowed";
+  if (!under_ceiling(start_m_, g) || !under_ceiling(end_m_, g)) {
+    return "the rope's ends are above that ceiling (move them with set-endpoints first)";
+  }
+  return nullptr;
+}
+
 bool Executive::terrain_switch(char (&pack_id)[dds::kPackIdCapacity]) const {
   if (!switch_requested_.load(std::memory_order_acquire)) return false;
   std::memcpy(pack_id, switch_pack_id_, sizeof pack_id);
@@ -460,9 +583,10 @@ void Executive::install_hulls() {
   if (hull_pending_ != 0 && hulls_->refused_sequence() == hull_pending_) hull_pending_ = 0;
   const HullSet* set = hulls_->take();
   if (set == nullptr) return;
-  if (set->sequence == hull_pending_) hull_pending_ = 0;
-  forces_->set_hidden_from(set->has_hidden ? &set->hidden : nullptr);
-  forces_->set_visible_to(set->has_visible ? &set->visible : nullptr);
+  if (set->sequence() == hull_pending_) hull_pending_ = 0;
+  forces_->set_hidden_from(set->hidden.data(), set->hidden_count());
+  forces_->set_visible_to(set->visible.data(), set->visible_count());
+  in_force_ = set;
   ++counters_.hull_sets;
   equilibrium_.reset();
 }

@@ -4,6 +4,9 @@
 //   1. apply queued commands   (DDS command intake -> CommandQueue; each one
 //                               acknowledged applied or failed on the AckQueue),
 //                               then put in force hull constraints built since
+//                               (every hidden-from and visible-to observer of
+//                               the newest set; the clearance and the ceiling
+//                               take effect with their command)
 //   2. simulated device        (only with a simulation on the in-process bus)
 //   3. read CAN                (the haptic driver drains the bus)
 //   4. servo                   (proxy, soft joint, force safety)
@@ -71,7 +74,14 @@ struct ExecutiveConfig {
   int max_segments = 256;           // reserved: set-segments may not exceed it
   double stiffness = 1.0;           // factor on the rope's scaled springs
   double slack = 0.05;              // articulated: extra length over the straight start
-  ForceGains gains;                 // k1 magnitude (sign from the objective), k2, clearance
+  ForceGains gains;                 // k1 magnitude (sign from the objective), k2, clearance, ceiling
+                                    // (max_agl_m, max_altitude_m; infinite: none)
+  // Observers in force from the start (hidden-from and visible-to points, as
+  // set-constraints gives them): built once set_constraint_hulls() gives the
+  // executive a hull builder. Their eyes, and those of every command's
+  // observers, are eye_height_m above their points (the planner's --eye-height).
+  HullRequest observers;
+  double eye_height_m = 2.0;
   double k3_user = 1.0;             // the operator's pull
   bool start_running = true;        // settle from the start, or wait for a start command
   int level = 0;                    // the level of detail the rope runs on
@@ -143,8 +153,15 @@ class Executive final : public PeriodicTask {
 
   // Hidden-from and visible-to constraints (set-constraints) need a hull
   // builder on the executive's level; without one they are refused as
-  // unsupported. Set before the loop starts; `hulls` must outlive the executive.
+  // unsupported. Requests the configured observers (refused when they are
+  // more than the builder reserved). Set before the loop starts; `hulls`
+  // must outlive the executive.
   Status set_constraint_hulls(ConstraintHulls* hulls);
+
+  // The observers in force (null: none built yet), and whether a newer set
+  // is still being built. Loop thread, or any thread once the loop stopped.
+  const HullSet* hulls_in_force() const { return in_force_; }
+  bool hulls_pending() const { return hull_pending_ != 0; }
 
   // A switch-terrain command to another pack, once applied: copies its pack
   // id and returns true (any thread; the loop asks nothing more until the
@@ -169,6 +186,12 @@ class Executive final : public PeriodicTask {
 
   void apply_commands();
   void install_hulls();
+  Status check_observers(const HullRequest& r) const;
+  Status check_ceiling(const char* name, const Vec3& p, const ForceGains& g) const;
+  bool under_ceiling(const Vec3& p, const ForceGains& g) const;
+  const char* observer_problem(const dds::Constraint& k) const;
+  const char* constraints_problem(const ForceGains& g, const HullRequest& r) const;
+  Errc read_constraints(const dds::Command& c, ForceGains& gains, HullRequest& r, const char*& reason) const;
   Errc apply_constraints(const dds::Command& c, const char*& reason);
   Errc apply(const dds::Command& c, const char*& reason);
   void ack(const dds::Command& c, Errc result, const char* reason);
@@ -195,6 +218,8 @@ class Executive final : public PeriodicTask {
   std::optional<haptic::DeviceDriver> driver_;
   DeviceSimulation* simulation_ = nullptr;
   ConstraintHulls* hulls_ = nullptr;
+  const HullSet* in_force_ = nullptr;   // the set the forces hold (owned by hulls_)
+  fields::FieldSampler<storage::ResidentLevel> finest_;  // level 0's terrain: where observers and ceilings are judged
   std::uint64_t hull_requests_ = 0;  // hull requests made (their sequence numbers, from 1)
   std::uint64_t hull_pending_ = 0;   // the one being built, 0: none
   // switch-terrain: the id written by the loop, then the flag (release)

@@ -133,6 +133,10 @@ class FieldForces final : public RopeEnvironment, public PathField {
   void set_visible_to(const PointHull* const* hulls, int count) { set_hulls(visible_, visible_count_, hulls, count); }
   const PointHull* hidden_from() const { return hidden_count_ ? hidden_[0] : nullptr; }
   const PointHull* visible_to() const { return visible_count_ ? visible_[0] : nullptr; }
+  int hidden_from_count() const { return hidden_count_; }
+  int visible_to_count() const { return visible_count_; }
+  const PointHull* hidden_from(int k) const { return k >= 0 && k < hidden_count_ ? hidden_[static_cast<std::size_t>(k)] : nullptr; }
+  const PointHull* visible_to(int k) const { return k >= 0 && k < visible_count_ ? visible_[static_cast<std::size_t>(k)] : nullptr; }
   double reference_acceleration() const { return accel_ref_; }
   double reference_gradient() const { return gradient_ref_; }
   const Sampler& sampler() const { return sampler_; }

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
 
 #include "../tools/cli_runner.hpp"
@@ -70,6 +71,19 @@ class Console : public ::testing::Test {
   static std::string out_dir(const std::string& name) {
     return ::testing::TempDir() + "/console_" + name + "_" + std::to_string(getpid());
   }
+  // Post (i, j) of the pack's finest level, `up_m` above the terrain: "X Y Z".
+  static std::vector<double> post(int i, int j, double up_m) {
+    auto pack = visvol::storage::Pack::open(*pack_);
+    EXPECT_TRUE(pack.ok());
+    auto level = visvol::storage::PackLevel::open(*pack, 0);
+    EXPECT_TRUE(level.ok());
+    const visvol::fields::VolumeGeometry g = level->geometry();
+    return {g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, level->post(i, j) + up_m};
+  }
+  static std::string xyz(const std::vector<double>& p) {
+    return std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]);
+  }
+
   static std::string* pack_;
   static std::string* script_;
 };
@@ -79,7 +93,8 @@ std::string* Console::script_ = nullptr;
 TEST_F(Console, HelpAndBadOptions) {
   const Outcome h = console("--help");
   EXPECT_EQ(h.status, 0);
-  for (const char* o : {"--pack", "--budget-mib", "--device", "--domain", "--seconds"}) {
+  for (const char* o : {"--pack", "--budget-mib", "--device", "--domain", "--seconds", "--hidden-from", "--visible-to",
+                        "--max-agl", "--max-altitude", "--eye-height", "--max-observers"}) {
     EXPECT_NE(h.out.find(o), std::string::npos) << o;
   }
   for (const std::string& args :
@@ -91,6 +106,102 @@ TEST_F(Console, HelpAndBadOptions) {
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
     EXPECT_NE(r.err.find("visvol-console: "), std::string::npos) << args;
   }
+}
+
+// The envelope and observer options as the planner's: each bad value exits 2
+// with a line naming the option.
+TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
+  const std::string base = "--pack " + *pack_ + " --no-dds --seconds 1 --thumbnail-view none ";
+  const std::string p = " " + xyz(post(40, 40, 20));
+  std::string nine;
+  for (int k = 0; k < 9; ++k) nine += " --hidden-from" + p;
+  const std::pair<std::string, std::string> cases[] = {
+      {"--max-agl 20", "--max-agl: 20 m is not above --clearance 30 m"},
+      {"--max-agl 50 --clearance 50", "--max-agl: 50 m is not above --clearance 50 m"},
+      {"--max-agl -5", "--max-agl"},
+      {"--max-agl nan", "--max-agl"},
+      {"--max-altitude inf", "--max-altitude"},
+      {"--hidden-from 1 2", "--hidden-from"},
+      {nine, "--hidden-from: at most 8 points"},
+      {"--visible-to 1 2 nan", "--visible-to"},
+      {"--eye-height -1", "--eye-height"},
+      {"--max-observers 17", "--max-observers"},
+      {"--max-observers 1 --hidden-from" + p + " --visible-to" + p, "--max-observers: 1 is fewer than the 2"},
+      {"--hidden-from 1 2 3", "hidden-from point 1: (1.000000, 2.000000) is outside the pack"},
+      {"--visible-to " + xyz(post(10, 10, -40)), "visible-to point 1"},
+      {"--max-agl 100 --from " + xyz(post(10, 48, 150)), "start: "},
+      {"--max-altitude 100", "above the ceiling"},
+  };
+  for (const auto& [args, reason] : cases) {
+    const Outcome r = console(base + args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(reason), std::string::npos) << args << ": " << r.err;
+  }
+}
+
+// Observers and a ceiling from the command line, no DDS: in force from the
+// start, each judged by exact sight lines on the finest terrain in
+// summary.json, the ceiling keeping the rope under max-agl.
+TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
+  const std::string out = out_dir("envelope");
+  const auto h1 = post(48, 20, 10), h2 = post(20, 70, 10), v1 = post(48, 60, 60), v2 = post(75, 40, 60);
+  const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
+                            "--script none --thumbnail-view none --objective show --max-agl 120 --max-altitude 2000 "
+                            "--hidden-from " + xyz(h1) + " --hidden-from " + xyz(h2) + " --visible-to " + xyz(v1) +
+                            " --visible-to " + xyz(v2) + " --eye-height 1.5 --out " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("constraints: clearance 30 m, max-agl 120 m, max-altitude 2000 m, 2 hidden-from, 2 visible-to"),
+            std::string::npos)
+      << r.out;
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  const nlohmann::json& k = s["constraints"];
+  EXPECT_EQ(k["clearance_m"].get<double>(), 30.0);
+  EXPECT_EQ(k["max_agl_m"].get<double>(), 120.0);
+  EXPECT_EQ(k["max_altitude_m"].get<double>(), 2000.0);
+  EXPECT_EQ(k["eye_height_m"].get<double>(), 1.5);
+  EXPECT_EQ(k["max_observers"].get<int>(), 4);  // without DDS: those given
+  EXPECT_EQ(k["sets_in_force"].get<int>(), 1);
+  EXPECT_FALSE(k["pending"].get<bool>());
+  ASSERT_EQ(k["hidden_from"].size(), 2u);
+  ASSERT_EQ(k["visible_to"].size(), 2u);
+  EXPECT_NEAR(k["hidden_from"][1][0].get<double>(), h2[0], 1e-3);
+  EXPECT_NEAR(k["visible_to"][0][2].get<double>(), v1[2], 1e-3);
+
+  const nlohmann::json& c = s["check"];
+  ASSERT_TRUE(c.contains("constraints")) << c.dump();
+  ASSERT_EQ(c["constraints"].size(), 4u);
+  bool all = true;
+  for (const nlohmann::json& x : c["constraints"]) {
+    const double f = x["satisfied_fraction"].get<double>();
+    EXPECT_GE(f, 0.0);
+    EXPECT_LE(f, 1.0);
+    EXPECT_EQ(x["met"].get<bool>(), f == 1.0) << x.dump();
+    all = all && x["met"].get<bool>();
+  }
+  EXPECT_EQ(c["constraints"][0]["kind"], "hidden-from");
+  EXPECT_EQ(c["constraints"][3]["kind"], "visible-to");
+  EXPECT_NEAR(c["constraints"][0]["eye_m"][2].get<double>(), h1[2] + 1.5, 1e-3);
+  ASSERT_EQ(c["envelope"].size(), 3u);
+  EXPECT_EQ(c["envelope"][0]["name"], "clearance");
+  EXPECT_EQ(c["envelope"][1]["name"], "max-agl");
+  EXPECT_EQ(c["envelope"][1]["limit"].get<double>(), 120.0);
+  // the worst height is the exact one: at least the highest vertex of
+  // path.csv (same finest terrain), met exactly when it is under the ceiling
+  // (the executive's tests show the ceiling holding the rope; here the rope
+  // runs in real time and need not have settled)
+  const double worst_agl = c["envelope"][1]["worst"].get<double>();
+  double highest_vertex = -1e9;
+  std::istringstream csv(slurp(out + "/path.csv"));
+  std::string row;
+  std::getline(csv, row);  // header
+  while (std::getline(csv, row)) highest_vertex = std::max(highest_vertex, std::stod(row.substr(row.rfind(',') + 1)));
+  EXPECT_GE(worst_agl, highest_vertex - 0.01);
+  EXPECT_LE(worst_agl, highest_vertex + 60.0) << "a sample between vertices, not another path";
+  EXPECT_EQ(c["envelope"][1]["met"].get<bool>(), worst_agl <= 120.01);
+  EXPECT_EQ(c["envelope"][2]["name"], "max-altitude");
+  for (const nlohmann::json& x : c["envelope"]) all = all && x["met"].get<bool>();
+  EXPECT_EQ(c["all_met"].get<bool>(), all);
+  EXPECT_EQ(c["unmet"].empty(), all);
 }
 
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
@@ -157,31 +268,51 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   ASSERT_TRUE(level.ok());
   const visvol::fields::VolumeGeometry g = level->geometry();
   const int ci = g.nx / 2, cj = g.ny / 2;
+  // and from two more points beside it, visible to one, under a ceiling
   Command hide{};
   hide.kind = CommandKind::set_constraints;
   hide.sequence = 8;
   copy_text(hide.source, "console_test");
-  hide.constraints.count = 1;
-  hide.constraints.items[0].kind = ConstraintKind::hidden_from;
-  hide.constraints.items[0].position.x_m = g.origin_x + ci * g.spacing_m;
-  hide.constraints.items[0].position.y_m = g.origin_y - cj * g.spacing_m;
-  hide.constraints.items[0].position.z_m = level->post(ci, cj) + 50.0;
+  auto at = [&](ConstraintKind kind, int i, int j, double up_m) {
+    hide.constraints.items[hide.constraints.count++] = {
+        kind, {g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, level->post(i, j) + up_m}, 0.0};
+  };
+  at(ConstraintKind::hidden_from, ci, cj, 50.0);
+  at(ConstraintKind::hidden_from, ci - 20, cj + 10, 10.0);
+  at(ConstraintKind::hidden_from, ci + 20, cj - 10, 10.0);
+  at(ConstraintKind::visible_to, ci, cj + 30, 80.0);
+  hide.constraints.items[hide.constraints.count++] = {ConstraintKind::max_agl, {}, 250.0};
   ASSERT_EQ(commands->write(&msg.fill(hide)), DDS_RETCODE_OK);
+  // a ceiling under the clearance the command sets: the intake refuses it
+  Command low{};
+  low.kind = CommandKind::set_constraints;
+  low.sequence = 9;
+  copy_text(low.source, "console_test");
+  low.constraints.count = 2;
+  low.constraints.items[0] = {ConstraintKind::clearance, {}, 40.0};
+  low.constraints.items[1] = {ConstraintKind::max_agl, {}, 35.0};
+  ASSERT_EQ(commands->write(&msg.fill(low)), DDS_RETCODE_OK);
   run.join();
   ASSERT_EQ(r.status, 0) << r.err;
 
-  int applied = 0, accepted = 0;
+  int applied = 0, accepted = 0, rejected = 0;
   auto a = acks->take<visvol_msgs_msg_dds__CommandAck_>(
       [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
         const CommandAck ack = decode_ack(m);
-        EXPECT_TRUE(ack.sequence == 7u || ack.sequence == 8u) << ack.sequence;
+        EXPECT_TRUE(ack.sequence >= 7u && ack.sequence <= 9u) << ack.sequence;
         applied += ack.result == AckResult::applied;
         accepted += ack.result == AckResult::accepted;
+        if (ack.sequence == 9u) {
+          rejected += ack.result == AckResult::rejected;
+          EXPECT_NE(std::string(ack.reason).find("max-agl 35 m is not above the clearance 40 m"), std::string::npos)
+              << ack.reason;
+        }
       },
       16);
   ASSERT_TRUE(a.ok());
   EXPECT_EQ(accepted, 2);
   EXPECT_EQ(applied, 2);
+  EXPECT_EQ(rejected, 1);
   int received = 0;
   auto p = paths->take<visvol_msgs_msg_dds__PathUpdate_>(
       [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
@@ -206,10 +337,21 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_GT(s["dds"]["paths"].get<int>(), 50);
   EXPECT_EQ(s["commands"]["applied"].get<int>(), 2);
-  // the hidden-from hull was built beside the loop and put in force
-  EXPECT_EQ(s["constraints"]["built"].get<int>(), 1);
-  EXPECT_EQ(s["constraints"]["in_force"].get<int>(), 1);
-  EXPECT_EQ(s["constraints"]["refused"].get<int>(), 0);
+  // the hulls were built beside the loop and put in force, with the ceiling
+  const nlohmann::json& k = s["constraints"];
+  EXPECT_EQ(k["built"].get<int>(), 1);
+  EXPECT_EQ(k["sets_in_force"].get<int>(), 1);
+  EXPECT_EQ(k["refused"].get<int>(), 0);
+  EXPECT_EQ(k["max_observers"].get<int>(), 16);  // a small pack: all fit in a quarter of the budget
+  EXPECT_EQ(k["hidden_from"].size(), 3u);
+  EXPECT_EQ(k["visible_to"].size(), 1u);
+  EXPECT_EQ(k["max_agl_m"].get<double>(), 250.0);
+  EXPECT_TRUE(k["max_altitude_m"].is_null());
+  // and the final path checked against each of them
+  ASSERT_EQ(s["check"]["constraints"].size(), 4u);
+  EXPECT_EQ(s["check"]["constraints"][2]["kind"], "hidden-from");
+  EXPECT_EQ(s["check"]["constraints"][3]["kind"], "visible-to");
+  EXPECT_TRUE(s["check"]["all_met"].is_boolean());
 }
 
 

@@ -65,7 +65,7 @@ struct CommandOptions {
   std::string word;             // objective, model, pack id
   std::uint32_t segments = 0;
   std::vector<std::string> hidden_from, visible_to;
-  std::vector<double> clearances;
+  std::vector<double> clearances, max_agls, max_altitudes;  // m; one each (the console refuses more)
 };
 
 int usage_error(const std::string& message) {
@@ -267,6 +267,10 @@ Result<Command> build_command(const CommandOptions& o) {
       VISVOL_RETURN_IF_ERROR(add({ConstraintKind::visible_to, *w, 0.0}));
     }
     for (const double m : o.clearances) VISVOL_RETURN_IF_ERROR(add({ConstraintKind::clearance, {}, m}));
+    for (const double m : o.max_agls) VISVOL_RETURN_IF_ERROR(add({ConstraintKind::max_agl, {}, m}));
+    for (const double m : o.max_altitudes) {
+      VISVOL_RETURN_IF_ERROR(add({ConstraintKind::max_altitude, {}, m}));
+    }
   } else if (k == "start") {
     c.kind = CommandKind::start;
   } else if (k == "stop") {
@@ -372,11 +376,18 @@ void add_command_kinds(CLI::App& command, CommandOptions& o) {
       ->add_option("N", o.segments, "segments (the console says how many it reserved)")
       ->required()
       ->check(CLI::Range(1u, 1000000u));
-  CLI::App* constraints =
-      kind("set-constraints", "replace the constraints (none given: clear them)");
-  constraints->add_option("--hidden-from", o.hidden_from, "X,Y,Z: stay hidden from this observer (m)");
-  constraints->add_option("--visible-to", o.visible_to, "X,Y,Z: stay visible to this observer (m)");
-  constraints->add_option("--clearance", o.clearances, "keep this clearance above the terrain (m)")
+  CLI::App* constraints = kind(
+      "set-constraints",
+      "replace the observers (none given: clear them); clearance and ceilings change when given");
+  constraints->add_option("--hidden-from", o.hidden_from,
+                          "X,Y,Z: stay hidden from an observer standing there (m); repeatable");
+  constraints->add_option("--visible-to", o.visible_to,
+                          "X,Y,Z: stay visible to an observer standing there (m); repeatable");
+  constraints->add_option("--clearance", o.clearances, "keep at least this height above the terrain (m)")
+      ->check(kFinite);
+  constraints->add_option("--max-agl", o.max_agls, "keep at most this height above the terrain (m)")
+      ->check(kFinite);
+  constraints->add_option("--max-altitude", o.max_altitudes, "keep at most this height above the datum (m)")
       ->check(kFinite);
   kind("start", "start planning");
   kind("stop", "stop planning");

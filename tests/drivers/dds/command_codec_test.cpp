@@ -110,7 +110,27 @@ TEST(DecodeCommand, EachKindDecodesItsFields) {
   ASSERT_EQ(out.constraints.count, 2u);
   EXPECT_EQ(out.constraints.items[0].kind, ConstraintKind::hidden_from);
   EXPECT_EQ(out.constraints.items[0].position.z_m, 30.0);
-  EXPECT_EQ(out.constraints.items[1].clearance_m, 150.0);
+  EXPECT_EQ(out.constraints.items[1].height_m, 150.0);
+
+  // every kind at once: observers of both kinds, clearance and both ceilings
+  Msg all(kind(CommandKind::set_constraints));
+  all.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
+  all.constraints[1] = {2, {15.0, 25.0, 35.0}, 0.0};
+  all.constraints[2] = {3, {}, 40.0};
+  all.constraints[3] = {4, {}, 120.0};
+  all.constraints[4] = {5, {}, 450.0};
+  all.m.constraints._length = 5;
+  all.sync();
+  CommandLimits five = limits();
+  five.max_constraints = 5;
+  ASSERT_TRUE(decode_and_validate(all.m, five, out).ok());
+  ASSERT_EQ(out.constraints.count, 5u);
+  EXPECT_EQ(out.constraints.items[3].kind, ConstraintKind::max_agl);
+  EXPECT_EQ(out.constraints.items[3].height_m, 120.0);
+  EXPECT_EQ(out.constraints.items[4].kind, ConstraintKind::max_altitude);
+  EXPECT_EQ(out.constraints.items[4].height_m, 450.0);
+  EXPECT_STREQ(to_string(ConstraintKind::max_agl), "max-agl");
+  EXPECT_STREQ(to_string(ConstraintKind::max_altitude), "max-altitude");
 
   Msg empty(kind(CommandKind::set_constraints));  // clears the set
   EXPECT_EQ(verdict(empty), "");
@@ -160,10 +180,10 @@ TEST(DecodeCommand, StructuralProblemsNameTheField) {
   EXPECT_EQ(verdict(c), "constraints: 17 given, at most 16 fit");
   c.m.constraints._length = 2;
   c.constraints[0] = {3, {}, 10.0};
-  c.constraints[1] = {4, {}, 10.0};
+  c.constraints[1] = {6, {}, 10.0};
   EXPECT_EQ(verdict(c),
-            "constraints[1].kind: 4 is not a known constraint (1 hidden-from, 2 visible-to, "
-            "3 clearance)");
+            "constraints[1].kind: 6 is not a known constraint (1 hidden-from, 2 visible-to, "
+            "3 clearance, 4 max-agl, 5 max-altitude)");
   Msg hollow(kind(CommandKind::set_constraints));
   hollow.sync();
   hollow.m.constraints._length = 1;
@@ -230,7 +250,8 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   EXPECT_EQ(verdict(c),
             "constraints[1].position_m.y: 3000 m is outside the pack's y range [0, 2000] m");
   c.constraints[1] = {3, {}, 301.0};
-  EXPECT_EQ(verdict(c), "constraints[1].clearance_m: 301 is outside [0, 300] m");
+  EXPECT_EQ(verdict(c), "constraints[1].height_m: 301 is outside [0, 300] m");
+  c.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
   c.constraints[1] = {3, {kNan, kNan, kNan}, 20.0};  // clearance ignores position
   EXPECT_EQ(verdict(c), "");
 
@@ -240,6 +261,78 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   CommandLimits none = limits();
   none.pack_count = 0;
   EXPECT_EQ(verdict(t, none), "pack_id: 'taunus': this console has no other packs");
+}
+
+// The ceiling: a finite height, above 0 and above the clearance given with
+// it (max-agl), inside the pack's heights (max-altitude); one of each kind.
+TEST(ValidateCommand, CeilingsAreCheckedWithAReason) {
+  Msg c(kind(CommandKind::set_constraints));
+  c.m.constraints._length = 1;
+  const std::pair<visvol_msgs_msg_dds__Constraint_, const char*> cases[] = {
+      {{4, {}, kNan}, "constraints[0].height_m: nan is not a finite number"},
+      {{4, {}, kInf}, "constraints[0].height_m: inf is not a finite number"},
+      {{4, {}, -5.0}, "constraints[0].height_m: -5 is outside [0, 300] m"},
+      {{4, {}, 0.0}, "constraints[0].height_m: a max-agl of 0 m leaves no height to fly (> 0)"},
+      {{4, {}, 301.0}, "constraints[0].height_m: 301 is outside [0, 300] m"},
+      {{5, {}, -kInf}, "constraints[0].height_m: -inf is not a finite number"},
+      {{5, {}, -1.0}, "constraints[0].height_m: -1 is outside [0, 500] m (the pack's heights)"},
+      {{5, {}, 501.0}, "constraints[0].height_m: 501 is outside [0, 500] m (the pack's heights)"},
+      {{3, {}, -0.5}, "constraints[0].height_m: -0.5 is outside [0, 300] m"},
+  };
+  for (const auto& [constraint, reason] : cases) {
+    c.constraints[0] = constraint;
+    EXPECT_EQ(verdict(c), reason);
+  }
+  c.constraints[0] = {4, {}, 250.0};
+  EXPECT_EQ(verdict(c), "");
+  c.constraints[0] = {5, {}, 500.0};
+  EXPECT_EQ(verdict(c), "");
+
+  // with the clearance of the same command
+  c.m.constraints._length = 2;
+  c.constraints[0] = {3, {}, 50.0};
+  c.constraints[1] = {4, {}, 40.0};
+  EXPECT_EQ(verdict(c),
+            "constraints[1].height_m: max-agl 40 m is not above the clearance 50 m of constraints[0]: "
+            "no height is allowed");
+  c.constraints[1] = {4, {}, 50.0};
+  EXPECT_NE(verdict(c).find("is not above the clearance"), std::string::npos);
+  c.constraints[1] = {4, {}, 50.5};
+  EXPECT_EQ(verdict(c), "");
+  // twice the same limit
+  c.constraints[1] = {3, {}, 60.0};
+  EXPECT_EQ(verdict(c), "constraints[1].kind: a second clearance (the first is constraints[0])");
+  c.constraints[0] = {5, {}, 100.0};
+  c.constraints[1] = {5, {}, 200.0};
+  EXPECT_EQ(verdict(c), "constraints[1].kind: a second max-altitude (the first is constraints[0])");
+}
+
+// Observers: up to kMaxObserversPerKind of each kind, no more than the
+// console reserved hulls for.
+TEST(ValidateCommand, ObserversFitWhatTheConsoleReserved) {
+  CommandLimits l = limits();
+  l.max_constraints = static_cast<std::uint32_t>(kMaxConstraints);
+  Msg c(kind(CommandKind::set_constraints));
+  for (int i = 0; i < 8; ++i) {
+    c.constraints[i] = {1, {10.0 + i, 20.0, 30.0}, 0.0};
+    c.constraints[8 + i] = {2, {20.0, 10.0 + i, 30.0}, 0.0};
+  }
+  c.m.constraints._length = 16;
+  EXPECT_EQ(verdict(c, l), "") << "eight of each kind";
+  c.constraints[15] = {1, {1.0, 1.0, 1.0}, 0.0};
+  EXPECT_EQ(verdict(c, l), "constraints: 9 hidden-from and 7 visible-to points, at most 8 of a kind");
+  c.constraints[15] = {2, {1.0, 1.0, 1.0}, 0.0};
+  l.max_observers = 12;
+  EXPECT_EQ(verdict(c, l), "constraints: 16 hidden-from and visible-to points, the console reserved hulls for 12");
+  c.m.constraints._length = 12;
+  EXPECT_EQ(verdict(c, l), "");
+  l.max_observers = 0;
+  c.m.constraints._length = 1;
+  EXPECT_NE(verdict(c, l).find("reserved hulls for 0"), std::string::npos);
+  c.constraints[0] = {4, {}, 100.0};  // no observer: none needed
+  EXPECT_EQ(verdict(c, l), "");
+  l.max_observers = 2 * kMaxObserversPerKind + 1;
+  EXPECT_NE(validate_limits(l).message().find("max_observers"), std::string::npos);
 }
 
 TEST(CommandLimits, ValidationSaysWhatIsWrong) {
@@ -281,18 +374,21 @@ TEST(CommandMessage, EncodeThenDecodeGivesTheCommandBack) {
   c.kind = CommandKind::set_constraints;
   c.sequence = 77;
   copy_text(c.source, "planner-2");
-  c.constraints.count = 2;
+  c.constraints.count = 3;
   c.constraints.items[0] = {ConstraintKind::visible_to, {1.0, 2.0, 3.0}, 0.0};
   c.constraints.items[1] = {ConstraintKind::clearance, {}, 40.0};
+  c.constraints.items[2] = {ConstraintKind::max_agl, {}, 90.0};
   CommandMessage m;
   Command back{};
   ASSERT_TRUE(decode_and_validate(m.fill(c), limits(), back).ok());
   EXPECT_EQ(back.sequence, 77u);
   EXPECT_EQ(text_of(back.source), "planner-2");
-  ASSERT_EQ(back.constraints.count, 2u);
+  ASSERT_EQ(back.constraints.count, 3u);
   EXPECT_EQ(back.constraints.items[0].kind, ConstraintKind::visible_to);
   EXPECT_EQ(back.constraints.items[0].position.y_m, 2.0);
-  EXPECT_EQ(back.constraints.items[1].clearance_m, 40.0);
+  EXPECT_EQ(back.constraints.items[1].height_m, 40.0);
+  EXPECT_EQ(back.constraints.items[2].kind, ConstraintKind::max_agl);
+  EXPECT_EQ(back.constraints.items[2].height_m, 90.0);
 }
 
 TEST(AckMessage, CarriesSourceSequenceAndReason) {

@@ -108,7 +108,11 @@ void check_accepted(const Command& c, const visvol_msgs_msg_dds__Command_& msg) 
       for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
         const Constraint& k = c.constraints.items[i];
         if (k.kind == ConstraintKind::clearance) {
-          check(in_range(k.clearance_m, 0.0, l.max_clearance_m));
+          check(in_range(k.height_m, 0.0, l.max_clearance_m));
+        } else if (k.kind == ConstraintKind::max_agl) {
+          check(in_range(k.height_m, 0.0, l.max_clearance_m) && k.height_m > 0.0);
+        } else if (k.kind == ConstraintKind::max_altitude) {
+          check(in_range(k.height_m, l.min.z_m, l.max.z_m));
         } else {
           check(k.kind == ConstraintKind::hidden_from || k.kind == ConstraintKind::visible_to);
           check(finite_inside(k.position, l));
@@ -187,9 +191,9 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, CommandQue
     std::vector<visvol_msgs_msg_dds__Constraint_> constraints(
         fdp.ConsumeIntegralInRange<std::size_t>(0, 24));
     for (visvol_msgs_msg_dds__Constraint_& k : constraints) {
-      k.kind = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 4);
+      k.kind = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 6);
       k.position_m = fuzz_point(fdp);
-      k.clearance_m = fuzz_double(fdp);
+      k.height_m = fuzz_double(fdp);
     }
     visvol_msgs_msg_dds__Command_ msg{};
     msg.source = source.data();

@@ -67,12 +67,20 @@ TEST(Echo, AcceptedCommandExitsZeroAndReachesTheQueue) {
   EXPECT_EQ(text_of(got.source).rfind("visvol-echo@", 0), 0u);
 
   Child k(echo({"command", "set-constraints", "--hidden-from", "545000,4185000,10",
-                "--clearance", "50"}));
+                "--hidden-from", "546000,4186000,20", "--visible-to", "547000,4187000,30",
+                "--clearance", "50", "--max-agl", "300", "--max-altitude", "800"}));
   ASSERT_EQ(k.wait(30.0), 0) << k.output();
   ASSERT_TRUE(console.queue.try_pop(got));
-  ASSERT_EQ(got.constraints.count, 2u);
+  ASSERT_EQ(got.constraints.count, 6u);
   EXPECT_EQ(got.constraints.items[0].kind, ConstraintKind::hidden_from);
-  EXPECT_EQ(got.constraints.items[1].clearance_m, 50.0);
+  EXPECT_EQ(got.constraints.items[1].kind, ConstraintKind::hidden_from);
+  EXPECT_EQ(got.constraints.items[1].position.z_m, 20.0);
+  EXPECT_EQ(got.constraints.items[2].kind, ConstraintKind::visible_to);
+  EXPECT_EQ(got.constraints.items[3].height_m, 50.0);
+  EXPECT_EQ(got.constraints.items[4].kind, ConstraintKind::max_agl);
+  EXPECT_EQ(got.constraints.items[4].height_m, 300.0);
+  EXPECT_EQ(got.constraints.items[5].kind, ConstraintKind::max_altitude);
+  EXPECT_EQ(got.constraints.items[5].height_m, 800.0);
 }
 
 TEST(Echo, RejectedCommandPrintsTheReasonAndExitsOne) {
@@ -88,6 +96,9 @@ TEST(Echo, RejectedCommandPrintsTheReasonAndExitsOne) {
   Child t(echo({"command", "switch-terrain", "alps"}));
   ASSERT_EQ(t.wait(30.0), 1) << t.output();
   EXPECT_NE(t.output().find("this console has no other packs"), std::string::npos) << t.output();
+  Child k(echo({"command", "set-constraints", "--clearance", "50", "--max-agl", "20"}));
+  ASSERT_EQ(k.wait(30.0), 1) << k.output();
+  EXPECT_NE(k.output().find("max-agl 20 m is not above the clearance 50 m"), std::string::npos) << k.output();
   Command got{};
   EXPECT_FALSE(console.queue.try_pop(got));
 }
@@ -122,6 +133,8 @@ TEST(Echo, BadArgumentsExitTwoWithOneLine) {
       {"command", "set-endpoints", "1", "2", "nan", "4", "5", "6"},
       {"command", "set-endpoints", "1", "2", "3"},
       {"command", "set-constraints", "--visible-to", "1,2"},
+      {"command", "set-constraints", "--max-agl", "nan"},
+      {"command", "set-constraints", "--max-altitude", "high"},
       {"command", "switch-terrain", "../x"},
       {"command", "--source", "", "start"},
       {"path", "--count", "-3"},

@@ -1,6 +1,7 @@
-// The hull builder beside the loop: what it builds is point_hull's, the
-// newest request wins, a refused point leaves the set in force, and a set the
-// loop holds is never rewritten under it.
+// The hull builder beside the loop: what it builds is point_hull's for every
+// observer of a set (several of each kind), the newest request wins, a
+// refused request leaves the set in force, a set the loop holds is never
+// rewritten under it, and no set holds more than was reserved.
 #include "rt/exec/constraint_hulls.hpp"
 
 #include <gtest/gtest.h>
@@ -40,21 +41,30 @@ class ConstraintHullsTest : public ::testing::Test {
     auto r = storage::ResidentPack::create(*pack, storage::ResidentConfig{});
     ASSERT_TRUE(r.ok()) << r.status().message();
     field_ = std::move(*r);
-    hulls_ = ConstraintHulls::create(field_->level(0));
+    auto h = ConstraintHulls::create(field_->level(0), ConstraintHulls::kMaxObservers);
+    ASSERT_TRUE(h.ok()) << h.status().message();
+    hulls_ = std::move(*h);
     hulls_->start();
   }
 
-  // A post's position, `up_m` above (negative: below) its height.
-  HullRequest hidden_from_post(int i, int j, double up_m, std::uint64_t sequence) const {
+  // A post's position, `up_m` above its height.
+  Vec3 post(int i, int j, double up_m) const {
     const storage::ResidentLevel& l = field_->level(0);
     const fields::VolumeGeometry& g = l.geometry();
+    return {g.origin_x + i * g.spacing_m, g.origin_y - j * g.spacing_m, l.post(i, j) + up_m};
+  }
+  HullRequest hidden_from_post(int i, int j, double up_m, std::uint64_t sequence) const {
     HullRequest r;
     r.sequence = sequence;
-    r.hidden = true;
-    r.hidden_from_m[0] = g.origin_x + i * g.spacing_m;
-    r.hidden_from_m[1] = g.origin_y - j * g.spacing_m;
-    r.hidden_from_m[2] = l.post(i, j) + up_m;
+    r.eye_height_m = 0;
+    EXPECT_TRUE(r.add_hidden_from(post(i, j, up_m)));
     return r;
+  }
+  // What point_hull builds for an observer standing at p (its eye as the builder puts it).
+  PointHull direct(const Vec3& p, double eye_height_m) const {
+    Result<PointHull> h = point_hull(field_->level(0), p + Vec3(0, 0, eye_height_m), "p");
+    EXPECT_TRUE(h.ok()) << h.status().message();
+    return h.ok() ? *h : PointHull{};
   }
 
   // What the loop would take within `seconds`, or null.
@@ -78,14 +88,12 @@ TEST_F(ConstraintHullsTest, BuildsWhatPointHullBuildsAndClearsOnAnEmptyRequest) 
   hulls_->request(r);
   const HullSet* set = wait_for_set();
   ASSERT_NE(set, nullptr);
-  EXPECT_EQ(set->sequence, 7u);
-  EXPECT_TRUE(set->has_hidden);
-  EXPECT_FALSE(set->has_visible);
-  const Vec3 p(r.hidden_from_m[0], r.hidden_from_m[1], r.hidden_from_m[2]);
-  Result<PointHull> direct = point_hull(field_->level(0), p, "p");
-  ASSERT_TRUE(direct.ok());
-  EXPECT_EQ(set->hidden.height_m, direct->height_m);
-  EXPECT_EQ(set->hidden.nx, direct->nx);
+  EXPECT_EQ(set->sequence(), 7u);
+  ASSERT_EQ(set->hidden_count(), 1);
+  EXPECT_EQ(set->visible_count(), 0);
+  const PointHull expected = direct(HullRequest::point(r.hidden_from_m[0]), 0.0);
+  EXPECT_EQ(set->hidden[0]->height_m, expected.height_m);
+  EXPECT_EQ(set->hidden[0]->nx, expected.nx);
   EXPECT_GT(hulls_->stats().last_build_ms, 0.0);
 
   HullRequest none;
@@ -93,14 +101,43 @@ TEST_F(ConstraintHullsTest, BuildsWhatPointHullBuildsAndClearsOnAnEmptyRequest) 
   hulls_->request(none);
   set = wait_for_set();
   ASSERT_NE(set, nullptr);
-  EXPECT_EQ(set->sequence, 8u);
-  EXPECT_FALSE(set->has_hidden);
-  EXPECT_FALSE(set->has_visible);
+  EXPECT_EQ(set->sequence(), 8u);
+  EXPECT_EQ(set->hidden_count(), 0);
+  EXPECT_EQ(set->visible_count(), 0);
   EXPECT_EQ(hulls_->stats().built, 2u);
 }
 
+// Eight observers of each kind in one set, each hull its own observer's, in
+// the order asked, with the eye lifted by the eye height.
+TEST_F(ConstraintHullsTest, EveryObserverOfAFullSetGetsItsOwnHull) {
+  HullRequest r;
+  r.sequence = 3;
+  r.eye_height_m = 2.0;
+  for (int k = 0; k < kMaxConstraintHulls; ++k) {
+    ASSERT_TRUE(r.add_hidden_from(post(4 + 7 * k, 10, 30 + k)));
+    ASSERT_TRUE(r.add_visible_to(post(60 - 6 * k, 50, 5 + k)));
+  }
+  EXPECT_FALSE(r.add_hidden_from(post(1, 1, 1))) << "a ninth of a kind";
+  EXPECT_FALSE(r.add_visible_to(post(1, 1, 1)));
+  hulls_->request(r);
+  const HullSet* set = wait_for_set(60.0);
+  ASSERT_NE(set, nullptr);
+  ASSERT_EQ(set->hidden_count(), kMaxConstraintHulls);
+  ASSERT_EQ(set->visible_count(), kMaxConstraintHulls);
+  for (int k = 0; k < kMaxConstraintHulls; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    EXPECT_EQ(set->hidden[i]->height_m, direct(HullRequest::point(r.hidden_from_m[k]), 2.0).height_m) << k;
+    EXPECT_EQ(set->visible[i]->height_m, direct(HullRequest::point(r.visible_to_m[k]), 2.0).height_m) << k;
+  }
+  EXPECT_NE(set->hidden[0]->height_m, set->hidden[1]->height_m);
+  EXPECT_EQ(set->request.eye_height_m, 2.0);
+  EXPECT_EQ(set->request.visible_to_m[7][0], r.visible_to_m[7][0]);
+}
+
 TEST_F(ConstraintHullsTest, ARefusedPointLeavesTheSetInForceAndSaysWhy) {
-  hulls_->request(hidden_from_post(10, 10, -5, 1));  // 5 m under its post
+  HullRequest outside = hidden_from_post(10, 10, 5, 1);
+  outside.hidden_from_m[0][0] -= 1e6;  // far west of the pack
+  hulls_->request(outside);
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (hulls_->stats().failed == 0 && std::chrono::steady_clock::now() < end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -108,15 +145,38 @@ TEST_F(ConstraintHullsTest, ARefusedPointLeavesTheSetInForceAndSaysWhy) {
   const HullStats s = hulls_->stats();
   EXPECT_EQ(s.failed, 1u);
   EXPECT_EQ(s.built, 0u);
-  EXPECT_NE(s.last_error.find("below the terrain"), std::string::npos) << s.last_error;
+  EXPECT_EQ(hulls_->refused_sequence(), 1u);
+  EXPECT_NE(s.last_error.find("outside the pack"), std::string::npos) << s.last_error;
   EXPECT_EQ(hulls_->take(), nullptr);
+}
+
+// A builder reserved for two observers refuses three, naming both counts, and
+// its sets hold two hulls.
+TEST_F(ConstraintHullsTest, MoreObserversThanReservedAreRefusedWithAReason) {
+  auto small = ConstraintHulls::create(field_->level(0), 2);
+  ASSERT_TRUE(small.ok());
+  EXPECT_EQ((*small)->max_observers(), 2);
+  HullSet set = (*small)->reserve_set();
+  EXPECT_EQ(set.hulls.size(), 2u);
+  HullRequest r = hidden_from_post(10, 10, 20, 1);
+  ASSERT_TRUE(r.add_visible_to(post(20, 20, 20)));
+  EXPECT_TRUE((*small)->build(r, set).ok());
+  EXPECT_EQ(set.hidden_count(), 1);
+  EXPECT_EQ(set.visible_count(), 1);
+  ASSERT_TRUE(r.add_visible_to(post(30, 30, 20)));
+  const Status s = (*small)->build(r, set);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("1 hidden-from and 2 visible-to points: hulls are reserved for 2"), std::string::npos)
+      << s.message();
+  EXPECT_FALSE(ConstraintHulls::create(field_->level(0), ConstraintHulls::kMaxObservers + 1).ok());
+  EXPECT_FALSE(ConstraintHulls::create(field_->level(0), -1).ok());
 }
 
 TEST_F(ConstraintHullsTest, TheNewestRequestWinsAndAHeldSetIsNeverRewritten) {
   hulls_->request(hidden_from_post(5, 5, 30, 1));
   const HullSet* held = wait_for_set();
   ASSERT_NE(held, nullptr);
-  const std::vector<float> before = held->hidden.height_m;
+  const std::vector<float> before = held->hidden[0]->height_m;
   // two more sets from elsewhere, built while the loop holds the first
   for (std::uint64_t seq : {2u, 3u}) {
     hulls_->request(hidden_from_post(50 + static_cast<int>(seq), 40, 80, seq));
@@ -126,20 +186,26 @@ TEST_F(ConstraintHullsTest, TheNewestRequestWinsAndAHeldSetIsNeverRewritten) {
     }
   }
   EXPECT_EQ(hulls_->stats().built, 3u);
-  EXPECT_EQ(held->sequence, 1u);
-  EXPECT_EQ(held->hidden.height_m, before);
+  EXPECT_EQ(held->sequence(), 1u);
+  EXPECT_EQ(held->hidden[0]->height_m, before);
   const HullSet* newest = hulls_->take();
   ASSERT_NE(newest, nullptr);
-  EXPECT_EQ(newest->sequence, 3u);
-  EXPECT_NE(newest->hidden.height_m, before);
+  EXPECT_EQ(newest->sequence(), 3u);
+  EXPECT_NE(newest->hidden[0]->height_m, before);
   EXPECT_EQ(hulls_->take(), nullptr);
 }
 
-TEST(ConstraintHullsBudget, ReservesThreeSetsAndStatesWhatABuildAdds) {
+TEST(ConstraintHullsBudget, ReservesThreeSetsOfTheObserversAndStatesWhatABuildAdds) {
   fields::VolumeGeometry g;
   g.nx = 370;
   g.ny = 466;
-  EXPECT_EQ(ConstraintHulls::reserved_bytes(g), 6u * 370 * 466 * 4);
+  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 16), 3u * 16 * 370 * 466 * 4);
+  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 2), 3u * 2 * 370 * 466 * 4);
+  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 0), 0u);
+  // the most observers within a number of bytes
+  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 5)), 5);
+  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 5) - 1), 4);
+  EXPECT_EQ(ConstraintHulls::observers_within(g, std::uint64_t{1} << 40), ConstraintHulls::kMaxObservers);
   // heightfield and hull, horizon 931^2, and the terrain padded by the radius
   // on every side (a height and a ground level, 8 bytes, a post)
   EXPECT_EQ(ConstraintHulls::build_bytes(g),

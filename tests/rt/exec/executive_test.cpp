@@ -99,6 +99,47 @@ class ExecutiveTest : public ::testing::Test {
     EXPECT_TRUE(acks_.try_pop(a));
     return a;
   }
+  // The reason of the next ack, which must say the command failed.
+  std::string next_failure() {
+    const dds::CommandAck a = next_ack();
+    EXPECT_EQ(a.result, dds::AckResult::failed) << a.sequence << ": " << a.reason;
+    return a.reason;
+  }
+
+  // A hull builder for `observers` beside e's loop, started.
+  std::unique_ptr<ConstraintHulls> make_hulls(Executive& e, int observers) {
+    auto h = ConstraintHulls::create(field_->level(0), observers);
+    EXPECT_TRUE(h.ok()) << h.status().message();
+    if (!h.ok()) return nullptr;
+    const Status s = e.set_constraint_hulls(h->get());
+    EXPECT_TRUE(s.ok()) << s.message();
+    (*h)->start();
+    return std::move(*h);
+  }
+
+  // Ticks until `n` hull sets are in force (the builder works beside).
+  void wait_for_sets(Executive& e, std::uint64_t n) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (e.counters().hull_sets < n && std::chrono::steady_clock::now() < end) {
+      run(e, 1);
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  }
+
+  static void add(dds::Command& c, dds::ConstraintKind kind, const Vec3& p, double height_m = 0) {
+    c.constraints.items[c.constraints.count++] = {kind, {p.x(), p.y(), p.z()}, height_m};
+  }
+
+  // The highest height above the finest terrain along the rope.
+  double highest_agl(const Executive& e) const {
+    const fields::FieldSampler<storage::ResidentLevel> ground(field_->level(0));
+    double highest = -INFINITY;
+    for (int i = 0; i <= e.rope().segments(); ++i) {
+      const Vec3& v = e.rope().vertices()[i];
+      highest = std::max(highest, v.z() - ground.height(v.x(), v.y()));
+    }
+    return highest;
+  }
 
   static std::string* path_;
   std::unique_ptr<storage::ResidentPack> field_;
@@ -172,7 +213,7 @@ TEST_F(ExecutiveTest, CommandsAreAppliedOrFailWithAReason) {
   dds::Command clearance = command(dds::CommandKind::set_constraints, 5);
   clearance.constraints.count = 1;
   clearance.constraints.items[0].kind = dds::ConstraintKind::clearance;
-  clearance.constraints.items[0].clearance_m = 55;
+  clearance.constraints.items[0].height_m = 55;
   dds::Command spring = command(dds::CommandKind::set_model, 6);
   spring.model = dds::RopeModel::spring_mass;
   dds::Command terrain = command(dds::CommandKind::switch_terrain, 7);
@@ -320,9 +361,7 @@ double distance_to(const Rope& r, const Vec3& p) {
 TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   auto e = make();
   ASSERT_TRUE(e);
-  auto hulls = ConstraintHulls::create(field_->level(0));
-  ASSERT_TRUE(e->set_constraint_hulls(hulls.get()).ok());
-  hulls->start();
+  auto hulls = make_hulls(*e, 2);
   const Vec3 p = point_at(*field_, 0.5, 0.5, 60), q = point_at(*field_, 0.3, 0.6, 80);
   dds::Command set = command(dds::CommandKind::set_constraints, 1);
   set.constraints.count = 2;
@@ -334,21 +373,15 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   // the ticks that take the command and put the hulls in force allocate nothing
   const std::uint64_t allocations = testing::thread_allocation_count();
   run(*e, 1);
-  auto wait_for_sets = [&](std::uint64_t n) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    while (e->counters().hull_sets < n && std::chrono::steady_clock::now() < end) {
-      run(*e, 1);
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-  };
-  wait_for_sets(1);
+  wait_for_sets(*e, 1);
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
   EXPECT_EQ(next_ack().result, dds::AckResult::applied);
   ASSERT_EQ(e->counters().hull_sets, 1u);
   const PointHull* in_force = e->forces().hidden_from();
   ASSERT_NE(in_force, nullptr);
   ASSERT_NE(e->forces().visible_to(), nullptr);
-  Result<PointHull> direct = point_hull(field_->level(0), p, "p");
+  // the observer's eye 2 m above its point (the default eye height)
+  Result<PointHull> direct = point_hull(field_->level(0), p + Vec3(0, 0, 2), "p");
   ASSERT_TRUE(direct.ok());
   if (in_force) {
     EXPECT_EQ(in_force->height_m, direct->height_m);
@@ -366,11 +399,189 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   EXPECT_EQ(a.result, dds::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("below the terrain"), std::string::npos) << a.reason;
   EXPECT_EQ(next_ack().result, dds::AckResult::applied);
-  wait_for_sets(2);
+  wait_for_sets(*e, 2);
   EXPECT_EQ(e->counters().hull_sets, 2u);
   EXPECT_EQ(e->forces().hidden_from(), nullptr);
   EXPECT_EQ(e->forces().visible_to(), nullptr);
   hulls->stop();
+}
+
+// Several observers of each kind in one command: every one's hull is in
+// force (the forces hold three of each), with no allocation on the ticks
+// that take the command and put the set in force.
+TEST_F(ExecutiveTest, SeveralObserversOfEachKindComeIntoForce) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  auto hulls = make_hulls(*e, 6);
+  ASSERT_TRUE(hulls);
+  dds::Command set = command(dds::CommandKind::set_constraints, 1);
+  const Vec3 hidden[3] = {point_at(*field_, 0.5, 0.5, 60), point_at(*field_, 0.2, 0.8, 40),
+                          point_at(*field_, 0.8, 0.3, 20)};
+  const Vec3 visible[3] = {point_at(*field_, 0.3, 0.6, 80), point_at(*field_, 0.7, 0.7, 30),
+                           point_at(*field_, 0.4, 0.1, 50)};
+  for (const Vec3& p : hidden) add(set, dds::ConstraintKind::hidden_from, p);
+  for (const Vec3& p : visible) add(set, dds::ConstraintKind::visible_to, p);
+  add(set, dds::ConstraintKind::clearance, Vec3::Zero(), 25);
+  ASSERT_TRUE(commands_.try_push(set));
+  const std::uint64_t allocations = testing::thread_allocation_count();
+  wait_for_sets(*e, 1);
+  EXPECT_EQ(testing::thread_allocation_count(), allocations);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  ASSERT_EQ(e->counters().hull_sets, 1u);
+  ASSERT_EQ(e->forces().hidden_from_count(), 3);
+  ASSERT_EQ(e->forces().visible_to_count(), 3);
+  EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 25.0);
+  for (int k = 0; k < 3; ++k) {
+    Result<PointHull> h = point_hull(field_->level(0), hidden[k] + Vec3(0, 0, 2), "h");
+    Result<PointHull> v = point_hull(field_->level(0), visible[k] + Vec3(0, 0, 2), "v");
+    ASSERT_TRUE(h.ok() && v.ok());
+    const PointHull* hidden_hull = e->forces().hidden_from(k);
+    const PointHull* visible_hull = e->forces().visible_to(k);
+    ASSERT_TRUE(hidden_hull != nullptr && visible_hull != nullptr);
+    EXPECT_TRUE(hidden_hull->height_m == h->height_m) << k;
+    EXPECT_TRUE(visible_hull->height_m == v->height_m) << k;
+  }
+  const HullSet* in_force = e->hulls_in_force();
+  ASSERT_NE(in_force, nullptr);
+  EXPECT_EQ(in_force->request.hidden_from_m[2][0], hidden[2].x());
+  EXPECT_EQ(in_force->request.visible_to_m[1][1], visible[1].y());
+  EXPECT_FALSE(e->hulls_pending());
+  hulls->stop();
+}
+
+// Observers of the configuration are requested when the builder is given,
+// and refused when they are more than it reserved.
+TEST_F(ExecutiveTest, ConfiguredObserversComeIntoForceWithTheBuilder) {
+  config_.eye_height_m = 5;
+  ASSERT_TRUE(config_.observers.add_hidden_from(point_at(*field_, 0.5, 0.5, 10)));
+  ASSERT_TRUE(config_.observers.add_hidden_from(point_at(*field_, 0.6, 0.4, 10)));
+  ASSERT_TRUE(config_.observers.add_visible_to(point_at(*field_, 0.3, 0.3, 10)));
+  auto e = make();
+  ASSERT_TRUE(e);
+  auto small = ConstraintHulls::create(field_->level(0), 2);
+  ASSERT_TRUE(small.ok());
+  const Status refused = e->set_constraint_hulls(small->get());
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("3 hidden-from and visible-to points, hulls are reserved for 2"), std::string::npos)
+      << refused.message();
+  EXPECT_FALSE(e->set_constraint_hulls(nullptr).ok());
+  auto hulls = make_hulls(*e, 3);
+  ASSERT_TRUE(hulls);
+  EXPECT_TRUE(e->hulls_pending());
+  wait_for_sets(*e, 1);
+  EXPECT_FALSE(e->hulls_pending());
+  EXPECT_EQ(e->forces().hidden_from_count(), 2);
+  EXPECT_EQ(e->forces().visible_to_count(), 1);
+  ASSERT_NE(e->hulls_in_force(), nullptr);
+  EXPECT_EQ(e->hulls_in_force()->request.eye_height_m, 5.0);
+  hulls->stop();
+
+  // an observer outside the pack or under the terrain: create() says which
+  ExecutiveConfig c = config_;
+  c.observers.visible_to_m[0][2] -= 100;
+  auto under = Executive::create(c, *field_, nullptr, nullptr, nullptr, ExecutiveOutputs{});
+  ASSERT_FALSE(under.ok());
+  EXPECT_NE(under.status().message().find("visible-to point"), std::string::npos) << under.status().message();
+  EXPECT_NE(under.status().message().find("below the terrain"), std::string::npos) << under.status().message();
+}
+
+// Commands that cannot be had fail with a reason and change nothing.
+TEST_F(ExecutiveTest, BadConstraintsFailWithAReasonAndChangeNothing) {
+  config_.gains.max_agl_m = 400;
+  auto e = make();
+  ASSERT_TRUE(e);
+  auto hulls = make_hulls(*e, 2);
+  ASSERT_TRUE(hulls);
+  const Vec3 p = point_at(*field_, 0.5, 0.5, 60);
+  dds::Command three = command(dds::CommandKind::set_constraints, 1);
+  for (int k = 0; k < 3; ++k) add(three, dds::ConstraintKind::visible_to, p);
+  add(three, dds::ConstraintKind::clearance, Vec3::Zero(), 45);
+  dds::Command nine = command(dds::CommandKind::set_constraints, 2);
+  for (int k = 0; k < 9; ++k) add(nine, dds::ConstraintKind::hidden_from, p);
+  dds::Command low = command(dds::CommandKind::set_constraints, 3);  // under the clearance in force (30 m)
+  add(low, dds::ConstraintKind::max_agl, Vec3::Zero(), 20);
+  dds::Command both = command(dds::CommandKind::set_constraints, 4);  // under the clearance it sets
+  add(both, dds::ConstraintKind::max_agl, Vec3::Zero(), 100);
+  add(both, dds::ConstraintKind::clearance, Vec3::Zero(), 120);
+  dds::Command over_ends = command(dds::CommandKind::set_constraints, 5);  // the ends are 150 m up
+  add(over_ends, dds::ConstraintKind::max_agl, Vec3::Zero(), 100);
+  dds::Command datum = command(dds::CommandKind::set_constraints, 6);
+  add(datum, dds::ConstraintKind::max_altitude, Vec3::Zero(), config_.start_m.z() - 10);
+  dds::Command nan = command(dds::CommandKind::set_constraints, 7);
+  add(nan, dds::ConstraintKind::max_agl, Vec3::Zero(), std::nan(""));
+  dds::Command outside = command(dds::CommandKind::set_constraints, 8);
+  add(outside, dds::ConstraintKind::hidden_from, p + Vec3(1e6, 0, 0));
+  for (const dds::Command& c : {three, nine, low, both, over_ends, datum, nan, outside}) {
+    ASSERT_TRUE(commands_.try_push(c));
+  }
+  const std::uint64_t allocations = testing::thread_allocation_count();
+  run(*e, 1);
+  EXPECT_EQ(testing::thread_allocation_count(), allocations);
+  EXPECT_NE(next_failure().find("reserved hulls for"), std::string::npos);
+  EXPECT_NE(next_failure().find("more than 8 hidden-from"), std::string::npos);
+  EXPECT_NE(next_failure().find("max-agl is not above the clearance"), std::string::npos);
+  EXPECT_NE(next_failure().find("max-agl is not above the clearance"), std::string::npos);
+  EXPECT_NE(next_failure().find("ends are above that ceiling"), std::string::npos);
+  EXPECT_NE(next_failure().find("ends are above that ceiling"), std::string::npos);
+  EXPECT_NE(next_failure().find("not a height"), std::string::npos);
+  EXPECT_NE(next_failure().find("outside the pack"), std::string::npos);
+  EXPECT_EQ(e->counters().commands_failed, 8u);
+  EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 30.0);
+  EXPECT_DOUBLE_EQ(e->forces().gains().max_agl_m, 400.0);
+  EXPECT_TRUE(std::isinf(e->forces().gains().max_altitude_m));
+  EXPECT_FALSE(e->hulls_pending());
+
+  // a ceiling in force: endpoints above it are refused
+  dds::Command ceiling = command(dds::CommandKind::set_constraints, 9);
+  add(ceiling, dds::ConstraintKind::max_agl, Vec3::Zero(), 160);
+  add(ceiling, dds::ConstraintKind::max_altitude, Vec3::Zero(), 5000);
+  dds::Command high = command(dds::CommandKind::set_endpoints, 10);
+  const Vec3 a = point_at(*field_, 0.2, 0.2, 100), b = point_at(*field_, 0.7, 0.6, 170);
+  high.endpoints = {{a.x(), a.y(), a.z()}, {b.x(), b.y(), b.z()}};
+  ASSERT_TRUE(commands_.try_push(ceiling));
+  ASSERT_TRUE(commands_.try_push(high));
+  run(*e, 1);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_DOUBLE_EQ(e->forces().gains().max_agl_m, 160.0);
+  EXPECT_DOUBLE_EQ(e->forces().gains().max_altitude_m, 5000.0);
+  EXPECT_NE(next_failure().find("above the ceiling"), std::string::npos);
+  hulls->stop();
+
+  // the configuration is checked alike
+  ExecutiveConfig c = config_;
+  c.gains.max_agl_m = 20;
+  auto bad = Executive::create(c, *field_, nullptr, nullptr, nullptr, ExecutiveOutputs{});
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("is not above the clearance"), std::string::npos) << bad.status().message();
+  c.gains.max_agl_m = 100;  // the ends are 150 m up
+  bad = Executive::create(c, *field_, nullptr, nullptr, nullptr, ExecutiveOutputs{});
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("above the ceiling"), std::string::npos) << bad.status().message();
+}
+
+// Showing pulls the rope up (F_p grows upward); a max-agl set by command
+// holds it under the ceiling, where the same run without one climbs above.
+TEST_F(ExecutiveTest, ACeilingKeepsTheRopeUnderMaxAgl) {
+  constexpr double kMaxAglM = 90;
+  config_.objective = Objective::show;
+  config_.model = RopeModel::spring;
+  config_.start_m = point_at(*field_, 0.3, 0.4, 60);
+  config_.end_m = point_at(*field_, 0.7, 0.6, 60);
+  auto free = make();
+  ASSERT_TRUE(free);
+  run(*free, 8000);
+  EXPECT_GT(highest_agl(*free), kMaxAglM + 20) << "without a ceiling showing should climb above it";
+
+  auto held = make();
+  ASSERT_TRUE(held);
+  dds::Command ceiling = command(dds::CommandKind::set_constraints, 1);
+  add(ceiling, dds::ConstraintKind::max_agl, Vec3::Zero(), kMaxAglM);
+  ASSERT_TRUE(commands_.try_push(ceiling));
+  run(*held, 8000);
+  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_DOUBLE_EQ(held->forces().gains().max_agl_m, kMaxAglM);
+  EXPECT_LE(highest_agl(*held), kMaxAglM);
+  EXPECT_GT(held->counters().fc, 0.0);
 }
 
 // switch-terrain to another pack is handed to the console once; the pack

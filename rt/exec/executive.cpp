@@ -221,6 +221,7 @@ void Executive::update_gains() {
 }
 
 Errc Executive::start_run() {
+  relaid_ = false;
   const int n = segments_;
   const double straight = (end_m_ - start_m_).norm();
   const double length = rope_->model() == RopeModel::articulated ? straight * (1.0 + config_.slack) : straight;
@@ -467,6 +468,11 @@ Status Executive::check_observers(const HullRequest& r) const {
     const std::string name = std::string(hidden ? "hidden-from point " : "visible-to point ") +
                              std::to_string(1 + (hidden ? k : k - r.hidden_count));
     VISVOL_RETURN_IF_ERROR(check_point(name.c_str(), p, g, finest_.height(p.x(), p.y()) - kHeightTolM));
+    int pi = 0, pj = 0;
+    if (!hull_post(field_.level(config_.level).geometry(), p, pi, pj)) {
+      return invalid_argument("executive: " + name + " is outside level " + std::to_string(config_.level) +
+                              ", where its hull is built");
+    }
   }
   return {};
 }
@@ -490,7 +496,10 @@ Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGain
 const char* Executive::observer_problem(const dds::Constraint& k) const {
   const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
   int pi = 0, pj = 0;
-  if (!p.allFinite() || !hull_post(field_.level(0).geometry(), p, pi, pj)) {
+  // on the finest level and on the one the hulls are built on (a coarser
+  // level's posts stop up to half a post short of the finest's edge)
+  if (!p.allFinite() || !hull_post(field_.level(0).geometry(), p, pi, pj) ||
+      !hull_post(field_.level(config_.level).geometry(), p, pi, pj)) {
     return "a hidden-from or visible-to point is outside the pack";
   }
   if (p.z() < finest_.height(p.x(), p.y()) - kHeightTolM) return "a hidden-from or visible-to point is below the terrain";
@@ -697,12 +706,21 @@ void Executive::tick(const TickTime& time) {
 // A rope whose state stopped being finite is laid again between its ends and
 // let go of (MuJoCo resets on bad numbers likewise); it stops when even that
 // fails. Counted, never logged: this runs on the loop thread.
+// The hand is let go of (forces return only with a new grasp), and an
+// operator's stiffness, the likely cause, is dropped; a rope that diverges
+// again within a simulated second of being laid stops.
 void Executive::recover_rope() {
   ++counters_.rope_resets;
-  if (start_run() != Errc::ok) {
+  if (servo_) servo_->force_safe_state();
+  const bool again = relaid_ && counters_.run_s < 1.0;
+  stretch_override_.reset();
+  bend_override_.reset();
+  if (again || start_run() != Errc::ok) {
     counters_.running = false;
+    rope_->clear_point_force();
     return;
   }
+  relaid_ = true;
   --counters_.runs;  // the same run, laid again
 }
 
@@ -719,6 +737,7 @@ void Executive::measure() {
 
 void Executive::hand_off_path(std::int64_t stamp_ns) {
   if (outputs_.path == nullptr && outputs_.path_render == nullptr) return;
+  if (!finite_rope(*rope_)) return;  // a rope that could not be recovered is not published
   dds::PathSample& p = *path_sample_;
   const storage::ResidentSampler& s = forces_->sampler();
   p.sequence = ++path_sequence_;

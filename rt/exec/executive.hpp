@@ -236,6 +236,7 @@ class Executive final : public PeriodicTask {
   double stiffness_;
   double k1_, k3_;
   std::optional<double> stretch_override_, bend_override_;
+  bool relaid_ = false;  // this run was laid again after its state stopped being finite
   EquilibriumDetector equilibrium_;
   std::unique_ptr<Vec3[]> scratch_;      // max_segments + 1 points
   std::unique_ptr<dds::PathSample> path_sample_;  // filled, then copied into each hand-off

@@ -162,7 +162,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
   relax_turns(p, spec.envelope.min_turn_radius_m);
   const double step = spec.step_m > 0 ? spec.step_m : 0.25 * terrain.spacing_m;
   auto slope = [&](double limit_deg) {
-    const double aim_deg = limit_deg > 2 * spec.angle_margin_deg ? limit_deg - spec.angle_margin_deg : limit_deg;
+    const double aim_deg = limit_deg - std::min(spec.angle_margin_deg, 0.5 * limit_deg);
     return std::tan(std::min(aim_deg, 89.99) * kRadPerDeg);
   };
   const double climb = slope(spec.envelope.max_climb_deg);

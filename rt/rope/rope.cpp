@@ -98,6 +98,39 @@ double polyline_length_or_nan(const Vec3* polyline, int points) {
   return total;  // NaN or infinite when a point is not finite
 }
 
+// Calls f(k, point) for the segments + 1 points at equal arc-length spacing
+// along a polyline of positive, finite length.
+template <class F>
+void for_each_resampled(const Vec3* polyline, int points, int segments, F f) {
+  const double step = polyline_length_or_nan(polyline, points) / segments;
+  f(0, polyline[0]);
+  int seg = 0;
+  double seg_start = 0;  // arc length at polyline[seg]
+  for (int k = 1; k < segments; ++k) {
+    const double target = k * step;
+    while (seg + 1 < points - 1 && seg_start + (polyline[seg + 1] - polyline[seg]).norm() < target) {
+      seg_start += (polyline[seg + 1] - polyline[seg]).norm();
+      ++seg;
+    }
+    const double len = (polyline[seg + 1] - polyline[seg]).norm();
+    const double t = len > 0 ? std::clamp((target - seg_start) / len, 0.0, 1.0) : 0.0;
+    f(k, Vec3(polyline[seg] + t * (polyline[seg + 1] - polyline[seg])));
+  }
+  f(segments, polyline[points - 1]);
+}
+
+// Length of the chords between the resampled points: zero for a polyline
+// that folds back onto itself at the sample points (A, B, A in one segment).
+double resampled_length(const Vec3* polyline, int points, int segments) {
+  double total = 0;
+  Vec3 previous = polyline[0];
+  for_each_resampled(polyline, points, segments, [&](int, const Vec3& p) {
+    total += (p - previous).norm();
+    previous = p;
+  });
+  return total;
+}
+
 }  // namespace
 
 Errc check_polyline(const Vec3* polyline, int points, int segments, int min_segments, int max_segments) {
@@ -106,7 +139,8 @@ Errc check_polyline(const Vec3* polyline, int points, int segments, int min_segm
   }
   const double total = polyline_length_or_nan(polyline, points);
   if (!std::isfinite(total) || !polyline[0].allFinite()) return Errc::invalid_argument;
-  return total / segments >= kMinSegmentM ? Errc::ok : Errc::invalid_argument;
+  if (!(total / segments >= kMinSegmentM)) return Errc::invalid_argument;
+  return resampled_length(polyline, points, segments) > 0 ? Errc::ok : Errc::invalid_argument;
 }
 
 Status describe_polyline(const Vec3* polyline, int points, int segments, int min_segments, int max_segments) {
@@ -121,6 +155,10 @@ Status describe_polyline(const Vec3* polyline, int points, int segments, int min
   }
   const double total = polyline_length_or_nan(polyline, points);
   if (!(total > 0)) return invalid_argument("rope: the path has no length");
+  if (total / segments >= kMinSegmentM) {
+    return invalid_argument("rope: the path folds back onto itself at the " + std::to_string(segments) +
+                            " segments' points");
+  }
   std::ostringstream s;
   s << "rope: a path of " << total << " m in " << segments << " segments makes them shorter than " << kMinSegmentM
     << " m; use at most " << std::max(0, static_cast<int>(std::floor(total / kMinSegmentM))) << " segments";
@@ -129,29 +167,13 @@ Status describe_polyline(const Vec3* polyline, int points, int segments, int min
 
 Status resample_polyline(const Vec3* polyline, int points, int segments, Vec3* out) {
   if (points < 2) return invalid_argument("rope: a path needs at least 2 points");
-  double total = 0;
   for (int i = 0; i < points; ++i) {
     if (!polyline[i].allFinite()) {
       return invalid_argument("rope: path point " + std::to_string(i) + " is not finite");
     }
-    if (i > 0) total += (polyline[i] - polyline[i - 1]).norm();
   }
-  if (!(total > 0)) return invalid_argument("rope: the path has no length");
-  const double step = total / segments;
-  out[0] = polyline[0];
-  int seg = 0;
-  double seg_start = 0;  // arc length at polyline[seg]
-  for (int k = 1; k < segments; ++k) {
-    const double target = k * step;
-    while (seg + 1 < points - 1 && seg_start + (polyline[seg + 1] - polyline[seg]).norm() < target) {
-      seg_start += (polyline[seg + 1] - polyline[seg]).norm();
-      ++seg;
-    }
-    const double len = (polyline[seg + 1] - polyline[seg]).norm();
-    const double f = len > 0 ? std::clamp((target - seg_start) / len, 0.0, 1.0) : 0.0;
-    out[k] = polyline[seg] + f * (polyline[seg + 1] - polyline[seg]);
-  }
-  out[segments] = polyline[points - 1];
+  if (!(polyline_length_or_nan(polyline, points) > 0)) return invalid_argument("rope: the path has no length");
+  for_each_resampled(polyline, points, segments, [&](int k, const Vec3& p) { out[k] = p; });
   return Status::ok_status();
 }
 

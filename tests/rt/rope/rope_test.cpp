@@ -75,6 +75,9 @@ TEST(Rope, ResetRefusesBadPaths) {
   const Vec3 close[2] = {{0, 0, 0}, {1, 0, 0}};
   const Status s = rope->reset(close, 2, 4);
   EXPECT_NE(s.message().find("use at most 2 segments"), std::string::npos) << s.message();
+  // out to 100 m and back: one segment would have no length
+  const Vec3 fold[3] = {{0, 0, 0}, {100, 0, 0}, {0, 0, 0}};
+  EXPECT_NE(rope->reset(fold, 3, 1).message().find("folds back"), std::string::npos);
   EXPECT_EQ(rope->segments(), 8);  // unchanged by the refusals
   for (int i = 0; i <= 8; ++i) EXPECT_TRUE(rope->vertices()[i].allFinite());
 }

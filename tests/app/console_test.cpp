@@ -254,6 +254,8 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
                 out);
   });
   ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  // the intake acknowledges at once: its ack writer must reach us first
+  ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";
   Command show{};
   show.kind = CommandKind::set_objective;
   show.sequence = 7;
@@ -379,6 +381,8 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
                 "--segments 32 --script none --thumbnail-view none --out " + out);
   });
   ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  // the intake acknowledges at once: its ack writer must reach us first
+  ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";
   CommandMessage msg;
   Command unknown{};
   unknown.kind = CommandKind::switch_terrain;

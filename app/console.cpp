@@ -21,6 +21,7 @@
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
 #include "rt/exec/simulated_device.hpp"
+#include "rt/rope/check_json.hpp"
 #include "rt/rope/path_check.hpp"
 #include "storage/pack_identity.hpp"
 #include "storage/resident_pack.hpp"
@@ -46,10 +47,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-nlohmann::json height(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
-
-nlohmann::json point(const rt::Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); }
-
 // The observers of a built set, as the planner names them.
 std::vector<rt::ConstraintPoint> observers_of(const rt::HullSet* set) {
   std::vector<rt::ConstraintPoint> out;
@@ -70,14 +67,14 @@ nlohmann::json constraints_json(const rt::Executive& e, const rt::ConstraintHull
                                 const rt::ExecutiveCounters& c) {
   const rt::ForceGains& g = e.forces().gains();
   nlohmann::json j = {{"clearance_m", g.clearance_m},
-                      {"max_agl_m", height(g.max_agl_m)},
-                      {"max_altitude_m", height(g.max_altitude_m)},
+                      {"max_agl_m", rt::finite_or_null(g.max_agl_m)},
+                      {"max_altitude_m", rt::finite_or_null(g.max_altitude_m)},
                       {"eye_height_m", e.config().eye_height_m},
                       {"hidden_from", nlohmann::json::array()},
                       {"visible_to", nlohmann::json::array()},
                       {"hull_builder", hulls != nullptr}};
   for (const rt::ConstraintPoint& p : observers_of(e.hulls_in_force())) {
-    j[p.kind == rt::ConstraintKind::hidden_from ? "hidden_from" : "visible_to"].push_back(point(p.point_m));
+    j[p.kind == rt::ConstraintKind::hidden_from ? "hidden_from" : "visible_to"].push_back(rt::point_json(p.point_m));
   }
   if (hulls == nullptr) return j;
   const rt::HullStats s = hulls->stats();
@@ -109,22 +106,10 @@ nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
                       {"envelope", nlohmann::json::array()},
                       {"all_met", c.all_met},
                       {"unmet", c.unmet()}};
-  for (const rt::ConstraintResult& r : c.constraints) {
-    j["constraints"].push_back({{"kind", rt::to_string(r.constraint.kind)},
-                                {"point", point(r.constraint.point_m)},
-                                {"eye_m", point(r.constraint.eye_m())},
-                                {"satisfied_fraction", r.satisfied_fraction},
-                                {"seen_m", r.seen_m},
-                                {"met", r.met}});
-  }
+  for (const rt::ConstraintResult& r : c.constraints) j["constraints"].push_back(rt::constraint_json(r));
   for (const rt::LimitResult& l : c.envelope) {
     if (l.name != "clearance" && l.name != "max-agl" && l.name != "max-altitude") continue;
-    j["envelope"].push_back({{"name", l.name},
-                             {"unit", l.unit},
-                             {"limit", height(l.limit)},
-                             {"worst", height(l.worst)},
-                             {"satisfied_fraction", l.satisfied_fraction},
-                             {"met", l.met}});
+    j["envelope"].push_back(rt::limit_json(l));
   }
   return j;
 }

@@ -2,38 +2,22 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
+
+#include "rt/rope/check_json.hpp"
 
 namespace visvol::cli {
-
-namespace {
-
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
-
-nlohmann::json point(const rt::Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); }
-
-}  // namespace
 
 nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
   nlohmann::json j;
   j["constraints"] = nlohmann::json::array();
   for (const rt::ConstraintResult& r : c.constraints) {
-    j["constraints"].push_back({{"kind", rt::to_string(r.constraint.kind)},
-                                {"point", point(r.constraint.point_m)},
-                                {"eye_m", point(r.constraint.eye_m())},
-                                {"satisfied_fraction", r.satisfied_fraction},
-                                {"seen_m", r.seen_m},
-                                {"exposure_s", r.seen_m / e.speed_mps},
-                                {"met", r.met}});
+    nlohmann::json o = rt::constraint_json(r);
+    o["exposure_s"] = r.seen_m / e.speed_mps;
+    j["constraints"].push_back(std::move(o));
   }
   j["envelope"] = nlohmann::json::array();
-  for (const rt::LimitResult& l : c.envelope) {
-    j["envelope"].push_back({{"name", l.name},
-                             {"unit", l.unit},
-                             {"limit", number(l.limit)},
-                             {"worst", number(l.worst)},
-                             {"satisfied_fraction", l.satisfied_fraction},
-                             {"met", l.met}});
-  }
+  for (const rt::LimitResult& l : c.envelope) j["envelope"].push_back(rt::limit_json(l));
   j["vehicle"] = {{"name", e.name}, {"type", rt::to_string(e.type)}, {"speed_mps", e.speed_mps}};
   j["inside_planning_bounds"] = c.inside_planning_bounds;
   j["inside_bounds_fraction"] = c.inside_bounds_fraction;
@@ -58,7 +42,7 @@ nlohmann::json vertices_json(const rt::PathCheck& c, const std::vector<rt::Vec3>
                    {"ground_m", v.ground_m},
                    {"clearance_m", v.clearance_m},
                    {"climb_deg", v.climb_deg},
-                   {"turn_radius_m", number(v.turn_radius_m)},
+                   {"turn_radius_m", rt::finite_or_null(v.turn_radius_m)},
                    {"seen_by", seen}});
   }
   return out;

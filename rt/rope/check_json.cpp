@@ -1,0 +1,29 @@
+#include "rt/rope/check_json.hpp"
+
+#include <cmath>
+
+namespace visvol::rt {
+
+nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json point_json(const Vec3& p_m) { return nlohmann::json::array({p_m.x(), p_m.y(), p_m.z()}); }
+
+nlohmann::json constraint_json(const ConstraintResult& r) {
+  return {{"kind", to_string(r.constraint.kind)},
+          {"point", point_json(r.constraint.point_m)},
+          {"eye_m", point_json(r.constraint.eye_m())},
+          {"satisfied_fraction", r.satisfied_fraction},
+          {"seen_m", r.seen_m},
+          {"met", r.met}};
+}
+
+nlohmann::json limit_json(const LimitResult& l) {
+  return {{"name", l.name},
+          {"unit", l.unit},
+          {"limit", finite_or_null(l.limit)},
+          {"worst", finite_or_null(l.worst)},
+          {"satisfied_fraction", l.satisfied_fraction},
+          {"met", l.met}};
+}
+
+}  // namespace visvol::rt

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "app/flyable_path.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/dds/command_intake.hpp"
@@ -96,10 +97,11 @@ double pack_curvature(const storage::Pack& pack) {
   return c.is_number() && c.get<double>() >= 0 && c.get<double>() <= 1 ? c.get<double>() : 0.0;
 }
 
-// The check's members: per constraint and for the clearance and the ceiling
-// (the console holds no climb or turn limits), and whether all are met.
+// The check's members: per constraint and per envelope limit, and whether
+// all are met.
 nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
-  nlohmann::json j = {{"terrain", "level 0 (finest), exact sight lines (R3)"},
+  nlohmann::json j = {{"path", "flyable (the rope's path fitted into the envelope, as sent)"},
+                      {"terrain", "level 0 (finest), exact sight lines (R3)"},
                       {"sample_step_m", sample_step_m},
                       {"length_m", c.length_m},
                       {"constraints", nlohmann::json::array()},
@@ -107,11 +109,19 @@ nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
                       {"all_met", c.all_met},
                       {"unmet", c.unmet()}};
   for (const rt::ConstraintResult& r : c.constraints) j["constraints"].push_back(rt::constraint_json(r));
-  for (const rt::LimitResult& l : c.envelope) {
-    if (l.name != "clearance" && l.name != "max-agl" && l.name != "max-altitude") continue;
-    j["envelope"].push_back(rt::limit_json(l));
-  }
+  for (const rt::LimitResult& l : c.envelope) j["envelope"].push_back(rt::limit_json(l));
   return j;
+}
+
+// The flyable path's figures, and how many paths were sent.
+nlohmann::json flyable_json(const dds::PathSample& p, bool inside_envelope, const FlyableStats& sent) {
+  return {{"vertices", p.vertex_count},
+          {"fc", p.f_c},
+          {"length_m", p.length_m},
+          {"min_clearance_m", p.min_clearance_m},
+          {"inside_envelope", inside_envelope},
+          {"sent", sent.fitted},
+          {"sent_outside_envelope", sent.unflyable}};
 }
 
 dds::TimingSummary summary_of(const rt::DurationHistogram& h) {
@@ -136,15 +146,25 @@ struct Console::Impl {
   rt::RealtimeReport realtime;
   std::unique_ptr<storage::ResidentPack> field;
   std::unique_ptr<dds::Participant> participant;
-  std::unique_ptr<dds::LivePublisher> publisher;
-  std::unique_ptr<dds::CommandIntake> intake;
+  // Destroyed in reverse: the publisher before the intake it reads counters
+  // from, the intake before the queues it fills (their documented lifetimes).
   dds::CommandQueue commands;
   dds::AckQueue acks;
+  std::unique_ptr<dds::CommandIntake> intake;
+  std::unique_ptr<dds::LivePublisher> publisher;
   std::unique_ptr<rt::SimulatedDevice> sim;
   std::unique_ptr<can::SocketCanBus> socket_bus;
   std::unique_ptr<ThumbnailThread> thumbs;
   std::unique_ptr<rt::ConstraintHulls> hulls;  // with DDS or observers given: hidden-from / visible-to
   int observers = 0;                           // hulls reserved for (observers_reserved())
+  rt::VehicleEnvelope vehicle;                 // --vehicle and the envelope options
+  // The rope's path fitted into the envelope: a thread feeding the publisher
+  // and the renderer (after them: destroyed before them), or the fitter alone
+  // for the final path when nothing is sent.
+  std::unique_ptr<FlyablePath> flyable;
+  std::unique_ptr<PathFitter> fitter;
+  std::vector<rt::Vec3> final_path;            // the flyable path at the end (write_outputs)
+  bool final_flyable = false;
   std::unique_ptr<rt::Executive> exec;
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
@@ -160,6 +180,9 @@ struct Console::Impl {
   int observers_reserved(const fields::VolumeGeometry& g) const;
   Status start_hulls();
   rt::ExecutiveConfig executive_config(const fields::VolumeGeometry& g) const;
+  Status start_fitter();
+  const PathFitter& path_fitter() const { return flyable ? flyable->fitter() : *fitter; }
+  void fit_final_path();
   nlohmann::json check_path(std::string& line) const;
   void release_pack_pages();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
@@ -296,6 +319,10 @@ Status Console::Impl::start() {
     const std::uint64_t after = rt::resident_bytes();
     budget.reserve("renderer (GL context, mesh, F_p texture, PNG)", after > before ? after - before : 0);
   }
+  VISVOL_RETURN_IF_ERROR(start_fitter());
+  release_pack_pages();  // the fitter read the finest terrain once
+  budget.reserve("flyable path (finest terrain, fit)",
+                 path_fitter().bytes() + 8 * sizeof(dds::PathSample) + 1024 * 1024);
   const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
   budget.reserve("ropes (both models, max segments)", 2 * segments * 1024);
   budget.reserve("executive (samples, scratch)", sizeof(dds::PathSample) * 2 + segments * 64 + 64 * 1024);
@@ -348,11 +375,13 @@ Status Console::Impl::start() {
   const rt::ExecutiveConfig ec = executive_config(g);
   rt::ExecutiveOutputs out;
   if (publisher) {
-    out.path = &publisher->path();
     out.device = &publisher->device_status();
     out.acks = &acks;
   }
-  if (thumbs) out.path_render = &thumbs->paths();
+  if (flyable) {
+    out.path = &flyable->rope_paths();
+    out.path_gains = &flyable->gains();
+  }
   auto e = rt::Executive::create(ec, *field, bus, sim.get(), &commands, out);
   if (!e.ok()) return e.status();
   exec = std::move(*e);
@@ -396,16 +425,16 @@ Status Console::Impl::start_hulls() {
 // east edges 150 m up, or half way between the clearance and a lower ceiling.
 rt::ExecutiveConfig Console::Impl::executive_config(const fields::VolumeGeometry& g) const {
   rt::ExecutiveConfig ec;
-  ec.gains.clearance_m = o.clearance_m;
-  ec.gains.max_agl_m = o.max_agl_m.value_or(INFINITY);
-  ec.gains.max_altitude_m = o.max_altitude_m.value_or(INFINITY);
+  ec.gains.clearance_m = vehicle.clearance_m;
+  ec.gains.max_agl_m = vehicle.max_agl_m;  // infinite: none
+  ec.gains.max_altitude_m = vehicle.max_altitude_m;
   const fields::FieldSampler<storage::ResidentLevel> ground(field->level(o.level));
   auto end_at = [&](double x, double y) {
     const double z0 = ground.height(x, y);
     const double top = std::min(z0 + ec.gains.max_agl_m, ec.gains.max_altitude_m);
     // no room under the ceiling: left above it, for the executive to refuse naming it
-    const bool lower = z0 + 150 > top && top > z0 + o.clearance_m;
-    return rt::Vec3(x, y, lower ? 0.5 * (z0 + o.clearance_m + top) : z0 + 150);
+    const bool lower = z0 + 150 > top && top > z0 + vehicle.clearance_m;
+    return rt::Vec3(x, y, lower ? 0.5 * (z0 + vehicle.clearance_m + top) : z0 + 150);
   };
   const double ymid = g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m;
   const double xw = g.origin_x + 0.1 * (g.nx - 1) * g.spacing_m, xe = g.origin_x + 0.9 * (g.nx - 1) * g.spacing_m;
@@ -428,27 +457,51 @@ rt::ExecutiveConfig Console::Impl::executive_config(const fields::VolumeGeometry
   return ec;
 }
 
-// The final path against the constraints in force, by exact sight lines on
-// the finest terrain (rt::PathChecker), after the loop stopped. `line` gets
-// the verdict for the operator.
+// The fitter, and its thread when paths are sent (DDS or thumbnails).
+Status Console::Impl::start_fitter() {
+  Result<rt::VehicleEnvelope> v = resolve_vehicle(o);
+  if (!v.ok()) return v.status();
+  vehicle = *v;
+  auto f = PathFitter::create(pack, vehicle, 128);
+  if (!f.ok()) return f.status();
+  if (!publisher && !thumbs) {
+    fitter = std::move(*f);
+    return {};
+  }
+  auto t = FlyablePath::start(std::move(*f), publisher ? &publisher->path() : nullptr,
+                              thumbs ? &thumbs->paths() : nullptr);
+  if (!t.ok()) return t.status();
+  flyable = std::move(*t);
+  return {};
+}
+
+// The rope where it ended, fitted into the envelope in force: the path the
+// outputs give and the check judges (the fitter's thread has stopped).
+void Console::Impl::fit_final_path() {
+  const rt::Rope& rope = exec->rope();
+  const rt::EnvelopeFit f = path_fitter().fit(rope.vertices(), rope.segments() + 1, exec->forces().gains());
+  final_path = f.path;
+  final_flyable = f.feasible;
+}
+
+// The final (flyable) path against the envelope and the observers in force,
+// by exact sight lines on the finest terrain (rt::PathChecker), after the
+// loop stopped. `line` gets the verdict for the operator.
 nlohmann::json Console::Impl::check_path(std::string& line) const {
-  const rt::ForceGains& g = exec->forces().gains();
   rt::PathCheckSpec spec;
-  spec.envelope.name = "console";
-  spec.envelope.clearance_m = g.clearance_m;
-  spec.envelope.max_agl_m = g.max_agl_m;
-  spec.envelope.max_altitude_m = g.max_altitude_m;
-  spec.envelope.max_climb_deg = spec.envelope.max_descent_deg = 90;  // the console holds none
-  spec.envelope.min_turn_radius_m = 0;
+  spec.envelope = path_fitter().envelope(exec->forces().gains());
   spec.constraints = observers_of(exec->hulls_in_force());
   spec.curvature_coeff = pack_curvature(*pack);
-  Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(field->level(0)), nullptr, spec);
+  Result<rt::PathChecker> checker = rt::PathChecker::create(path_fitter().terrain(), nullptr, spec);
   if (!checker.ok()) {
     line = "check: " + checker.status().message();
     return {{"error", checker.status().message()}};
   }
-  const rt::Rope& rope = exec->rope();
-  const rt::PathCheck c = checker->check(rope.vertices(), rope.segments() + 1);
+  if (final_path.size() < 2) {
+    line = "check: no path";
+    return {{"error", "no path"}};
+  }
+  const rt::PathCheck c = checker->check(final_path.data(), static_cast<int>(final_path.size()));
   line = c.all_met ? "all met" : "NOT MET:";
   for (const std::string& u : c.unmet()) line += " " + u + ";";
   return check_json(c, checker->spec().sample_step_m);
@@ -546,6 +599,7 @@ Status Console::run(const std::atomic<bool>& stop) {
   const double wall_s = seconds_since(t0);
   m.session_s = wall_s;
   const rt::LoopRun run = m.loop->stop();
+  if (m.flyable) m.flyable->stop();  // before the publisher and the renderer it feeds
   m.field->set_reader_active(false);
   m.field->stop_pager();
   if (m.hulls) m.hulls->stop();
@@ -574,18 +628,19 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
     }
   }
   const rt::Rope& rope = exec->rope();
-  const storage::ResidentSampler& s = exec->forces().sampler();
+  fit_final_path();
+  auto flyable_sample = std::make_unique<dds::PathSample>();
+  path_fitter().describe(final_path, *flyable_sample);
+  const dds::PathSample& fp = *flyable_sample;
   std::string csv = "x_m,y_m,z_m,fp,clearance_m\n";
   char line[192];
-  double lowest = INFINITY;
-  for (int i = 0; i <= rope.segments(); ++i) {
-    const rt::Vec3& v = rope.vertices()[i];
-    const double clearance = v.z() - s.height(v.x(), v.y());
-    lowest = std::min(lowest, clearance);
-    std::snprintf(line, sizeof line, "%.3f,%.3f,%.3f,%.6f,%.2f\n", v.x(), v.y(), v.z(), s.visibility(v.x(), v.y(), v.z()),
-                  clearance);
+  for (std::uint32_t i = 0; i < fp.vertex_count; ++i) {
+    const dds::PathVertex& v = fp.vertices[i];
+    std::snprintf(line, sizeof line, "%.3f,%.3f,%.3f,%.6f,%.2f\n", v.position.x_m, v.position.y_m, v.position.z_m,
+                  v.visibility, v.clearance_m);
     csv += line;
   }
+  const double lowest = fp.min_clearance_m;
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", csv));
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/health.csv", health_csv));
   if (thumbs) {
@@ -634,11 +689,12 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
         {"fc_start", fc_start},
         {"fc_end", c.fc},
         {"length_m", rope.length_m()},
-        {"min_clearance_m", lowest},
         {"converged", c.converged},
         {"equilibrium_s", c.equilibrium_s},
         {"runs", c.runs},
-        {"rope_resets", c.rope_resets}}},
+        {"rope_resets", c.rope_resets},
+        {"flyable", flyable_json(fp, final_flyable, flyable ? flyable->stats() : FlyableStats{})}}},
+      {"vehicle", rt::vehicle_json(vehicle)},
       {"device",
        {{"kind", o.device},
         {"state", device_text(c)},
@@ -683,8 +739,10 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
               run.wake_latency.percentile_us(0.99), run.wake_latency.max_us(), run.compute.percentile_us(0.5),
               run.compute.percentile_us(0.99), static_cast<unsigned long long>(run.totals.overruns),
               static_cast<long long>(run.totals.faults_after_settle.major));
-  std::printf("path: %s, F_c %.4f -> %.4f, %.0f m, lowest clearance %.1f m, %s; device %s, %llu grasp(s)\n",
-              o.objective.c_str(), fc_start, c.fc, rope.length_m(), lowest, c.converged ? "at rest" : "moving",
+  std::printf("path: %s, rope F_c %.4f -> %.4f, %s; flyable (%s): F_c %.4f, %.0f m, %u vertices, lowest clearance "
+              "%.1f m, %s; device %s, %llu grasp(s)\n",
+              o.objective.c_str(), fc_start, c.fc, c.converged ? "at rest" : "moving", vehicle.name.c_str(), fp.f_c,
+              fp.length_m, fp.vertex_count, lowest, final_flyable ? "inside the envelope" : "NOT inside the envelope",
               device_text(c), static_cast<unsigned long long>(c.grasps));
   std::printf("memory: peak RSS %.1f MiB of a %.0f MiB budget; tiles %.1f of %.1f MiB (pack %.1f MiB)\n",
               static_cast<double>(rss_peak) / kMiB, o.budget_mib, static_cast<double>(ts.resident_bytes) / kMiB,

@@ -6,11 +6,13 @@
 //                      to the log, a progress line every second
 //   loop thread        the executive's ticks (SCHED_FIFO when permitted)
 //   pager thread       resident tiles around the rope
+//   fitter thread      the rope's path fitted into the vehicle's envelope,
+//                      for the publisher and the renderer (flyable_path.hpp)
 //   renderer thread    a thumbnail when the rope comes to rest (at most 1 Hz)
 //   DDS threads        publisher, command intake, Cyclone's own
 //
 // Outputs in the output directory (written whole or not at all):
-//   path.csv       the last path: x_m, y_m, z_m (pack CRS), F_p, clearance_m
+//   path.csv       the last flyable path: x_m, y_m, z_m (pack CRS), F_p, clearance_m
 //   health.csv     one line a second: loop timing, F_c, device, tiles, memory
 //   summary.json   the run: loop timing percentiles, overruns, faults, memory
 //                  against the budget, tiles, commands, the path's figures

@@ -20,9 +20,7 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--model", o.model, "articulated or spring")->check(CLI::IsMember({"articulated", "spring"}))->capture_default_str();
   app.add_option("--segments", o.segments, "Rope segments at start")->capture_default_str();
   app.add_option("--max-segments", o.max_segments, "Rope segments reserved (set-segments may go up to this)")->capture_default_str();
-  app.add_option("--clearance", o.clearance_m, "Least height above the terrain, m")->capture_default_str();
-  app.add_option("--max-agl", o.max_agl_m, "Highest height above the terrain, m (default: none)");
-  app.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m (default: none)");
+  cli::add_envelope_options(app, o.envelope);
   app.add_option("--hidden-from", o.hidden_from,
                  "Stay hidden from an observer standing at X Y Z (pack CRS, m; at or above the terrain); repeatable, "
                  "at most 8")
@@ -84,17 +82,22 @@ std::string metres(double v) {
   return text;
 }
 
-// The ceiling: finite, above the clearance (as the planner's vehicle check).
-Status validate_envelope(const ConsoleOptions& o) {
-  if (o.max_agl_m) {
-    const double v = *o.max_agl_m;
+// The ceilings given as options: finite, above the clearance (the vehicle
+// check that follows names the vehicle; these name the options).
+Status validate_ceilings(const cli::EnvelopeOptions& e) {
+  const double clearance = e.clearance_m.value_or(rt::VehicleEnvelope().clearance_m);
+  if (e.clearance_m && !(*e.clearance_m >= 0 && *e.clearance_m <= 10000)) {
+    return invalid_argument("--clearance: must be in 0..10000 m");
+  }
+  if (e.max_agl_m) {
+    const double v = *e.max_agl_m;
     if (!(std::isfinite(v) && v > 0 && v <= 10000)) return invalid_argument("--max-agl: must be in (0, 10000] m");
-    if (!(v > o.clearance_m)) {
-      return invalid_argument("--max-agl: " + metres(v) + " is not above --clearance " + metres(o.clearance_m) +
+    if (!(v > clearance)) {
+      return invalid_argument("--max-agl: " + metres(v) + " is not above --clearance " + metres(clearance) +
                               ": no height is allowed");
     }
   }
-  if (o.max_altitude_m && !(std::isfinite(*o.max_altitude_m) && std::fabs(*o.max_altitude_m) <= 1e5)) {
+  if (e.max_altitude_m && !(std::isfinite(*e.max_altitude_m) && std::fabs(*e.max_altitude_m) <= 1e5)) {
     return invalid_argument("--max-altitude: must be a height in -100000..100000 m");
   }
   return {};
@@ -135,8 +138,8 @@ Status validate(const ConsoleOptions& o) {
                std::to_string(o.max_segments) + ")");
   }
   if (o.max_segments < 2 || o.max_segments > 4096) return bad("--max-segments: must be in 2..4096");
-  if (!(o.clearance_m >= 0 && o.clearance_m <= 10000)) return bad("--clearance: must be in 0..10000 m");
-  VISVOL_RETURN_IF_ERROR(validate_envelope(o));
+  VISVOL_RETURN_IF_ERROR(validate_ceilings(o.envelope));
+  if (Result<rt::VehicleEnvelope> v = resolve_vehicle(o); !v.ok()) return v.status();
   VISVOL_RETURN_IF_ERROR(validate_observers(o));
   for (const auto& [name, v] : {std::pair{"--k1", o.k1}, {"--k2", o.k2}, {"--k3", o.k3}}) {
     if (!(std::isfinite(v) && v >= 0 && v <= 1e6)) return bad(std::string(name) + ": must be in 0..1e6");
@@ -154,5 +157,7 @@ Status validate(const ConsoleOptions& o) {
   if (!(o.thumbnail_max_hz > 0 && o.thumbnail_max_hz <= 50)) return bad("--thumbnail-max-hz: must be in (0, 50]");
   return {};
 }
+
+Result<rt::VehicleEnvelope> resolve_vehicle(const ConsoleOptions& o) { return cli::resolve_envelope(o.envelope); }
 
 }  // namespace visvol::app

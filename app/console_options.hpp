@@ -9,7 +9,9 @@
 #include <utility>
 #include <vector>
 
+#include "mission_options.hpp"
 #include "rt/base/status.hpp"
+#include "rt/rope/vehicle.hpp"
 
 namespace visvol::app {
 
@@ -24,12 +26,14 @@ struct ConsoleOptions {
   std::string model = "articulated";
   int segments = 128;
   int max_segments = 256;
-  double clearance_m = 30;
-  // The envelope and the observers, as `visvol plan` names them (pack CRS,
-  // metres): a ceiling above the terrain and above the datum (none when
-  // absent), points to stay hidden from and visible to (X Y Z each, at most 8
-  // of a kind), their observers' eyes above them.
-  std::optional<double> max_agl_m, max_altitude_m;
+  // The vehicle and its envelope, with the options `visvol plan` takes
+  // (--vehicle, --speed, --max-climb, --max-descent, --min-turn-radius,
+  // --clearance, --max-agl, --max-altitude; the ceilings: none when absent).
+  // The paths the console sends are fitted into it (app/flyable_path.hpp).
+  cli::EnvelopeOptions envelope;
+  // The observers, as `visvol plan` names them (pack CRS, metres): points to
+  // stay hidden from and visible to (X Y Z each, at most 8 of a kind), their
+  // observers' eyes above them.
   std::vector<std::vector<double>> hidden_from, visible_to;
   double eye_height_m = 2.0;
   int max_observers = -1;             // hulls reserved for commands; -1: as the budget allows (see add_console_options)
@@ -70,6 +74,9 @@ Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text);
 void add_console_options(CLI::App& app, ConsoleOptions& o);
 // Checks what CLI11 cannot: combinations and ranges. Names the option.
 Status validate(const ConsoleOptions& o);
+
+// The vehicle (preset or file) with the options' overrides, validated.
+Result<rt::VehicleEnvelope> resolve_vehicle(const ConsoleOptions& o);
 
 // Most observers (hidden-from and visible-to points together) a console holds.
 inline constexpr int kMaxObservers = 16;

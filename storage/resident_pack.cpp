@@ -229,6 +229,8 @@ void ResidentPack::release(const TileEntry& tile) {
 }
 
 bool ResidentPack::wait_for_readers() {
+  // the evictions' stores are visible before the count is read (see tick_done)
+  std::atomic_thread_fence(std::memory_order_seq_cst);
   const std::uint64_t start = epoch_.load(std::memory_order_acquire);
   while (reader_active_.load(std::memory_order_acquire) &&
          epoch_.load(std::memory_order_acquire) < start + 2) {

@@ -167,7 +167,13 @@ class ResidentPack {
   // Real-time side.
   const ResidentLevel& level(int l) const { return views_[static_cast<std::size_t>(l)]; }
   void set_focus(const WorldBox& box) { focus_.write(box); }
-  void tick_done() { epoch_.fetch_add(1, std::memory_order_acq_rel); }
+  // A full fence after the count, paired with the pager's fence between its
+  // evictions and its reading of the count (StoreLoad on both sides): a tick
+  // that starts after a counted one sees every eviction made before it.
+  void tick_done() {
+    epoch_.fetch_add(1, std::memory_order_seq_cst);
+    std::atomic_thread_fence(std::memory_order_seq_cst);
+  }
   // Lookups that fell back to a coarser level, all levels (any thread).
   std::uint64_t fallbacks() const;
 

@@ -763,6 +763,7 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
   }
   p.vertex_count = static_cast<std::uint32_t>(keep);
   p.min_clearance_m = lowest;
+  if (outputs_.path_gains != nullptr) outputs_.path_gains->write(forces_->gains());
   for (LatestValue<dds::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
     if (sink == nullptr) continue;
     std::memcpy(&sink->back(), &p, sizeof p);

@@ -131,6 +131,9 @@ struct ExecutiveCounters {
 struct ExecutiveOutputs {
   LatestValue<dds::PathSample>* path = nullptr;            // DDS publisher
   LatestValue<dds::PathSample>* path_render = nullptr;     // renderer
+  // The gains in force (clearance, ceilings), handed off before each path
+  // sent to `path`: a consumer that fits the path into the envelope.
+  LatestValue<ForceGains>* path_gains = nullptr;
   LatestValue<dds::DeviceStatusSample>* device = nullptr;  // DDS publisher
   dds::AckQueue* acks = nullptr;                           // applied/failed, to command intake
 };

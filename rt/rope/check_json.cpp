@@ -26,4 +26,16 @@ nlohmann::json limit_json(const LimitResult& l) {
           {"met", l.met}};
 }
 
+nlohmann::json vehicle_json(const VehicleEnvelope& v) {
+  return {{"name", v.name},
+          {"type", to_string(v.type)},
+          {"speed_mps", v.speed_mps},
+          {"max_climb_deg", v.max_climb_deg},
+          {"max_descent_deg", v.max_descent_deg},
+          {"min_turn_radius_m", v.min_turn_radius_m},
+          {"clearance_m", v.clearance_m},
+          {"max_agl_m", finite_or_null(v.max_agl_m)},
+          {"max_altitude_m", finite_or_null(v.max_altitude_m)}};
+}
+
 }  // namespace visvol::rt

@@ -167,7 +167,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
   };
   const double climb = slope(spec.envelope.max_climb_deg);
   const double descent = slope(spec.envelope.max_descent_deg);
-  const std::size_t max_points = 4 * p.size() + 64;
+  const std::size_t max_points = spec.max_points > 0 ? spec.max_points : 4 * p.size() + 64;
 
   std::vector<double> lo(p.size()), hi(p.size()), z;
   auto set_band = [&](std::size_t i) {

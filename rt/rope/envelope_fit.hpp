@@ -43,6 +43,7 @@ struct EnvelopeFitSpec {
   double angle_margin_deg = 0.1;
   double hull_margin_m = 5.0;  // kept under hidden-from and over visible-to hulls
   double step_m = 0;           // between-vertex samples; 0: a quarter post spacing
+  std::size_t max_points = 0;  // vertices the fit may end with (it splits segments); 0: 4 n + 64
   std::vector<const PointHull*> below;  // hidden-from hulls (finest level)
   std::vector<const PointHull*> above;  // visible-to hulls
 };

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -94,7 +96,8 @@ TEST_F(Console, HelpAndBadOptions) {
   const Outcome h = console("--help");
   EXPECT_EQ(h.status, 0);
   for (const char* o : {"--pack", "--budget-mib", "--device", "--domain", "--seconds", "--hidden-from", "--visible-to",
-                        "--max-agl", "--max-altitude", "--eye-height", "--max-observers"}) {
+                        "--max-agl", "--max-altitude", "--eye-height", "--max-observers", "--vehicle", "--max-climb",
+                        "--max-descent", "--min-turn-radius", "--speed"}) {
     EXPECT_NE(h.out.find(o), std::string::npos) << o;
   }
   for (const std::string& args :
@@ -131,6 +134,12 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--visible-to " + xyz(post(10, 10, -40)), "visible-to point 1"},
       {"--max-agl 100 --from " + xyz(post(10, 48, 150)), "start: "},
       {"--max-altitude 100", "above the ceiling"},
+      {"--vehicle /nonexistent.toml", "--vehicle /nonexistent.toml"},
+      {"--vehicle glider", "--vehicle glider"},
+      {"--max-climb 0", "max-climb 0"},
+      {"--max-descent 91", "max-descent 91"},
+      {"--min-turn-radius -1", "min-turn-radius -1"},
+      {"--speed nan", "speed nan"},
   };
   for (const auto& [args, reason] : cases) {
     const Outcome r = console(base + args);
@@ -181,7 +190,7 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   EXPECT_EQ(c["constraints"][0]["kind"], "hidden-from");
   EXPECT_EQ(c["constraints"][3]["kind"], "visible-to");
   EXPECT_NEAR(c["constraints"][0]["eye_m"][2].get<double>(), h1[2] + 1.5, 1e-3);
-  ASSERT_EQ(c["envelope"].size(), 3u);
+  ASSERT_EQ(c["envelope"].size(), 6u);  // the fixed-wing preset's climb, descent and turn limits too
   EXPECT_EQ(c["envelope"][0]["name"], "clearance");
   EXPECT_EQ(c["envelope"][1]["name"], "max-agl");
   EXPECT_EQ(c["envelope"][1]["limit"].get<double>(), 120.0);
@@ -199,9 +208,59 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   EXPECT_LE(worst_agl, highest_vertex + 60.0) << "a sample between vertices, not another path";
   EXPECT_EQ(c["envelope"][1]["met"].get<bool>(), worst_agl <= 120.01);
   EXPECT_EQ(c["envelope"][2]["name"], "max-altitude");
+  EXPECT_EQ(c["envelope"][3]["name"], "max-climb");
+  EXPECT_EQ(c["envelope"][5]["name"], "min-turn-radius");
   for (const nlohmann::json& x : c["envelope"]) all = all && x["met"].get<bool>();
   EXPECT_EQ(c["all_met"].get<bool>(), all);
   EXPECT_EQ(c["unmet"].empty(), all);
+}
+
+// The path the console sends and writes is the rope's, fitted into the
+// vehicle's envelope as `visvol plan` fits its answer: judged here from
+// path.csv alone (every segment's climb and descent), and by the exact check.
+TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
+  const std::string out = out_dir("vehicle");
+  const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
+                            "--script none --thumbnail-view none --objective show --vehicle fixed-wing "
+                            "--max-climb 4 --max-descent 3 --min-turn-radius 150 --speed 25 --out " + out);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(s["vehicle"]["name"], "fixed-wing");
+  EXPECT_EQ(s["vehicle"]["max_climb_deg"].get<double>(), 4.0);
+  EXPECT_EQ(s["vehicle"]["max_descent_deg"].get<double>(), 3.0);
+  EXPECT_EQ(s["vehicle"]["min_turn_radius_m"].get<double>(), 150.0);
+  EXPECT_EQ(s["vehicle"]["speed_mps"].get<double>(), 25.0);
+  const nlohmann::json& f = s["path"]["flyable"];
+  ASSERT_TRUE(f["inside_envelope"].get<bool>()) << f.dump();
+  const nlohmann::json& c = s["check"];
+  for (const nlohmann::json& l : c["envelope"]) EXPECT_TRUE(l["met"].get<bool>()) << l.dump();
+  EXPECT_EQ(c["envelope"][3]["limit"].get<double>(), 4.0);
+  EXPECT_EQ(c["envelope"][4]["limit"].get<double>(), 3.0);
+  EXPECT_EQ(c["envelope"][5]["limit"].get<double>(), 150.0);
+
+  std::istringstream csv(slurp(out + "/path.csv"));
+  std::string row;
+  std::getline(csv, row);  // header
+  std::vector<std::array<double, 3>> v;
+  while (std::getline(csv, row)) {
+    std::array<double, 3> p{};
+    ASSERT_EQ(std::sscanf(row.c_str(), "%lf,%lf,%lf", &p[0], &p[1], &p[2]), 3) << row;
+    v.push_back(p);
+  }
+  ASSERT_EQ(static_cast<int>(v.size()), f["vertices"].get<int>());
+  const double kDeg = 180.0 / 3.14159265358979323846;
+  double steepest_up = 0, steepest_down = 0;
+  for (std::size_t k = 1; k < v.size(); ++k) {
+    const double h = std::hypot(v[k][0] - v[k - 1][0], v[k][1] - v[k - 1][1]);
+    const double angle = std::atan2(v[k][2] - v[k - 1][2], h) * kDeg;
+    steepest_up = std::max(steepest_up, angle);
+    steepest_down = std::max(steepest_down, -angle);
+  }
+  // path.csv rounds to millimetres
+  EXPECT_LE(steepest_up, 4.0 + 1e-3);
+  EXPECT_LE(steepest_down, 3.0 + 1e-3);
+  EXPECT_NE(r.out.find("flyable (fixed-wing)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(", inside the envelope"), std::string::npos) << r.out;
 }
 
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
@@ -226,7 +285,9 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   EXPECT_LE(s["device"]["simulated"]["max_force_n"].get<double>(), 1.4 + 1e-9);
   EXPECT_LE(s["memory"]["rss_peak_mib"].get<double>(), s["memory"]["budget_mib"].get<double>());
   const std::string csv = slurp(out + "/path.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);  // header + 33 vertices
+  const int vertices = s["path"]["flyable"]["vertices"].get<int>();
+  EXPECT_GE(vertices, 2);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), vertices + 1);  // header + the flyable path's vertices
   const std::string health = slurp(out + "/health.csv");
   EXPECT_GE(std::count(health.begin(), health.end(), '\n'), 3);  // header + a line a second
   EXPECT_GE(s["thumbnails"]["rendered"].get<int>(), 1);  // at least the one where the rope ended
@@ -319,7 +380,10 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   auto p = paths->take<visvol_msgs_msg_dds__PathUpdate_>(
       [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
         ++received;
-        EXPECT_EQ(m.positions_m._length, 33u);
+        // the rope's 33 vertices fitted into the envelope (a segment split
+        // where the terrain between vertices asks for it)
+        EXPECT_GE(m.positions_m._length, 2u);
+        EXPECT_LE(m.positions_m._length, 512u);
         EXPECT_EQ(m.objective, 2);  // show, after the command
       },
       64);
@@ -422,7 +486,7 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   EXPECT_EQ(after["switched_to"], "");
   EXPECT_GT(after["loop"]["ticks"].get<int>(), 1000);  // it ran on the other pack
   const std::string csv = slurp(out + "/path.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 34);  // header + 33 vertices
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), after["path"]["flyable"]["vertices"].get<int>() + 1);
 }
 
 }  // namespace

@@ -1,0 +1,111 @@
+// The path a crew flies: the rope's path fitted into the vehicle's flight
+// envelope off the real-time thread, as `visvol plan` fits its answer
+// (rt::fit_to_envelope).
+//
+//   loop thread   --rope path, gains in force-->   fitter thread
+//   fitter thread --flyable path-->                DDS publisher, renderer
+//
+// The rope stays the operator's: it settles in the field and follows the
+// hand. What leaves the console is its projection into the envelope: climb
+// and descent within the vehicle's limits on every segment, turns no tighter
+// than its radius, heights from the clearance up to the ceilings in force
+// (the executive's gains, which commands change). Where the band of heights
+// and the slope limits conflict, the path sent is the nearest the fit found
+// and `unflyable` counts it; the session's summary checks the final path
+// exactly (rt::PathChecker).
+//
+// Hidden-from and visible-to observers are not part of this fit (their hulls
+// live on the loop's level and belong to the loop): the rope's hull forces
+// keep them, and the summary's check says how well.
+//
+// Thread-safety: rope_paths() and gains() have one producer, the loop
+// thread; the sinks have one consumer each; stats() from any thread.
+// Allocates on its own thread and at create() only.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "drivers/dds/samples.hpp"
+#include "fields/heightfield.hpp"
+#include "rt/base/handoff.hpp"
+#include "rt/rope/envelope_fit.hpp"
+#include "rt/rope/field_forces.hpp"
+#include "rt/rope/vehicle.hpp"
+#include "storage/pack_reader.hpp"
+
+namespace visvol::app {
+
+// Fits paths on the pack's finest level. Not thread-safe; offline.
+class PathFitter {
+ public:
+  static Result<std::unique_ptr<PathFitter>> create(std::shared_ptr<const storage::Pack> pack,
+                                                    const rt::VehicleEnvelope& vehicle, int fc_samples);
+
+  // The vehicle's limits with the clearance and the ceilings in force.
+  rt::VehicleEnvelope envelope(const rt::ForceGains& gains) const;
+  rt::EnvelopeFit fit(const rt::Vec3* vertices, int count, const rt::ForceGains& gains) const;
+  // `path` into `out`'s vertices and figures (F_c, length, lowest clearance
+  // on the finest level); the header fields are left as they are.
+  void describe(const std::vector<rt::Vec3>& path, dds::PathSample& out) const;
+
+  const fields::Heightfield& terrain() const { return terrain_; }
+  // Bytes held: the finest terrain.
+  std::uint64_t bytes() const { return terrain_.height_m.size() * sizeof(float); }
+
+ private:
+  PathFitter() = default;
+  rt::VehicleEnvelope vehicle_;
+  double top_m_ = 0;
+  int fc_samples_ = 128;
+  std::unique_ptr<storage::PackLevel> finest_;
+  std::unique_ptr<rt::FieldForces<storage::PackLevel>> field_;
+  fields::Heightfield terrain_;
+};
+
+struct FlyableStats {
+  std::uint64_t fitted = 0;      // flyable paths sent
+  std::uint64_t unflyable = 0;   // of them, outside the envelope somewhere (the nearest the fit found)
+};
+
+class FlyablePath {
+ public:
+  // Starts the thread; `to_publisher` and `to_renderer` may be null.
+  static Result<std::unique_ptr<FlyablePath>> start(std::unique_ptr<PathFitter> fitter,
+                                                    LatestValue<dds::PathSample>* to_publisher,
+                                                    LatestValue<dds::PathSample>* to_renderer,
+                                                    double poll_s = 0.02);
+  ~FlyablePath();
+  FlyablePath(const FlyablePath&) = delete;
+  FlyablePath& operator=(const FlyablePath&) = delete;
+
+  LatestValue<dds::PathSample>& rope_paths() { return rope_paths_; }
+  LatestValue<rt::ForceGains>& gains() { return gains_; }
+  FlyableStats stats() const;
+  // Stops the thread (idempotent); afterwards fitter() may be used.
+  void stop();
+  const PathFitter& fitter() const { return *fitter_; }
+
+ private:
+  FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<dds::PathSample>* to_publisher,
+              LatestValue<dds::PathSample>* to_renderer, double poll_s);
+  void run();
+  void send(const dds::PathSample& rope, const rt::ForceGains& gains);
+
+  std::unique_ptr<PathFitter> fitter_;
+  LatestValue<dds::PathSample>* to_publisher_;
+  LatestValue<dds::PathSample>* to_renderer_;
+  double poll_s_;
+  LatestValue<dds::PathSample> rope_paths_;
+  LatestValue<rt::ForceGains> gains_;
+  std::unique_ptr<dds::PathSample> out_;  // large: filled here, copied into the sinks
+  std::vector<rt::Vec3> rope_;
+  std::atomic<std::uint64_t> fitted_{0}, unflyable_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace visvol::app

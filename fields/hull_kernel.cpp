@@ -267,7 +267,16 @@ VISVOL_INLINE void store_levels(const VecI& k, int nz, std::uint8_t* dst) {
 
 }  // namespace
 
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+// One clone per instruction set, picked at load time by an ifunc resolver.
+// ThreadSanitizer instruments that resolver, which then runs before the
+// sanitizer's runtime is up and crashes: its build keeps the default clone.
+#if defined(__SANITIZE_THREAD__)
+#define VISVOL_KERNEL_CLONES
+#else
+#define VISVOL_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#endif
+
+VISVOL_KERNEL_CLONES
 void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
                        const LevelRowLayout& layout, const LevelMap& levels, RangeShape shape,
                        const ObserverChunk& chunk, float* ring_a, float* ring_b,

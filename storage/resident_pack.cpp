@@ -42,7 +42,7 @@ Status validate(const ResidentConfig& c) {
 bool ResidentLevel::resident(int i, int j) const {
   if (coarser_ == nullptr) return true;
   const std::size_t b = static_cast<std::size_t>((j / kBrickPosts) * bricks_x_ + i / kBrickPosts);
-  return state_[b].load(std::memory_order_acquire) == kResident;
+  return state_[b].load(std::memory_order_seq_cst) == kResident;  // see ResidentPack::tick_done
 }
 
 bool ResidentLevel::resident(int i0, int j0, int i1, int j1) const {
@@ -52,7 +52,7 @@ bool ResidentLevel::resident(int i0, int j0, int i1, int j1) const {
   const unsigned by0 = static_cast<unsigned>(j0) / kBrickPosts, by1 = static_cast<unsigned>(j1) / kBrickPosts;
   for (unsigned by = by0; by <= by1; ++by) {
     for (unsigned bx = bx0; bx <= bx1; ++bx) {
-      if (state_[by * static_cast<std::size_t>(bricks_x_) + bx].load(std::memory_order_acquire) != kResident) {
+      if (state_[by * static_cast<std::size_t>(bricks_x_) + bx].load(std::memory_order_seq_cst) != kResident) {
         return false;
       }
     }
@@ -229,11 +229,10 @@ void ResidentPack::release(const TileEntry& tile) {
 }
 
 bool ResidentPack::wait_for_readers() {
-  // the evictions' stores are visible before the count is read (see tick_done)
-  std::atomic_thread_fence(std::memory_order_seq_cst);
-  const std::uint64_t start = epoch_.load(std::memory_order_acquire);
+  // seq_cst: after the evictions' stores in the total order (see tick_done)
+  const std::uint64_t start = epoch_.load(std::memory_order_seq_cst);
   while (reader_active_.load(std::memory_order_acquire) &&
-         epoch_.load(std::memory_order_acquire) < start + 2) {
+         epoch_.load(std::memory_order_seq_cst) < start + 2) {
     if (stop_.load(std::memory_order_acquire)) return false;
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
@@ -313,7 +312,7 @@ Status ResidentPack::update() {
     LevelState& s = *state_[static_cast<std::size_t>(l)];
     for (std::size_t b = 0; b < s.bricks.size(); ++b) {
       if (!s.target[b] && s.state[b].load(std::memory_order_relaxed) == kResident) {
-        s.state[b].store(kAbsent, std::memory_order_release);
+        s.state[b].store(kAbsent, std::memory_order_seq_cst);  // see tick_done
         evict.emplace_back(l, b);
       }
     }

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The test command: installs what it needs, builds, and runs the whole suite
 # twice (optimised, then under AddressSanitizer + UndefinedBehaviorSanitizer),
-# then the fuzzers. Prints each stage's time as it ends and all of them at the
-# end, passed or not.
-#   VISVOL_FUZZ_SECONDS   time per fuzz target (default here 30)
+# the threaded tests under ThreadSanitizer, then the fuzzers. Prints each
+# stage's time as it ends and all of them at the end, passed or not.
+#   VISVOL_FUZZ_SECONDS   time per fuzz target (default here 20)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -39,21 +39,43 @@ stage() {
 # Line tables only (-g1: stack traces without the variables, half the
 # compile time of -g); Ninja for a new tree. The benchmarks are built once, in
 # the optimised tree.
-build_tree() {  # build_tree BUILD_DIR [cmake options...]
+build_tree() {  # build_tree BUILD_DIR [cmake options...] [-- targets...]
   local dir=$1
   shift
+  local options=() targets=()
+  while (($#)); do
+    if [[ $1 == -- ]]; then
+      shift
+      targets=(--target "$@")
+      break
+    fi
+    options+=("$1")
+    shift
+  done
   local generator=()
   [[ -f "$dir/CMakeCache.txt" ]] || generator=(-G Ninja)
-  cmake "${generator[@]}" -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISVOL_DEBUG_INFO=-g1 "$@" >/dev/null
-  cmake --build "$dir" -j "$jobs"
+  cmake "${generator[@]}" -S . -B "$dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISVOL_DEBUG_INFO=-g1 \
+    "${options[@]}" >/dev/null
+  cmake --build "$dir" -j "$jobs" "${targets[@]}"
 }
 
-export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-30}
+# The tests labelled `threaded` (ctest -L threaded): real threads sharing
+# state (hand-offs, the loop, the executive, the hull builder, the tile pager,
+# the DDS publisher and intake, the renderer thread), under ThreadSanitizer.
+threaded_tests=(rt_base_handoff_test rt_exec_periodic_loop_test rt_exec_executive_test
+                rt_exec_constraint_hulls_test storage_resident_pack_test dds_live_publisher_test
+                dds_command_intake_test app_thumbnail_thread_test)
+
+export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-20}
 stage "install packages" tools/deps.sh build storage dds render hil fuzz
 stage "build: optimised" build_tree build
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs"
+stage "build: TSan (threaded tests)" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
+  -- "${threaded_tests[@]}"
+stage "tests: TSan" env TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
+  ctest --test-dir build-tsan -L threaded --output-on-failure -j "$jobs"
 stage "fuzzing: build and run" tools/fuzz.sh
-echo "== all tests passed (optimised, ASan+UBSan, fuzzing)"
+echo "== all tests passed (optimised, ASan+UBSan, TSan, fuzzing)"

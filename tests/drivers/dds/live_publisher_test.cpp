@@ -61,7 +61,13 @@ void expect_producer_never_waits(LivePublisher& pub) {
     pub.health().publish();
   }
   const long waited = voluntary_switches() - switches;
+  // ThreadSanitizer's runtime takes locks of its own on every synchronising
+  // access: a switch there is not the producer's.
+#if !defined(__SANITIZE_THREAD__)
   EXPECT_EQ(waited, 0) << "the producer blocked " << waited << " times";
+#else
+  (void)waited;
+#endif
   // ... while the publisher did publish meanwhile or right after
   EXPECT_TRUE(wait_until([&] { return pub.stats().paths > before; }, 5.0));
 }

@@ -15,6 +15,7 @@
 #include "fields/sampler.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
+#include "storage/pack_writer.hpp"
 
 namespace visvol::storage {
 namespace {
@@ -212,6 +213,34 @@ TEST_F(Crafted, NonFiniteFloatVisibilityFailsVerifyNamingTheVoxel) {
     EXPECT_TRUE(PackLevel::open(*pack, 1).ok());
   }
   std::remove(path.c_str());
+}
+
+// The writer refuses up front what the reader would refuse: no build ends
+// in a pack that cannot be opened.
+TEST(CraftedLayout, TheWriterRefusesWhatTheReaderWould) {
+  LevelEntry e{};
+  e.nx = 20;
+  e.ny = 20;
+  e.nz = 8;
+  e.spacing_m = 30;
+  e.dz_m = 5;
+  PackLayout layout;
+  layout.levels = {e};
+  EXPECT_TRUE(validate(layout).ok());
+  layout.levels[0].dz_m = kDenormal;
+  const Status st = validate(layout);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("pack: level 0: voxel level spacing dz"), std::string::npos) << st.message();
+  layout.levels[0].dz_m = 5;
+  LevelEntry coarse = e;
+  coarse.nx = coarse.ny = 10;
+  coarse.spacing_m = 60;  // origin not moved half a post
+  layout.levels.push_back(coarse);
+  EXPECT_NE(validate(layout).message().find("level 1: spacing"), std::string::npos);
+  PackLayout shifted = layout;
+  shifted.levels[1].origin_x = 15;
+  shifted.levels[1].origin_y = -15;
+  EXPECT_TRUE(validate(shifted).ok()) << validate(shifted).message();
 }
 
 }  // namespace

@@ -230,6 +230,20 @@ std::optional<ConsoleOptions> Console::next_session() const {
   return next;
 }
 
+ConsoleOptions session_after_failed_switch(const ConsoleOptions& failed, const std::string& error) {
+  ConsoleOptions back = failed;
+  const std::string failed_id = storage::pack_id_from_path(failed.pack);
+  back.terrains.clear();
+  for (const std::string& path : failed.terrains) {
+    const std::string id = storage::pack_id_from_path(path);
+    if (id == failed.switched_from) back.pack = path;  // next_session() put the pack it left here
+    if (id != failed.switched_from && id != failed_id) back.terrains.push_back(path);
+  }
+  back.switched_from.clear();
+  back.switch_failed = failed_id + ": " + error;
+  return back;
+}
+
 Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   dds::ParticipantConfig pc;
   pc.domain_id = o.domain;
@@ -270,8 +284,27 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   return {};
 }
 
-// The other packs: each opened once (structure and checksums of its tables)
-// so that a switch never lands on a bad file; ids unique.
+namespace {
+
+// A --terrain pack as a switch would find it: its structure and contents
+// (Pack::open), every tile's checksum, and the --level the session runs on.
+Status check_terrain(const std::string& path, int level) {
+  auto p = storage::Pack::open(path);
+  if (!p.ok()) return p.status();
+  VISVOL_RETURN_IF_ERROR((*p)->verify());
+  if (level >= (*p)->level_count()) {
+    return invalid_argument(path + ": " + std::to_string((*p)->level_count()) + " levels of detail, --level " +
+                            std::to_string(level) + " is not among them");
+  }
+  return {};
+}
+
+}  // namespace
+
+// The other packs, ids unique. At start-up each is checked whole, tiles
+// included, so that a switch never lands on a bad file: a bad one refuses the
+// start. After a switch (the packs checked then, or run on), one that no
+// longer opens is dropped from those a switch may name, with a warning.
 Status Console::Impl::open_terrains() {
   for (const std::string& path : o.terrains) {
     const std::string id = storage::pack_id_from_path(path);
@@ -282,8 +315,13 @@ Status Console::Impl::open_terrains() {
     if (terrains.size() + 1 >= dds::kMaxKnownPacks) {
       return invalid_argument("--terrain: at most " + std::to_string(dds::kMaxKnownPacks - 1) + " other packs");
     }
-    auto p = storage::Pack::open(path);
-    if (!p.ok()) return Status(p.status().code(), "--terrain " + path + ": " + p.status().message());
+    const Status st = o.session == 1 ? check_terrain(path, o.level) : storage::Pack::open(path).status();
+    if (!st.ok() && o.session == 1) return Status(st.code(), "--terrain " + path + ": " + st.message());
+    if (!st.ok()) {
+      std::fprintf(stderr, "visvol-console: warning: switch-terrain %s is no longer possible: %s\n", id.c_str(),
+                   st.message().c_str());
+      continue;
+    }
     terrains.emplace_back(id, path);
   }
   return {};
@@ -667,6 +705,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
       {"session", o.session},
       {"switched_from", o.switched_from},
       {"switched_to", switch_to},
+      {"switch_failed", o.switch_failed},
       {"wall_s", wall_s},
       {"loop",
        {{"period_us", o.period_us},

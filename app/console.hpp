@@ -18,7 +18,10 @@
 //                  against the budget, tiles, commands, the path's figures
 //   thumbnail.png  the last thumbnail: the rope where it ended
 // A session that ends on a switch-terrain command writes them into
-// OUT/session-N-PACKID, and the next session runs on the other pack.
+// OUT/session-N-PACKID, and the next session runs on the other pack; if
+// that session cannot start (its pack changed on disk since start-up, or
+// does not fit the budget), the console goes back to the pack it left
+// (session_after_failed_switch) and its summary.json names the failure.
 #pragma once
 
 #include <atomic>
@@ -30,6 +33,12 @@
 #include "rt/base/status.hpp"
 
 namespace visvol::app {
+
+// The session to run when `failed`, the session a terrain switch asked for,
+// could not start with `error`: the pack it switched from, for the time left,
+// with the pack that failed no longer one a switch may name, and the failure
+// recorded for the summary.
+ConsoleOptions session_after_failed_switch(const ConsoleOptions& failed, const std::string& error);
 
 class Console {
  public:

@@ -2,7 +2,8 @@
 // budget, runs the rope and the haptic servo at 1 kHz against the haptic
 // device (simulated by default), publishes the path over DDS and takes
 // commands, until the time is up or Ctrl-C. A switch-terrain command to
-// one of its --terrain packs ends the session and starts one on that pack.
+// one of its --terrain packs ends the session and starts one on that pack
+// (or, when that one cannot start, goes back to the pack it left).
 //
 // Exit status: 0 success, 1 a failure while running, 2 bad options or input.
 #include <CLI/CLI.hpp>
@@ -45,6 +46,12 @@ int main(int argc, char** argv) {
     auto console = app::Console::start(*session);
     if (!console.ok()) {
       std::fprintf(stderr, "visvol-console: %s\n", console.status().message().c_str());
+      if (!session->switched_from.empty()) {
+        // a switch that cannot start ends nothing: back to the pack it left
+        session = app::session_after_failed_switch(*session, console.status().message());
+        std::fprintf(stderr, "visvol-console: switch-terrain failed; back on %s\n", session->pack.c_str());
+        continue;
+      }
       const Errc c = console.status().code();
       const bool bad_input = c == Errc::invalid_argument || c == Errc::resource || c == Errc::corrupt;
       return bad_input && session->session == 1 ? 2 : 1;

@@ -15,6 +15,7 @@
 #endif
 
 #include "storage/crc32c.hpp"
+#include "storage/pack_checks.hpp"
 
 namespace visvol::storage {
 
@@ -152,6 +153,7 @@ Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path) {
   pack->base_ = static_cast<const std::uint8_t*>(map);
   VISVOL_RETURN_IF_ERROR(pack->validate_structure());
   VISVOL_RETURN_IF_ERROR(pack->parse_metadata());
+  VISVOL_RETURN_IF_ERROR(pack->check_heights());
   return std::shared_ptr<const Pack>(std::move(pack));
 }
 
@@ -220,10 +222,6 @@ Status Pack::validate_structure() {
       return bad(name + "grid " + std::to_string(e.nx) + " x " + std::to_string(e.ny) + " x " +
                  std::to_string(e.nz) + " is out of range");
     }
-    if (!(e.spacing_m > 0) || !std::isfinite(e.spacing_m) || !(e.dz_m > 0) || !std::isfinite(e.dz_m) ||
-        !std::isfinite(e.z0_m) || !std::isfinite(e.origin_x) || !std::isfinite(e.origin_y)) {
-      return bad(name + "spacing, origin or level heights are not finite positive numbers");
-    }
     if (e.first_tile != expected_first) {
       return bad(name + "first_tile " + std::to_string(e.first_tile) + ", expected " + std::to_string(expected_first));
     }
@@ -232,6 +230,8 @@ Status Pack::validate_structure() {
   if (expected_first != h.tile_count) {
     return bad("tile_count " + std::to_string(h.tile_count) + ", the levels need " + std::to_string(expected_first));
   }
+  // the numbers readers index grids with: finite, sane, levels consistent
+  VISVOL_RETURN_IF_ERROR(check_level_geometry(levels_, static_cast<int>(h.level_count), path_));
   // every tile entry: identity, alignment, size, inside the tile area
   std::uint64_t n = 0;
   for (std::uint32_t l = 0; l < h.level_count; ++l) {
@@ -265,7 +265,7 @@ Status Pack::parse_metadata() {
   metadata_.json.assign(text, static_cast<std::size_t>(header_->metadata_bytes));
   try {
     const nlohmann::json j = nlohmann::json::parse(metadata_.json);
-    if (!j.is_object()) return corrupt(path_ + ": metadata is not a JSON object");
+    VISVOL_RETURN_IF_ERROR(check_metadata_types(j, path_));
     auto str = [&](const char* key) {
       return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
     };
@@ -312,6 +312,24 @@ const TileEntry& Pack::tile(int level, Layer layer, int tx, int ty) const {
 Status Pack::verify_tile(const TileEntry& t) const {
   if (checksum(base_ + t.offset, t.bytes) != t.crc32c) {
     return corrupt(path_ + ": " + describe(t) + ": checksum mismatch");
+  }
+  // float32 F_p is read where the checksum is: a value outside [0, 1] never reaches a reader
+  if (t.layer == static_cast<std::uint16_t>(Layer::visibility) && encoding() == VisibilityEncoding::float32) {
+    return check_visibility_tile(levels_[t.level], t, base_ + t.offset, path_);
+  }
+  return Status::ok_status();
+}
+
+Status Pack::check_heights() const {
+  for (int l = 0; l < level_count(); ++l) {
+    const LevelEntry& e = levels_[l];
+    const TileGrid g = tile_grid(Layer::height, e.nx, e.ny);
+    for (int ty = 0; ty < g.tiles_y; ++ty) {
+      for (int tx = 0; tx < g.tiles_x; ++tx) {
+        const TileEntry& t = tile(l, Layer::height, tx, ty);
+        VISVOL_RETURN_IF_ERROR(check_height_tile(e, t, tile_data(t), path_));
+      }
+    }
   }
   return Status::ok_status();
 }

@@ -3,9 +3,13 @@
 // open() checks everything structural before anything is used: magic,
 // version, header and table checksums, the file size against the header (a
 // truncated pack is named as such), every level's grid and every tile entry's
-// identity, offset, alignment and size. Tile checksums are checked by
-// verify() and verify_level(), which name the bad tile. Nothing here trusts a
-// number from the file without bounds.
+// identity, offset, alignment and size; and the contents readers index grids
+// with (storage/pack_checks.hpp): every level's geometry finite, in sane
+// ranges and consistent with the other levels, every height post finite and
+// within its level's voxel levels, the metadata members of the types readers
+// expect. Tile checksums (and float32 F_p in [0, 1]) are checked by verify()
+// and verify_level(), which name the bad tile. Nothing here trusts a number
+// from the file without bounds.
 //
 // Thread-safety: a Pack is immutable after open(); concurrent reads are safe.
 // Not real-time safe to open (I/O); the mapped bytes are read in place.
@@ -83,6 +87,9 @@ class Pack {
   Pack() = default;
   Status validate_structure();
   Status parse_metadata();
+  // Every level's height posts finite and within its voxel levels (a scan of
+  // the height layer, a small part of the pack; see pack_checks.hpp).
+  Status check_heights() const;
 
   std::string path_;
   const std::uint8_t* base_ = nullptr;

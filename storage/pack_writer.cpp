@@ -10,6 +10,7 @@
 
 #include "rt/base/atomic_file.hpp"
 #include "storage/crc32c.hpp"
+#include "storage/pack_checks.hpp"
 
 namespace visvol::storage {
 
@@ -47,6 +48,9 @@ Status validate(const PackLayout& layout) {
       return invalid_argument(msg.str());
     }
   }
+  // what the reader would refuse (pack_checks.hpp) is refused before anything is written
+  const Status readable = check_level_geometry(layout.levels.data(), static_cast<int>(layout.levels.size()), "pack");
+  if (!readable.ok()) return invalid_argument(readable.message());
   return Status::ok_status();
 }
 

@@ -8,12 +8,15 @@
 #include <array>
 #include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
+#include "../storage/crafted_pack.hpp"
 #include "../tools/cli_runner.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
@@ -487,6 +490,97 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   EXPECT_GT(after["loop"]["ticks"].get<int>(), 1000);  // it ran on the other pack
   const std::string csv = slurp(out + "/path.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), after["path"]["flyable"]["vertices"].get<int>() + 1);
+}
+
+// A --terrain pack is checked at start-up as a switch would need it, tiles
+// included: a bad one refuses the start (status 2), naming it.
+TEST_F(Console, RefusesToStartWithABadTerrainPack) {
+  const std::string bad = ::testing::TempDir() + "/console_bad_" + std::to_string(getpid()) + ".vvp";
+  const std::string out = out_dir("bad_terrain");
+  struct Case {
+    const char* what;
+    std::function<void(visvol::storage::testing::CraftedPack&, const std::string&)> make;
+    const char* expect;
+  };
+  const std::vector<Case> cases = {
+      {"a tile whose checksum fails",
+       [](visvol::storage::testing::CraftedPack& p, const std::string& path) {
+         p.write(path);
+         // one byte of the last tile, after the checksums were written
+         const visvol::storage::TileEntry& t = p.tile(1, visvol::storage::Layer::tff, 0, 0);
+         std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+         f.seekp(static_cast<std::streamoff>(t.offset + 5));
+         f.put('\x7f');
+       },
+       "tff tile (0, 0) of level 1: checksum mismatch"},
+      {"a NaN height with consistent checksums",
+       [](visvol::storage::testing::CraftedPack& p, const std::string& path) {
+         p.set_height(0, 3, 4, NAN);
+         p.write(path);
+       },
+       "post (3, 4) has height nan"},
+  };
+  for (const Case& c : cases) {
+    visvol::storage::testing::CraftedPack pack(*pack_);
+    c.make(pack, bad);
+    const Outcome r = console("--pack " + *pack_ + " --terrain " + bad + " --seconds 2 --no-dds --priority 0 --no-lock "
+                              "--script none --thumbnail-view none --out " + out);
+    EXPECT_EQ(r.status, 2) << c.what << ": " << r.err;
+    EXPECT_NE(r.err.find("--terrain " + bad + ": "), std::string::npos) << c.what << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.what << ": " << r.err;
+    EXPECT_NE(access((out + "/summary.json").c_str(), F_OK), 0) << c.what << ": it ran";
+  }
+  std::remove(bad.c_str());
+}
+
+// A switch whose session cannot start (here the pack was damaged after
+// start-up) ends nothing: the console goes back to the pack it left, runs
+// out its time there and names the failure in summary.json.
+TEST_F(Console, ASwitchThatCannotStartGoesBackToThePackItLeft) {
+  using namespace visvol::dds;
+  const std::string other = ::testing::TempDir() + "/console_c_" + std::to_string(getpid()) + ".vvp";
+  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
+  const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_c_" + std::to_string(getpid());
+
+  ParticipantConfig pc;
+  pc.domain_id = 226;
+  pc.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(pc);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto commands = Writer::create(**participant, Topic::command);
+  auto acks = Reader::create(**participant, Topic::command_ack);
+  ASSERT_TRUE(commands.ok() && acks.ok());
+  const std::string out = out_dir("switch_back");
+  Outcome r;
+  std::thread run([&] {
+    r = console("--pack " + *pack_ + " --terrain " + other + " --seconds 6 --domain 226 --priority 0 --no-lock "
+                "--segments 32 --script none --thumbnail-view none --out " + out);
+  });
+  ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";
+  // the pack is cut short on disk after the console checked it
+  ASSERT_EQ(truncate(other.c_str(), 8192), 0);
+  Command go{};
+  go.kind = CommandKind::switch_terrain;
+  go.sequence = 3;
+  copy_text(go.source, "console_test");
+  copy_text(go.pack_id, other_id);
+  CommandMessage msg;
+  ASSERT_EQ(commands->write(&msg.fill(go)), DDS_RETCODE_OK);
+  run.join();
+  std::remove(other.c_str());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("switch-terrain failed; back on " + *pack_), std::string::npos) << r.err;
+
+  const nlohmann::json before = nlohmann::json::parse(slurp(out + "/session-1-" + first_id + "/summary.json"));
+  EXPECT_EQ(before["switched_to"], other_id);
+  const nlohmann::json after = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(after["pack_id"], first_id);
+  EXPECT_EQ(after["session"], 2);
+  const std::string failed = after["switch_failed"].get<std::string>();
+  EXPECT_EQ(failed.rfind(other_id + ": ", 0), 0u) << failed;
+  EXPECT_NE(failed.find("truncated"), std::string::npos) << failed;
+  EXPECT_GT(after["loop"]["ticks"].get<int>(), 1000);  // it ran on after the failed switch
 }
 
 }  // namespace

@@ -359,8 +359,9 @@ Status Console::Impl::start() {
   }
   VISVOL_RETURN_IF_ERROR(start_fitter());
   release_pack_pages();  // the fitter read the finest terrain once
-  budget.reserve("flyable path (finest terrain, fit)",
-                 path_fitter().bytes() + 8 * sizeof(dds::PathSample) + 1024 * 1024);
+  budget.reserve("flyable path (finest terrain, a hull of it per observer, fit)",
+                 PathFitter::bytes(pack->geometry(0), observers) + 8 * sizeof(dds::PathSample) + 1024 * 1024 +
+                     (observers > 0 ? rt::ConstraintHulls::build_bytes(pack->geometry(0)) : 0));
   const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
   budget.reserve("ropes (both models, max segments)", 2 * segments * 1024);
   budget.reserve("executive (samples, scratch)", sizeof(dds::PathSample) * 2 + segments * 64 + 64 * 1024);
@@ -418,7 +419,7 @@ Status Console::Impl::start() {
   }
   if (flyable) {
     out.path = &flyable->rope_paths();
-    out.path_gains = &flyable->gains();
+    out.path_limits = &flyable->limits();
   }
   auto e = rt::Executive::create(ec, *field, bus, sim.get(), &commands, out);
   if (!e.ok()) return e.status();
@@ -500,7 +501,7 @@ Status Console::Impl::start_fitter() {
   Result<rt::VehicleEnvelope> v = resolve_vehicle(o);
   if (!v.ok()) return v.status();
   vehicle = *v;
-  auto f = PathFitter::create(pack, vehicle, 128);
+  auto f = PathFitter::create(pack, vehicle, 128, observers);
   if (!f.ok()) return f.status();
   if (!publisher && !thumbs) {
     fitter = std::move(*f);
@@ -517,7 +518,10 @@ Status Console::Impl::start_fitter() {
 // outputs give and the check judges (the fitter's thread has stopped).
 void Console::Impl::fit_final_path() {
   const rt::Rope& rope = exec->rope();
-  const rt::EnvelopeFit f = path_fitter().fit(rope.vertices(), rope.segments() + 1, exec->forces().gains());
+  PathFitter& fit = flyable ? flyable->fitter() : *fitter;
+  const rt::HullSet* set = exec->hulls_in_force();
+  fit.set_observers(set != nullptr ? set->request : rt::HullRequest{});
+  const rt::EnvelopeFit f = fit.fit(rope.vertices(), rope.segments() + 1, exec->forces().gains());
   final_path = f.path;
   final_flyable = f.feasible;
 }

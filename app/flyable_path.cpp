@@ -5,12 +5,14 @@
 #include <cmath>
 #include <cstring>
 
+#include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
 
 namespace visvol::app {
 
 Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const storage::Pack> pack,
-                                                       const rt::VehicleEnvelope& vehicle, int fc_samples) {
+                                                       const rt::VehicleEnvelope& vehicle, int fc_samples,
+                                                       int max_observers) {
   VISVOL_RETURN_IF_ERROR(rt::validate(vehicle));
   if (fc_samples < 2) return invalid_argument("flyable path: fc_samples must be at least 2");
   // the console verified the pack's tiles when it opened it
@@ -23,7 +25,31 @@ Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const sto
   f->top_m_ = f->finest_->geometry().top_m();
   f->field_ = std::make_unique<rt::FieldForces<storage::PackLevel>>(*f->finest_, rt::ForceGains{});
   f->terrain_ = rt::level_terrain(*f->finest_);
+  f->hulls_.reserve(static_cast<std::size_t>(std::max(0, max_observers)));
   return f;
+}
+
+std::uint64_t PathFitter::bytes(const fields::VolumeGeometry& g, int observers) {
+  const auto posts = static_cast<std::uint64_t>(g.nx) * static_cast<std::uint64_t>(g.ny);
+  return posts * sizeof(float) * static_cast<std::uint64_t>(1 + std::max(0, observers));
+}
+
+void PathFitter::set_observers(const rt::HullRequest& r) {
+  if (r.sequence == observers_sequence_) return;
+  observers_sequence_ = r.sequence;
+  hulls_.clear();
+  below_.clear();
+  above_.clear();
+  auto add = [&](const double (&p)[3], std::vector<const rt::PointHull*>& to, const char* name) {
+    if (hulls_.size() == hulls_.capacity()) return void(++hull_failures_);  // never moves the hulls
+    const rt::ConstraintPoint c{rt::ConstraintKind::hidden_from, rt::HullRequest::point(p), r.eye_height_m};
+    Result<rt::PointHull> h = rt::point_hull(*finest_, c.eye_m(), name);
+    if (!h.ok()) return void(++hull_failures_);
+    hulls_.push_back(std::move(*h));
+    to.push_back(&hulls_.back());
+  };
+  for (int k = 0; k < r.hidden_count; ++k) add(r.hidden_from_m[k], below_, "hidden-from");
+  for (int k = 0; k < r.visible_count; ++k) add(r.visible_to_m[k], above_, "visible-to");
 }
 
 rt::VehicleEnvelope PathFitter::envelope(const rt::ForceGains& g) const {
@@ -39,6 +65,8 @@ rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::F
   spec.envelope = envelope(gains);
   spec.top_m = top_m_;
   spec.max_points = dds::kMaxPathVertices;
+  spec.below = below_;
+  spec.above = above_;
   return rt::fit_to_envelope(std::vector<rt::Vec3>(vertices, vertices + count), spec, terrain_);
 }
 
@@ -95,25 +123,26 @@ FlyableStats FlyablePath::stats() const {
 }
 
 void FlyablePath::run() {
-  rt::ForceGains gains;
-  bool have_gains = false;
+  rt::PathLimits limits;
+  bool have_limits = false;
   const auto poll = std::chrono::duration<double>(poll_s_);
   while (!stop_.load(std::memory_order_acquire)) {
-    if (const rt::ForceGains* g = gains_.take()) gains = *g, have_gains = true;
-    // the gains are handed off before their path: a path never comes first
-    if (const dds::PathSample* p = rope_paths_.take(); p != nullptr && have_gains) send(*p, gains);
+    if (const rt::PathLimits* l = limits_.take()) limits = *l, have_limits = true;
+    // the limits are handed off before their path: a path never comes first
+    if (const dds::PathSample* p = rope_paths_.take(); p != nullptr && have_limits) send(*p, limits);
     std::this_thread::sleep_for(poll);
   }
 }
 
-void FlyablePath::send(const dds::PathSample& rope, const rt::ForceGains& gains) {
+void FlyablePath::send(const dds::PathSample& rope, const rt::PathLimits& limits) {
   rope_.clear();
   for (std::uint32_t k = 0; k < rope.vertex_count && k < dds::kMaxPathVertices; ++k) {
     const dds::WorldPoint& w = rope.vertices[k].position;
     rope_.emplace_back(w.x_m, w.y_m, w.z_m);
   }
   if (rope_.size() < 2) return;
-  const rt::EnvelopeFit fit = fitter_->fit(rope_.data(), static_cast<int>(rope_.size()), gains);
+  fitter_->set_observers(limits.observers);
+  const rt::EnvelopeFit fit = fitter_->fit(rope_.data(), static_cast<int>(rope_.size()), limits.gains);
   if (fit.path.size() < 2) return;
   dds::PathSample& out = *out_;
   // the header as the rope's: its run, its time, its state of rest

@@ -2,21 +2,20 @@
 // envelope off the real-time thread, as `visvol plan` fits its answer
 // (rt::fit_to_envelope).
 //
-//   loop thread   --rope path, gains in force-->   fitter thread
+//   loop thread   --rope path, limits in force-->  fitter thread
 //   fitter thread --flyable path-->                DDS publisher, renderer
 //
 // The rope stays the operator's: it settles in the field and follows the
 // hand. What leaves the console is its projection into the envelope: climb
 // and descent within the vehicle's limits on every segment, turns no tighter
 // than its radius, heights from the clearance up to the ceilings in force
-// (the executive's gains, which commands change). Where the band of heights
-// and the slope limits conflict, the path sent is the nearest the fit found
-// and `unflyable` counts it; the session's summary checks the final path
-// exactly (rt::PathChecker).
-//
-// Hidden-from and visible-to observers are not part of this fit (their hulls
-// live on the loop's level and belong to the loop): the rope's hull forces
-// keep them, and the summary's check says how well.
+// (the executive's gains, which commands change), under the hull of every
+// hidden-from observer in force and over that of every visible-to one (the
+// fitter builds its own hulls on the finest level, on its thread, when the
+// set in force changes). Where the band of heights and the slope limits
+// conflict, the path sent is the nearest the fit found and `unflyable` counts
+// it; the session's summary checks the final path exactly (rt::PathChecker):
+// the hulls make the observers' requirements likely, the sight lines judge.
 //
 // Thread-safety: rope_paths() and gains() have one producer, the loop
 // thread; the sinks have one consumer each; stats() from any thread.
@@ -32,6 +31,7 @@
 #include "drivers/dds/samples.hpp"
 #include "fields/heightfield.hpp"
 #include "rt/base/handoff.hpp"
+#include "rt/exec/executive.hpp"
 #include "rt/rope/envelope_fit.hpp"
 #include "rt/rope/field_forces.hpp"
 #include "rt/rope/vehicle.hpp"
@@ -43,18 +43,25 @@ namespace visvol::app {
 class PathFitter {
  public:
   static Result<std::unique_ptr<PathFitter>> create(std::shared_ptr<const storage::Pack> pack,
-                                                    const rt::VehicleEnvelope& vehicle, int fc_samples);
+                                                    const rt::VehicleEnvelope& vehicle, int fc_samples,
+                                                    int max_observers);
 
   // The vehicle's limits with the clearance and the ceilings in force.
   rt::VehicleEnvelope envelope(const rt::ForceGains& gains) const;
+  // Builds the hulls of a set of observers on the finest level, unless they
+  // are those of the last set (same sequence). An observer whose hull cannot
+  // be built (under the terrain, outside the pack: the executive refused it
+  // already) is left out and counted.
+  void set_observers(const rt::HullRequest& observers);
   rt::EnvelopeFit fit(const rt::Vec3* vertices, int count, const rt::ForceGains& gains) const;
   // `path` into `out`'s vertices and figures (F_c, length, lowest clearance
   // on the finest level); the header fields are left as they are.
   void describe(const std::vector<rt::Vec3>& path, dds::PathSample& out) const;
 
   const fields::Heightfield& terrain() const { return terrain_; }
-  // Bytes held: the finest terrain.
-  std::uint64_t bytes() const { return terrain_.height_m.size() * sizeof(float); }
+  // Bytes held: the finest terrain, and a hull of it per observer.
+  static std::uint64_t bytes(const fields::VolumeGeometry& finest, int observers);
+  int hull_failures() const { return hull_failures_; }
 
  private:
   PathFitter() = default;
@@ -64,6 +71,10 @@ class PathFitter {
   std::unique_ptr<storage::PackLevel> finest_;
   std::unique_ptr<rt::FieldForces<storage::PackLevel>> field_;
   fields::Heightfield terrain_;
+  std::uint64_t observers_sequence_ = 0;
+  std::vector<rt::PointHull> hulls_;                 // reserved at create()
+  std::vector<const rt::PointHull*> below_, above_;  // hidden-from, visible-to
+  int hull_failures_ = 0;
 };
 
 struct FlyableStats {
@@ -83,24 +94,25 @@ class FlyablePath {
   FlyablePath& operator=(const FlyablePath&) = delete;
 
   LatestValue<dds::PathSample>& rope_paths() { return rope_paths_; }
-  LatestValue<rt::ForceGains>& gains() { return gains_; }
+  LatestValue<rt::PathLimits>& limits() { return limits_; }
   FlyableStats stats() const;
   // Stops the thread (idempotent); afterwards fitter() may be used.
   void stop();
   const PathFitter& fitter() const { return *fitter_; }
+  PathFitter& fitter() { return *fitter_; }  // after stop()
 
  private:
   FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<dds::PathSample>* to_publisher,
               LatestValue<dds::PathSample>* to_renderer, double poll_s);
   void run();
-  void send(const dds::PathSample& rope, const rt::ForceGains& gains);
+  void send(const dds::PathSample& rope, const rt::PathLimits& limits);
 
   std::unique_ptr<PathFitter> fitter_;
   LatestValue<dds::PathSample>* to_publisher_;
   LatestValue<dds::PathSample>* to_renderer_;
   double poll_s_;
   LatestValue<dds::PathSample> rope_paths_;
-  LatestValue<rt::ForceGains> gains_;
+  LatestValue<rt::PathLimits> limits_;
   std::unique_ptr<dds::PathSample> out_;  // large: filled here, copied into the sinks
   std::vector<rt::Vec3> rope_;
   std::atomic<std::uint64_t> fitted_{0}, unflyable_{0};

@@ -763,7 +763,12 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
   }
   p.vertex_count = static_cast<std::uint32_t>(keep);
   p.min_clearance_m = lowest;
-  if (outputs_.path_gains != nullptr) outputs_.path_gains->write(forces_->gains());
+  if (outputs_.path_limits != nullptr) {
+    PathLimits& l = outputs_.path_limits->back();
+    l.gains = forces_->gains();
+    l.observers = in_force_ != nullptr ? in_force_->request : HullRequest{};
+    outputs_.path_limits->publish();
+  }
   for (LatestValue<dds::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
     if (sink == nullptr) continue;
     std::memcpy(&sink->back(), &p, sizeof p);

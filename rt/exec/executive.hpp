@@ -127,13 +127,19 @@ struct ExecutiveCounters {
   bool haptics = false;
 };
 
+// The limits in force when a path was handed off (plain data).
+struct PathLimits {
+  ForceGains gains;        // the clearance and the ceilings
+  HullRequest observers;   // the hidden-from and visible-to set in force (none: sequence 0, no points)
+};
+
 // Where the executive's outputs go; every pointer may be null.
 struct ExecutiveOutputs {
   LatestValue<dds::PathSample>* path = nullptr;            // DDS publisher
   LatestValue<dds::PathSample>* path_render = nullptr;     // renderer
-  // The gains in force (clearance, ceilings), handed off before each path
-  // sent to `path`: a consumer that fits the path into the envelope.
-  LatestValue<ForceGains>* path_gains = nullptr;
+  // What the paths sent to `path` are held to, handed off before each:
+  // for a consumer that fits them into the envelope.
+  LatestValue<PathLimits>* path_limits = nullptr;
   LatestValue<dds::DeviceStatusSample>* device = nullptr;  // DDS publisher
   dds::AckQueue* acks = nullptr;                           // applied/failed, to command intake
 };

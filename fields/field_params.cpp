@@ -55,8 +55,10 @@ Status validate(const FieldParams& p, const Heightfield& hf) {
     msg << "threads: " << p.threads << " is outside 0..1024";
     return invalid_argument(msg.str());
   }
-  if (!std::isfinite(p.max_memory_mib) || p.max_memory_mib <= 0) {
-    msg << "memory limit: " << p.max_memory_mib << " MiB must be positive";
+  // Bounded so that the limit in bytes fits a size_t (1e308 MiB once became 0 bytes).
+  if (!std::isfinite(p.max_memory_mib) || p.max_memory_mib <= 0 || p.max_memory_mib > kMaxMemoryMib) {
+    msg << "memory limit: " << p.max_memory_mib << " MiB is outside 0.."
+        << static_cast<long long>(kMaxMemoryMib) << " MiB (16 TiB), 0 excluded";
     return invalid_argument(msg.str());
   }
   if (p.vertical && !(std::isfinite(p.vertical->z0_m) && std::isfinite(p.vertical->dz_m) &&

@@ -33,6 +33,9 @@ struct VerticalGrid {
   double dz_m = 1;
 };
 
+// The largest working-memory limit a build accepts, MiB (16 TiB).
+inline constexpr double kMaxMemoryMib = 16.0 * 1024 * 1024;
+
 struct FieldParams {
   int nz = 128;                   // voxel levels
   double ceiling_m = 300.0;       // height of the top level above the highest post

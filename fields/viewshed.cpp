@@ -27,8 +27,11 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
       p.target_height_m < -1.0e4 || p.target_height_m > 1.0e5) {
     return invalid_argument("observer or target height is not a finite height within 100 km");
   }
-  if (!std::isfinite(p.max_distance_m) || p.max_distance_m < 0) {
-    return invalid_argument("max distance must be a finite number of metres, 0 for unlimited");
+  if (!std::isfinite(p.max_distance_m) || p.max_distance_m < 0 || p.max_distance_m > kMaxViewshedDistanceM) {
+    msg.precision(6);
+    msg << "max distance: " << p.max_distance_m << " m is outside 0.." << kMaxViewshedDistanceM
+        << " m (0: unlimited)";
+    return invalid_argument(msg.str());
   }
   if (!std::isfinite(p.curvature_coeff) || p.curvature_coeff < 0 || p.curvature_coeff > 1) {
     return invalid_argument("curvature coefficient must be in [0, 1]");
@@ -43,8 +46,9 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
   vs.observer_i = static_cast<int>(fi);
   vs.observer_j = static_cast<int>(fj);
   const int full = std::max(hf.nx, hf.ny) - 1;
+  // In posts, clamped to the grid before it becomes an int.
   const int radius = p.max_distance_m > 0
-      ? std::min(full, static_cast<int>(std::ceil(p.max_distance_m / hf.spacing_m)))
+      ? static_cast<int>(std::min<double>(full, std::ceil(p.max_distance_m / hf.spacing_m)))
       : full;
 
   VolumeGeometry g;  // only the ground levels of the padding are unused here

@@ -27,6 +27,8 @@ struct ViewshedParams {
 inline constexpr std::uint8_t kViewshedHidden = 0;
 inline constexpr std::uint8_t kViewshedVisible = 1;
 inline constexpr std::uint8_t kViewshedOutside = 255;  // beyond max_distance_m (nodata)
+// The largest max_distance_m accepted, m (100000 km: beyond any DEM).
+inline constexpr double kMaxViewshedDistanceM = 1.0e8;
 
 struct Viewshed {
   int nx = 0, ny = 0;

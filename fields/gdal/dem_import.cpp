@@ -174,9 +174,11 @@ Result<ImportPlan> plan_import(GDALDataset& src, const std::string& path, const 
   if (!info.ok()) return info.status();
   plan.info = *info;
   VISVOL_RETURN_IF_ERROR(plan_source_srs(src, path, options, plan));
+  const bool geographic = plan.has_srs && plan.source_srs.IsGeographic();
+  // A flipped, rotated or absurd grid is refused, not warped into something plausible.
+  VISVOL_RETURN_IF_ERROR(gdal::check_geotransform(plan.info, path, geographic));
   VISVOL_RETURN_IF_ERROR(plan_target(path, options, plan));
   // Non-square pixels of a projected DEM become square ones of the same area.
-  const bool geographic = plan.has_srs && plan.source_srs.IsGeographic();
   const double* gt = plan.info.geotransform;
   const bool square = std::fabs(std::fabs(gt[1]) - std::fabs(gt[5])) <= 1e-3 * std::fabs(gt[1]) &&
                       gt[2] == 0 && gt[4] == 0 && gt[1] > 0 && gt[5] < 0;
@@ -238,9 +240,15 @@ Result<BoundingBox> inner_footprint(void* transformer, int nx, int ny, const std
   return b;
 }
 
-// The grid of a DEM that import warps: GDAL's suggested output (what gdalwarp
-// chooses) unless a spacing is given.
-Result<ImportGrid> warped_grid(GDALDataset& in, const ImportPlan& plan, const std::string& path) {
+// GDAL's suggested output of a warp to the plan's CRS (what gdalwarp chooses),
+// with the transformer that found it.
+struct SuggestedWarp {
+  double gt[6] = {0, 1, 0, 0, 0, -1};
+  double extent[4] = {0, 0, 0, 0};  // xmin ymin xmax ymax, output CRS
+  TransformerPtr transformer;
+};
+
+Result<SuggestedWarp> suggest_warp(GDALDataset& in, const ImportPlan& plan, const std::string& path) {
   CPLStringList transformer_options;
   if (!plan.target.empty()) {
     Result<OGRSpatialReference> t = parse_srs(plan.target, "--t-srs");
@@ -251,21 +259,51 @@ Result<ImportGrid> warped_grid(GDALDataset& in, const ImportPlan& plan, const st
     CPLFree(wkt);
   }
   CPLErrorReset();
-  TransformerPtr t(
+  SuggestedWarp w;
+  w.transformer.reset(
       GDALCreateGenImgProjTransformer2(GDALDataset::ToHandle(&in), nullptr, transformer_options.List()));
-  if (!t) return io_error(path + ": cannot transform to the output CRS: " + gdal::last_gdal_error());
-  double gt[6], extent[4];
+  if (!w.transformer) return io_error(path + ": cannot transform to the output CRS: " + gdal::last_gdal_error());
   int nx = 0, ny = 0;
-  if (GDALSuggestedWarpOutput2(GDALDataset::ToHandle(&in), GDALGenImgProjTransform, t.get(), gt, &nx, &ny,
-                               extent, 0) != CE_None) {
+  if (GDALSuggestedWarpOutput2(GDALDataset::ToHandle(&in), GDALGenImgProjTransform, w.transformer.get(), w.gt,
+                               &nx, &ny, w.extent, 0) != CE_None) {
     return io_error(path + ": cannot find the output grid: " + gdal::last_gdal_error());
   }
+  return w;
+}
+
+// The grid of a DEM that import warps: GDAL's suggested output unless a
+// spacing is given.
+Result<ImportGrid> warped_grid(GDALDataset& in, const ImportPlan& plan, const std::string& path) {
+  Result<SuggestedWarp> w = suggest_warp(in, plan, path);
+  if (!w.ok()) return w.status();
   ImportGrid g;
-  g.spacing_m = plan.spacing_m > 0 ? plan.spacing_m : gt[1];
-  Result<BoundingBox> covered = inner_footprint(t.get(), plan.info.nx, plan.info.ny, path);
+  g.spacing_m = plan.spacing_m > 0 ? plan.spacing_m : w->gt[1];
+  Result<BoundingBox> covered = inner_footprint(w->transformer.get(), plan.info.nx, plan.info.ny, path);
   if (!covered.ok()) return covered.status();
   g.covered = *covered;
   return g;
+}
+
+// Refuses a warp whose output would exceed the size limits, before GDAL
+// allocates and fills it (posts a side as gdalwarp rounds them).
+Status check_warp_size(GDALDataset& in, const ImportPlan& plan, const ImportOptions& options,
+                       const std::string& path) {
+  Result<SuggestedWarp> w = suggest_warp(in, plan, path);
+  if (!w.ok()) return w.status();
+  const double spacing_m = plan.spacing_m > 0 ? plan.spacing_m : w->gt[1];
+  const BoundingBox box = options.crop ? *options.crop
+                                       : BoundingBox{w->extent[0], w->extent[1], w->extent[2], w->extent[3]};
+  const double nx = std::floor((box.xmax - box.xmin) / spacing_m + 0.5);
+  const double ny = std::floor((box.ymax - box.ymin) / spacing_m + 0.5);
+  if (std::isfinite(nx) && std::isfinite(ny) && nx <= kMaxPostsPerSide && ny <= kMaxPostsPerSide &&
+      nx * ny <= static_cast<double>(options.max_posts)) {
+    return Status::ok_status();
+  }
+  std::ostringstream msg;
+  msg << path << ": the import would be " << nx << " x " << ny << " posts at " << number(spacing_m)
+      << " m spacing; at most " << kMaxPostsPerSide << " a side and " << options.max_posts
+      << " in all are supported: give a coarser --spacing or a smaller --crop";
+  return invalid_argument(msg.str());
 }
 
 BoundingBox grown(const BoundingBox& b, double by_m) {
@@ -316,8 +354,10 @@ Status check_covered(const BoundingBox& covered, const BoundingBox& need, const 
 }  // namespace
 
 Status validate(const ImportOptions& o) {
-  if (!(o.spacing_m >= 0) || !std::isfinite(o.spacing_m) || o.spacing_m > 1.0e5) {
-    return invalid_argument("spacing: " + number(o.spacing_m) + " m is outside 0..100000 m");
+  const bool keep = o.spacing_m == 0;
+  if (!keep && !(o.spacing_m >= kMinPostSpacingM && o.spacing_m <= kMaxPostSpacingM)) {
+    return invalid_argument("spacing: " + number(o.spacing_m) + " m is neither 0 (keep) nor in " +
+                            number(kMinPostSpacingM) + ".." + number(kMaxPostSpacingM) + " m");
   }
   if (o.crop && !is_box(*o.crop)) return invalid_argument("crop: " + not_a_box(*o.crop));
   for (const char* r : {"near", "bilinear", "cubic", "cubicspline", "lanczos", "average"}) {
@@ -351,6 +391,7 @@ Result<Heightfield> import_dem(const std::string& path, const ImportOptions& opt
   const double spacing = plan->spacing_m;
 
   DatasetPtr result;
+  if (warp) VISVOL_RETURN_IF_ERROR(check_warp_size(in, *plan, options, path));
   if (warp) {
     Args args;
     args.add("-of").add("MEM").add("-r").add(options.resampling);
@@ -406,6 +447,7 @@ Result<Heightfield> import_dem(const std::string& path, const ImportOptions& opt
   Result<Heightfield> hf = gdal::to_heightfield(out, *out_info, path, read, info.vertical_to_m);
   if (!hf.ok()) return hf.status();
   if (info.vertical_to_m != 1.0) steps << "heights from " << info.vertical_unit << " to metres; ";
+  if (info.vertical_unit.empty()) steps << "heights taken as metres (the file names no vertical unit); ";
   rep.output_crs = crs_name(hf->crs_wkt);
   rep.steps = steps.str();
   if (!rep.steps.empty()) rep.steps.resize(rep.steps.size() - 2);  // trailing "; "

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "fields/gdal/ascii_grid.hpp"
 #include "fields/gdal/gdal_dataset.hpp"
 #include "rt/base/atomic_file.hpp"
 
@@ -56,15 +57,27 @@ Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::s
   if (!ds) return io_error(path + ": cannot open as a raster: " + last_gdal_error());
   DatasetPtr owned(ds);
   if (ds->GetRasterCount() < 1) return invalid_argument(path + ": raster has no bands");
+  const char* driver = ds->GetDriver() ? ds->GetDriver()->GetDescription() : "";
+  if (is_ascii_grid_driver(driver)) {
+    VISVOL_RETURN_IF_ERROR(check_ascii_grid_cells(path, ds->GetRasterXSize(), ds->GetRasterYSize()));
+  }
   return owned;
 }
 
-double vertical_factor(std::string unit) {
+std::optional<double> vertical_factor(std::string unit) {
   std::transform(unit.begin(), unit.end(), unit.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (unit == "ft" || unit == "foot" || unit == "feet" || unit == "international foot") return 0.3048;
-  if (unit == "us-ft" || unit == "ftus" || unit == "us survey foot") return 1200.0 / 3937.0;
-  return 1.0;
+  // Band units as GDAL's drivers spell them (GeoTIFF vertical units, USGS DEM, DTED, SRTM).
+  for (const char* metre : {"", "m", "metre", "metres", "meter", "meters"}) {
+    if (unit == metre) return 1.0;
+  }
+  for (const char* foot : {"ft", "foot", "feet", "international foot"}) {
+    if (unit == foot) return 0.3048;
+  }
+  for (const char* us_foot : {"us-ft", "ftus", "us survey foot", "us_survey_foot", "foot_us"}) {
+    if (unit == us_foot) return 1200.0 / 3937.0;
+  }
+  return std::nullopt;
 }
 
 Result<DemInfo> info_of(GDALDataset& ds, const std::string& name) {
@@ -86,7 +99,13 @@ Result<DemInfo> info_of(GDALDataset& ds, const std::string& name) {
   }
   GDALRasterBand* band = ds.GetRasterBand(1);
   info.vertical_unit = band->GetUnitType() ? band->GetUnitType() : "";
-  info.vertical_to_m = vertical_factor(info.vertical_unit);
+  const std::optional<double> to_m = vertical_factor(info.vertical_unit);
+  if (!to_m) {
+    return invalid_argument(name + ": heights are in '" + info.vertical_unit +
+                            "', a unit visvol does not know; known: metre (m, meters), foot (ft, feet), "
+                            "US survey foot (us-ft); none means metres");
+  }
+  info.vertical_to_m = *to_m;
   int has = 0;
   info.nodata = band->GetNoDataValue(&has);
   info.has_nodata = has != 0;
@@ -153,6 +172,97 @@ Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
 
 }  // namespace
 
+namespace {
+
+std::string geotransform_text(const double* gt) {
+  std::ostringstream s;
+  s.precision(10);
+  s << "(" << gt[0] << ", " << gt[1] << ", " << gt[2] << ", " << gt[3] << ", " << gt[4] << ", " << gt[5] << ")";
+  return s.str();
+}
+
+Status refuse_unlabelled_degrees(const DemInfo& info, const std::string& name) {
+  if (!looks_like_degrees(info)) return Status::ok_status();
+  std::ostringstream msg;
+  msg << name << ": has no CRS, and its extent and pixel size (" << info.geotransform[1]
+      << ") look like degrees; give its CRS (--assume-srs EPSG:4326) so it can be projected";
+  return invalid_argument(msg.str());
+}
+
+// Pixel width and height inside the range for the CRS's unit.
+Status check_pixel_size(const DemInfo& info, const std::string& name, bool geographic) {
+  const double* gt = info.geotransform;
+  std::ostringstream msg;
+  msg.precision(10);
+  msg << name << ": pixel size " << gt[1] << " x " << -gt[5];
+  if (geographic) {
+    if (gt[1] < kMinPixelDeg || gt[1] > kMaxPixelDeg || -gt[5] < kMinPixelDeg || -gt[5] > kMaxPixelDeg) {
+      msg << " degrees is outside " << kMinPixelDeg << ".." << kMaxPixelDeg << " degrees";
+      return invalid_argument(msg.str());
+    }
+    return Status::ok_status();
+  }
+  const double sx_m = gt[1] * info.linear_unit_m, sy_m = -gt[5] * info.linear_unit_m;
+  if (sx_m < kMinPostSpacingM || sx_m > kMaxPostSpacingM || sy_m < kMinPostSpacingM ||
+      sy_m > kMaxPostSpacingM) {
+    msg << (info.linear_unit_m == 1.0 ? " m" : " CRS units") << " is outside " << kMinPostSpacingM << ".."
+        << kMaxPostSpacingM << " m";
+    return invalid_argument(msg.str());
+  }
+  return Status::ok_status();
+}
+
+// The raster's corners inside what the CRS can hold.
+Status check_extent(const DemInfo& info, const std::string& name, bool geographic) {
+  const double* gt = info.geotransform;
+  const double x0 = gt[0], x1 = gt[0] + gt[1] * info.nx;
+  const double y1 = gt[3], y0 = gt[3] + gt[5] * info.ny;
+  std::ostringstream msg;
+  msg.precision(10);
+  msg << name << ": extent x " << x0 << ".." << x1 << ", y " << y0 << ".." << y1;
+  if (geographic) {
+    const double lat_slack_deg = -gt[5];  // pixel edges of a global grid may pass a pole by one pixel
+    if (x0 < -360 || x1 > 360 || y0 < -90 - lat_slack_deg || y1 > 90 + lat_slack_deg) {
+      msg << " degrees is not on Earth (longitude -360..360, latitude -90..90)";
+      return invalid_argument(msg.str());
+    }
+    return Status::ok_status();
+  }
+  const double limit = kMaxCoordinateM / info.linear_unit_m;
+  if (std::fabs(x0) > limit || std::fabs(x1) > limit || std::fabs(y0) > limit || std::fabs(y1) > limit) {
+    msg << (info.linear_unit_m == 1.0 ? " m" : " CRS units") << " reaches beyond +-" << kMaxCoordinateM
+        << " m, outside any projected CRS on Earth";
+    return invalid_argument(msg.str());
+  }
+  return Status::ok_status();
+}
+
+}  // namespace
+
+Status check_geotransform(const DemInfo& info, const std::string& name, bool geographic) {
+  const double* gt = info.geotransform;
+  if (!std::all_of(gt, gt + 6, [](double v) { return std::isfinite(v); })) {
+    return invalid_argument(name + ": geotransform " + geotransform_text(gt) + " has a term that is not finite");
+  }
+  if (gt[2] != 0 || gt[4] != 0) {
+    return invalid_argument(name + ": geotransform " + geotransform_text(gt) +
+                            " has rotation or shear terms (the 3rd and 5th); visvol reads north-up "
+                            "rasters only: warp it north-up first (gdalwarp)");
+  }
+  if (!(gt[1] > 0 && gt[5] < 0)) {
+    std::ostringstream msg;
+    msg << name << ": pixel size " << gt[1] << " x " << gt[5]
+        << " (geotransform terms 2 and 6) is not north-up: the width must be > 0 and the height < 0 "
+           "(row 0 the northern edge); a negative or zero cell size is not a valid grid, and a "
+           "south-up raster must be warped north-up first (gdalwarp)";
+    return invalid_argument(msg.str());
+  }
+  // Degrees without a CRS would fail the metre ranges below; say what they are.
+  if (!geographic) VISVOL_RETURN_IF_ERROR(refuse_unlabelled_degrees(info, name));
+  VISVOL_RETURN_IF_ERROR(check_pixel_size(info, name, geographic));
+  return check_extent(info, name, geographic);
+}
+
 Status check_metric_grid(const DemInfo& info, const std::string& name, std::size_t max_posts) {
   const double* gt = info.geotransform;
   std::ostringstream msg;
@@ -163,23 +273,12 @@ Status check_metric_grid(const DemInfo& info, const std::string& name, std::size
            "zone or --t-srs), or project it first (gdalwarp -t_srs EPSG:326<zone>)";
     return invalid_argument(msg.str());
   }
-  if (looks_like_degrees(info)) {
-    msg << "has no CRS, and its extent and pixel size (" << gt[1]
-        << ") look like degrees; give its CRS (--assume-srs EPSG:4326) so it can be projected";
-    return invalid_argument(msg.str());
-  }
+  VISVOL_RETURN_IF_ERROR(refuse_unlabelled_degrees(info, name));
   if (std::fabs(info.linear_unit_m - 1.0) > 1e-9) {
     msg << "CRS unit is " << info.linear_unit_m << " m, not metres; reproject it (--t-srs)";
     return invalid_argument(msg.str());
   }
-  if (gt[2] != 0 || gt[4] != 0) {
-    msg << "rotated geotransform; warp it north-up (--t-srs)";
-    return invalid_argument(msg.str());
-  }
-  if (!(gt[1] > 0 && gt[5] < 0)) {
-    msg << "pixel size " << gt[1] << " x " << gt[5] << " is not north-up (x > 0, y < 0); warp it first";
-    return invalid_argument(msg.str());
-  }
+  VISVOL_RETURN_IF_ERROR(check_geotransform(info, name, false));
   const double sx = gt[1], sy = -gt[5];
   if (std::fabs(sx - sy) > 1e-3 * std::max(sx, sy)) {
     msg << "pixels are " << sx << " x " << sy << " m; resample to square pixels (--spacing)";

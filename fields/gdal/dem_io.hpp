@@ -11,6 +11,16 @@
 
 namespace visvol::fields {
 
+// What a heightfield's grid may be, in metres: posts closer than 1 cm or
+// farther apart than 100 km are no terrain model, and a coordinate beyond
+// 1e8 m lies outside every projected CRS on Earth (UTM northings reach 1e7 m).
+inline constexpr double kMinPostSpacingM = 0.01;
+inline constexpr double kMaxPostSpacingM = 1.0e5;
+inline constexpr double kMaxCoordinateM = 1.0e8;
+// The same for a geographic source's pixels, in degrees (about 1 cm and 111 km).
+inline constexpr double kMinPixelDeg = 1.0e-7;
+inline constexpr double kMaxPixelDeg = 1.0;
+
 struct DemInfo {
   std::string driver;        // GDAL driver short name ("GTiff", "USGSDEM", ...)
   int nx = 0, ny = 0;

@@ -5,6 +5,7 @@
 #include <gdal_priv.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,8 +29,16 @@ Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::s
 // The header of an opened raster; `name` names it in messages.
 Result<DemInfo> info_of(GDALDataset& ds, const std::string& name);
 
-// Metres per unit for a band unit string ("ft", "US survey foot", "m", ...).
-double vertical_factor(std::string unit);
+// Metres per unit for a band unit string ("ft", "US survey foot", "m", ...;
+// none is metres), or nothing for a unit it does not know.
+std::optional<double> vertical_factor(std::string unit);
+
+// Refuses a geotransform no DEM should have, naming what was found: a
+// non-finite term, rotation or shear, a pixel width <= 0 or height >= 0 (not
+// north-up: a negative ESRI cellsize flips the grid), pixels outside
+// kMinPostSpacingM..kMaxPostSpacingM (kMinPixelDeg..kMaxPixelDeg when
+// `geographic`), corners beyond kMaxCoordinateM (longitude +-360, latitude +-90).
+Status check_geotransform(const DemInfo& info, const std::string& name, bool geographic);
 
 // Refuses what the heightfield cannot hold: degrees, non-metre CRS units,
 // rotated, flipped or non-square pixels, sizes beyond the limits.

@@ -11,8 +11,8 @@ Status validate(const PlanRequest& r) {
   std::ostringstream msg;
   if (!r.from.allFinite() || !r.to.allFinite()) return invalid_argument("plan: endpoints must be finite");
   if ((r.from - r.to).norm() < 1e-6) return invalid_argument("plan: --from and --to are the same point");
-  if (r.segments < 2 || r.segments > 100000) {
-    msg << "plan: " << r.segments << " segments is outside 2..100000";
+  if (r.segments < 2 || r.segments > kMaxPlanSegments) {
+    msg << "plan: " << r.segments << " segments is outside 2.." << kMaxPlanSegments;
     return invalid_argument(msg.str());
   }
   const double apart_m = (r.from - r.to).norm();
@@ -41,12 +41,28 @@ Status validate(const PlanRequest& r) {
       return invalid_argument(msg.str());
     }
   }
+  // The rope's steps cannot be interrupted within a level: bound their work.
+  const double vertex_steps = (r.segments + 1.0) * (r.max_seconds_per_level / r.dt_s);
+  if (vertex_steps > kMaxVertexStepsPerLevel) {
+    msg.precision(3);
+    msg << "plan: " << r.segments << " segments for " << r.max_seconds_per_level
+        << " simulated s a level is " << vertex_steps << " vertex steps a level, over the "
+        << kMaxVertexStepsPerLevel << " allowed (about half a minute of wall time a level): use fewer "
+        << "--segments or a smaller --max-seconds";
+    return invalid_argument(msg.str());
+  }
   if (r.fc_samples < 2 || r.fc_samples > 1000000) return invalid_argument("plan: F_c samples must be 2..1000000");
   if (r.init == InitialPath::polyline) {
     if (r.polyline.size() < 2) return invalid_argument("plan: an initial path needs at least 2 points");
     for (std::size_t i = 0; i < r.polyline.size(); ++i) {
       if (!r.polyline[i].allFinite()) {
         msg << "plan: initial path point " << i << " is not finite";
+        return invalid_argument(msg.str());
+      }
+      if (r.planning_bounds && !r.planning_bounds->contains(r.polyline[i].x(), r.polyline[i].y())) {
+        msg.precision(1);
+        msg << std::fixed << "plan: initial path point " << i << " (" << r.polyline[i].x() << ", "
+            << r.polyline[i].y() << ") is outside the pack's planning bounds";
         return invalid_argument(msg.str());
       }
     }

@@ -47,6 +47,14 @@ namespace visvol::rt {
 
 enum class InitialPath : std::uint8_t { straight, global, polyline };
 
+// Rope segments a plan may have (waypoints less one).
+inline constexpr int kMaxPlanSegments = 4096;
+// A level of detail's rope work at most: vertices x time steps. A level runs
+// to its simulated-time limit without a wall clock; at about 0.7 us a vertex
+// step this keeps one under about half a minute (the default 128 segments
+// for 40 s at 1 ms is 5.2e6).
+inline constexpr double kMaxVertexStepsPerLevel = 4.0e7;
+
 struct PlanRequest {
   Vec3 from = Vec3::Zero(), to = Vec3::Zero();
   Objective objective = Objective::hide;

@@ -52,6 +52,23 @@ TEST(Viewshed, MaxDistanceMarksOutsideCells) {
   EXPECT_EQ(vs->at(19, 19), kViewshedOutside);  // 56.6 m
 }
 
+TEST(Viewshed, AHugeMaxDistanceIsRefusedAndALargeOneCoversTheDem) {
+  // 1e308 m made a negative radius and an uncaught std::length_error (abort).
+  const Heightfield hf = flat(30, 10.0);
+  ViewshedParams p;
+  p.observer_x = hf.x_of(15);
+  p.observer_y = hf.y_of(15);
+  p.max_distance_m = 1e308;
+  const Result<Viewshed> refused = compute_viewshed(hf, p);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("max distance: 1e+308 m is outside 0..1e+08 m"), std::string::npos)
+      << refused.status().message();
+  p.max_distance_m = kMaxViewshedDistanceM;  // far beyond the grid: clamped to it
+  const Result<Viewshed> vs = compute_viewshed(hf, p);
+  ASSERT_TRUE(vs.ok()) << vs.status().message();
+  for (std::uint8_t v : vs->value) ASSERT_EQ(v, kViewshedVisible);
+}
+
 TEST(Viewshed, RefusesObserverOutsideTheDem) {
   const Heightfield hf = flat(10);
   ViewshedParams p;

@@ -349,6 +349,22 @@ TEST(VisibilityFieldInput, RejectsBadParameters) {
   EXPECT_NE(build_visibility_dense(hf, p).status().message().find("[0, 1]"), std::string::npos);
 }
 
+TEST(VisibilityFieldInput, AMemoryLimitTooLargeForBytesIsRefusedAndTheLargestWorks) {
+  // 1e308 MiB in bytes overflowed a size_t: a 2 MiB build was refused as over 0 bytes.
+  const Heightfield hf = flat(8);
+  FieldParams p = small_params(RangeShape::cube, 4);
+  p.max_memory_mib = 1e308;
+  const Result<DenseVolume> v = build_visibility_dense(hf, p);
+  ASSERT_FALSE(v.ok());
+  EXPECT_EQ(v.status().code(), Errc::invalid_argument);
+  EXPECT_NE(v.status().message().find("memory limit: 1e+308 MiB is outside 0..16777216 MiB"), std::string::npos)
+      << v.status().message();
+  p.max_memory_mib = kMaxMemoryMib;
+  EXPECT_TRUE(build_visibility_dense(hf, p).ok());
+  p.max_memory_mib = 0;
+  EXPECT_FALSE(build_visibility_dense(hf, p).ok());
+}
+
 TEST(VisibilityFieldInput, RefusesAbsurdSizesWithTheNeededMemory) {
   // 6000 x 6000 x 255 voxels (36 GB) in memory is far beyond the limit.
   Heightfield hf;

@@ -417,7 +417,7 @@ Runner add_build_command(CLI::App& app) {
   c->add_option("--planning-margin", o->planning_margin_m,
                 "Planning bounds: this far inside the DEM's posts on every side, m (default: the range "
                 "in metres; for --range-shape none, 1/8 of the DEM's smaller side)");
-  c->add_option("--max-memory", o->max_memory_mib, "Refuse builds needing more working memory, MiB")
+  c->add_option("--max-memory", o->max_memory_mib, "Refuse builds needing more working memory, MiB (at most 16777216, 16 TiB)")
       ->capture_default_str();
   c->add_flag("--json", o->json, "Print the summary as one JSON object");
   c->add_option("--json-file", o->json_file, "Also write the JSON summary to this file");

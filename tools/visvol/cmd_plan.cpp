@@ -5,6 +5,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 
 #include "check_report.hpp"
 #include "cli.hpp"
@@ -30,7 +31,8 @@ struct PlanOptions {
   int segments = 128;
   EnvelopeOptions envelope;
   ConstraintOptions constraints;
-  double k1 = 1.0, k2 = 1.0, stiffness = 1.0, slack = -1.0, length_weight = 0.0;
+  double k1 = 1.0, k2 = 1.0, stiffness = 1.0, length_weight = 0.0;
+  std::optional<double> slack;
   double max_seconds = 40.0;
   bool json = false;
   bool publish = false;
@@ -55,6 +57,39 @@ std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
   return rt::Vec3(v[0], v[1], v[2]);
 }
 
+// Each point of an --init path inside the planning bounds and, with heights,
+// between the terrain and the field's top; errors name the file and the
+// point as the file counts them (1 the first).
+Status check_init_points(const std::string& file_name, const PathFile& file, const PlanningPack& p,
+                         const fields::FieldSampler<PackLevel>& finest) {
+  const fields::Bounds2D& b = p.bounds;
+  const double top_m = p.levels.front().geometry().top_m();
+  for (std::size_t i = 0; i < file.points.size(); ++i) {
+    const rt::Vec3& v = file.points[i];
+    std::ostringstream msg;
+    msg.precision(1);
+    msg << std::fixed << "--init " << file_name << ": point " << i + 1 << " (" << v.x() << ", " << v.y();
+    if (file.has_heights) msg << ", " << v.z();
+    msg << ") ";
+    if (!b.contains(v.x(), v.y())) {
+      msg << "is outside the pack's planning bounds (x " << b.xmin_m << ".." << b.xmax_m << ", y " << b.ymin_m
+          << ".." << b.ymax_m << ")";
+      return invalid_argument(msg.str());
+    }
+    if (!file.has_heights) continue;
+    const double ground_m = finest.height(v.x(), v.y());
+    if (v.z() < ground_m) {
+      msg << "is " << ground_m - v.z() << " m below the terrain";
+      return invalid_argument(msg.str());
+    }
+    if (v.z() > top_m) {
+      msg << "is over the field's top " << top_m << " m";
+      return invalid_argument(msg.str());
+    }
+  }
+  return Status::ok_status();
+}
+
 // The request from the options and the pack: envelope, constraints, bounds.
 Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p) {
   rt::PlanRequest r;
@@ -74,7 +109,7 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   r.visibility_gain = o.k1;
   r.terrain_gain = o.k2;
   r.stiffness = o.stiffness;
-  r.slack = o.slack;
+  r.slack = o.slack.value_or(-1.0);  // negative: the planner's default
   r.length_weight = o.length_weight;
   r.max_seconds_per_level = o.max_seconds;
   const fields::FieldSampler<PackLevel> finest(p.levels.front());
@@ -85,18 +120,13 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   } else {
     Result<PathFile> file = read_path_file(o.init, p.pack->metadata().crs_wkt);
     if (!file.ok()) return invalid_argument("--init " + file.status().message());
+    VISVOL_RETURN_IF_ERROR(check_init_points(o.init, *file, p, finest));
     r.init = rt::InitialPath::polyline;
     if (file->has_heights) {
       r.polyline = file->points;
     } else {
       r.polyline = lift_polyline(file->points, r.envelope.clearance_m, p.levels.front().geometry().spacing_m / 2,
                                  [&](double x, double y) { return finest.height(x, y); });
-    }
-    for (std::size_t i = 0; i < r.polyline.size(); ++i) {
-      if (!p.bounds.contains(r.polyline[i].x(), r.polyline[i].y())) {
-        return invalid_argument("--init " + o.init + ": point " + std::to_string(i + 1) +
-                                " is outside the pack's planning bounds");
-      }
     }
     // The rope runs between --from and --to: they close the traced path.
     r.polyline.insert(r.polyline.begin(), r.from);
@@ -237,7 +267,10 @@ Runner add_plan_command(CLI::App& app) {
   c->add_option("--model", o->model, "articulated (inextensible capsules) or spring (spring-mass)")
       ->check(CLI::IsMember({"articulated", "spring"}))
       ->capture_default_str();
-  c->add_option("--segments", o->segments, "Rope segments (2..100000)")->capture_default_str();
+  c->add_option("--segments", o->segments,
+                "Rope segments (2..4096; with --max-seconds at most 4e7 vertex steps a level: "
+                "(segments + 1) x seconds / 1 ms)")
+      ->capture_default_str();
   c->add_option("--init", o->init,
                 "straight, global (graph search inside the envelope and constraints, coarsest level "
                 "first), or a path file (text 'x y' lifted to the clearance or 'x y z', plan CSV, GeoJSON)")
@@ -248,10 +281,14 @@ Runner add_plan_command(CLI::App& app) {
   c->add_option("--k2", o->k2, "Terrain force field gain")->capture_default_str();
   c->add_option("--stiffness", o->stiffness, "Rope stiffness factor")->capture_default_str();
   c->add_option("--slack", o->slack,
-                "Articulated rope: extra length over the initial path (default 0.3 straight, 0.05 otherwise)");
+                "Articulated rope: extra length over the initial path, 0..10 (default 0.3 straight, 0.05 "
+                "otherwise)")
+      ->check(CLI::Range(0.0, 10.0));
   c->add_option("--length-weight", o->length_weight, "Global search: cost per metre on top of F_p")
       ->capture_default_str();
-  c->add_option("--max-seconds", o->max_seconds, "Simulated seconds per level of detail at most")
+  c->add_option("--max-seconds", o->max_seconds,
+                "Simulated seconds per level of detail at most (not wall time: a level of 4e7 vertex "
+                "steps, the most --segments allow, takes about half a minute)")
       ->capture_default_str();
   c->add_option("-o,--output", o->out, "Output base name: writes BASE.geojson, .csv, .kml, .plan")->required();
   c->footer(

@@ -68,7 +68,7 @@ Runner add_viewshed_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--target-height", o->params.target_height_m, "Target above the ground, m")
       ->capture_default_str();
-  c->add_option("--max-distance", o->params.max_distance_m, "Range, m (0: unlimited)")
+  c->add_option("--max-distance", o->params.max_distance_m, "Range, m (0: unlimited; at most 1e8)")
       ->capture_default_str();
   c->add_option("--curvature", o->params.curvature_coeff,
                 "Earth curvature and refraction coefficient, 0 off (0.85714 is usual)")

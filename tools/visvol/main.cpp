@@ -13,11 +13,32 @@
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <exception>
 #include <map>
+#include <new>
 #include <string>
 
 #include "cli.hpp"
 #include "commands.hpp"
+
+namespace {
+
+// Runs a command; an exception that escapes it (a library's, or memory
+// running out) ends it with a message and exit 1, never an abort.
+int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
+  try {
+    return runner();
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "visvol %s: out of memory\n", command.c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "visvol %s: internal error: %s\n", command.c_str(), e.what());
+  } catch (...) {
+    std::fprintf(stderr, "visvol %s: internal error (unknown exception)\n", command.c_str());
+  }
+  return visvol::cli::kExitFailure;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace visvol::cli;
@@ -52,7 +73,10 @@ int main(int argc, char** argv) {
     }
     std::fprintf(stderr, "visvol: %s (try --help)\n", e.what());
     return kExitUsage;
+  } catch (const std::exception& e) {  // an option's own conversion or check
+    std::fprintf(stderr, "visvol: %s (try --help)\n", e.what());
+    return kExitUsage;
   }
-  for (CLI::App* sub : app.get_subcommands()) return runners.at(sub->get_name())();
+  for (CLI::App* sub : app.get_subcommands()) return run_guarded(sub->get_name(), runners.at(sub->get_name()));
   return kExitUsage;
 }

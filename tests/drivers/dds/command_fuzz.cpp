@@ -13,7 +13,12 @@
 // After every command the oracle checks: the ack is accepted or rejected,
 // texts are terminated and printable, a rejection says why, and an accepted
 // command is the sender's, passes validation again, and holds only finite
-// values inside the limits.
+// values inside the limits. set-constraints is judged both ways against a
+// model of its rules written from the message alone (at most one clearance,
+// max-agl and max-altitude each, a max-agl above the clearance, kinds 1..5,
+// at most 8 observers of a kind and `max_observers` (3 here) in all): a
+// command the rules allow is accepted unless the rate limit refused it, and
+// one they forbid is rejected.
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include <dds/ddsi/ddsi_cdrstream.h>
@@ -25,6 +30,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "drivers/dds/command_processor.hpp"
@@ -44,6 +50,7 @@ CommandLimits make_limits() {
   l.max = {551100.0, 4194000.0, 900.0};
   l.max_segments = 200;
   l.max_constraints = 8;
+  l.max_observers = 3;  // below the 8 of a kind and the 8 constraints: the total bound is met
   l.max_weight = 100.0;
   check(add_known_pack(l, "sf_north").ok());
   check(add_known_pack(l, "taunus").ok());
@@ -103,22 +110,38 @@ void check_accepted(const Command& c, const visvol_msgs_msg_dds__Command_& msg) 
     case CommandKind::set_segment_count:
       check(c.segment_count >= l.min_segments && c.segment_count <= l.max_segments);
       break;
-    case CommandKind::set_constraints:
+    case CommandKind::set_constraints: {
       check(c.constraints.count <= l.max_constraints);
+      int clearance = -1, max_agl = -1, max_altitude = -1;  // item index, -1: none
+      std::uint32_t hidden = 0, visible = 0;
       for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
         const Constraint& k = c.constraints.items[i];
+        const int at = static_cast<int>(i);
         if (k.kind == ConstraintKind::clearance) {
+          check(clearance < 0);
+          clearance = at;
           check(in_range(k.height_m, 0.0, l.max_clearance_m));
         } else if (k.kind == ConstraintKind::max_agl) {
+          check(max_agl < 0);
+          max_agl = at;
           check(in_range(k.height_m, 0.0, l.max_clearance_m) && k.height_m > 0.0);
         } else if (k.kind == ConstraintKind::max_altitude) {
+          check(max_altitude < 0);
+          max_altitude = at;
           check(in_range(k.height_m, l.min.z_m, l.max.z_m));
         } else {
           check(k.kind == ConstraintKind::hidden_from || k.kind == ConstraintKind::visible_to);
           check(finite_inside(k.position, l));
+          (k.kind == ConstraintKind::hidden_from ? hidden : visible) += 1;
         }
       }
+      check(hidden <= kMaxObserversPerKind && visible <= kMaxObserversPerKind);
+      check(hidden + visible <= l.max_observers);
+      if (clearance >= 0 && max_agl >= 0) {
+        check(c.constraints.items[max_agl].height_m > c.constraints.items[clearance].height_m);
+      }
       break;
+    }
     case CommandKind::switch_terrain:
       check(text_of(c.pack_id) == "sf_north" || text_of(c.pack_id) == "taunus");
       break;
@@ -128,6 +151,52 @@ void check_accepted(const Command& c, const visvol_msgs_msg_dds__Command_& msg) 
     default:
       check(false);  // an unknown kind reached the queue
   }
+}
+
+// Whether the rules of set-constraints allow the message's items, judged
+// from the raw message alone (not through decode or validate).
+bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
+  const CommandLimits& l = limits();
+  const std::uint32_t n = msg.constraints._length;
+  if (n > kMaxConstraints || n > l.max_constraints) return false;
+  if (n > 0 && msg.constraints._buffer == nullptr) return false;
+  int envelope[6] = {0, 0, 0, 0, 0, 0};  // items of each kind (1..5)
+  double clearance_m = 0, max_agl_m = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const visvol_msgs_msg_dds__Constraint_& k = msg.constraints._buffer[i];
+    if (k.kind < 1 || k.kind > 5) return false;
+    ++envelope[k.kind];
+    const double h = k.height_m;
+    const WorldPoint p{k.position_m.x, k.position_m.y, k.position_m.z};
+    switch (k.kind) {
+      case 1:
+      case 2:
+        if (!finite_inside(p, l)) return false;
+        break;
+      case 3:
+        if (!in_range(h, 0.0, l.max_clearance_m)) return false;
+        clearance_m = h;
+        break;
+      case 4:
+        if (!(in_range(h, 0.0, l.max_clearance_m) && h > 0.0)) return false;
+        max_agl_m = h;
+        break;
+      default:
+        if (!in_range(h, l.min.z_m, l.max.z_m)) return false;
+    }
+  }
+  if (envelope[3] > 1 || envelope[4] > 1 || envelope[5] > 1) return false;
+  if (envelope[1] > 8 || envelope[2] > 8 || envelope[1] + envelope[2] > 3) return false;
+  return !(envelope[3] == 1 && envelope[4] == 1 && !(max_agl_m > clearance_m));
+}
+
+// A set-constraints message the processor judged: its verdict is the rules'.
+void check_constraints_verdict(const visvol_msgs_msg_dds__Command_& msg, const CommandAck& ack,
+                               const CommandCounts& before, const CommandCounts& after) {
+  if (msg.kind != static_cast<std::uint8_t>(CommandKind::set_constraints)) return;
+  if (after.rate_limited != before.rate_limited || after.queue_full != before.queue_full) return;
+  if (!check_source(msg.source != nullptr ? std::string_view(msg.source) : std::string_view()).ok()) return;
+  check((ack.result == AckResult::accepted) == constraints_allowed(msg));
 }
 
 // One command through the processor, and the oracle.
@@ -142,6 +211,7 @@ void run_one(CommandProcessor& processor, CommandQueue& queue,
   check(terminated_printable(ack.source));
   check(terminated_printable(ack.reason));
   check(ack.sequence == msg.sequence_number && ack.kind == msg.kind);
+  check_constraints_verdict(msg, ack, before, after);
   Command popped;
   if (ack.result == AckResult::accepted) {
     check(ack.reason[0] == '\0');
@@ -174,6 +244,14 @@ double fuzz_double(FuzzedDataProvider& fdp) {
   }
 }
 
+// A constraint height: often one of a few round values, so that a clearance
+// and a max-agl meet (equal, above, below) as often as operators make them.
+double fuzz_height(FuzzedDataProvider& fdp) {
+  static constexpr double kRound[] = {0.0, 30.0, 100.0, 400.0};
+  if (fdp.ConsumeBool()) return kRound[fdp.ConsumeIntegralInRange<std::size_t>(0, 3)];
+  return fuzz_double(fdp);
+}
+
 geometry_msgs_msg_dds__Point_ fuzz_point(FuzzedDataProvider& fdp) {
   if (fdp.ConsumeBool()) {  // near or inside the pack
     return {fdp.ConsumeFloatingPointInRange<double>(539000.0, 552000.0),
@@ -193,7 +271,7 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, CommandQue
     for (visvol_msgs_msg_dds__Constraint_& k : constraints) {
       k.kind = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 6);
       k.position_m = fuzz_point(fdp);
-      k.height_m = fuzz_double(fdp);
+      k.height_m = fuzz_height(fdp);
     }
     visvol_msgs_msg_dds__Command_ msg{};
     msg.source = source.data();

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "../terrains.hpp"
+#include "hostile_rasters.hpp"
 
 namespace visvol::fields {
 namespace {
@@ -180,6 +181,108 @@ TEST(DemImport, UtmZones) {
   EXPECT_EQ(utm_srs_for(-122.4, 37.8), "EPSG:32610");
   EXPECT_EQ(utm_srs_for(151.2, -33.9), "EPSG:32756");
   EXPECT_EQ(utm_srs_for(180.0, 0.0), "EPSG:32660");
+}
+
+TEST(DemImport, ANegativeCellSizeIsRefusedNotWarpedUpsideDown) {
+  // Import used to warp this grid (pixel -30 x +30) north-up: rotated 180
+  // degrees and moved by the grid's size, with exit 0.
+  const std::string path = write_text("negative_cell", ".asc", asc_text(40, "-30"));
+  ImportOptions o;
+  o.assume_srs = "EPSG:32633";
+  const Result<Heightfield> hf = import_dem(path, o);
+  ASSERT_FALSE(hf.ok());
+  EXPECT_EQ(hf.status().code(), Errc::invalid_argument);
+  EXPECT_NE(hf.status().message().find(path + ": pixel size -30 x 30"), std::string::npos)
+      << hf.status().message();
+  EXPECT_NE(hf.status().message().find("not north-up"), std::string::npos);
+  // --area asks for the same grid first: refused the same way.
+  EXPECT_FALSE(import_grid(path, o).ok());
+  std::remove(path.c_str());
+}
+
+TEST(DemImport, RotatedAndAbsurdGridsAreRefusedBeforeAnyWarp) {
+  const struct {
+    std::string cellsize, xll, message;
+  } cases[] = {{"1e30", "500000", "outside 0.01..100000 m"},
+               {"1e-9", "500000", "outside 0.01..100000 m"},
+               {"30", "1e300", "reaches beyond +-100000000 m"}};
+  for (const auto& c : cases) {
+    const std::string path = write_text("absurd_grid", ".asc", asc_text(40, c.cellsize, c.xll));
+    ImportOptions o;
+    o.assume_srs = "EPSG:32633";
+    o.spacing_m = 30;  // a warp would follow
+    const Result<Heightfield> hf = import_dem(path, o);
+    ASSERT_FALSE(hf.ok()) << c.cellsize << " " << c.xll;
+    EXPECT_NE(hf.status().message().find(c.message), std::string::npos) << hf.status().message();
+    std::remove(path.c_str());
+  }
+  TiffSpec spec;
+  spec.gt[2] = 3;  // row rotation
+  const std::string rotated = write_hostile_tiff("rotated", spec);
+  const Result<Heightfield> hf = import_dem(rotated, ImportOptions{});
+  ASSERT_FALSE(hf.ok());
+  EXPECT_NE(hf.status().message().find("rotation or shear"), std::string::npos) << hf.status().message();
+  std::remove(rotated.c_str());
+}
+
+TEST(DemImport, GeographicGridsOffTheEarthAreRefused) {
+  TiffSpec spec;
+  spec.epsg = 4326;
+  const double off_earth[][6] = {{8, 0.001, 0, 95, 0, -0.001},      // north of the pole
+                                 {8, 5, 0, 50, 0, -5},              // 5 degree pixels
+                                 {8, 1e-9, 0, 50, 0, -1e-9}};       // nanodegree pixels
+  for (const auto& gt : off_earth) {
+    std::copy(gt, gt + 6, spec.gt);
+    const std::string path = write_hostile_tiff("off_earth", spec);
+    const Result<Heightfield> hf = import_dem(path, ImportOptions{});
+    ASSERT_FALSE(hf.ok()) << gt[1] << " " << gt[3];
+    EXPECT_TRUE(hf.status().message().find("not on Earth") != std::string::npos ||
+                hf.status().message().find("outside 1e-07..1 degrees") != std::string::npos)
+        << hf.status().message();
+    std::remove(path.c_str());
+  }
+}
+
+TEST(DemImport, AnOversizedWarpIsRefusedBeforeWarping) {
+  // 40 x 40 posts of 30 m at 1 cm would be 120000 posts a side: the red team's
+  // "--spacing 3" on an SRTM tile warped for a minute and 3.6 GB before this.
+  const std::string path = write_text("oversized", ".asc", asc_text(40));
+  ImportOptions o;
+  o.assume_srs = "EPSG:32633";
+  o.spacing_m = 0.01;
+  const Result<Heightfield> hf = import_dem(path, o);
+  ASSERT_FALSE(hf.ok());
+  EXPECT_NE(hf.status().message().find("would be 120000 x 120000 posts at 0.01 m spacing"),
+            std::string::npos)
+      << hf.status().message();
+  o.spacing_m = 1;  // 1200 x 1200, over a small post budget
+  o.max_posts = 1000000;
+  const Result<Heightfield> over = import_dem(path, o);
+  ASSERT_FALSE(over.ok());
+  EXPECT_NE(over.status().message().find("1200 x 1200 posts"), std::string::npos) << over.status().message();
+  o.max_posts = 2000000;
+  EXPECT_TRUE(import_dem(path, o).ok());
+  std::remove(path.c_str());
+}
+
+TEST(DemImport, SpacingOutsideItsRangeIsRefusedByName) {
+  ImportOptions o;
+  for (const double bad : {1e-9, 1e6, -1.0, std::nan("")}) {
+    o.spacing_m = bad;
+    EXPECT_NE(validate(o).message().find("neither 0 (keep) nor in 0.01..100000 m"), std::string::npos)
+        << bad << ": " << validate(o).message();
+  }
+  o.spacing_m = 0;
+  EXPECT_TRUE(validate(o).ok());
+}
+
+TEST(DemImport, AFileWithoutAVerticalUnitSaysItsHeightsAreTakenAsMetres) {
+  const std::string path = write_hostile_tiff("no_unit", TiffSpec{});
+  ImportReport rep;
+  ASSERT_TRUE(import_dem(path, ImportOptions{}, &rep).ok());
+  EXPECT_NE(rep.steps.find("heights taken as metres (the file names no vertical unit)"), std::string::npos)
+      << rep.steps;
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "../terrains.hpp"
+#include "hostile_rasters.hpp"
 
 namespace visvol::fields {
 namespace {
@@ -138,6 +139,82 @@ TEST(DemIo, FailedWriteLeavesNoFile) {
   const Heightfield hf = flat(4);
   const Status st = write_geotiff_u8("/nonexistent-dir/out.tif", hf, std::vector<std::uint8_t>(16, 1), 255);
   EXPECT_FALSE(st.ok());
+}
+
+TEST(DemIo, UnknownVerticalUnitIsRefusedNamingIt) {
+  TiffSpec spec;
+  spec.unit = "furlong";
+  const std::string path = write_hostile_tiff("furlong", spec);
+  const Result<Heightfield> hf = read_heightfield(path);
+  ASSERT_FALSE(hf.ok());
+  EXPECT_EQ(hf.status().code(), Errc::invalid_argument);
+  EXPECT_NE(hf.status().message().find(path + ": heights are in 'furlong', a unit visvol does not know"),
+            std::string::npos)
+      << hf.status().message();
+  std::remove(path.c_str());
+}
+
+TEST(DemIo, KnownVerticalUnitsConvertToMetres) {
+  const struct {
+    const char* unit;
+    double to_m;
+  } cases[] = {{"metre", 1.0}, {"Meters", 1.0}, {"ft", 0.3048}, {"US survey foot", 1200.0 / 3937.0}, {"", 1.0}};
+  for (const auto& c : cases) {
+    TiffSpec spec;
+    spec.unit = c.unit;
+    const std::string path = write_hostile_tiff("unit", spec);
+    const Result<Heightfield> hf = read_heightfield(path);
+    ASSERT_TRUE(hf.ok()) << c.unit << ": " << hf.status().message();
+    EXPECT_NEAR(hf->at(0, 0), 100.0 * c.to_m, 1e-3) << c.unit;
+    std::remove(path.c_str());
+  }
+}
+
+// Each geotransform a DEM should not have, and what the refusal says.
+struct BadGrid {
+  const char* what;
+  double gt[6];
+  const char* message;
+};
+
+const BadGrid kBadGrids[] = {
+    {"rotated", {500000, 30, 2, 4001000, 2, -30}, "has rotation or shear terms"},
+    {"sheared", {500000, 30, 0, 4001000, 5, -30}, "has rotation or shear terms"},
+    {"south-up", {500000, 30, 0, 4000000, 0, 30}, "is not north-up"},
+    {"negative width", {500000, -30, 0, 4001000, 0, -30}, "is not north-up"},
+    {"zero width", {500000, 0, 0, 4001000, 0, -30}, "has no georeference"},  // GeoTIFF keeps none
+    {"NaN term", {500000, 30, 0, NAN, 0, -30}, "has a term that is not finite"},
+    {"huge cells", {500000, 1e30, 0, 4001000, 0, -1e30}, "is outside 0.01..100000 m"},
+    {"tiny cells", {500000, 1e-9, 0, 4001000, 0, -1e-9}, "is outside 0.01..100000 m"},
+    {"far origin", {1e300, 30, 0, 4001000, 0, -30}, "reaches beyond +-100000000 m"},
+    {"far south", {500000, 30, 0, -2e8, 0, -30}, "reaches beyond +-100000000 m"},
+};
+
+TEST(DemIo, RefusesGeotransformsNoDemShouldHaveSayingWhatWasFound) {
+  for (const BadGrid& bad : kBadGrids) {
+    TiffSpec spec;
+    std::copy(bad.gt, bad.gt + 6, spec.gt);
+    const std::string path = write_hostile_tiff("bad_grid", spec);
+    const Result<Heightfield> hf = read_heightfield(path);
+    ASSERT_FALSE(hf.ok()) << bad.what;
+    EXPECT_EQ(hf.status().code(), Errc::invalid_argument) << bad.what;
+    EXPECT_EQ(hf.status().message().rfind(path + ": ", 0), 0u) << bad.what << ": " << hf.status().message();
+    EXPECT_NE(hf.status().message().find(bad.message), std::string::npos)
+        << bad.what << ": " << hf.status().message();
+    std::remove(path.c_str());
+  }
+}
+
+TEST(DemIo, GridsAtTheEdgesOfTheRangesRead) {
+  for (const double cell_m : {kMinPostSpacingM, kMaxPostSpacingM}) {
+    TiffSpec spec;
+    spec.gt[1] = cell_m;
+    spec.gt[5] = -cell_m;
+    spec.gt[3] = 4001000;
+    const std::string path = write_hostile_tiff("edge_grid", spec);
+    EXPECT_TRUE(read_heightfield(path).ok()) << cell_m;
+    std::remove(path.c_str());
+  }
 }
 
 }  // namespace

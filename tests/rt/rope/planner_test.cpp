@@ -381,5 +381,40 @@ TEST_F(RealTerrain, BadRequestsAreRefusedByName) {
   EXPECT_NE(plan(levels, r).status().message().find("--hidden-from"), std::string::npos);
 }
 
+// Requests refused by validate alone, before any level is touched.
+PlanRequest valid_request() {
+  PlanRequest r;
+  r.from = Vec3(100, 100, 50);
+  r.to = Vec3(4000, 100, 50);  // room for 4096 segments of 0.5 m at least
+  return r;
+}
+
+TEST(PlanValidate, SegmentsAndTheirWorkAreBounded) {
+  PlanRequest r = valid_request();
+  ASSERT_TRUE(validate(r).ok()) << validate(r).message();
+  r.segments = kMaxPlanSegments + 1;
+  EXPECT_NE(validate(r).message().find("4097 segments is outside 2..4096"), std::string::npos) << validate(r).message();
+  // 100000 segments for 1 s ran past a minute a level (red team, issue 14); the
+  // most segments allowed still need a shorter simulated time than the default.
+  r.segments = kMaxPlanSegments;
+  r.max_seconds_per_level = 40;
+  EXPECT_NE(validate(r).message().find("vertex steps a level, over the 4e+07 allowed"), std::string::npos)
+      << validate(r).message();
+  r.max_seconds_per_level = 9;
+  EXPECT_TRUE(validate(r).ok()) << validate(r).message();
+}
+
+TEST(PlanValidate, InitialPathPointsOutsideThePlanningBoundsAreRefusedByIndex) {
+  PlanRequest r = valid_request();
+  r.planning_bounds = fields::Bounds2D{0, 0, 5000, 1000};
+  r.init = InitialPath::polyline;
+  r.polyline = {r.from, Vec3(500, 1.0e7, 50), r.to};
+  EXPECT_NE(validate(r).message().find("initial path point 1 (500.0, 10000000.0) is outside the pack's planning bounds"),
+            std::string::npos)
+      << validate(r).message();
+  r.polyline[1].y() = 500;
+  EXPECT_TRUE(validate(r).ok()) << validate(r).message();
+}
+
 }  // namespace
 }  // namespace visvol::rt

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -34,6 +35,14 @@ bool exists(const std::string& path) {
 mode_t type_of(const std::string& path) {
   struct stat st {};
   return ::lstat(path.c_str(), &st) == 0 ? (st.st_mode & S_IFMT) : 0;
+}
+
+// A character device to write at: a private copy of /dev/null where this test
+// may make one (as root, where a regression would replace the real one), else
+// /dev/null itself (which then cannot be replaced).
+std::string device_node(const std::string& dir) {
+  const std::string node = dir + "/null";
+  return ::mknod(node.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0 ? node : "/dev/null";
 }
 
 std::string own_temp(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
@@ -96,7 +105,7 @@ TEST_F(AtomicFile, DeviceFifoAndDirectoryDestinationsAreRefusedAndLeftAsTheyAre)
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
   ASSERT_EQ(::mkdir(folder.c_str(), 0755), 0);
   const std::pair<std::string, mode_t> cases[] = {
-      {"/dev/null", S_IFCHR}, {fifo, S_IFIFO}, {folder, S_IFDIR}};
+      {device_node(dir_), S_IFCHR}, {fifo, S_IFIFO}, {folder, S_IFDIR}};
   for (const auto& [path, type] : cases) {
     const Status st = write_file_atomically(path, "x");
     ASSERT_FALSE(st.ok()) << path;

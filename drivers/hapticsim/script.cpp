@@ -303,7 +303,11 @@ Result<Script> parse_script(const std::string& text, const std::string& source,
 Result<Script> load_script(const std::string& path, const std::array<double, 3>& workspace_half_mm) {
   // a script that cannot be read is bad input, whatever the reason
   Result<std::string> text = read_input_file(path, kMaxScriptBytes);
-  if (!text.ok()) return invalid_argument("script " + text.status().message());
+  if (!text.ok()) {
+    const std::string& m = text.status().message();
+    const std::string reason = m.rfind(path + ": ", 0) == 0 ? m.substr(path.size() + 2) : m;
+    return invalid_argument(path + ": cannot open the script: " + reason);
+  }
   return parse_script(*text, path, workspace_half_mm);
 }
 

@@ -45,7 +45,10 @@ Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::s
   register_gdal();
   // GDAL also opens /vsi paths; only plain paths get the OS's reason.
   // (and a FIFO or a device would block or worse inside GDAL's open)
-  if (path.rfind("/vsi", 0) != 0) VISVOL_RETURN_IF_ERROR(check_input_file(path));
+  if (path.rfind("/vsi", 0) != 0) {
+    VISVOL_RETURN_IF_ERROR(check_input_file(path));
+    VISVOL_RETURN_IF_ERROR(check_side_files(path));
+  }
   std::vector<const char*> allowed;
   for (const std::string& d : drivers) allowed.push_back(d.c_str());
   allowed.push_back(nullptr);

@@ -1,9 +1,12 @@
 #include "rt/base/input_file.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 
@@ -90,6 +93,33 @@ Result<std::string> read_input_file(const std::string& path, std::size_t max_byt
 Status check_input_file(const std::string& path) {
   Result<InputFile> f = InputFile::open(path);
   return f.ok() ? Status::ok_status() : f.status();
+}
+
+Status check_side_files(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  const auto lower = [](std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+  };
+  const std::size_t dot = base.find_last_of('.');
+  const std::string prefix = lower(dot == std::string::npos || dot == 0 ? base : base.substr(0, dot)) + ".";
+  DIR* d = ::opendir(dir.c_str());
+  if (d == nullptr) return Status::ok_status();  // the open of `path` names the problem
+  Status status;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name == base || lower(name).rfind(prefix, 0) != 0) continue;
+    const std::string side = dir + "/" + name;
+    struct stat st {};
+    if (::stat(side.c_str(), &st) != 0 || S_ISREG(st.st_mode) || S_ISDIR(st.st_mode)) continue;
+    status = invalid_argument(side + ": is " + kind_of(st.st_mode) + ", not a regular file (a side file of " + path +
+                              " that would be opened with it)");
+    break;
+  }
+  ::closedir(d);
+  return status;
 }
 
 }  // namespace visvol

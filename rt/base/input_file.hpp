@@ -51,4 +51,10 @@ Result<std::string> read_input_file(const std::string& path, std::size_t max_byt
 // same check, opening and closing the file, before handing the path over.
 Status check_input_file(const std::string& path);
 
+// Libraries also open side files by name next to `path` (GDAL: DEM.prj,
+// DEM.hdr, DEM.tif.aux.xml, DEM.tfw...): any entry of the same stem (the name
+// up to its last '.', case ignored) that is a FIFO, device or socket is refused
+// naming it, since opening it would block or worse.
+Status check_side_files(const std::string& path);
+
 }  // namespace visvol

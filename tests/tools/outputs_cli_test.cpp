@@ -149,6 +149,15 @@ TEST_F(Outputs, AFifoAsInputExitsTwoAtOnce) {
   }
   EXPECT_EQ(type_of(fifo), S_IFIFO);
   std::remove(fifo.c_str());
+  // GDAL opens a grid's .prj by name: a FIFO there is refused too
+  const std::string grid = *dir_ + "/grid.asc", prj = *dir_ + "/grid.prj";
+  std::ofstream(grid) << "ncols 3\nnrows 3\nxllcorner 500000\nyllcorner 4000000\ncellsize 30\n1 2 3\n4 5 6\n7 8 9\n";
+  ASSERT_EQ(::mkfifo(prj.c_str(), 0644), 0);
+  const Outcome r = visvol("info " + grid);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find(prj + ": is a FIFO, not a regular file"), std::string::npos) << r.err;
+  std::remove(prj.c_str());
+  std::remove(grid.c_str());
 }
 
 // A killed build leaves NAME.tmp.<pid>; the next write of that output removes

@@ -68,6 +68,20 @@ TEST_F(InputFileTest, AFileLargerThanTheLimitIsRefused) {
   EXPECT_TRUE(read_input_file(file, 101).ok());
 }
 
+// GDAL opens DEM.prj and the like by name: a FIFO there would block it.
+TEST_F(InputFileTest, AFifoBesideAnInputWithTheSameStemIsRefused) {
+  const std::string dem = dir_ + "/dem.asc";
+  std::ofstream(dem) << "ncols 1";
+  std::ofstream(dir_ + "/dem.hdr") << "";
+  std::ofstream(dir_ + "/other.prj") << "";
+  ASSERT_EQ(::mkfifo((dir_ + "/other.aux").c_str(), 0644), 0);
+  EXPECT_TRUE(check_side_files(dem).ok());
+  ASSERT_EQ(::mkfifo((dir_ + "/DEM.PRJ").c_str(), 0644), 0);
+  const Status st = check_side_files(dem);
+  EXPECT_EQ(st.code(), Errc::invalid_argument);
+  EXPECT_NE(st.message().find(dir_ + "/DEM.PRJ: is a FIFO, not a regular file"), std::string::npos) << st.message();
+}
+
 // The descriptor is blocking again: reads of a regular file behave as usual.
 TEST_F(InputFileTest, TheDescriptorIsLeftBlocking) {
   const std::string file = dir_ + "/a.txt";

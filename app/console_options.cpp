@@ -3,10 +3,26 @@
 #include <cmath>
 #include <cstdio>
 
+#include "rt/base/input_file.hpp"
+
 namespace visvol::app {
 
+namespace {
+
+// A regular file, checked without blocking: CLI11 and the script reader open
+// by name, and open() of a FIFO waits for a writer for ever.
+std::string regular_file_problem(const std::string& path) {
+  const Status s = check_input_file(path);
+  return s.ok() ? std::string() : s.message();
+}
+
+}  // namespace
+
 void add_console_options(CLI::App& app, ConsoleOptions& o) {
-  app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)");
+  // checked as soon as it is parsed: CLI11 reads it before any other check
+  app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)")
+      ->check(CLI::Validator([](std::string& path) { return regular_file_problem(path); }, "FILE"))
+      ->trigger_on_parse();
   app.add_option("--pack", o.pack, "Field pack to plan in (visvol build ... -o PACK)")->required()->check(CLI::ExistingFile);
   app.add_option("--terrain", o.terrains,
                  "Another preloaded pack that a switch-terrain command (by pack id: the file name without its "
@@ -50,6 +66,9 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--can-interface", o.can_interface, "CAN interface for --device socketcan (e.g. can0, vcan0)");
   app.add_option("--node", o.node, "Device node id, 1..127")->capture_default_str();
   app.add_option("--script", o.script, "Simulated operator: builtin (grab and pull), none, or a visvol-hapticsim script")
+      ->check(CLI::Validator(
+          [](std::string& v) { return v == "builtin" || v == "none" ? std::string() : regular_file_problem(v); },
+          "builtin|none|FILE"))
       ->capture_default_str();
   app.add_flag("!--no-dds", o.dds, "Do not publish or take commands over DDS");
   app.add_option("--domain", o.domain, "DDS domain id")->check(CLI::Range(0u, 232u))->capture_default_str();

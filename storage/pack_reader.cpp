@@ -14,6 +14,7 @@
 #include <immintrin.h>
 #endif
 
+#include "rt/base/input_file.hpp"
 #include "storage/crc32c.hpp"
 #include "storage/pack_checks.hpp"
 
@@ -129,26 +130,16 @@ std::string Pack::describe(const TileEntry& t) {
 Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path) {
   std::shared_ptr<Pack> pack(new Pack());
   pack->path_ = path;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return io_error(path + ": " + std::strerror(errno));
-  struct stat st {};
-  if (::fstat(fd, &st) != 0) {
-    const int e = errno;
-    ::close(fd);
-    return io_error(path + ": " + std::strerror(e));
-  }
-  if (!S_ISREG(st.st_mode)) {
-    ::close(fd);
-    return io_error(path + ": not a regular file");
-  }
-  pack->size_ = static_cast<std::uint64_t>(st.st_size);
+  // never blocks on a FIFO; refuses what is not a regular file
+  Result<InputFile> file = InputFile::open(path);
+  if (!file.ok()) return file.status();
+  pack->size_ = file->size_bytes();
   if (pack->size_ < sizeof(PackHeader)) {
-    ::close(fd);
     return corrupt(path + ": " + std::to_string(pack->size_) +
                    " bytes, smaller than a pack header; not a visvol pack or truncated");
   }
-  void* map = ::mmap(nullptr, static_cast<std::size_t>(pack->size_), PROT_READ, MAP_SHARED, fd, 0);
-  ::close(fd);  // the mapping keeps the file
+  void* map = ::mmap(nullptr, static_cast<std::size_t>(pack->size_), PROT_READ, MAP_SHARED, file->fd(), 0);
+  // the mapping keeps the file once `file` closes it
   if (map == MAP_FAILED) return io_error(path + ": cannot map: " + std::strerror(errno));
   pack->base_ = static_cast<const std::uint8_t*>(map);
   VISVOL_RETURN_IF_ERROR(pack->validate_structure());

@@ -1,6 +1,5 @@
 #include "storage/pack_writer.hpp"
 
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -54,18 +53,13 @@ Status validate(const PackLayout& layout) {
   return Status::ok_status();
 }
 
-PackWriter::PackWriter(std::string path, std::string temp, int fd, PackLayout layout)
-    : path_(std::move(path)), temp_(std::move(temp)), fd_(fd), layout_(std::move(layout)) {}
+PackWriter::PackWriter(OutputFile out, PackLayout layout)
+    : out_(std::move(out)), path_(out_.path()), layout_(std::move(layout)) {}
 
-PackWriter::~PackWriter() {
-  if (fd_ >= 0) ::close(fd_);
-  if (!finished_) discard_file(temp_);
-}
+PackWriter::~PackWriter() = default;  // out_ removes an unfinished temporary
 
 Status PackWriter::fail(Status status) {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
-  discard_file(temp_);
+  out_.discard();
   return status;
 }
 
@@ -76,10 +70,9 @@ std::size_t PackWriter::payload_bytes(int level, Layer layer) const {
 
 Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout) {
   VISVOL_RETURN_IF_ERROR(validate(layout));
-  const std::string temp = temp_path_for(path);
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return io_error(path + ": cannot create " + temp + ": " + std::strerror(errno));
-  std::unique_ptr<PackWriter> w(new PackWriter(path, temp, fd, std::move(layout)));
+  Result<OutputFile> out = OutputFile::create(path);
+  if (!out.ok()) return out.status();
+  std::unique_ptr<PackWriter> w(new PackWriter(std::move(out).value(), std::move(layout)));
   // Every tile's place: level, layer, ty, tx order, each on its own pages.
   std::uint64_t offset = kPageBytes;  // after the header
   for (std::size_t l = 0; l < w->layout_.levels.size(); ++l) {
@@ -108,27 +101,9 @@ Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, 
   return w;
 }
 
-namespace {
-
-Status pwrite_all(int fd, const void* data, std::size_t bytes, std::uint64_t offset,
-                  const std::string& path) {
-  const char* p = static_cast<const char*>(data);
-  while (bytes > 0) {
-    const ssize_t n = ::pwrite(fd, p, bytes, static_cast<off_t>(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return io_error(path + ": write failed: " + std::strerror(errno));
-    p += n;
-    bytes -= static_cast<std::size_t>(n);
-    offset += static_cast<std::uint64_t>(n);
-  }
-  return Status::ok_status();
-}
-
-}  // namespace
-
 Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void* payload,
                               std::size_t bytes) {
-  if (fd_ < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
+  if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
   if (level < 0 || level >= static_cast<int>(layout_.levels.size())) {
     return invalid_argument(path_ + ": no level " + std::to_string(level));
   }
@@ -150,18 +125,16 @@ Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void
   if (pad > 0) {
     static const std::uint8_t zeros[kPageBytes] = {};
     crc = crc32c(zeros, pad, crc);
-    Status st = pwrite_all(fd_, zeros, pad, t.offset + bytes, temp_);
-    if (!st.ok()) return fail(st);
+    VISVOL_RETURN_IF_ERROR(out_.write_at(zeros, pad, t.offset + bytes));
   }
-  Status st = pwrite_all(fd_, payload, bytes, t.offset, temp_);
-  if (!st.ok()) return fail(st);
+  VISVOL_RETURN_IF_ERROR(out_.write_at(payload, bytes, t.offset));
   t.crc32c = crc;
   written_[index] = 1;
   return Status::ok_status();
 }
 
 Status PackWriter::finish(const std::string& metadata_json) {
-  if (fd_ < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
+  if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
   for (std::size_t n = 0; n < tiles_.size(); ++n) {
     if (!written_[n]) {
       const TileEntry& t = tiles_[n];
@@ -180,8 +153,7 @@ Status PackWriter::finish(const std::string& metadata_json) {
   append(layout_.levels.data(), layout_.levels.size() * sizeof(LevelEntry));
   append(tiles_.data(), tiles_.size() * sizeof(TileEntry));
   append(metadata_json.data(), metadata_json.size());
-  Status st = pwrite_all(fd_, tables.data(), tables.size(), tables_offset_, temp_);
-  if (!st.ok()) return fail(st);
+  VISVOL_RETURN_IF_ERROR(out_.write_at(tables.data(), tables.size(), tables_offset_));
 
   PackHeader h{};
   std::memcpy(h.magic, kPackMagic, sizeof h.magic);
@@ -204,19 +176,12 @@ Status PackWriter::finish(const std::string& metadata_json) {
   h.band_offset_m = layout_.band_offset_m;
   h.tables_crc32c = crc32c(tables.data(), tables.size());
   h.header_crc32c = crc32c(&h, offsetof(PackHeader, header_crc32c));
-  st = pwrite_all(fd_, &h, sizeof h, 0, temp_);
-  if (!st.ok()) return fail(st);
-  if (::ftruncate(fd_, static_cast<off_t>(h.file_bytes)) != 0) {
-    return fail(io_error(temp_ + ": cannot set size: " + std::strerror(errno)));
+  VISVOL_RETURN_IF_ERROR(out_.write_at(&h, sizeof h, 0));
+  if (::ftruncate(out_.fd(), static_cast<off_t>(h.file_bytes)) != 0) {
+    return fail(output_error(path_ + ": cannot set the size of " + out_.write_path() + ": " + std::strerror(errno)));
   }
   file_bytes_ = h.file_bytes;
-  if (::close(fd_) != 0) {
-    fd_ = -1;
-    return fail(io_error(temp_ + ": close failed: " + std::strerror(errno)));
-  }
-  fd_ = -1;
-  st = commit_file(temp_, path_);
-  if (!st.ok()) return st;
+  VISVOL_RETURN_IF_ERROR(out_.commit());
   finished_ = true;
   return Status::ok_status();
 }

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rt/base/atomic_file.hpp"
 #include "rt/base/status.hpp"
 #include "storage/pack_format.hpp"
 
@@ -50,11 +51,11 @@ class PackWriter {
   std::uint64_t file_bytes() const { return file_bytes_; }
 
  private:
-  PackWriter(std::string path, std::string temp, int fd, PackLayout layout);
+  PackWriter(OutputFile out, PackLayout layout);
   Status fail(Status status);
 
-  std::string path_, temp_;
-  int fd_ = -1;
+  OutputFile out_;  // the temporary until finish() renames it
+  std::string path_;
   PackLayout layout_;
   std::vector<TileEntry> tiles_;
   std::vector<std::uint8_t> written_;

@@ -115,27 +115,20 @@ std::string vti_header(const ExportedVolume& v) {
 }  // namespace
 
 Status write_volume(const std::string& path, const ExportedVolume& v, ExportFormat format) {
-  const std::string temp = temp_path_for(path);
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) return io_error(path + ": cannot create " + temp);
-    const std::uint64_t bytes = v.values.size() * sizeof(float);
-    if (format == ExportFormat::mhd) {
-      out << mhd_header(v);
-      out.write(reinterpret_cast<const char*>(v.values.data()), static_cast<std::streamsize>(bytes));
-    } else {
-      out << vti_header(v);
-      out.write(reinterpret_cast<const char*>(&bytes), sizeof bytes);
-      out.write(reinterpret_cast<const char*>(v.values.data()), static_cast<std::streamsize>(bytes));
-      out << "\n  </AppendedData>\n</VTKFile>\n";
-    }
-    out.flush();
-    if (!out) {
-      discard_file(temp);
-      return io_error(path + ": write failed");
-    }
+  Result<OutputFile> out = OutputFile::create(path);
+  if (!out.ok()) return out.status();
+  const std::uint64_t bytes = v.values.size() * sizeof(float);
+  const auto write_text = [&](const std::string& text) { return out->write(text.data(), text.size()); };
+  if (format == ExportFormat::mhd) {
+    VISVOL_RETURN_IF_ERROR(write_text(mhd_header(v)));
+    VISVOL_RETURN_IF_ERROR(out->write(v.values.data(), static_cast<std::size_t>(bytes)));
+  } else {
+    VISVOL_RETURN_IF_ERROR(write_text(vti_header(v)));
+    VISVOL_RETURN_IF_ERROR(out->write(&bytes, sizeof bytes));
+    VISVOL_RETURN_IF_ERROR(out->write(v.values.data(), static_cast<std::size_t>(bytes)));
+    VISVOL_RETURN_IF_ERROR(write_text("\n  </AppendedData>\n</VTKFile>\n"));
   }
-  return commit_file(temp, path);
+  return out->commit();
 }
 
 }  // namespace visvol::storage

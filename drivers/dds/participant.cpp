@@ -11,6 +11,8 @@
 
 #include <dds/ddsi/ddsi_serdata.h>
 
+#include "rt/base/input_file.hpp"
+
 namespace visvol::dds {
 namespace {
 
@@ -118,20 +120,9 @@ Status check_domain_entries(const std::string& xml, std::uint32_t domain_id) {
 
 Result<std::string> read_cyclone_config(const std::string& path) {
   if (path.empty()) return invalid_argument("cyclone configuration: empty file name");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return io_error("cyclone configuration " + path + ": cannot open (" +
-                    std::strerror(errno) + ")");
-  }
-  std::string text;
-  char buffer[4096];
-  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-    text.append(buffer, static_cast<std::size_t>(in.gcount()));
-    if (text.size() > kMaxConfigBytes) {
-      return invalid_argument("cyclone configuration " + path + ": larger than 1 MiB");
-    }
-  }
-  if (in.bad()) return io_error("cyclone configuration " + path + ": read error");
+  Result<std::string> read = read_input_file(path, kMaxConfigBytes);
+  if (!read.ok()) return Status(read.status().code(), "cyclone configuration " + read.status().message());
+  std::string text = std::move(read).value();
   if (trim(text).empty()) return invalid_argument("cyclone configuration " + path + ": empty");
   if (trim(text).front() != '<') {
     return invalid_argument("cyclone configuration " + path + ": not XML (must start with '<')");

@@ -6,10 +6,14 @@
 #include <fstream>
 #include <sstream>
 
+#include "rt/base/input_file.hpp"
+
 namespace visvol::hapticsim {
 namespace {
 
 constexpr double kMaxSeconds = 1e6;
+// far beyond any script written by hand or generated for a test
+constexpr std::size_t kMaxScriptBytes = 16u << 20;
 constexpr double kDefaultStrokeMm = 60.0;
 constexpr double kDefaultRebootS = 0.2;
 constexpr std::uint32_t kMaxGarbage = 1'000'000;
@@ -297,12 +301,14 @@ Result<Script> parse_script(const std::string& text, const std::string& source,
 }
 
 Result<Script> load_script(const std::string& path, const std::array<double, 3>& workspace_half_mm) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return io_error(path + ": cannot open the script");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return io_error(path + ": cannot read the script");
-  return parse_script(text.str(), path, workspace_half_mm);
+  // a script that cannot be read is bad input, whatever the reason
+  Result<std::string> text = read_input_file(path, kMaxScriptBytes);
+  if (!text.ok()) {
+    const std::string& m = text.status().message();
+    const std::string reason = m.rfind(path + ": ", 0) == 0 ? m.substr(path.size() + 2) : m;
+    return invalid_argument(path + ": cannot open the script: " + reason);
+  }
+  return parse_script(*text, path, workspace_half_mm);
 }
 
 void Player::advance(double t_s, std::int64_t now_ns, SimDevice& device) {

@@ -8,9 +8,14 @@
 #include <fstream>
 #include <sstream>
 
+#include "rt/base/input_file.hpp"
+
 namespace visvol::render {
 
 namespace {
+
+// 64 points of each kind take a few kilobytes; anything far larger is not one
+constexpr std::size_t kMaxTransferFileBytes = 1u << 20;
 
 std::string number_text(double v) {
   std::ostringstream s;
@@ -157,12 +162,9 @@ Result<TransferFunction> parse_transfer_function(std::string_view text, const st
 }
 
 Result<TransferFunction> read_transfer_function(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return io_error(path + ": " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return io_error(path + ": read error");
-  return parse_transfer_function(text.str(), path);
+  Result<std::string> text = read_input_file(path, kMaxTransferFileBytes);
+  if (!text.ok()) return text.status();
+  return parse_transfer_function(*text, path);
 }
 
 Rgb colour_at(const TransferFunction& tf, double fp) {

@@ -20,6 +20,7 @@
 #include "fields/gdal/ascii_grid.hpp"
 #include "fields/gdal/gdal_dataset.hpp"
 #include "rt/base/atomic_file.hpp"
+#include "rt/base/input_file.hpp"
 
 namespace visvol::fields {
 
@@ -44,8 +45,10 @@ std::string last_gdal_error() {
 Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::string>& drivers) {
   register_gdal();
   // GDAL also opens /vsi paths; only plain paths get the OS's reason.
-  if (path.rfind("/vsi", 0) != 0 && ::access(path.c_str(), R_OK) != 0) {
-    return io_error(path + ": " + std::strerror(errno));
+  // (and a FIFO or a device would block or worse inside GDAL's open)
+  if (path.rfind("/vsi", 0) != 0) {
+    VISVOL_RETURN_IF_ERROR(check_input_file(path));
+    VISVOL_RETURN_IF_ERROR(check_side_files(path));
   }
   std::vector<const char*> allowed;
   for (const std::string& d : drivers) allowed.push_back(d.c_str());
@@ -441,12 +444,15 @@ Status write_geotiff(const std::string& path, const Heightfield& like, GDALDataT
   register_gdal();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   if (!driver) return Status(Errc::unsupported, "GDAL has no GTiff driver");
-  const std::string temp = temp_path_for(path);
+  // GDAL creates the file by name: inside a private directory of our own,
+  // so no link planted next to the output can redirect it
+  Result<OutputFile> out = OutputFile::create_for_library(path);
+  if (!out.ok()) return out.status();
   const char* options[] = {"COMPRESS=DEFLATE", "TILED=YES", nullptr};
   CPLErrorReset();
-  GDALDataset* ds = driver->Create(temp.c_str(), like.nx, like.ny, 1, type,
+  GDALDataset* ds = driver->Create(out->write_path().c_str(), like.nx, like.ny, 1, type,
                                    const_cast<char**>(options));
-  if (!ds) return io_error(path + ": cannot create: " + last_gdal_error());
+  if (!ds) return output_error(path + ": cannot create: " + last_gdal_error());
   double gt[6] = {like.origin_x - 0.5 * like.spacing_m, like.spacing_m, 0,
                   like.origin_y + 0.5 * like.spacing_m, 0, -like.spacing_m};
   bool ok = ds->SetGeoTransform(gt) == CE_None;
@@ -460,11 +466,8 @@ Status write_geotiff(const std::string& path, const Heightfield& like, GDALDataT
   CPLErrorReset();
   GDALClose(GDALDataset::ToHandle(ds));
   if (CPLGetLastErrorType() == CE_Failure || CPLGetLastErrorType() == CE_Fatal) ok = false;
-  if (!ok) {
-    discard_file(temp);
-    return io_error(path + ": cannot write GeoTIFF: " + (detail.empty() ? last_gdal_error() : detail));
-  }
-  return commit_file(temp, path);
+  if (!ok) return output_error(path + ": cannot write GeoTIFF: " + (detail.empty() ? last_gdal_error() : detail));
+  return out->commit();
 }
 
 }  // namespace

@@ -1,15 +1,24 @@
 #include "rt/base/atomic_file.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <climits>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
+#include <set>
 
 namespace visvol {
 
 namespace {
+
+// --- names -------------------------------------------------------------------
 
 std::string directory_of(const std::string& path) {
   const std::size_t slash = path.find_last_of('/');
@@ -18,61 +27,363 @@ std::string directory_of(const std::string& path) {
   return path.substr(0, slash);
 }
 
-Status errno_status(const std::string& what, const std::string& path) {
-  return io_error(path + ": " + what + ": " + std::strerror(errno));
+std::string base_of(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-Status fsync_path(const std::string& path, int flags) {
-  const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
-  if (fd < 0) return errno_status("cannot open for fsync", path);
+std::string temp_name_for(const std::string& path) {
+  return path + ".tmp." + std::to_string(::getpid());
+}
+
+const char* kind_of(mode_t mode) {
+  if (S_ISLNK(mode)) return "a symbolic link";
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// Failures of the disk or the system, not of the path the user gave.
+bool is_resource_errno(int e) {
+  return e == ENOSPC || e == EDQUOT || e == EIO || e == EFBIG || e == ENOMEM || e == EMFILE ||
+         e == ENFILE;
+}
+
+Status errno_status(int e, const std::string& message) {
+  const std::string text = message + ": " + std::strerror(e);
+  return is_resource_errno(e) ? output_error(text) : invalid_argument(text);
+}
+
+// --- the live temporaries ------------------------------------------------------
+
+// Every temporary this process has open, for the sweep (which must not remove
+// one of its own that is still being written).
+std::mutex g_live_mutex;
+std::set<std::string> g_live;
+
+// The same for the signal handler, which can neither lock nor allocate: fixed
+// slots of paths, each guarded by a sequence number (odd while it changes) so
+// the handler only acts on a path it read whole.
+constexpr int kSlots = 16;
+struct Slot {
+  std::atomic<bool> claimed{false};
+  std::atomic<unsigned> sequence{0};
+  char file[PATH_MAX];
+  char directory[PATH_MAX];  // empty unless create_for_library
+};
+Slot g_slots[kSlots];
+
+void copy_path(char* out, const std::string& in) {
+  std::memcpy(out, in.c_str(), in.size() + 1);
+}
+
+int register_live(const std::string& temp, const std::string& file, bool is_directory) {
+  {
+    std::lock_guard<std::mutex> lock(g_live_mutex);
+    g_live.insert(temp);
+  }
+  if (file.size() >= PATH_MAX || temp.size() >= PATH_MAX) return -1;
+  for (int n = 0; n < kSlots; ++n) {
+    bool expected = false;
+    if (!g_slots[n].claimed.compare_exchange_strong(expected, true)) continue;
+    Slot& s = g_slots[n];
+    s.sequence.fetch_add(1);  // odd: changing
+    copy_path(s.file, file);
+    copy_path(s.directory, is_directory ? temp : std::string());
+    s.sequence.fetch_add(1);  // even: whole
+    return n;
+  }
+  return -1;  // all slots busy: the sweep of a later run removes it
+}
+
+void unregister_live(const std::string& temp, int slot) {
+  if (slot >= 0) {
+    Slot& s = g_slots[slot];
+    s.sequence.fetch_add(1);
+    s.file[0] = '\0';
+    s.directory[0] = '\0';
+    s.sequence.fetch_add(1);
+    s.claimed.store(false);
+  }
+  std::lock_guard<std::mutex> lock(g_live_mutex);
+  g_live.erase(temp);
+}
+
+bool is_live(const std::string& temp) {
+  std::lock_guard<std::mutex> lock(g_live_mutex);
+  return g_live.count(temp) != 0;
+}
+
+// Async-signal-safe: unlink, rmdir, signal and raise only.
+extern "C" void remove_temporaries_and_reraise(int sig) {
+  const int saved_errno = errno;
+  for (Slot& s : g_slots) {
+    if (!s.claimed.load()) continue;
+    const unsigned before = s.sequence.load();
+    if (before % 2 != 0) continue;
+    char file[PATH_MAX];
+    char directory[PATH_MAX];
+    std::memcpy(file, s.file, sizeof file);
+    std::memcpy(directory, s.directory, sizeof directory);
+    if (s.sequence.load() != before) continue;
+    if (file[0] != '\0') ::unlink(file);
+    if (directory[0] != '\0') ::rmdir(directory);
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);  // delivered with the default action once this returns
+  errno = saved_errno;
+}
+
+// --- removal -------------------------------------------------------------------
+
+// Empties and removes a private directory `name` in `parent_fd`; entries are
+// unlinked, never followed.
+void remove_private_directory(int parent_fd, const char* name) {
+  const int fd = ::openat(parent_fd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd >= 0) {
+    if (DIR* d = ::fdopendir(fd)) {
+      while (const dirent* e = ::readdir(d)) {
+        if (std::strcmp(e->d_name, ".") == 0 || std::strcmp(e->d_name, "..") == 0) continue;
+        ::unlinkat(fd, e->d_name, 0);
+      }
+      ::closedir(d);  // closes fd
+    } else {
+      ::close(fd);
+    }
+  }
+  ::unlinkat(parent_fd, name, AT_REMOVEDIR);
+}
+
+void remove_temporary(const std::string& temp, bool is_directory) {
+  if (!is_directory) {
+    ::unlink(temp.c_str());
+    return;
+  }
+  const int parent = ::open(directory_of(temp).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (parent < 0) return;
+  remove_private_directory(parent, base_of(temp).c_str());
+  ::close(parent);
+}
+
+bool process_runs(long pid) {
+  return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
+
+// The pid of `name` when it is `prefix` followed by digits only, else -1.
+long temporary_pid(const std::string& name, const std::string& prefix) {
+  if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return -1;
+  const std::string digits = name.substr(prefix.size());
+  if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const long pid = std::stol(digits);
+  return pid > 0 ? pid : -1;
+}
+
+// --- checks ------------------------------------------------------------------
+
+// The destination must be absent or a regular file; anything else is refused
+// and left as it is.
+Status check_destination(const std::string& path) {
+  if (path.empty()) return invalid_argument("empty output file name");
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) return Status::ok_status();
+    return errno_status(errno, path + ": cannot be written");
+  }
+  if (!S_ISREG(st.st_mode)) {
+    return invalid_argument(path + ": is " + kind_of(st.st_mode) +
+                            ", not a regular file; refusing to replace it (left untouched)");
+  }
+  return Status::ok_status();
+}
+
+Status creation_error(int e, const std::string& path, const std::string& temp) {
+  if (e == EEXIST) {
+    struct stat st {};
+    const bool seen = ::lstat(temp.c_str(), &st) == 0;
+    return invalid_argument(path + ": the temporary " + temp + " already exists" +
+                            (seen && !S_ISREG(st.st_mode) ? std::string(" (") + kind_of(st.st_mode) + ")" : "") +
+                            "; not following or replacing it");
+  }
+  return errno_status(e, path + ": cannot create the temporary " + temp);
+}
+
+Status fsync_directory_of(const std::string& path) {
+  const std::string dir = directory_of(path);
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return output_error(dir + ": cannot open for fsync: " + std::strerror(errno));
   const int rc = ::fsync(fd);
-  const int saved = errno;
+  const int e = errno;
   ::close(fd);
-  if (rc != 0) {
-    errno = saved;
-    return errno_status("fsync failed", path);
+  // Some file systems cannot fsync a directory; the rename is done either way.
+  if (rc != 0 && e != EINVAL && e != EROFS) {
+    return output_error(dir + ": fsync failed: " + std::strerror(e));
   }
   return Status::ok_status();
 }
 
 }  // namespace
 
-std::string temp_path_for(const std::string& path) {
-  return path + ".tmp." + std::to_string(::getpid());
+// --- OutputFile ------------------------------------------------------------------
+
+Result<OutputFile> OutputFile::create(const std::string& path) {
+  VISVOL_RETURN_IF_ERROR(check_destination(path));
+  sweep_stale_temporaries(path);
+  OutputFile f;
+  f.path_ = path;
+  f.temp_path_ = temp_name_for(path);
+  f.write_path_ = f.temp_path_;
+  f.fd_ = ::open(f.temp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (f.fd_ < 0) return creation_error(errno, path, f.temp_path_);
+  f.done_ = false;
+  f.slot_ = register_live(f.temp_path_, f.write_path_, false);
+  return f;
 }
 
-Status commit_file(const std::string& temp_path, const std::string& path) {
-  Status st = fsync_path(temp_path, O_RDONLY);
-  if (!st.ok()) {
-    discard_file(temp_path);
-    return st;
-  }
-  if (std::rename(temp_path.c_str(), path.c_str()) != 0) {
-    st = errno_status("cannot rename " + temp_path + " into place", path);
-    discard_file(temp_path);
-    return st;
-  }
-  // The rename is durable once the directory entry is.
-  return fsync_path(directory_of(path), O_RDONLY | O_DIRECTORY);
+Result<OutputFile> OutputFile::create_for_library(const std::string& path) {
+  VISVOL_RETURN_IF_ERROR(check_destination(path));
+  sweep_stale_temporaries(path);
+  OutputFile f;
+  f.path_ = path;
+  f.temp_path_ = temp_name_for(path);
+  f.write_path_ = f.temp_path_ + "/" + base_of(path);
+  f.is_directory_ = true;
+  if (::mkdir(f.temp_path_.c_str(), 0700) != 0) return creation_error(errno, path, f.temp_path_);
+  f.done_ = false;
+  f.slot_ = register_live(f.temp_path_, f.write_path_, true);
+  return f;
 }
 
-void discard_file(const std::string& temp_path) { ::unlink(temp_path.c_str()); }
+OutputFile::OutputFile(OutputFile&& other) noexcept { *this = std::move(other); }
 
-}  // namespace visvol
+OutputFile& OutputFile::operator=(OutputFile&& other) noexcept {
+  if (this == &other) return *this;
+  discard();
+  path_ = std::move(other.path_);
+  temp_path_ = std::move(other.temp_path_);
+  write_path_ = std::move(other.write_path_);
+  fd_ = other.fd_;
+  slot_ = other.slot_;
+  is_directory_ = other.is_directory_;
+  done_ = other.done_;
+  other.fd_ = -1;
+  other.slot_ = -1;
+  other.done_ = true;
+  return *this;
+}
 
-namespace visvol {
+OutputFile::~OutputFile() { discard(); }
+
+Status OutputFile::fail(Status status) {
+  discard();
+  return status;
+}
+
+Status OutputFile::write(const void* data, std::size_t bytes) {
+  if (done_ || fd_ < 0) return Status(Errc::state, path_ + ": output is closed");
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::write(fd_, p, bytes);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return fail(output_error(path_ + ": write failed: " + std::strerror(n < 0 ? errno : EIO)));
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+  }
+  return Status::ok_status();
+}
+
+Status OutputFile::write_at(const void* data, std::size_t bytes, std::uint64_t offset_bytes) {
+  if (done_ || fd_ < 0) return Status(Errc::state, path_ + ": output is closed");
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(offset_bytes));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return fail(output_error(path_ + ": write failed: " + std::strerror(n < 0 ? errno : EIO)));
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+    offset_bytes += static_cast<std::uint64_t>(n);
+  }
+  return Status::ok_status();
+}
+
+Status OutputFile::commit() {
+  if (done_) return Status(Errc::state, path_ + ": output is closed");
+  // the data durable before the name points at it
+  int fd = fd_;
+  if (fd < 0) fd = ::open(write_path_.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) return fail(errno_status(errno, path_ + ": the written file " + write_path_ + " is missing"));
+  const bool synced = ::fsync(fd) == 0;
+  const int sync_errno = errno;
+  const bool closed = ::close(fd) == 0;
+  const int close_errno = errno;
+  fd_ = -1;
+  if (!synced) return fail(output_error(path_ + ": fsync failed: " + std::strerror(sync_errno)));
+  if (!closed) return fail(output_error(path_ + ": close failed: " + std::strerror(close_errno)));
+  // something other than a regular file may have appeared there meanwhile
+  if (Status st = check_destination(path_); !st.ok()) return fail(st);
+  if (std::rename(write_path_.c_str(), path_.c_str()) != 0) {
+    return fail(errno_status(errno, path_ + ": cannot rename " + write_path_ + " into place"));
+  }
+  if (is_directory_) remove_temporary(temp_path_, true);
+  unregister_live(temp_path_, slot_);
+  slot_ = -1;
+  done_ = true;
+  return fsync_directory_of(path_);
+}
+
+void OutputFile::discard() {
+  if (done_) return;
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  remove_temporary(temp_path_, is_directory_);
+  unregister_live(temp_path_, slot_);
+  slot_ = -1;
+  done_ = true;
+}
+
+// --- the rest --------------------------------------------------------------------
 
 Status write_file_atomically(const std::string& path, const std::string& bytes) {
-  const std::string temp = temp_path_for(path);
-  std::FILE* f = std::fopen(temp.c_str(), "wb");
-  if (f == nullptr) return io_error(path + ": cannot write (" + std::strerror(errno) + ")");
-  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-  const bool closed = std::fclose(f) == 0;
-  if (!written || !closed) {
-    discard_file(temp);
-    return io_error(path + ": cannot write (" + std::strerror(errno) + ")");
+  Result<OutputFile> f = OutputFile::create(path);
+  if (!f.ok()) return f.status();
+  VISVOL_RETURN_IF_ERROR(f->write(bytes.data(), bytes.size()));
+  return f->commit();
+}
+
+void install_output_cleanup_on_signals() {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;  // nohup stays
+    struct sigaction sa {};
+    sa.sa_handler = remove_temporaries_and_reraise;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(sig, &sa, nullptr);
   }
-  return commit_file(temp, path);
+}
+
+void sweep_stale_temporaries(const std::string& path) {
+  const std::string prefix = base_of(path) + ".tmp.";
+  DIR* d = ::opendir(directory_of(path).c_str());
+  if (d == nullptr) return;
+  const int dir_fd = ::dirfd(d);
+  const long self = static_cast<long>(::getpid());
+  while (const dirent* e = ::readdir(d)) {
+    const long pid = temporary_pid(e->d_name, prefix);
+    if (pid < 0) continue;
+    // one of ours that is still being written, or one of another running process
+    if (pid == self ? is_live(temp_name_for(path)) : process_runs(pid)) continue;
+    struct stat st {};
+    if (::fstatat(dir_fd, e->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
+    if (st.st_uid != ::geteuid()) continue;  // never another user's files
+    if (S_ISREG(st.st_mode)) {
+      ::unlinkat(dir_fd, e->d_name, 0);
+    } else if (S_ISDIR(st.st_mode)) {
+      remove_private_directory(dir_fd, e->d_name);
+    }
+  }
+  ::closedir(d);
 }
 
 }  // namespace visvol

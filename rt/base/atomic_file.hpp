@@ -1,31 +1,89 @@
-// Files that appear whole or not at all.
+// Output files that appear whole or not at all, and never through a link.
 //
-// Writers write to temp_path_for(path), then commit_file(): fsync the data,
-// rename over the destination, fsync the directory. A crash or a kill before the
-// rename leaves the old file (or none) and a stray temporary, never a torn file.
+// Every writer of visvol goes through OutputFile: it creates the temporary
+// `PATH.tmp.<pid>` next to the destination with O_CREAT|O_EXCL|O_NOFOLLOW (so a
+// link or file planted at that name is refused, never followed), refuses a
+// destination that exists and is not a regular file (symlink, device, FIFO,
+// directory: left untouched), and commit() fsyncs the data, renames it over the
+// destination and fsyncs the directory. A crash or a kill before the rename
+// leaves the old file (or none); the temporary is removed on every error, on
+// SIGINT/SIGTERM where install_output_cleanup_on_signals() was called, and a
+// later write to the same output sweeps those of dead processes.
 //
-// Not real-time safe (blocking I/O).
+// Errors: Errc::invalid_argument when the path cannot be an output (not a
+// regular file, no such directory, a planted temporary: bad input, exit 2);
+// Errc::output when writing fails (disk full, I/O error: the operation failed,
+// exit 1).
+//
+// Thread-safety: an OutputFile belongs to one thread; several may exist at once
+// in different threads. Not real-time safe (blocking I/O, allocation).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "rt/base/status.hpp"
 
 namespace visvol {
 
-// A temporary name next to `path` (same directory, so rename is atomic), unique
-// per process.
-std::string temp_path_for(const std::string& path);
+class OutputFile {
+ public:
+  // A temporary open for writing (fd()) next to `path`.
+  static Result<OutputFile> create(const std::string& path);
 
-// Makes `temp_path` durable and renames it to `path`. On failure the temporary
-// is removed and `path` is untouched.
-Status commit_file(const std::string& temp_path, const std::string& path);
+  // For a library that must create its file by path (GDAL): a private
+  // directory `PATH.tmp.<pid>` (mode 0700, made with mkdir, which never follows
+  // a link) and write_path() inside it, where nobody else can plant anything.
+  // fd() is -1.
+  static Result<OutputFile> create_for_library(const std::string& path);
 
-// Removes a temporary left by a failed write (errors ignored).
-void discard_file(const std::string& temp_path);
+  OutputFile(OutputFile&& other) noexcept;
+  OutputFile& operator=(OutputFile&& other) noexcept;
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  ~OutputFile();  // discards unless committed
 
-// Writes a whole file that way: `path` holds the old content or `bytes`,
-// never part of them.
+  const std::string& path() const { return path_; }
+  // Where the bytes go: the temporary file (or the file in the private directory).
+  const std::string& write_path() const { return write_path_; }
+  int fd() const { return fd_; }
+
+  // Appends all `bytes` (retrying short writes and EINTR).
+  Status write(const void* data, std::size_t bytes);
+  // Writes all `bytes` at `offset_bytes`.
+  Status write_at(const void* data, std::size_t bytes, std::uint64_t offset_bytes);
+
+  // fsync, rename over path(), fsync the directory. On failure the temporary is
+  // removed and path() is untouched.
+  Status commit();
+  // Removes the temporary now (errors ignored); later calls do nothing.
+  void discard();
+
+ private:
+  OutputFile() = default;
+  Status fail(Status status);  // discards, then returns `status`
+
+  std::string path_;
+  std::string temp_path_;   // the name registered for cleanup: file or directory
+  std::string write_path_;  // == temp_path_ for a file, inside it for a directory
+  int fd_ = -1;
+  int slot_ = -1;           // in the signal registry, or -1
+  bool is_directory_ = false;
+  bool done_ = true;        // committed or discarded
+};
+
+// Writes a whole file: `path` holds the old content or `bytes`, never part.
 Status write_file_atomically(const std::string& path, const std::string& bytes);
+
+// For offline tools: SIGINT and SIGTERM remove the temporaries being written,
+// then end the process by the same signal. Call once at the start of main(),
+// before any other handler is installed.
+void install_output_cleanup_on_signals();
+
+// Removes `NAME.tmp.<pid>` temporaries next to `path` left by processes that no
+// longer run (regular files and the private directories of create_for_library,
+// owned by this user). OutputFile::create calls it; public for tests.
+void sweep_stale_temporaries(const std::string& path);
 
 }  // namespace visvol

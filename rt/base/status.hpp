@@ -27,6 +27,7 @@ enum class Errc : int {
   resource = -5,          // memory or another budget would be exceeded
   timeout = -6,
   state = -7,             // the call is not valid in the current state
+  output = -8,            // an output could not be written (disk full, I/O error)
 };
 
 class [[nodiscard]] Status {
@@ -57,6 +58,7 @@ inline Status invalid_argument(std::string message) {
   return Status(Errc::invalid_argument, std::move(message));
 }
 inline Status io_error(std::string message) { return Status(Errc::io, std::move(message)); }
+inline Status output_error(std::string message) { return Status(Errc::output, std::move(message)); }
 inline Status corrupt(std::string message) { return Status(Errc::corrupt, std::move(message)); }
 inline Status resource_error(std::string message) {
   return Status(Errc::resource, std::move(message));

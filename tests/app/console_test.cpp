@@ -2,6 +2,7 @@
 // device, its outputs, and the DDS side (paths, health, a command and its
 // acknowledgements) seen from another participant (domain 223, loopback).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -29,12 +30,12 @@ namespace {
 using visvol::test::Outcome;
 using visvol::test::slurp;
 
-Outcome console(const std::string& args) {
+Outcome console(const std::string& args, const std::string& prefix = "") {
   // the runner's binary is visvol; point it at the console instead
   const std::string dir = ::testing::TempDir();
   const std::string tag = std::to_string(getpid());
   const std::string out = dir + "/console_out_" + tag, err = dir + "/console_err_" + tag;
-  const std::string cmd = std::string(VISVOL_CONSOLE) + " " + args + " </dev/null >" + out + " 2>" + err;
+  const std::string cmd = prefix + VISVOL_CONSOLE + " " + args + " </dev/null >" + out + " 2>" + err;
   const int rc = std::system(cmd.c_str());
   Outcome r;
   r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
@@ -44,6 +45,9 @@ Outcome console(const std::string& args) {
   std::remove(err.c_str());
   return r;
 }
+
+// The console under a 30 s limit: a hang exits 124 (or 137) instead of stalling the suite.
+Outcome console_limited(const std::string& args) { return console(args, "timeout -k 5 30 "); }
 
 // The console's test packs: small, two levels of detail.
 visvol::storage::PackBuildParams small_pack_params() {
@@ -112,6 +116,29 @@ TEST_F(Console, HelpAndBadOptions) {
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
     EXPECT_NE(r.err.find("visvol-console: "), std::string::npos) << args;
   }
+}
+
+// A FIFO named as any input is refused at once (before, the console waited in
+// open() for a writer, ignoring SIGTERM); a script that is not there is bad
+// input. `timeout` turns a hang into a failure here.
+TEST_F(Console, FifoInputsAndAMissingScriptExitTwoAtOnce) {
+  const std::string fifo = out_dir("fifo") + ".fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  const std::string base = "--pack " + *pack_ + " --no-dds --seconds 1 --thumbnail-view none -o " + out_dir("fifo");
+  const std::pair<std::string, std::string> cases[] = {
+      {"--pack " + fifo + " --no-dds", fifo + ": is a FIFO, not a regular file"},
+      {base + " --config " + fifo, "--config: " + fifo + ": is a FIFO, not a regular file"},
+      {base + " --script " + fifo, "--script: " + fifo + ": is a FIFO, not a regular file"},
+      {base + " --terrain " + fifo, fifo + ": is a FIFO, not a regular file"},
+      {"--pack " + *pack_ + " --seconds 1 --thumbnail-view none --dds-config " + fifo,
+       fifo + ": is a FIFO, not a regular file"},
+      {base + " --script " + fifo + ".missing", "--script: " + fifo + ".missing: No such file or directory"}};
+  for (const auto& [args, expected] : cases) {
+    const Outcome r = console_limited(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+  }
+  std::remove(fifo.c_str());
 }
 
 // The envelope and observer options as the planner's: each bad value exits 2

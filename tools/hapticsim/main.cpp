@@ -14,6 +14,7 @@
 #include <string>
 
 #include "drivers/can/socketcan_bus.hpp"
+#include "rt/base/atomic_file.hpp"
 #include "drivers/hapticsim/script.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
 
@@ -214,11 +215,10 @@ int main(int argc, char** argv) {
     std::fputs(summary.c_str(), stdout);
     return kExitOk;
   }
-  std::ofstream out(o.summary_path, std::ios::trunc);
-  out << summary;
-  if (!out.flush()) {
-    std::fprintf(stderr, "visvol-hapticsim: %s: cannot write the summary\n", o.summary_path.c_str());
-    return kExitFailure;
+  if (const Status written = visvol::write_file_atomically(o.summary_path, summary); !written.ok()) {
+    std::fprintf(stderr, "visvol-hapticsim: cannot write the summary: %s\n", written.message().c_str());
+    // a path that cannot be an output is bad input; a full disk is a failure
+    return written.code() == visvol::Errc::invalid_argument ? kExitUsage : kExitFailure;
   }
   return kExitOk;
 }

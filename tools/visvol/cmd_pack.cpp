@@ -1,4 +1,6 @@
 // visvol info | verify | sample | export: reading field packs (and DEMs for info).
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,6 +15,7 @@
 #include "fields/gdal/dem_io.hpp"
 #include "fields/sampler.hpp"
 #include "import_cli.hpp"
+#include "rt/base/input_file.hpp"
 #include "storage/pack_reader.hpp"
 #include "storage/volume_export.hpp"
 
@@ -23,11 +26,13 @@ namespace {
 using storage::Pack;
 using storage::PackLevel;
 
+// False also for what cannot be opened: the DEM reader then names the problem.
 bool is_pack(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  Result<InputFile> in = InputFile::open(path);
+  if (!in.ok()) return false;
   char magic[8] = {};
-  in.read(magic, sizeof magic);
-  return in.gcount() == 8 && std::memcmp(magic, storage::kPackMagic, 8) == 0;
+  return ::pread(in->fd(), magic, sizeof magic, 0) == static_cast<ssize_t>(sizeof magic) &&
+         std::memcmp(magic, storage::kPackMagic, 8) == 0;
 }
 
 // A member of the metadata, or `fallback` when it is missing or of another type.

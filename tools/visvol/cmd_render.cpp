@@ -190,17 +190,10 @@ Status configure(const RenderOptions& o, render::RendererConfig& config, render:
 
 // The PNG whole or not at all (temporary file, then rename).
 Status write_png_file(const std::string& file, const std::uint8_t* data, std::size_t bytes) {
-  const std::string temp = temp_path_for(file);
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-    out.flush();
-    if (!out) {
-      discard_file(temp);
-      return io_error(file + ": cannot write");
-    }
-  }
-  return commit_file(temp, file);
+  Result<OutputFile> out = OutputFile::create(file);
+  if (!out.ok()) return out.status();
+  VISVOL_RETURN_IF_ERROR(out->write(data, bytes));
+  return out->commit();
 }
 
 // What colours the picture, for the summary line.

@@ -20,6 +20,7 @@
 
 #include "cli.hpp"
 #include "commands.hpp"
+#include "rt/base/atomic_file.hpp"
 
 namespace {
 
@@ -42,6 +43,8 @@ int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
 
 int main(int argc, char** argv) {
   using namespace visvol::cli;
+  // Ctrl-C or a kill during a build leaves no PACK.tmp.<pid> behind
+  visvol::install_output_cleanup_on_signals();
   CLI::App app{
       "visvol: visibility volumes above terrain (the field F_p of Srikanth et al., "
       "\"Visibility Volumes for Interactive Path Optimization\")"};

@@ -1,48 +1,17 @@
 #include "mission_options.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cstring>
 #include <toml++/toml.h>
+
+#include "rt/base/input_file.hpp"
 
 namespace visvol::cli {
 
 namespace {
 
 constexpr std::size_t kMaxVehicleFileBytes = 64 * 1024;
-
-// The whole of a small regular file; never blocks on a FIFO or a device.
-Result<std::string> read_small_file(const std::string& path, std::size_t max_bytes) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) return io_error(path + ": " + std::strerror(errno));
-  struct stat st {};
-  std::string text;
-  Status status;
-  if (::fstat(fd, &st) != 0) {
-    status = io_error(path + ": " + std::strerror(errno));
-  } else if (!S_ISREG(st.st_mode)) {
-    status = invalid_argument(path + ": not a regular file");
-  } else if (static_cast<std::size_t>(st.st_size) > max_bytes) {
-    status = invalid_argument(path + ": larger than " + std::to_string(max_bytes) + " bytes");
-  } else {
-    text.resize(static_cast<std::size_t>(st.st_size));
-    std::size_t got = 0;
-    while (got < text.size()) {
-      const ssize_t n = ::read(fd, &text[got], text.size() - got);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      got += static_cast<std::size_t>(n);
-    }
-    if (got != text.size()) status = io_error(path + ": short read");
-  }
-  ::close(fd);
-  if (!status.ok()) return status;
-  return text;
-}
 
 // A number under `key` (an integer is taken as one too), or an error.
 Status read_number(const toml::node& node, const std::string& file, const std::string& key, double& out) {
@@ -59,7 +28,7 @@ Status read_number(const toml::node& node, const std::string& file, const std::s
 }  // namespace
 
 Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
-  Result<std::string> text = read_small_file(path, kMaxVehicleFileBytes);
+  Result<std::string> text = read_input_file(path, kMaxVehicleFileBytes);
   if (!text.ok()) return text.status();
   toml::table table;
   try {

@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "rt/base/atomic_file.hpp"
+#include "rt/base/input_file.hpp"
 
 namespace visvol::cli {
 
@@ -67,17 +68,14 @@ std::string quoted(const std::string& line) {
 Result<std::string> read_whole_file(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return io_error(path + ": is a folder, not a path file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return io_error(path + ": " + std::strerror(errno));
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  if (!ec && size > kMaxPathFileBytes) {
-    return invalid_argument(path + ": " + std::to_string(size >> 20) + " MiB is too large for a path file (at most " +
-                            std::to_string(kMaxPathFileBytes >> 20) + " MiB)");
+  Result<InputFile> in = InputFile::open(path);
+  if (!in.ok()) return in.status();
+  if (in->size_bytes() > kMaxPathFileBytes) {
+    return invalid_argument(path + ": " + std::to_string(in->size_bytes() >> 20) +
+                            " MiB is too large for a path file (at most " + std::to_string(kMaxPathFileBytes >> 20) +
+                            " MiB)");
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return io_error(path + ": read error");
-  return text.str();
+  return in->read_all(static_cast<std::size_t>(kMaxPathFileBytes));
 }
 
 // Each line without its comment ('#' onwards), with its number; blank lines skipped.

@@ -72,7 +72,15 @@ TEST(ParticipantConfig, ReadErrorsNameTheFile) {
   Result<std::string> r = read_cyclone_config("/nonexistent/cyclone.xml");
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.status().message().find("/nonexistent/cyclone.xml"), std::string::npos);
+  // a device is refused without reading it (a FIFO would block for ever)
   r = read_cyclone_config("/dev/null");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("/dev/null: is a character device, not a regular file"), std::string::npos)
+      << r.status().message();
+  const std::string empty = ::testing::TempDir() + "/participant_test_empty.xml";
+  std::ofstream{empty};
+  r = read_cyclone_config(empty);
+  std::remove(empty.c_str());
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.status().message().find("empty"), std::string::npos);
 }

@@ -331,7 +331,8 @@ TEST(Script, ErrorsNameTheLineAndTheProblem) {
   EXPECT_EQ(error("  # only a comment\n\n0 grab # and another\n"), "(parsed)");
   auto missing = load_script("/nonexistent/script.txt", kHalf);
   ASSERT_FALSE(missing.ok());
-  EXPECT_EQ(missing.status().message(), "/nonexistent/script.txt: cannot open the script");
+  EXPECT_EQ(missing.status().message(), "/nonexistent/script.txt: cannot open the script: No such file or directory");
+  EXPECT_EQ(missing.status().code(), Errc::invalid_argument);  // bad input: the console exits 2
 }
 
 TEST(Script, ExamplesParse) {

@@ -1,0 +1,253 @@
+#include "rt/base/atomic_file.hpp"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace visvol {
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+bool exists(const std::string& path) {
+  struct stat st {};
+  return ::lstat(path.c_str(), &st) == 0;
+}
+
+mode_t type_of(const std::string& path) {
+  struct stat st {};
+  return ::lstat(path.c_str(), &st) == 0 ? (st.st_mode & S_IFMT) : 0;
+}
+
+// A character device to write at: a private copy of /dev/null where this test
+// may make one (as root, where a regression would replace the real one), else
+// /dev/null itself (which then cannot be replaced).
+std::string device_node(const std::string& dir) {
+  const std::string node = dir + "/null";
+  return ::mknod(node.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0 ? node : "/dev/null";
+}
+
+std::string own_temp(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
+
+// A pid that ran and has ended (and was reaped).
+pid_t dead_pid() {
+  const pid_t pid = ::fork();
+  if (pid == 0) ::_exit(0);
+  ::waitpid(pid, nullptr, 0);
+  return pid;
+}
+
+class AtomicFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/atomic_file_test_XXXXXX";
+    ASSERT_NE(::mkdtemp(tmpl), nullptr);
+    dir_ = tmpl;
+  }
+  void TearDown() override { std::system(("rm -rf " + dir_).c_str()); }
+  std::string dir_;
+};
+
+TEST_F(AtomicFile, WritesTheWholeFileAndLeavesNoTemporary) {
+  const std::string out = dir_ + "/out.txt";
+  write_text(out, "old");
+  ASSERT_TRUE(write_file_atomically(out, "new content").ok());
+  EXPECT_EQ(read_text(out), "new content");
+  EXPECT_FALSE(exists(own_temp(out)));
+}
+
+TEST_F(AtomicFile, LinkPlantedAtTheTemporaryNameIsRefusedAndItsTargetUntouched) {
+  const std::string victim = dir_ + "/victim", out = dir_ + "/out.vvp";
+  write_text(victim, "precious");
+  ASSERT_EQ(::symlink(victim.c_str(), own_temp(out).c_str()), 0);
+  const Status st = write_file_atomically(out, "attack");
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.code(), Errc::invalid_argument);
+  EXPECT_NE(st.message().find(own_temp(out)), std::string::npos) << st.message();
+  EXPECT_EQ(read_text(victim), "precious");
+  EXPECT_EQ(type_of(own_temp(out)), S_IFLNK);  // not ours to remove
+  EXPECT_FALSE(exists(out));
+}
+
+TEST_F(AtomicFile, LinkAtTheDestinationIsRefusedAndLeftAsItIs) {
+  const std::string victim = dir_ + "/victim", out = dir_ + "/out.png";
+  write_text(victim, "precious");
+  ASSERT_EQ(::symlink(victim.c_str(), out.c_str()), 0);
+  const Status st = write_file_atomically(out, "attack");
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.code(), Errc::invalid_argument);
+  EXPECT_NE(st.message().find(out + ": is a symbolic link, not a regular file"), std::string::npos) << st.message();
+  EXPECT_EQ(type_of(out), S_IFLNK);
+  EXPECT_EQ(read_text(victim), "precious");
+  EXPECT_FALSE(exists(own_temp(out)));
+}
+
+TEST_F(AtomicFile, DeviceFifoAndDirectoryDestinationsAreRefusedAndLeftAsTheyAre) {
+  const std::string fifo = dir_ + "/fifo", folder = dir_ + "/folder";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  ASSERT_EQ(::mkdir(folder.c_str(), 0755), 0);
+  const std::pair<std::string, mode_t> cases[] = {
+      {device_node(dir_), S_IFCHR}, {fifo, S_IFIFO}, {folder, S_IFDIR}};
+  for (const auto& [path, type] : cases) {
+    const Status st = write_file_atomically(path, "x");
+    ASSERT_FALSE(st.ok()) << path;
+    EXPECT_EQ(st.code(), Errc::invalid_argument) << path;
+    EXPECT_NE(st.message().find(path + ": is a"), std::string::npos) << st.message();
+    EXPECT_EQ(type_of(path), type) << path;
+    EXPECT_FALSE(exists(own_temp(path))) << path;
+  }
+  // and through OutputFile directly, in the library form too
+  EXPECT_FALSE(OutputFile::create_for_library(fifo).ok());
+  EXPECT_EQ(type_of(fifo), S_IFIFO);
+}
+
+TEST_F(AtomicFile, AnOutputNotCommittedLeavesTheOldFileAndNoTemporary) {
+  const std::string out = dir_ + "/out.bin";
+  write_text(out, "old");
+  {
+    Result<OutputFile> f = OutputFile::create(out);
+    ASSERT_TRUE(f.ok()) << f.status().message();
+    ASSERT_TRUE(f->write("half", 4).ok());
+    EXPECT_TRUE(exists(own_temp(out)));
+  }
+  EXPECT_EQ(read_text(out), "old");
+  EXPECT_FALSE(exists(own_temp(out)));
+}
+
+TEST_F(AtomicFile, ALibraryWritesInsideAPrivateDirectoryThenItIsRenamed) {
+  const std::string out = dir_ + "/dem.tif";
+  Result<OutputFile> f = OutputFile::create_for_library(out);
+  ASSERT_TRUE(f.ok()) << f.status().message();
+  EXPECT_EQ(f->fd(), -1);
+  EXPECT_EQ(type_of(own_temp(out)), S_IFDIR);
+  struct stat st {};
+  ASSERT_EQ(::stat(own_temp(out).c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0700u);
+  write_text(f->write_path(), "by path");
+  write_text(own_temp(out) + "/side.aux.xml", "a side file");
+  ASSERT_TRUE(f->commit().ok());
+  EXPECT_EQ(read_text(out), "by path");
+  EXPECT_FALSE(exists(own_temp(out)));
+}
+
+TEST_F(AtomicFile, StaleTemporariesOfDeadProcessesAreSweptThoseOfLiveOnesKept) {
+  const std::string out = dir_ + "/sf.vvp", victim = dir_ + "/victim";
+  const std::string dead = out + ".tmp." + std::to_string(dead_pid());
+  const std::string dead_dir = out + ".tmp." + std::to_string(dead_pid());
+  const std::string dead_link = out + ".tmp." + std::to_string(dead_pid());
+  const std::string live = out + ".tmp." + std::to_string(::getppid());
+  const std::string other = dir_ + "/other.vvp.tmp." + std::to_string(dead_pid());
+  write_text(dead, "600 MB of a killed build");
+  ASSERT_EQ(::mkdir(dead_dir.c_str(), 0700), 0);
+  write_text(dead_dir + "/sf.vvp", "half a GeoTIFF");
+  write_text(victim, "precious");
+  ASSERT_EQ(::symlink(victim.c_str(), dead_link.c_str()), 0);
+  write_text(live, "a build still running");
+  write_text(other, "another output's");
+  ASSERT_TRUE(write_file_atomically(out, "pack").ok());
+  EXPECT_FALSE(exists(dead));
+  EXPECT_FALSE(exists(dead_dir));
+  EXPECT_EQ(type_of(dead_link), S_IFLNK);  // never created by us: left
+  EXPECT_EQ(read_text(victim), "precious");
+  EXPECT_TRUE(exists(live));
+  EXPECT_TRUE(exists(other));
+  EXPECT_EQ(read_text(out), "pack");
+}
+
+TEST_F(AtomicFile, AStaleTemporaryWithThisProcessesPidIsSweptUnlessLive) {
+  const std::string out = dir_ + "/a.csv";
+  write_text(own_temp(out), "from an earlier process with the same pid");
+  Result<OutputFile> f = OutputFile::create(out);
+  ASSERT_TRUE(f.ok()) << f.status().message();
+  // a second writer of the same output while the first is live is refused
+  const Result<OutputFile> g = OutputFile::create(out);
+  EXPECT_FALSE(g.ok());
+  ASSERT_TRUE(f->write("1", 1).ok());
+  ASSERT_TRUE(f->commit().ok());
+  EXPECT_EQ(read_text(out), "1");
+}
+
+// Writing past the file size limit fails with EFBIG like a full disk with
+// ENOSPC: the operation failed (Errc::output), and no temporary is left.
+TEST_F(AtomicFile, AFailedWriteIsAnOutputErrorAndRemovesTheTemporary) {
+  const std::string out = dir_ + "/big.bin";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{4096, 4096};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    const Status st = write_file_atomically(out, std::string(1 << 20, 'x'));
+    const bool ok = !st.ok() && st.code() == Errc::output && st.message().find(out) != std::string::npos &&
+                    !exists(own_temp(out)) && !exists(out);
+    ::_exit(ok ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+// A child writing an output is killed by `sig`; returns the temporary's name.
+std::string killed_while_writing(const std::string& out, int sig, bool library, int& wait_status) {
+  int ready[2];
+  if (::pipe(ready) != 0) return "";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    install_output_cleanup_on_signals();
+    Result<OutputFile> f = library ? OutputFile::create_for_library(out) : OutputFile::create(out);
+    if (!f.ok()) ::_exit(3);
+    if (library) {
+      write_text(f->write_path(), "partial");
+    } else if (!f->write("partial", 7).ok()) {
+      ::_exit(4);
+    }
+    const char byte = 1;
+    if (::write(ready[1], &byte, 1) != 1) ::_exit(5);
+    while (true) ::pause();
+  }
+  ::close(ready[1]);
+  char byte = 0;
+  const bool told = ::read(ready[0], &byte, 1) == 1;
+  ::close(ready[0]);
+  const std::string temp = out + ".tmp." + std::to_string(pid);
+  const bool was_there = exists(temp);
+  ::kill(pid, sig);
+  ::waitpid(pid, &wait_status, 0);
+  return told && was_there ? temp : "(the child never wrote its temporary)";
+}
+
+TEST_F(AtomicFile, SigintAndSigtermRemoveTheTemporariesThenEndTheProcessBySignal) {
+  for (const bool library : {false, true}) {
+    for (const int sig : {SIGINT, SIGTERM}) {
+      const std::string out = dir_ + "/killed.vvp";
+      int status = 0;
+      const std::string temp = killed_while_writing(out, sig, library, status);
+      ASSERT_EQ(temp.find(out), 0u) << temp;
+      EXPECT_FALSE(exists(temp)) << temp;
+      EXPECT_FALSE(exists(out));
+      ASSERT_TRUE(WIFSIGNALED(status)) << "library " << library << " signal " << sig;
+      EXPECT_EQ(WTERMSIG(status), sig);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace visvol

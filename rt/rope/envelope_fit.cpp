@@ -12,6 +12,12 @@ namespace {
 constexpr double kRadPerDeg = 0.017453292519943295;
 constexpr int kTurnPasses = 400;
 constexpr int kHeightPasses = 60;
+// Rounds of turns then heights: a vertex the heights insert shortens the
+// segments beside it, and with them the fillets their turns may use.
+constexpr int kTurnRounds = 4;
+// Where a segment is split, as a fraction of it: never at its ends, where the
+// split would leave the turns beside it no room.
+constexpr double kSplitMin = 0.25, kSplitMax = 0.75;
 
 struct Band {
   double lo = 0, hi = 0;
@@ -179,7 +185,8 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
   for (std::size_t i = 0; i < p.size(); ++i) set_band(i);
 
   bool feasible = false;
-  for (int pass = 0; pass < kHeightPasses; ++pass) {
+  int round = 1;
+  for (int pass = 0; pass < kHeightPasses * kTurnRounds; ++pass) {
     feasible = fit_heights(p, lo, hi, climb, descent, z);
     std::vector<Vec3> fitted = p;
     for (std::size_t i = 0; i < p.size(); ++i) fitted[i].z() = z[i];
@@ -207,7 +214,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
       changed = changed || moved;
       if ((held && moved) || p.size() >= max_points) continue;
       // the segment cannot hold the band: a vertex at its worst sample
-      const Vec3 mid = p[i] + m.worst_t * (p[i + 1] - p[i]);
+      const Vec3 mid = p[i] + std::clamp(m.worst_t, kSplitMin, kSplitMax) * (p[i + 1] - p[i]);
       p.insert(p.begin() + static_cast<std::ptrdiff_t>(i) + 1, mid);
       lo.insert(lo.begin() + static_cast<std::ptrdiff_t>(i) + 1, 0.0);
       hi.insert(hi.begin() + static_cast<std::ptrdiff_t>(i) + 1, 0.0);
@@ -217,7 +224,16 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
     }
     if (!changed) {
       for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];
-      out.feasible = feasible && turns_fit(p, spec.envelope.min_turn_radius_m);
+      const bool turns = turns_fit(p, spec.envelope.min_turn_radius_m);
+      if (!turns && round < kTurnRounds) {
+        // the splits tightened some turns: open them again, then the heights
+        ++round;
+        relax_turns(p, spec.envelope.min_turn_radius_m);
+        if (spec.planning_bounds) clamp_to_bounds(p, *spec.planning_bounds);
+        for (std::size_t i = 0; i < p.size(); ++i) set_band(i);
+        continue;
+      }
+      out.feasible = feasible && turns;
       out.path = std::move(p);
       return out;
     }

@@ -16,6 +16,9 @@
 //    heights from which the end is still reachable; forwards, the height
 //    nearest the path's own inside that band and one segment's climb or
 //    descent from the previous vertex.
+// 4. A split shortens the segments beside it, and with them the fillets of
+//    the turns there: where a turn no longer fits, steps 2 and 3 run again
+//    (a few rounds). Splits fall in the middle half of a segment.
 //
 // The fit is exact for the envelope where the band allows it (`feasible`);
 // constraint hulls come from the field's hull kernel, so hidden-from and

@@ -100,7 +100,7 @@ double pack_curvature(const storage::Pack& pack) {
 // The check's members: per constraint and per envelope limit, and whether
 // all are met.
 nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
-  nlohmann::json j = {{"path", "flyable (the rope's path fitted into the envelope, as sent)"},
+  nlohmann::json j = {{"path", "flyable (the rope's final path fitted into the envelope)"},
                       {"terrain", "level 0 (finest), exact sight lines (R3)"},
                       {"sample_step_m", sample_step_m},
                       {"length_m", c.length_m},
@@ -121,7 +121,9 @@ nlohmann::json flyable_json(const dds::PathSample& p, bool inside_envelope, cons
           {"min_clearance_m", p.min_clearance_m},
           {"inside_envelope", inside_envelope},
           {"sent", sent.fitted},
-          {"sent_outside_envelope", sent.unflyable}};
+          {"sent_outside_envelope", sent.unflyable},
+          {"fits_failed", sent.failed},
+          {"observers_left_out", sent.hull_failures}};
 }
 
 dds::TimingSummary summary_of(const rt::DurationHistogram& h) {
@@ -418,8 +420,7 @@ Status Console::Impl::start() {
     out.acks = &acks;
   }
   if (flyable) {
-    out.path = &flyable->rope_paths();
-    out.path_limits = &flyable->limits();
+    out.limited_path = &flyable->rope_paths();
   }
   auto e = rt::Executive::create(ec, *field, bus, sim.get(), &commands, out);
   if (!e.ok()) return e.status();
@@ -501,7 +502,7 @@ Status Console::Impl::start_fitter() {
   Result<rt::VehicleEnvelope> v = resolve_vehicle(o);
   if (!v.ok()) return v.status();
   vehicle = *v;
-  auto f = PathFitter::create(pack, vehicle, 128, observers);
+  auto f = PathFitter::create(pack, vehicle, rt::ExecutiveConfig().fc_samples, observers);
   if (!f.ok()) return f.status();
   if (!publisher && !thumbs) {
     fitter = std::move(*f);

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "mission_options.hpp"
+#include "app/mission_options.hpp"
 #include "rt/base/status.hpp"
 #include "rt/rope/vehicle.hpp"
 

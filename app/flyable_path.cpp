@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <exception>
+#include <pthread.h>
 
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
@@ -15,8 +17,8 @@ Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const sto
                                                        int max_observers) {
   VISVOL_RETURN_IF_ERROR(rt::validate(vehicle));
   if (fc_samples < 2) return invalid_argument("flyable path: fc_samples must be at least 2");
-  // the console verified the pack's tiles when it opened it
-  Result<storage::PackLevel> level = storage::PackLevel::open(std::move(pack), 0, storage::TileCheck::deferred);
+  // every tile checked once here: the fitter reads level 0 outside the pager
+  Result<storage::PackLevel> level = storage::PackLevel::open(std::move(pack), 0, storage::TileCheck::at_open);
   if (!level.ok()) return level.status();
   std::unique_ptr<PathFitter> f(new PathFitter());
   f->vehicle_ = vehicle;
@@ -43,7 +45,12 @@ void PathFitter::set_observers(const rt::HullRequest& r) {
   auto add = [&](const double (&p)[3], std::vector<const rt::PointHull*>& to, const char* name) {
     if (hulls_.size() == hulls_.capacity()) return void(++hull_failures_);  // never moves the hulls
     const rt::ConstraintPoint c{rt::ConstraintKind::hidden_from, rt::HullRequest::point(p), r.eye_height_m};
-    Result<rt::PointHull> h = rt::point_hull(*finest_, c.eye_m(), name);
+    // on its post, as the executive's hull builder puts it (a point accepted
+    // on the bilinear terrain may be under the nearest post)
+    rt::Vec3 eye = c.eye_m();
+    int i = 0, j = 0;
+    if (rt::hull_post(finest_->geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(finest_->post(i, j)) + 0.01);
+    Result<rt::PointHull> h = rt::point_hull(*finest_, eye, name);
     if (!h.ok()) return void(++hull_failures_);
     hulls_.push_back(std::move(*h));
     to.push_back(&hulls_.back());
@@ -61,13 +68,24 @@ rt::VehicleEnvelope PathFitter::envelope(const rt::ForceGains& g) const {
 }
 
 rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::ForceGains& gains) const {
+  for (int i = 0; i < count; ++i) {
+    if (!vertices[i].allFinite()) return {};
+  }
+  std::vector<rt::Vec3> path;
+  const int keep = std::min(count, static_cast<int>(dds::kMaxPathVertices));
+  for (int k = 0; k < keep; ++k) {
+    // evenly spaced, both ends kept (as the executive thins what it sends)
+    const int i = keep == count ? k : static_cast<int>(std::lround(static_cast<double>(k) * (count - 1) / (keep - 1)));
+    path.push_back(vertices[i]);
+  }
+  if (path.size() < 2) return {};
   rt::EnvelopeFitSpec spec;
   spec.envelope = envelope(gains);
   spec.top_m = top_m_;
   spec.max_points = dds::kMaxPathVertices;
   spec.below = below_;
   spec.above = above_;
-  return rt::fit_to_envelope(std::vector<rt::Vec3>(vertices, vertices + count), spec, terrain_);
+  return rt::fit_to_envelope(path, spec, terrain_);
 }
 
 void PathFitter::describe(const std::vector<rt::Vec3>& path, dds::PathSample& out) const {
@@ -119,22 +137,31 @@ void FlyablePath::stop() {
 }
 
 FlyableStats FlyablePath::stats() const {
-  return {fitted_.load(std::memory_order_relaxed), unflyable_.load(std::memory_order_relaxed)};
+  return {fitted_.load(std::memory_order_relaxed), unflyable_.load(std::memory_order_relaxed),
+          failed_.load(std::memory_order_relaxed), hull_failures_.load(std::memory_order_relaxed)};
 }
 
 void FlyablePath::run() {
-  rt::PathLimits limits;
-  bool have_limits = false;
+  pthread_setname_np(pthread_self(), "visvol-flyable");
   const auto poll = std::chrono::duration<double>(poll_s_);
-  while (!stop_.load(std::memory_order_acquire)) {
-    if (const rt::PathLimits* l = limits_.take()) limits = *l, have_limits = true;
-    // the limits are handed off before their path: a path never comes first
-    if (const dds::PathSample* p = rope_paths_.take(); p != nullptr && have_limits) send(*p, limits);
+  for (;;) {
+    const bool stopping = stop_.load(std::memory_order_acquire);
+    // the last path handed off is sent too, before stopping
+    if (const rt::LimitedPath* p = rope_paths_.take()) {
+      try {
+        send(*p);
+      } catch (const std::exception&) {  // memory: this path is not sent, the last one stands
+        failed_.fetch_add(1, std::memory_order_relaxed);
+      }
+    }
+    if (stopping) return;
     std::this_thread::sleep_for(poll);
   }
 }
 
-void FlyablePath::send(const dds::PathSample& rope, const rt::PathLimits& limits) {
+void FlyablePath::send(const rt::LimitedPath& limited) {
+  const dds::PathSample& rope = limited.path;
+  const rt::PathLimits& limits = limited.limits;
   rope_.clear();
   for (std::uint32_t k = 0; k < rope.vertex_count && k < dds::kMaxPathVertices; ++k) {
     const dds::WorldPoint& w = rope.vertices[k].position;
@@ -142,6 +169,7 @@ void FlyablePath::send(const dds::PathSample& rope, const rt::PathLimits& limits
   }
   if (rope_.size() < 2) return;
   fitter_->set_observers(limits.observers);
+  hull_failures_.store(fitter_->hull_failures(), std::memory_order_relaxed);
   const rt::EnvelopeFit fit = fitter_->fit(rope_.data(), static_cast<int>(rope_.size()), limits.gains);
   if (fit.path.size() < 2) return;
   dds::PathSample& out = *out_;

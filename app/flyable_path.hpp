@@ -17,9 +17,10 @@
 // it; the session's summary checks the final path exactly (rt::PathChecker):
 // the hulls make the observers' requirements likely, the sight lines judge.
 //
-// Thread-safety: rope_paths() and gains() have one producer, the loop
-// thread; the sinks have one consumer each; stats() from any thread.
-// Allocates on its own thread and at create() only.
+// Thread-safety: rope_paths() has one producer, the loop thread; the sinks
+// have one consumer each; stats() from any thread. Allocates on its own
+// thread and at create() only; a failure there (memory) is counted, the last
+// path sent stands.
 #pragma once
 
 #include <atomic>
@@ -50,9 +51,12 @@ class PathFitter {
   rt::VehicleEnvelope envelope(const rt::ForceGains& gains) const;
   // Builds the hulls of a set of observers on the finest level, unless they
   // are those of the last set (same sequence). An observer whose hull cannot
-  // be built (under the terrain, outside the pack: the executive refused it
-  // already) is left out and counted.
+  // be built (outside the pack: the executive refused it already) is left
+  // out and counted in hull_failures().
   void set_observers(const rt::HullRequest& observers);
+  // The path (at most dds::kMaxPathVertices vertices: more are thinned
+  // evenly, ends kept) fitted into the envelope; the fit has at most that
+  // many vertices too. A path that is not finite gives an empty fit.
   rt::EnvelopeFit fit(const rt::Vec3* vertices, int count, const rt::ForceGains& gains) const;
   // `path` into `out`'s vertices and figures (F_c, length, lowest clearance
   // on the finest level); the header fields are left as they are.
@@ -80,6 +84,8 @@ class PathFitter {
 struct FlyableStats {
   std::uint64_t fitted = 0;      // flyable paths sent
   std::uint64_t unflyable = 0;   // of them, outside the envelope somewhere (the nearest the fit found)
+  std::uint64_t failed = 0;      // fits that failed (memory), nothing sent
+  int hull_failures = 0;         // observers left out of the fit (their hull could not be built)
 };
 
 class FlyablePath {
@@ -93,8 +99,8 @@ class FlyablePath {
   FlyablePath(const FlyablePath&) = delete;
   FlyablePath& operator=(const FlyablePath&) = delete;
 
-  LatestValue<dds::PathSample>& rope_paths() { return rope_paths_; }
-  LatestValue<rt::PathLimits>& limits() { return limits_; }
+  // The rope's paths with their limits (rt::ExecutiveOutputs::limited_path).
+  LatestValue<rt::LimitedPath>& rope_paths() { return rope_paths_; }
   FlyableStats stats() const;
   // Stops the thread (idempotent); afterwards fitter() may be used.
   void stop();
@@ -105,17 +111,17 @@ class FlyablePath {
   FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<dds::PathSample>* to_publisher,
               LatestValue<dds::PathSample>* to_renderer, double poll_s);
   void run();
-  void send(const dds::PathSample& rope, const rt::PathLimits& limits);
+  void send(const rt::LimitedPath& rope);
 
   std::unique_ptr<PathFitter> fitter_;
   LatestValue<dds::PathSample>* to_publisher_;
   LatestValue<dds::PathSample>* to_renderer_;
   double poll_s_;
-  LatestValue<dds::PathSample> rope_paths_;
-  LatestValue<rt::PathLimits> limits_;
+  LatestValue<rt::LimitedPath> rope_paths_;
   std::unique_ptr<dds::PathSample> out_;  // large: filled here, copied into the sinks
   std::vector<rt::Vec3> rope_;
-  std::atomic<std::uint64_t> fitted_{0}, unflyable_{0};
+  std::atomic<std::uint64_t> fitted_{0}, unflyable_{0}, failed_{0};
+  std::atomic<int> hull_failures_{0};
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

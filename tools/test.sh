@@ -59,12 +59,6 @@ build_tree() {  # build_tree BUILD_DIR [cmake options...] [-- targets...]
   cmake --build "$dir" -j "$jobs" "${targets[@]}"
 }
 
-# The tests labelled `threaded` (ctest -L threaded): real threads sharing
-# state (hand-offs, the loop, the executive, the hull builder, the tile pager,
-# the DDS publisher and intake, the renderer thread), under ThreadSanitizer.
-threaded_tests=(rt_base_handoff_test rt_exec_periodic_loop_test rt_exec_executive_test
-                rt_exec_constraint_hulls_test storage_resident_pack_test dds_live_publisher_test
-                dds_command_intake_test app_thumbnail_thread_test)
 
 export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-20}
 stage "install packages" tools/deps.sh build storage dds render hil fuzz
@@ -73,8 +67,12 @@ stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs"
+# The tests labelled `threaded` (ctest -L threaded; target visvol_threaded_tests):
+# real threads sharing state (hand-offs, the loop, the executive, the hull
+# builder, the tile pager, the DDS publisher and intake, the renderer and the
+# flyable-path threads), under ThreadSanitizer.
 stage "build: TSan (threaded tests)" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
-  -- "${threaded_tests[@]}"
+  -- visvol_threaded_tests
 stage "tests: TSan" env TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
   ctest --test-dir build-tsan -L threaded --output-on-failure -j "$jobs"
 stage "fuzzing: build and run" tools/fuzz.sh

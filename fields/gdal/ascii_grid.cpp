@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <memory>
 #include <sstream>
@@ -39,15 +40,16 @@ bool is_nodata_key(std::string word) {
   return word == "nodata_value" || word == "null";
 }
 
-// A number as GDAL reads these formats (CPLAtofM: '.' or ',' as the decimal
-// mark), and nothing after it.
+// A finite number as GDAL reads these formats (CPLAtofM: '.' or ',' as the
+// decimal mark), and nothing after it ("nan" and "inf" are not heights; the
+// process keeps the C locale).
 bool is_number(std::string token) {
   if (token.size() > kMaxCellChars) return false;
   std::replace(token.begin(), token.end(), ',', '.');
   if (token.empty()) return false;
   char* end = nullptr;
-  static_cast<void>(std::strtod(token.c_str(), &end));
-  return end == token.c_str() + token.size();
+  const double value = std::strtod(token.c_str(), &end);
+  return end == token.c_str() + token.size() && std::isfinite(value);
 }
 
 // Splits the file into whitespace-separated words, knowing which start a line.

@@ -736,7 +736,7 @@ void Executive::measure() {
 }
 
 void Executive::hand_off_path(std::int64_t stamp_ns) {
-  if (outputs_.path == nullptr && outputs_.path_render == nullptr) return;
+  if (outputs_.path == nullptr && outputs_.path_render == nullptr && outputs_.limited_path == nullptr) return;
   if (!finite_rope(*rope_)) return;  // a rope that could not be recovered is not published
   dds::PathSample& p = *path_sample_;
   const storage::ResidentSampler& s = forces_->sampler();
@@ -763,11 +763,12 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
   }
   p.vertex_count = static_cast<std::uint32_t>(keep);
   p.min_clearance_m = lowest;
-  if (outputs_.path_limits != nullptr) {
-    PathLimits& l = outputs_.path_limits->back();
-    l.gains = forces_->gains();
-    l.observers = in_force_ != nullptr ? in_force_->request : HullRequest{};
-    outputs_.path_limits->publish();
+  if (outputs_.limited_path != nullptr) {
+    LimitedPath& l = outputs_.limited_path->back();
+    std::memcpy(&l.path, &p, sizeof p);
+    l.limits.gains = forces_->gains();
+    l.limits.observers = in_force_ != nullptr ? in_force_->request : HullRequest{};
+    outputs_.limited_path->publish();
   }
   for (LatestValue<dds::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
     if (sink == nullptr) continue;

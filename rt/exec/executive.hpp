@@ -133,13 +133,19 @@ struct PathLimits {
   HullRequest observers;   // the hidden-from and visible-to set in force (none: sequence 0, no points)
 };
 
+// A path and the limits in force when it was handed off (plain data).
+struct LimitedPath {
+  dds::PathSample path;
+  PathLimits limits;
+};
+
 // Where the executive's outputs go; every pointer may be null.
 struct ExecutiveOutputs {
   LatestValue<dds::PathSample>* path = nullptr;            // DDS publisher
   LatestValue<dds::PathSample>* path_render = nullptr;     // renderer
-  // What the paths sent to `path` are held to, handed off before each:
-  // for a consumer that fits them into the envelope.
-  LatestValue<PathLimits>* path_limits = nullptr;
+  // Each path with the limits it is held to, in one hand-off: for a
+  // consumer that fits it into the envelope.
+  LatestValue<LimitedPath>* limited_path = nullptr;
   LatestValue<dds::DeviceStatusSample>* device = nullptr;  // DDS publisher
   dds::AckQueue* acks = nullptr;                           // applied/failed, to command intake
 };

@@ -9,7 +9,7 @@
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "mission_options.hpp"
+#include "app/mission_options.hpp"
 #include "path_io.hpp"
 #include "planning_pack.hpp"
 #include "rt/rope/field_forces.hpp"

@@ -10,7 +10,7 @@
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "mission_options.hpp"
+#include "app/mission_options.hpp"
 #include "path_io.hpp"
 #include "planning_pack.hpp"
 #include "plan_publish.hpp"

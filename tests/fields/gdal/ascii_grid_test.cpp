@@ -19,7 +19,7 @@ bool mentions(const Status& st, const std::string& text) {
 
 TEST(AsciiGrid, ANonNumericCellIsRefusedNamingItsColumnAndRow) {
   // GDAL reads "abc" as 0 m without a word: the red team's "a typo becomes sea level".
-  for (const std::string bad : {"abc", "1.2.3", "12m", "--5", "0x", "1e"}) {
+  for (const std::string bad : {"abc", "1.2.3", "12m", "--5", "0x", "1e", "nan", "inf", "-infinity"}) {
     const std::string path = write_text("bad_cell", ".asc", asc_text(12, "30", "500000", bad));
     const Result<Heightfield> hf = read_heightfield(path);
     ASSERT_FALSE(hf.ok()) << bad;

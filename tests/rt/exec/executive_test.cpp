@@ -71,6 +71,7 @@ class ExecutiveTest : public ::testing::Test {
   std::unique_ptr<Executive> make(can::CanBus* bus = nullptr, DeviceSimulation* sim = nullptr) {
     ExecutiveOutputs out;
     out.path = &paths_;
+    out.limited_path = &limited_;
     out.device = &device_;
     out.acks = &acks_;
     auto e = Executive::create(config_, *field_, bus, sim, &commands_, out);
@@ -147,6 +148,7 @@ class ExecutiveTest : public ::testing::Test {
   dds::CommandQueue commands_;
   dds::AckQueue acks_;
   LatestValue<dds::PathSample> paths_;
+  LatestValue<LimitedPath> limited_;  // the flyable-path fitter's hand-off
   LatestValue<dds::DeviceStatusSample> device_;
   std::int64_t now_ns_ = 10'000 * kMs;
   std::uint64_t tick_ = 0;
@@ -432,6 +434,21 @@ TEST_F(ExecutiveTest, SeveralObserversOfEachKindComeIntoForce) {
   ASSERT_EQ(e->forces().hidden_from_count(), 3);
   ASSERT_EQ(e->forces().visible_to_count(), 3);
   EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 25.0);
+  // the path with its limits goes to the fitter in one hand-off, allocating nothing
+  while (limited_.take() != nullptr) {
+  }
+  const std::uint64_t before_hand_off = testing::thread_allocation_count();
+  run(*e, 2 * config_.path_every_ticks);
+  EXPECT_EQ(testing::thread_allocation_count(), before_hand_off);
+  const LimitedPath* lp = limited_.take();
+  const dds::PathSample* sent = paths_.take();
+  ASSERT_TRUE(lp != nullptr && sent != nullptr);
+  EXPECT_EQ(lp->path.sequence, sent->sequence);  // the same path, not one before or after
+  EXPECT_EQ(lp->path.vertex_count, sent->vertex_count);
+  EXPECT_DOUBLE_EQ(lp->limits.gains.clearance_m, 25.0);
+  EXPECT_EQ(lp->limits.observers.hidden_count, 3);
+  EXPECT_EQ(lp->limits.observers.visible_count, 3);
+  EXPECT_EQ(lp->limits.observers.sequence, e->hulls_in_force()->sequence());
   for (int k = 0; k < 3; ++k) {
     Result<PointHull> h = point_hull(field_->level(0), hidden[k] + Vec3(0, 0, 2), "h");
     Result<PointHull> v = point_hull(field_->level(0), visible[k] + Vec3(0, 0, 2), "v");

@@ -1,4 +1,4 @@
-// The mission options `visvol plan` and `visvol check` share: the vehicle's
+// The mission options `visvol plan`, `visvol check` and the console share: the vehicle's
 // flight envelope and the observers a path must stay hidden from or visible to.
 //
 // --vehicle is a preset (fixed-wing, multirotor) or a small TOML file of the

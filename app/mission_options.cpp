@@ -1,4 +1,4 @@
-#include "mission_options.hpp"
+#include "app/mission_options.hpp"
 
 #include <CLI/CLI.hpp>
 #include <cerrno>

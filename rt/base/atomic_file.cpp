@@ -1,4 +1,5 @@
 #include "rt/base/atomic_file.hpp"
+#include "rt/base/input_file.hpp"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -34,16 +35,6 @@ std::string base_of(const std::string& path) {
 
 std::string temp_name_for(const std::string& path) {
   return path + ".tmp." + std::to_string(::getpid());
-}
-
-const char* kind_of(mode_t mode) {
-  if (S_ISLNK(mode)) return "a symbolic link";
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISFIFO(mode)) return "a FIFO";
-  if (S_ISCHR(mode)) return "a character device";
-  if (S_ISBLK(mode)) return "a block device";
-  if (S_ISSOCK(mode)) return "a socket";
-  return "not a regular file";
 }
 
 // Failures of the disk or the system, not of the path the user gave.
@@ -193,7 +184,7 @@ Status check_destination(const std::string& path) {
     return errno_status(errno, path + ": cannot be written");
   }
   if (!S_ISREG(st.st_mode)) {
-    return invalid_argument(path + ": is " + kind_of(st.st_mode) +
+    return invalid_argument(path + ": is " + file_kind(st.st_mode) +
                             ", not a regular file; refusing to replace it (left untouched)");
   }
   return Status::ok_status();
@@ -204,7 +195,7 @@ Status creation_error(int e, const std::string& path, const std::string& temp) {
     struct stat st {};
     const bool seen = ::lstat(temp.c_str(), &st) == 0;
     return invalid_argument(path + ": the temporary " + temp + " already exists" +
-                            (seen && !S_ISREG(st.st_mode) ? std::string(" (") + kind_of(st.st_mode) + ")" : "") +
+                            (seen && !S_ISREG(st.st_mode) ? std::string(" (") + file_kind(st.st_mode) + ")" : "") +
                             "; not following or replacing it");
   }
   return errno_status(e, path + ": cannot create the temporary " + temp);

@@ -12,9 +12,8 @@
 
 namespace visvol {
 
-namespace {
-
-const char* kind_of(mode_t mode) {
+const char* file_kind(mode_t mode) {
+  if (S_ISLNK(mode)) return "a symbolic link";
   if (S_ISDIR(mode)) return "a directory";
   if (S_ISFIFO(mode)) return "a FIFO";
   if (S_ISCHR(mode)) return "a character device";
@@ -22,8 +21,6 @@ const char* kind_of(mode_t mode) {
   if (S_ISSOCK(mode)) return "a socket";
   return "not a regular file";
 }
-
-}  // namespace
 
 Result<InputFile> InputFile::open(const std::string& path) {
   if (path.empty()) return invalid_argument("empty input file name");
@@ -35,7 +32,7 @@ Result<InputFile> InputFile::open(const std::string& path) {
   struct stat st {};
   if (::fstat(f.fd_, &st) != 0) return io_error(path + ": " + std::strerror(errno));
   if (!S_ISREG(st.st_mode)) {
-    return invalid_argument(path + ": is " + kind_of(st.st_mode) + ", not a regular file");
+    return invalid_argument(path + ": is " + file_kind(st.st_mode) + ", not a regular file");
   }
   // Reads of a regular file then behave as usual (and mmap does not care).
   const int flags = ::fcntl(f.fd_, F_GETFL);
@@ -114,7 +111,7 @@ Status check_side_files(const std::string& path) {
     const std::string side = dir + "/" + name;
     struct stat st {};
     if (::stat(side.c_str(), &st) != 0 || S_ISREG(st.st_mode) || S_ISDIR(st.st_mode)) continue;
-    status = invalid_argument(side + ": is " + kind_of(st.st_mode) + ", not a regular file (a side file of " + path +
+    status = invalid_argument(side + ": is " + file_kind(st.st_mode) + ", not a regular file (a side file of " + path +
                               " that would be opened with it)");
     break;
   }

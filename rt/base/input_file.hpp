@@ -13,6 +13,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <sys/types.h>
+
 #include <string>
 
 #include "rt/base/status.hpp"
@@ -56,5 +58,10 @@ Status check_input_file(const std::string& path);
 // up to its last '.', case ignored) that is a FIFO, device or socket is refused
 // naming it, since opening it would block or worse.
 Status check_side_files(const std::string& path);
+
+// What a file that is not a regular one is, for messages: "a symbolic link",
+// "a directory", "a FIFO", "a character device", "a block device", "a socket"
+// (inputs and outputs alike).
+const char* file_kind(mode_t mode);
 
 }  // namespace visvol

@@ -13,7 +13,7 @@ enum class Profile {
   latest,      // reliable, transient-local, keep-last 1
   telemetry,   // best effort, volatile, keep-last 1
   command,     // reliable, volatile, keep-all
-  ack,         // reliable, volatile, keep-last kAckHistoryDepth
+  ack,         // reliable, transient-local, keep-last kAckHistoryDepth
 };
 
 struct TopicSpec {
@@ -42,7 +42,7 @@ const char* describe_profile(Profile profile) {
     case Profile::latest: return "reliable, transient-local, keep-last 1";
     case Profile::telemetry: return "best effort, volatile, keep-last 1";
     case Profile::command: return "reliable, volatile, keep-all";
-    case Profile::ack: return "reliable, volatile, keep-last 1024 (reader: keep-all)";
+    case Profile::ack: return "reliable, transient-local, keep-last 1024 (reader: keep-all)";
   }
   return "?";
 }
@@ -87,7 +87,11 @@ QosPtr make_qos(Profile profile, bool reader) {
       break;
     case Profile::ack:
       dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, kMaxBlocking);
-      dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+      // Discovery is not symmetric: a sender that already sees the console's
+      // ack writer may not yet be seen by it, and a volatile writer would drop
+      // the answers written before it matched. Transient-local hands them over
+      // at the match; senders pick their own by source and sequence.
+      dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
       // The writer never blocks on a slow or dead subscriber, yet keeps a
       // flood's worth of acknowledgements for retransmission; a subscriber
       // keeps all, so that its own answer is never pushed out by others'.

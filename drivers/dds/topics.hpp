@@ -18,7 +18,8 @@
 //   latest     reliable, transient-local, keep-last 1 (a late joiner gets the newest)
 //   telemetry  best effort, volatile, keep-last 1
 //   command    reliable, volatile, keep-all; the console's reader queues at most 256
-//   ack        reliable, volatile; the writer keeps the last 1024, readers keep all
+//   ack        reliable, transient-local; the writer keeps the last 1024 (a late
+//              joiner gets them), readers keep all
 //
 // Readers request no more than writers offer: a volatile or best-effort reader
 // (RViz's default) matches the path writer; a reliable reader does not match

@@ -484,6 +484,24 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   copy_text(unknown.source, "console_test");
   copy_text(unknown.pack_id, "no_such_pack");
   ASSERT_EQ(commands->write(&msg.fill(unknown)), DDS_RETCODE_OK);
+  int refused = 0, applied = 0;
+  auto count_acks = [&] {
+    auto a = acks->take<visvol_msgs_msg_dds__CommandAck_>(
+        [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
+          const CommandAck ack = decode_ack(m);
+          refused += ack.sequence == 1 && ack.result == AckResult::rejected;
+          applied += ack.sequence == 2 && ack.result == AckResult::applied;
+        },
+        16);
+    ASSERT_TRUE(a.ok());
+  };
+  // as an operator would: the refusal read before the next command (the
+  // switch ends this session's participant, and with it what it had not sent)
+  for (int i = 0; i < 100 && refused == 0; ++i) {
+    (void)acks->wait(0.1);
+    count_acks();
+  }
+  ASSERT_EQ(refused, 1) << "the unknown pack was not refused within 10 s";
   Command go = unknown;
   go.sequence = 2;
   copy_text(go.pack_id, other_id);
@@ -492,16 +510,7 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   std::remove(other.c_str());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("switch-terrain"), std::string::npos) << r.err;
-
-  int refused = 0, applied = 0;
-  auto a = acks->take<visvol_msgs_msg_dds__CommandAck_>(
-      [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
-        const CommandAck ack = decode_ack(m);
-        refused += ack.sequence == 1 && ack.result == AckResult::rejected;
-        applied += ack.sequence == 2 && ack.result == AckResult::applied;
-      },
-      16);
-  ASSERT_TRUE(a.ok());
+  count_acks();
   EXPECT_EQ(refused, 1);
   EXPECT_EQ(applied, 1);
 

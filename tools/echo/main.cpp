@@ -295,8 +295,9 @@ int run_command(const Common& common, const CommandOptions& options) {
   Result<Reader> acks = Reader::create(**p, Topic::command_ack);
   if (!acks.ok()) return failure(acks.status().message());
 
-  // both directions matched before sending: a volatile command written
-  // earlier would reach nobody, an ack sent earlier would be missed
+  // both ends seen before sending: a volatile command written earlier would
+  // reach nobody; acks are transient-local, so one the console wrote before
+  // its writer saw this reader still arrives
   const Status heard = writer->wait_for_readers(1, options.timeout_s);
   const Status hearing = heard.ok() ? acks->wait_for_writers(1, options.timeout_s) : heard;
   if (!hearing.ok()) {

@@ -3,9 +3,11 @@
 // acknowledges them.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <thread>
 #include <vector>
 
 #include "drivers/dds/command_intake.hpp"
@@ -130,6 +132,35 @@ TEST(CommandIntake, ValidCommandIsQueuedAndAccepted) {
   EXPECT_EQ(got.kind, CommandKind::set_objective);
   EXPECT_EQ(got.objective, Objective::show);
   EXPECT_FALSE(f.queue.try_pop(got));
+}
+
+// Discovery is not symmetric: a sender may see the intake's ack writer
+// before that writer sees the sender's reader. An answer written in between
+// must still reach it.
+TEST(CommandIntake, AnAckWrittenBeforeTheSendersReaderMatchedStillArrives) {
+  Fixture f(default_config());
+  ASSERT_NE(f.intake, nullptr);
+  Result<Writer> writer = Writer::create(*f.operator_side, Topic::command);
+  ASSERT_TRUE(writer.ok());
+  ASSERT_TRUE(writer->wait_for_readers(1, 5.0).ok());
+  Command o = base(CommandKind::set_objective, 41);
+  o.objective = Objective::show;
+  CommandMessage m;
+  ASSERT_EQ(writer->write(&m.fill(o)), 0);
+  Command got{};
+  ASSERT_TRUE(wait_until([&] { return f.queue.try_pop(got); }, 5.0));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the ack is out, to nobody
+
+  Result<Reader> acks = Reader::create(*f.operator_side, Topic::command_ack);
+  ASSERT_TRUE(acks.ok());
+  ASSERT_TRUE(acks->wait_for_writers(1, 5.0).ok());
+  CommandAck ack{};
+  ASSERT_TRUE(wait_until([&] {
+    (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
+        [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) { ack = decode_ack(a); }, 8);
+    return ack.sequence == 41u;
+  }, 5.0));
+  EXPECT_EQ(ack.result, AckResult::accepted);
 }
 
 TEST(CommandIntake, BadCommandsAreRejectedWithReasonsAndIntakeGoesOn) {

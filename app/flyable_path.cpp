@@ -38,7 +38,6 @@ std::uint64_t PathFitter::bytes(const fields::VolumeGeometry& g, int observers) 
 
 void PathFitter::set_observers(const rt::HullRequest& r) {
   if (r.sequence == observers_sequence_) return;
-  observers_sequence_ = r.sequence;
   hulls_.clear();
   below_.clear();
   above_.clear();
@@ -57,6 +56,8 @@ void PathFitter::set_observers(const rt::HullRequest& r) {
   };
   for (int k = 0; k < r.hidden_count; ++k) add(r.hidden_from_m[k], below_, "hidden-from");
   for (int k = 0; k < r.visible_count; ++k) add(r.visible_to_m[k], above_, "visible-to");
+  // last: a build that threw (out of memory) is tried again with the next fit
+  observers_sequence_ = r.sequence;
 }
 
 rt::VehicleEnvelope PathFitter::envelope(const rt::ForceGains& g) const {

@@ -73,9 +73,8 @@ Status validate(const PlanRequest& r) {
     if (!c.point_m.allFinite() || !std::isfinite(c.eye_height_m)) {
       return invalid_argument(std::string("plan: --") + to_string(c.kind) + " must be finite");
     }
-    if (++per_kind[static_cast<int>(c.kind)] > kMaxConstraintHulls) {
-      msg << "plan: more than " << kMaxConstraintHulls << " --" << to_string(c.kind)
-          << " points";
+    if (++per_kind[static_cast<int>(c.kind)] > kMaxPlanObservers) {
+      msg << "plan: more than " << kMaxPlanObservers << " --" << to_string(c.kind) << " points";
       return invalid_argument(msg.str());
     }
   }
@@ -144,13 +143,9 @@ bool better(const PathCheck& a, const PathCheck& b, Objective objective) {
   return objective == Objective::hide ? a.fc < b.fc : a.fc > b.fc;
 }
 
-std::vector<const PointHull*> hulls_of(const std::vector<PointHull>& hulls,
-                                       const std::vector<ConstraintPoint>& constraints, ConstraintKind kind) {
-  std::vector<const PointHull*> out;
-  for (std::size_t c = 0; c < constraints.size() && c < hulls.size(); ++c) {
-    if (constraints[c].kind == kind) out.push_back(&hulls[c]);
-  }
-  return out;
+std::vector<const PointHull*> ObserverHulls::of(ConstraintKind kind) const {
+  const std::optional<PointHull>& h = kind == ConstraintKind::hidden_from ? hidden_from : visible_to;
+  return h ? std::vector<const PointHull*>{&*h} : std::vector<const PointHull*>{};
 }
 
 }  // namespace detail

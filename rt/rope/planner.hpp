@@ -49,6 +49,10 @@ enum class InitialPath : std::uint8_t { straight, global, polyline };
 
 // Rope segments a plan may have (waypoints less one).
 inline constexpr int kMaxPlanSegments = 4096;
+// Observers of each kind a plan may have: their hulls fold into one a kind
+// (detail::ObserverHulls), so the bound is only on the time to build them
+// (one hull per observer and level of detail).
+inline constexpr int kMaxPlanObservers = 256;
 // A level of detail's rope work at most: vertices x time steps. A level runs
 // to its simulated-time limit without a wall clock; at about 0.7 us a vertex
 // step this keeps one under about half a minute (the default 128 segments
@@ -130,25 +134,42 @@ Status check_ends(const PlanRequest& request, const PathChecker& checker, double
 // Is path a (its check) better than path b?
 bool better(const PathCheck& a, const PathCheck& b, Objective objective);
 
-// One hull per constraint on a level, its eye lifted onto that level's
-// terrain where the level is coarser (and higher) than the finest.
+// Every observer of a kind on one level as a single hull: a path must stay
+// under every hidden-from hull (so under their lowest) and over every
+// visible-to hull (so over their highest). Folded post by post, the hull is
+// exact at the posts; between them its bilinear height is the more cautious
+// one. So any number of observers costs two hulls of memory and one lookup a
+// query; building costs one hull per observer.
+struct ObserverHulls {
+  std::optional<PointHull> hidden_from, visible_to;
+  // The hull of a kind as the forces, the fit and the search take it (none or one).
+  std::vector<const PointHull*> of(ConstraintKind kind) const;
+};
+
+// The folded hulls of `constraints` on a level, each eye lifted onto that
+// level's terrain where the level is coarser (and higher) than the finest.
 template <class Level>
-Result<std::vector<PointHull>> constraint_hulls(const Level& level, const std::vector<ConstraintPoint>& constraints) {
-  std::vector<PointHull> hulls;
+Result<ObserverHulls> observer_hulls(const Level& level, const std::vector<ConstraintPoint>& constraints) {
+  ObserverHulls out;
   for (const ConstraintPoint& c : constraints) {
     Vec3 eye = c.eye_m();
     int i = 0, j = 0;
     if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
-    Result<PointHull> h = point_hull(level, eye, c.kind == ConstraintKind::hidden_from ? "--hidden-from" : "--visible-to");
+    const bool hidden = c.kind == ConstraintKind::hidden_from;
+    Result<PointHull> h = point_hull(level, eye, hidden ? "--hidden-from" : "--visible-to");
     if (!h.ok()) return h.status();
-    hulls.push_back(std::move(*h));
+    std::optional<PointHull>& folded = hidden ? out.hidden_from : out.visible_to;
+    if (!folded) {
+      folded = std::move(*h);
+      continue;
+    }
+    std::vector<float>& into = folded->height_m;
+    for (std::size_t k = 0; k < into.size(); ++k) {
+      into[k] = hidden ? std::min(into[k], h->height_m[k]) : std::max(into[k], h->height_m[k]);
+    }
   }
-  return hulls;
+  return out;
 }
-
-// The hulls of one kind, as pointers.
-std::vector<const PointHull*> hulls_of(const std::vector<PointHull>& hulls,
-                                       const std::vector<ConstraintPoint>& constraints, ConstraintKind kind);
 
 }  // namespace detail
 
@@ -169,16 +190,16 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   gains.clearance_m = envelope.clearance_m;
   gains.max_agl_m = envelope.max_agl_m;
   gains.max_altitude_m = std::min(envelope.max_altitude_m, top_m);
-  // one environment and one hull per constraint, per level
+  // one environment and the observers' folded hulls, per level
   std::vector<std::unique_ptr<FieldForces<Level>>> envs;
-  std::vector<std::vector<PointHull>> hulls(levels.size());
+  std::vector<detail::ObserverHulls> hulls(levels.size());
   for (std::size_t l = 0; l < levels.size(); ++l) {
     envs.push_back(std::make_unique<FieldForces<Level>>(*levels[l], gains));
-    Result<std::vector<PointHull>> h = detail::constraint_hulls(*levels[l], request.constraints);
+    Result<detail::ObserverHulls> h = detail::observer_hulls(*levels[l], request.constraints);
     if (!h.ok()) return h.status();
     hulls[l] = std::move(*h);
-    const auto hidden = detail::hulls_of(hulls[l], request.constraints, ConstraintKind::hidden_from);
-    const auto visible = detail::hulls_of(hulls[l], request.constraints, ConstraintKind::visible_to);
+    const auto hidden = hulls[l].of(ConstraintKind::hidden_from);
+    const auto visible = hulls[l].of(ConstraintKind::visible_to);
     envs.back()->set_hidden_from(hidden.data(), static_cast<int>(hidden.size()));
     envs.back()->set_visible_to(visible.data(), static_cast<int>(visible.size()));
   }
@@ -197,8 +218,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   fit.envelope = envelope;
   fit.planning_bounds = request.planning_bounds;
   fit.top_m = top_m;
-  fit.below = detail::hulls_of(hulls.front(), request.constraints, ConstraintKind::hidden_from);
-  fit.above = detail::hulls_of(hulls.front(), request.constraints, ConstraintKind::visible_to);
+  fit.below = hulls.front().of(ConstraintKind::hidden_from);
+  fit.above = hulls.front().of(ConstraintKind::visible_to);
 
   PlanResult result;
   std::vector<Vec3> best;
@@ -245,8 +266,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     }
     for (int l : {coarsest, fine}) {
       const Level& level = *levels[static_cast<std::size_t>(l)];
-      gp.hidden_from = detail::hulls_of(hulls[static_cast<std::size_t>(l)], request.constraints, ConstraintKind::hidden_from);
-      gp.visible_to = detail::hulls_of(hulls[static_cast<std::size_t>(l)], request.constraints, ConstraintKind::visible_to);
+      gp.hidden_from = hulls[static_cast<std::size_t>(l)].of(ConstraintKind::hidden_from);
+      gp.visible_to = hulls[static_cast<std::size_t>(l)].of(ConstraintKind::visible_to);
       Result<GlobalPath> gpath = global_search(level, request.from, request.to, gp);
       // no lattice path inside the envelope on this level: the others may have one
       if (gpath.ok() && consider(gpath->points.data(), static_cast<int>(gpath->points.size()), "global search")) {

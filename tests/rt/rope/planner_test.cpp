@@ -262,6 +262,43 @@ TEST_F(RealTerrain, Fig10HiddenFromAndVisibleToHoldByExactSightLines) {
   EXPECT_DOUBLE_EQ(both_seen, 1.0);
 }
 
+// More observers than the rope's force has slots for (8 a kind): a plan
+// hidden from p1 of Fig. 10, then eleven more observers on the ground that
+// cannot see that path (so a corridor hidden from all twelve exists). The
+// plan must hold every one of them, by the independent sight lines too.
+TEST_F(RealTerrain, TwelveHiddenFromObserversAreAllHeld) {
+  const fields::FieldSampler<DenseLevel> s((*levels_)[0]);
+  auto ground_point = [&](int i, int j) {
+    return Vec3(terrain_->x_of(i), terrain_->y_of(j), s.height(terrain_->x_of(i), terrain_->y_of(j)));
+  };
+  PlanRequest r = hide_request(RopeModel::articulated);
+  r.init = InitialPath::global;
+  r.max_seconds_per_level = 10;
+  r.constraints = {{ConstraintKind::hidden_from, ground_point(64, 78), 2.0}};
+  const Result<PlanResult> one = plan(pointers(*levels_), r);
+  ASSERT_TRUE(one.ok()) << one.status().message();
+  ASSERT_TRUE(one->final_check.all_met);
+  std::vector<ConstraintPoint> blind;  // posts from which that path is hidden
+  for (int j = 2; j < 96; j += 4) {
+    for (int i = 2; i < 96; i += 4) {
+      const ConstraintPoint c{ConstraintKind::hidden_from, ground_point(i, j), 2.0};
+      if (seen_share_r3(*terrain_, c.eye_m(), one->final_path) == 0.0) blind.push_back(c);
+    }
+  }
+  ASSERT_GE(blind.size(), 11u) << "not enough observers blind to the first path";
+  for (int k = 0; k < 11; ++k) r.constraints.push_back(blind[blind.size() * static_cast<std::size_t>(k) / 11]);
+  const Result<PlanResult> all = plan(pointers(*levels_), r);
+  ASSERT_TRUE(all.ok()) << all.status().message();
+  for (const std::string& u : all->final_check.unmet()) std::cout << "  unmet: " << u << "\n";
+  EXPECT_TRUE(all->final_check.all_met);
+  ASSERT_EQ(all->final_check.constraints.size(), 12u);
+  for (std::size_t k = 0; k < r.constraints.size(); ++k) {
+    EXPECT_TRUE(all->final_check.constraints[k].met) << "observer " << k;
+    EXPECT_EQ(seen_share_r3(*terrain_, r.constraints[k].eye_m(), all->final_path), 0.0) << "observer " << k;
+  }
+  EXPECT_GE(densest_clearance(all->final_path), r.envelope.clearance_m - 0.01);
+}
+
 TEST_F(RealTerrain, NoCorridorIsReportedUnmetNotHidden) {
   // an observer right beside the start sees it: no path can be hidden from it
   const fields::FieldSampler<DenseLevel> s((*levels_)[0]);
@@ -402,6 +439,15 @@ TEST(PlanValidate, SegmentsAndTheirWorkAreBounded) {
       << validate(r).message();
   r.max_seconds_per_level = 9;
   EXPECT_TRUE(validate(r).ok()) << validate(r).message();
+}
+
+TEST(PlanValidate, ObserversAreBoundedOnlyByTheTimeToBuildTheirHulls) {
+  PlanRequest r = valid_request();
+  const ConstraintPoint c{ConstraintKind::visible_to, Vec3(200, 100, 10), 2.0};
+  r.constraints.assign(kMaxPlanObservers, c);
+  EXPECT_TRUE(validate(r).ok()) << validate(r).message();
+  r.constraints.push_back(c);
+  EXPECT_NE(validate(r).message().find("more than 256 --visible-to points"), std::string::npos) << validate(r).message();
 }
 
 TEST(PlanValidate, InitialPathPointsOutsideThePlanningBoundsAreRefusedByIndex) {

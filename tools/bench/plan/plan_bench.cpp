@@ -317,7 +317,7 @@ struct Optimum {
 Result<Optimum> lattice_optimum(const World& w, const PlanRequest& r, const FieldForces<DenseLevel>& field,
                                 const PathChecker& checker) {
   const DenseLevel& finest = w.levels[0];
-  Result<std::vector<PointHull>> hulls = detail::constraint_hulls(finest, r.constraints);
+  Result<detail::ObserverHulls> hulls = detail::observer_hulls(finest, r.constraints);
   if (!hulls.ok()) return hulls.status();
   GlobalSearchParams gp;
   gp.objective = r.objective;
@@ -328,8 +328,8 @@ Result<Optimum> lattice_optimum(const World& w, const PlanRequest& r, const Fiel
   gp.max_climb_deg = r.envelope.max_climb_deg;
   gp.max_descent_deg = r.envelope.max_descent_deg;
   gp.bounds = r.planning_bounds;
-  gp.hidden_from = detail::hulls_of(*hulls, r.constraints, ConstraintKind::hidden_from);
-  gp.visible_to = detail::hulls_of(*hulls, r.constraints, ConstraintKind::visible_to);
+  gp.hidden_from = hulls->of(ConstraintKind::hidden_from);
+  gp.visible_to = hulls->of(ConstraintKind::visible_to);
   Optimum out;
   const auto t0 = Clock::now();
   Result<GlobalPath> g = global_search(finest, r.from, r.to, gp);

@@ -106,6 +106,8 @@ nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
                       {"length_m", c.length_m},
                       {"constraints", nlohmann::json::array()},
                       {"envelope", nlohmann::json::array()},
+                      {"inside_planning_bounds", c.inside_planning_bounds},
+                      {"inside_bounds_fraction", c.inside_bounds_fraction},
                       {"all_met", c.all_met},
                       {"unmet", c.unmet()}};
   for (const rt::ConstraintResult& r : c.constraints) j["constraints"].push_back(rt::constraint_json(r));
@@ -141,6 +143,7 @@ struct Console::Impl {
   ConsoleOptions o;
   std::shared_ptr<const storage::Pack> pack;
   std::string pack_id;
+  fields::Bounds2D bounds;  // the pack's planning bounds: the ends and the flyable path stay inside
   std::vector<std::pair<std::string, std::string>> terrains;  // id, path: where switch-terrain may go
   std::string switch_to;    // the pack id a switch-terrain command asked for, once seen
   double session_s = 0;     // how long the session ran
@@ -181,7 +184,7 @@ struct Console::Impl {
   Status start_thumbnails();
   int observers_reserved(const fields::VolumeGeometry& g) const;
   Status start_hulls();
-  rt::ExecutiveConfig executive_config(const fields::VolumeGeometry& g) const;
+  rt::ExecutiveConfig executive_config() const;
   Status start_fitter();
   const PathFitter& path_fitter() const { return flyable ? flyable->fitter() : *fitter; }
   void fit_final_path();
@@ -261,8 +264,9 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   if (!p.ok()) return p.status();
   participant = std::move(*p);
   dds::IntakeConfig ic;
-  ic.limits.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
-  ic.limits.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m() + 10000.0};
+  // endpoints from commands inside the planning bounds, as on the command line
+  ic.limits.min = {bounds.xmin_m, bounds.ymin_m, g.z0_m};
+  ic.limits.max = {bounds.xmax_m, bounds.ymax_m, g.top_m() + 10000.0};
   ic.limits.max_segments = static_cast<std::uint32_t>(o.max_segments);
   ic.limits.max_observers = static_cast<std::uint32_t>(observers);
   VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
@@ -279,8 +283,8 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   dds::copy_text(t.pack_id, pack_id);
   dds::copy_text(t.crs, storage::epsg_from_wkt(pack->metadata().crs_wkt));
   if (!dds::copy_text(t.crs_wkt, pack->metadata().crs_wkt)) t.crs_wkt[0] = '\0';
-  t.min = ic.limits.min;
-  t.max = {ic.limits.max.x_m, ic.limits.max.y_m, g.top_m()};
+  t.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
+  t.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m()};
   t.post_spacing_m = g.spacing_m;
   publisher->terrain().publish();
   return {};
@@ -297,6 +301,19 @@ Status check_terrain(const std::string& path, int level) {
   if (level >= (*p)->level_count()) {
     return invalid_argument(path + ": " + std::to_string((*p)->level_count()) + " levels of detail, --level " +
                             std::to_string(level) + " is not among them");
+  }
+  return {};
+}
+
+// --from and --to inside the pack's planning bounds, as `visvol plan` asks.
+Status check_ends_inside(const ConsoleOptions& o, const fields::Bounds2D& b) {
+  for (const auto& [name, p] : {std::pair{"--from", &o.from}, std::pair{"--to", &o.to}}) {
+    if (p->size() == 3 && !b.contains((*p)[0], (*p)[1])) {
+      char at[96];
+      std::snprintf(at, sizeof at, "(%.1f, %.1f)", (*p)[0], (*p)[1]);
+      return invalid_argument(std::string(name) + " " + at + " is outside " + o.pack + "'s planning bounds (" +
+                              storage::describe(b) + "), where F_p undercounts observers beyond the DEM");
+    }
   }
   return {};
 }
@@ -340,6 +357,8 @@ Status Console::Impl::start() {
     return invalid_argument("--level: " + std::to_string(o.level) + " is not in " + o.pack + " (0.." +
                             std::to_string(pack->level_count() - 1) + ")");
   }
+  bounds = storage::planning_bounds(*pack);
+  VISVOL_RETURN_IF_ERROR(check_ends_inside(o, bounds));
   const fields::VolumeGeometry g = pack->geometry(o.level);
   rt::RealtimeConfig rtc;
   rtc.priority = o.priority;
@@ -413,7 +432,7 @@ Status Console::Impl::start() {
   }
 
   // the executive
-  const rt::ExecutiveConfig ec = executive_config(g);
+  const rt::ExecutiveConfig ec = executive_config();
   rt::ExecutiveOutputs out;
   if (publisher) {
     out.device = &publisher->device_status();
@@ -461,9 +480,10 @@ Status Console::Impl::start_hulls() {
   return {};
 }
 
-// The planning problem of the options; endpoints by default at the west and
-// east edges 150 m up, or half way between the clearance and a lower ceiling.
-rt::ExecutiveConfig Console::Impl::executive_config(const fields::VolumeGeometry& g) const {
+// The planning problem of the options; endpoints by default a tenth inside
+// the west and east edges of the planning bounds, 150 m up, or half way
+// between the clearance and a lower ceiling.
+rt::ExecutiveConfig Console::Impl::executive_config() const {
   rt::ExecutiveConfig ec;
   ec.gains.clearance_m = vehicle.clearance_m;
   ec.gains.max_agl_m = vehicle.max_agl_m;  // infinite: none
@@ -476,8 +496,9 @@ rt::ExecutiveConfig Console::Impl::executive_config(const fields::VolumeGeometry
     const bool lower = z0 + 150 > top && top > z0 + vehicle.clearance_m;
     return rt::Vec3(x, y, lower ? 0.5 * (z0 + vehicle.clearance_m + top) : z0 + 150);
   };
-  const double ymid = g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m;
-  const double xw = g.origin_x + 0.1 * (g.nx - 1) * g.spacing_m, xe = g.origin_x + 0.9 * (g.nx - 1) * g.spacing_m;
+  const double ymid = 0.5 * (bounds.ymin_m + bounds.ymax_m);
+  const double xw = bounds.xmin_m + 0.1 * (bounds.xmax_m - bounds.xmin_m);
+  const double xe = bounds.xmin_m + 0.9 * (bounds.xmax_m - bounds.xmin_m);
   ec.start_m = o.from.empty() ? end_at(xw, ymid) : rt::Vec3(o.from[0], o.from[1], o.from[2]);
   ec.end_m = o.to.empty() ? end_at(xe, ymid) : rt::Vec3(o.to[0], o.to[1], o.to[2]);
   ec.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
@@ -491,6 +512,7 @@ rt::ExecutiveConfig Console::Impl::executive_config(const fields::VolumeGeometry
   ec.period_s = o.period_us * 1e-6;
   ec.driver.node_id = static_cast<std::uint8_t>(o.node);
   ec.eye_height_m = o.eye_height_m;
+  ec.planning_bounds = bounds;
   for (const std::vector<double>& p : o.hidden_from) ec.observers.add_hidden_from(rt::Vec3(p[0], p[1], p[2]));
   for (const std::vector<double>& p : o.visible_to) ec.observers.add_visible_to(rt::Vec3(p[0], p[1], p[2]));
   dds::copy_text(ec.pack_id, pack_id);
@@ -535,6 +557,7 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
   spec.envelope = path_fitter().envelope(exec->forces().gains());
   spec.constraints = observers_of(exec->hulls_in_force());
   spec.curvature_coeff = pack_curvature(*pack);
+  spec.planning_bounds = bounds;
   Result<rt::PathChecker> checker = rt::PathChecker::create(path_fitter().terrain(), nullptr, spec);
   if (!checker.ok()) {
     line = "check: " + checker.status().message();

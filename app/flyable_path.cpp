@@ -21,6 +21,7 @@ Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const sto
   Result<storage::PackLevel> level = storage::PackLevel::open(std::move(pack), 0, storage::TileCheck::at_open);
   if (!level.ok()) return level.status();
   std::unique_ptr<PathFitter> f(new PathFitter());
+  f->bounds_ = storage::planning_bounds(level->pack());
   f->vehicle_ = vehicle;
   f->fc_samples_ = fc_samples;
   f->finest_ = std::make_unique<storage::PackLevel>(std::move(*level));
@@ -83,6 +84,7 @@ rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::F
   rt::EnvelopeFitSpec spec;
   spec.envelope = envelope(gains);
   spec.top_m = top_m_;
+  spec.planning_bounds = bounds_;
   spec.max_points = dds::kMaxPathVertices;
   spec.below = below_;
   spec.above = above_;
@@ -180,6 +182,7 @@ void FlyablePath::send(const rt::LimitedPath& limited) {
   std::memcpy(out.pack_id, rope.pack_id, sizeof out.pack_id);
   out.objective = rope.objective;
   out.converged = rope.converged;
+  out.inside_envelope = fit.feasible;
   fitter_->describe(fit.path, out);
   for (LatestValue<dds::PathSample>* sink : {to_publisher_, to_renderer_}) {
     if (sink != nullptr) sink->write(out);

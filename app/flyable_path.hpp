@@ -8,7 +8,8 @@
 // The rope stays the operator's: it settles in the field and follows the
 // hand. What leaves the console is its projection into the envelope: climb
 // and descent within the vehicle's limits on every segment, turns no tighter
-// than its radius, heights from the clearance up to the ceilings in force
+// than its radius, inside the pack's planning bounds, heights from the
+// clearance up to the ceilings in force
 // (the executive's gains, which commands change), under the hull of every
 // hidden-from observer in force and over that of every visible-to one (the
 // fitter builds its own hulls on the finest level, on its thread, when the
@@ -71,6 +72,7 @@ class PathFitter {
   PathFitter() = default;
   rt::VehicleEnvelope vehicle_;
   double top_m_ = 0;
+  fields::Bounds2D bounds_;  // the pack's planning bounds: the fit clamps into them
   int fc_samples_ = 128;
   std::unique_ptr<storage::PackLevel> finest_;
   std::unique_ptr<rt::FieldForces<storage::PackLevel>> field_;

@@ -58,10 +58,11 @@ for view in oblique volume slice; do
 done
 
 echo "== the console: 20 s at 1 kHz, simulated haptic device, DDS on loopback (domain 0);"
-echo "   at 8 s a second station tells it over DDS to stay hidden from above the Presidio"
+echo "   at 8 s a second station tells it over DDS to stay hidden from an observer on the ground"
+echo "   south of the Presidio (a corridor hidden from it exists: visvol plan finds one)"
 (
   sleep 8
-  build/tools/echo/visvol-echo command set-constraints --hidden-from 545500,4185500,150 --clearance 30 \
+  build/tools/echo/visvol-echo command set-constraints --hidden-from 547250,4182750,109 --clearance 30 \
     >"$out/console_command.txt" 2>&1 || echo "visvol-echo failed: see $out/console_command.txt"
 ) &
 build/app/visvol-console --pack "$pack" --seconds 20 --out "$out/console"

@@ -119,6 +119,7 @@ Status PathMessages::fill(const PathSample& sample) {
   update_.length_m = sample.length_m;
   update_.min_clearance_m = sample.min_clearance_m;
   update_.converged = sample.converged;
+  update_.inside_envelope = sample.inside_envelope;
   update_.positions_m._length = n;
   update_.visibility._length = n;
   update_.clearance_m._length = n;
@@ -145,6 +146,7 @@ Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& msg, PathSampl
   out.stamp_ns = from_ros_time(msg.header.stamp);
   out.objective = static_cast<Objective>(msg.objective);
   out.converged = msg.converged;
+  out.inside_envelope = msg.inside_envelope;
   out.f_c = msg.f_c;
   out.length_m = msg.length_m;
   out.min_clearance_m = msg.min_clearance_m;

@@ -121,6 +121,7 @@ struct PathSample {
   char pack_id[kPackIdCapacity];
   Objective objective;
   bool converged;             // the rope has come to rest
+  bool inside_envelope;       // the vertices hold the vehicle's envelope (false: the rope's own path, or no fit)
   double f_c;                 // path measure F_c (sum of F_p along the path, weighted)
   double length_m;
   double min_clearance_m;

@@ -126,6 +126,7 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   field_.set_focus(box);
   VISVOL_RETURN_IF_ERROR(field_.update());
   forces_ = std::make_unique<FieldForces<storage::ResidentLevel, storage::ResidentSampler>>(level, c.gains);
+  if (c.planning_bounds) forces_->set_bounds(*c.planning_bounds);
   const storage::ResidentSampler& sampler = forces_->sampler();
   VISVOL_RETURN_IF_ERROR(check_point("start", c.start_m, g, sampler.height(c.start_m.x(), c.start_m.y())));
   VISVOL_RETURN_IF_ERROR(check_point("end", c.end_m, g, sampler.height(c.end_m.x(), c.end_m.y())));
@@ -745,6 +746,7 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
   std::memcpy(p.pack_id, config_.pack_id, sizeof p.pack_id);
   p.objective = objective_ == Objective::show ? dds::Objective::show : dds::Objective::hide;
   p.converged = counters_.converged;
+  p.inside_envelope = false;  // the rope's own path: the flyable-path thread fits it
   p.f_c = counters_.fc;
   p.length_m = rope_->length_m();
   const int count = rope_->segments() + 1;

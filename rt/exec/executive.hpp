@@ -82,6 +82,9 @@ struct ExecutiveConfig {
   // observers, are eye_height_m above their points (the planner's --eye-height).
   HullRequest observers;
   double eye_height_m = 2.0;
+  // The pack's planning bounds: the rope is pushed back inside them (absent:
+  // inside the field's extent).
+  std::optional<fields::Bounds2D> planning_bounds;
   double k3_user = 1.0;             // the operator's pull
   bool start_running = true;        // settle from the start, or wait for a start command
   int level = 0;                    // the level of detail the rope runs on

@@ -124,6 +124,16 @@ class FieldForces final : public RopeEnvironment, public PathField {
 
   void set_gains(const ForceGains& g) { gains_ = g; }
   const ForceGains& gains() const { return gains_; }
+  // Pushes the rope back inside `b` (the pack's planning bounds, where F_p
+  // counts every observer) instead of the field's extent; the part of `b`
+  // beyond the field is ignored.
+  void set_bounds(const fields::Bounds2D& b) {
+    const fields::VolumeGeometry& g = sampler_.level().geometry();
+    x0_ = std::max(b.xmin_m, g.origin_x);
+    x1_ = std::min(b.xmax_m, g.origin_x + (g.nx - 1) * g.spacing_m);
+    y0_ = std::max(b.ymin_m, g.origin_y - (g.ny - 1) * g.spacing_m);
+    y1_ = std::min(b.ymax_m, g.origin_y);
+  }
   // At most kMaxHulls of each kind; the hulls must outlive their use.
   static constexpr int kMaxHulls = kMaxConstraintHulls;
   void set_hidden_from(const PointHull* hull) { set_hulls(hidden_, hidden_count_, &hull, hull ? 1 : 0); }

@@ -195,6 +195,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   std::vector<detail::ObserverHulls> hulls(levels.size());
   for (std::size_t l = 0; l < levels.size(); ++l) {
     envs.push_back(std::make_unique<FieldForces<Level>>(*levels[l], gains));
+    if (request.planning_bounds) envs.back()->set_bounds(*request.planning_bounds);
     Result<detail::ObserverHulls> h = detail::observer_hulls(*levels[l], request.constraints);
     if (!h.ok()) return h.status();
     hulls[l] = std::move(*h);

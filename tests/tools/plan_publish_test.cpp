@@ -82,6 +82,10 @@ TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
         ++received;
         EXPECT_EQ(m.sequence_number, summary["dds"]["paths_published"].get<std::uint64_t>());
         EXPECT_EQ(m.converged, summary["converged"].get<bool>());
+        // inside the envelope as the check found it, and only when no vertex was dropped
+        bool limits_met = true;
+        for (const nlohmann::json& l : summary["envelope"]) limits_met = limits_met && l["met"].get<bool>();
+        EXPECT_EQ(m.inside_envelope, limits_met && summary["vertices"].get<int>() <= 512) << summary["envelope"].dump();
         EXPECT_STREQ(m.pack_id, ("publish_" + std::to_string(getpid())).c_str());
         EXPECT_EQ(m.objective, 1);  // hide
         EXPECT_NEAR(m.f_c, summary["fc_end"].get<double>(), 1e-9);

@@ -49,11 +49,11 @@ void add_timing(std::string& out, const char* key, const visvol_msgs_msg_dds__Ti
 std::string format_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool with_vertices) {
   std::string out;
   add(out, "path seq=%llu stamp=%s frame=%s pack=%s objective=%s vertices=%u length_m=%.3f "
-           "f_c=%.6g min_clearance_m=%.3f converged=%s",
+           "f_c=%.6g min_clearance_m=%.3f converged=%s inside_envelope=%s",
       static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
       quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(),
       name_of<dds::Objective>(m.objective), m.positions_m._length, m.length_m, m.f_c,
-      m.min_clearance_m, m.converged ? "yes" : "no");
+      m.min_clearance_m, m.converged ? "yes" : "no", m.inside_envelope ? "yes" : "no");
   if (with_vertices) {
     for (std::uint32_t i = 0; i < m.positions_m._length; ++i) {
       const geometry_msgs_msg_dds__Point_& p = m.positions_m._buffer[i];

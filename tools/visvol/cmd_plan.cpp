@@ -1,5 +1,6 @@
 // visvol plan PACK --from X Y Z --to X Y Z --objective hide|show -o OUT:
 // the offline planner (paper, section 4) on a field pack.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -170,7 +171,11 @@ int run_plan(const PlanOptions& o) {
   if (!res.ok()) return fail("plan", res.status());
   progress.finish();
   Status delivery;
-  if (publisher) delivery = publisher->finish(res->final_path, res->final_metrics, res->converged);
+  if (publisher) {
+    const auto& limits = res->final_check.envelope;
+    const bool inside = std::all_of(limits.begin(), limits.end(), [](const rt::LimitResult& l) { return l.met; });
+    delivery = publisher->finish(res->final_path, res->final_metrics, res->converged, inside);
+  }
 
   // per-vertex figures on the finest level
   PathReport report;

@@ -82,22 +82,25 @@ void PlanPublisher::progress(const rt::Vec3* vertices, int count, double f_c) {
   double length_m = 0;
   for (int i = 1; i < count; ++i) length_m += (vertices[i] - vertices[i - 1]).norm();
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  if (!publish(vertices, count, f_c, length_m, nan, false).ok()) ++errors_;
+  // the rope as it settles, not fitted: not said to be inside the envelope
+  if (!publish(vertices, count, f_c, length_m, nan, false, false).ok()) ++errors_;
 }
 
 Status PlanPublisher::finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics,
-                             bool converged) {
+                             bool converged, bool inside_envelope) {
   VISVOL_RETURN_IF_ERROR(publish(vertices.data(), static_cast<int>(vertices.size()), metrics.fc,
-                                 metrics.length_m, metrics.min_clearance_m, converged));
+                                 metrics.length_m, metrics.min_clearance_m, converged, inside_envelope));
   return publisher_->wait_for_delivery(options_.linger_s);
 }
 
 Status PlanPublisher::publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
-                              double min_clearance_m, bool converged) {
+                              double min_clearance_m, bool converged, bool inside_envelope) {
   dds::PathSample& s = *sample_;
   s.sequence = ++sequence_;
   s.stamp_ns = dds::now_stamp_ns();
   s.converged = converged;
+  // thinned to fit the message, the straight legs between kept vertices are unchecked
+  s.inside_envelope = inside_envelope && count <= static_cast<int>(dds::kMaxPathVertices);
   s.f_c = f_c;
   s.length_m = length_m;
   s.min_clearance_m = std::numeric_limits<double>::infinity();

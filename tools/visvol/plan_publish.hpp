@@ -46,9 +46,11 @@ class PlanPublisher {
   // Errors are counted, not returned: publishing never stops planning.
   void progress(const rt::Vec3* vertices, int count, double f_c);
   // The final path, then waits (up to linger_s) for matched subscribers to
-  // acknowledge it. An error says what was not delivered.
+  // acknowledge it. `inside_envelope`: the check found every envelope limit
+  // met (sent as such only when no vertex had to be dropped to fit the
+  // message). An error says what was not delivered.
   Status finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics,
-                bool converged);
+                bool converged, bool inside_envelope);
 
   std::uint64_t published() const { return sequence_; }
   std::uint64_t errors() const { return errors_; }
@@ -60,7 +62,7 @@ class PlanPublisher {
                 dds::Objective objective, VertexProbe probe);
   // min_clearance_m NaN: the lowest of the published vertices.
   Status publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
-                 double min_clearance_m, bool converged);
+                 double min_clearance_m, bool converged, bool inside_envelope);
 
   PublishOptions options_;
   std::unique_ptr<dds::Participant> participant_;

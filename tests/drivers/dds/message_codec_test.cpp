@@ -17,6 +17,7 @@ std::unique_ptr<PathSample> path(std::uint32_t n) {
   copy_text(s->pack_id, "sf_north");
   s->objective = Objective::show;
   s->converged = true;
+  s->inside_envelope = true;
   s->f_c = 3.5;
   s->length_m = 1234.5;
   s->min_clearance_m = 20.0;
@@ -62,6 +63,7 @@ TEST(PathMessages, FillsRosPathAndUpdateWithOneHeader) {
   EXPECT_STREQ(u.pack_id, "sf_north");
   EXPECT_EQ(u.objective, 2);
   EXPECT_TRUE(u.converged);
+  EXPECT_TRUE(u.inside_envelope);
   EXPECT_EQ(u.length_m, 1234.5);
   ASSERT_EQ(u.positions_m._length, 3u);
   ASSERT_EQ(u.visibility._length, 3u);
@@ -102,6 +104,7 @@ TEST(DecodePathUpdate, RoundTripAndInconsistentLengths) {
   EXPECT_EQ(back->sequence, s->sequence);
   EXPECT_EQ(back->stamp_ns, s->stamp_ns);
   EXPECT_EQ(back->objective, s->objective);
+  EXPECT_TRUE(back->inside_envelope);
   EXPECT_EQ(back->vertex_count, 4u);
   EXPECT_EQ(std::memcmp(back->vertices, s->vertices, 4 * sizeof(PathVertex)), 0);
 

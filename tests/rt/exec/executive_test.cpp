@@ -707,14 +707,27 @@ class CountingExecutive final : public PeriodicTask {
     if (t.index == 200) start_ = visvol::testing::thread_allocation_count();  // after warm-up
     e_.tick(t);
     if (t.index >= 200) allocations_.store(visvol::testing::thread_allocation_count() - start_);
+    ticks_.store(t.index + 1, std::memory_order_relaxed);
   }
   void safe_state() override { e_.safe_state(); }
   std::uint64_t allocations() const { return allocations_.load(); }
+  std::uint64_t ticks() const { return ticks_.load(std::memory_order_relaxed); }
+  // Waits at least `at_least`, and until `count` more ticks have run (a slow,
+  // sanitized or loaded machine runs fewer a second), 10 s at most.
+  void wait_ticks(std::uint64_t count, std::chrono::milliseconds at_least) const {
+    const std::uint64_t until = ticks() + count;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::this_thread::sleep_for(at_least);
+    while (ticks() < until && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
 
  private:
   Executive& e_;
   std::uint64_t start_ = 0;
   std::atomic<std::uint64_t> allocations_{0};
+  std::atomic<std::uint64_t> ticks_{0};
 };
 
 TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations) {
@@ -770,13 +783,13 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
     m.endpoints.start = {a.x(), a.y(), a.z()};
     m.endpoints.end = {b.x(), b.y(), b.z()};
     ASSERT_TRUE(commands.try_push(m));
-    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+    task.wait_ticks(60, std::chrono::milliseconds(150));
   }
   const LoopRun run = loop.stop();
   (*field)->set_reader_active(false);
   (*field)->stop_pager();
   const storage::ResidentStats s = (*field)->stats();
-  EXPECT_GT(run.totals.ticks, 500u);
+  EXPECT_GT(run.totals.ticks, 12u * 60u);
   // not even a minor fault once settled: every page a tick reads is locked and
   // mapped (a read of a brick that is not resident would fault, from the page
   // cache at best). Under AddressSanitizer the shadow of newly touched memory

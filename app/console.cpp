@@ -264,9 +264,11 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   if (!p.ok()) return p.status();
   participant = std::move(*p);
   dds::IntakeConfig ic;
+  ic.limits.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
+  ic.limits.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m() + 10000.0};
   // endpoints from commands inside the planning bounds, as on the command line
-  ic.limits.min = {bounds.xmin_m, bounds.ymin_m, g.z0_m};
-  ic.limits.max = {bounds.xmax_m, bounds.ymax_m, g.top_m() + 10000.0};
+  ic.limits.plan_min = {bounds.xmin_m, bounds.ymin_m, 0.0};
+  ic.limits.plan_max = {bounds.xmax_m, bounds.ymax_m, 0.0};
   ic.limits.max_segments = static_cast<std::uint32_t>(o.max_segments);
   ic.limits.max_observers = static_cast<std::uint32_t>(observers);
   VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
@@ -283,9 +285,11 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   dds::copy_text(t.pack_id, pack_id);
   dds::copy_text(t.crs, storage::epsg_from_wkt(pack->metadata().crs_wkt));
   if (!dds::copy_text(t.crs_wkt, pack->metadata().crs_wkt)) t.crs_wkt[0] = '\0';
-  t.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
-  t.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m()};
+  t.min = ic.limits.min;
+  t.max = {ic.limits.max.x_m, ic.limits.max.y_m, g.top_m()};
   t.post_spacing_m = g.spacing_m;
+  t.planning_min = ic.limits.plan_min;
+  t.planning_max = ic.limits.plan_max;
   publisher->terrain().publish();
   return {};
 }

@@ -30,8 +30,12 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
       ->check(CLI::ExistingFile);
   app.add_option("--seconds", o.seconds, "Run this long, s (0: until Ctrl-C or SIGTERM)")->capture_default_str();
   app.add_option("-o,--out", o.out, "Directory for the path, health log and summary")->capture_default_str();
-  app.add_option("--from", o.from, "Rope start X Y Z (pack CRS, m; default: west edge, 150 m up)")->expected(3);
-  app.add_option("--to", o.to, "Rope end X Y Z (default: east edge, 150 m up)")->expected(3);
+  app.add_option("--from", o.from,
+                 "Rope start X Y Z (pack CRS, m; inside the pack's planning bounds; default: a tenth in from their "
+                 "west edge, half way north, 150 m up)")
+      ->expected(3);
+  app.add_option("--to", o.to, "Rope end X Y Z (default: a tenth in from the planning bounds' east edge, 150 m up)")
+      ->expected(3);
   app.add_option("--objective", o.objective, "hide or show")->check(CLI::IsMember({"hide", "show"}))->capture_default_str();
   app.add_option("--model", o.model, "articulated or spring")->check(CLI::IsMember({"articulated", "spring"}))->capture_default_str();
   app.add_option("--segments", o.segments, "Rope segments at start")->capture_default_str();
@@ -170,8 +174,13 @@ Status validate(const ConsoleOptions& o) {
     return bad("--device socketcan needs --can-interface (e.g. can0 or vcan0)");
   }
   if (!(o.tile_margin_m >= 0 && o.tile_margin_m <= 1e5)) return bad("--tile-margin: must be in 0..100000 m");
-  if (!o.from.empty() && o.from.size() != 3) return bad("--from: needs X Y Z");
-  if (!o.to.empty() && o.to.size() != 3) return bad("--to: needs X Y Z");
+  for (const auto& [name, p] : {std::pair{"--from", &o.from}, std::pair{"--to", &o.to}}) {
+    if (p->empty()) continue;
+    if (p->size() != 3) return bad(std::string(name) + ": needs X Y Z");
+    for (double v : *p) {
+      if (!std::isfinite(v)) return bad(std::string(name) + ": X Y Z must be finite (m, pack CRS)");
+    }
+  }
   if (auto size = parse_thumbnail_size(o.thumbnail_size); !size.ok()) return size.status();
   if (!(o.thumbnail_max_hz > 0 && o.thumbnail_max_hz <= 50)) return bad("--thumbnail-max-hz: must be in (0, 50]");
   return {};

@@ -62,7 +62,7 @@ echo "   at 8 s a second station tells it over DDS to stay hidden from an observ
 echo "   south of the Presidio (a corridor hidden from it exists: visvol plan finds one)"
 (
   sleep 8
-  build/tools/echo/visvol-echo command set-constraints --hidden-from 547250,4182750,109 --clearance 30 \
+  build/tools/echo/visvol-echo command --wait-applied set-constraints --hidden-from 547250,4182750,109 --clearance 30 \
     >"$out/console_command.txt" 2>&1 || echo "visvol-echo failed: see $out/console_command.txt"
 ) &
 build/app/visvol-console --pack "$pack" --seconds 20 --out "$out/console"

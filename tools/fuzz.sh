@@ -16,31 +16,40 @@ CC=clang CXX=clang++ cmake "${generator[@]}" -S . -B build-fuzz -DVISVOL_FUZZ=ON
 cmake --build build-fuzz --target fuzzers -j "$(nproc)"
 
 mkdir -p build-fuzz/artifacts
+scratch=$(mktemp -d)
+# an interrupt stops the fuzzers still running and removes their corpora
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$scratch"' EXIT
+
 # fuzz_one NAME BINARY: runs one target on a copy of its corpus; its report
-# goes to build-fuzz/NAME.log, printed when it ends.
+# goes to build-fuzz/NAME.log (printed when it ends), its exit status to
+# $scratch/NAME.rc.
 fuzz_one() {
-  local name=$1 binary=$2 work rc=0
-  work=$(mktemp -d)
-  if [[ -d "tests/fuzz/corpus/$name" ]]; then cp -r "tests/fuzz/corpus/$name/." "$work/"; fi
+  local name=$1 binary=$2 rc=0
+  mkdir -p "$scratch/$name"
+  if [[ -d "tests/fuzz/corpus/$name" ]]; then cp -r "tests/fuzz/corpus/$name/." "$scratch/$name/"; fi
   "$binary" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-    -artifact_prefix="build-fuzz/artifacts/$name-" "$work" >"build-fuzz/$name.log" 2>&1 || rc=$?
-  rm -rf "$work"
+    -artifact_prefix="build-fuzz/artifacts/$name-" "$scratch/$name" >"build-fuzz/$name.log" 2>&1 || rc=$?
+  echo "$rc" >"$scratch/$name.rc"
   echo "== fuzzed $name for ${seconds} s (exit $rc)"
   tail -n 12 "build-fuzz/$name.log"
-  return "$rc"
 }
 
-# One target per core at a time; any failure fails the run once all ended.
+# One target per core at a time; the run fails when any target failed.
 slots=$(nproc)
-failed=0
+names=()
 while read -r name binary; do
   [[ -n "$name" ]] || continue
-  while (($(jobs -rp | wc -l) >= slots)); do wait -n || failed=1; done
+  while (($(jobs -rp | wc -l) >= slots)); do wait -n || true; done
   fuzz_one "$name" "$binary" &
+  names+=("$name")
 done < build-fuzz/fuzzers.txt
-while (($(jobs -rp | wc -l) > 0)); do wait -n || failed=1; done
-if ((failed)); then
-  echo "== fuzzing found a problem: inputs under build-fuzz/artifacts/, reports in build-fuzz/*.log" >&2
+wait
+failed=()
+for name in "${names[@]}"; do
+  [[ "$(cat "$scratch/$name.rc" 2>/dev/null || echo missing)" == 0 ]] || failed+=("$name")
+done
+if ((${#failed[@]})); then
+  echo "== fuzzing found a problem in: ${failed[*]} (inputs under build-fuzz/artifacts/, reports in build-fuzz/NAME.log)" >&2
   exit 1
 fi
-echo "== fuzzing found nothing"
+echo "== fuzzing found nothing (${#names[@]} targets)"

@@ -101,6 +101,27 @@ Status check_inside(const std::string& field, const WorldPoint& p, const Command
   return Status();
 }
 
+bool has_planning_bounds(const CommandLimits& l) {
+  return l.plan_min.x_m != 0 || l.plan_min.y_m != 0 || l.plan_max.x_m != 0 || l.plan_max.y_m != 0;
+}
+
+// An endpoint: inside the pack, and inside its planning bounds when set.
+Status check_endpoint(const std::string& field, const WorldPoint& p, const CommandLimits& limits) {
+  VISVOL_RETURN_IF_ERROR(check_inside(field, p, limits));
+  if (!has_planning_bounds(limits)) return Status();
+  const auto outside = [&](const char* axis, double v, double lo, double hi) {
+    return reject(field + "." + axis, number(v) + " m is outside the pack's planning bounds, " + axis + " [" +
+                                          number(lo) + ", " + number(hi) + "] m (where F_p counts every observer)");
+  };
+  if (p.x_m < limits.plan_min.x_m || p.x_m > limits.plan_max.x_m) {
+    return outside("x", p.x_m, limits.plan_min.x_m, limits.plan_max.x_m);
+  }
+  if (p.y_m < limits.plan_min.y_m || p.y_m > limits.plan_max.y_m) {
+    return outside("y", p.y_m, limits.plan_min.y_m, limits.plan_max.y_m);
+  }
+  return Status();
+}
+
 WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return WorldPoint{p.x, p.y, p.z}; }
 
 bool is_pack_char(char c) {
@@ -249,6 +270,16 @@ Status validate_limits(const CommandLimits& l) {
   if (!(l.min.x_m < l.max.x_m) || !(l.min.y_m < l.max.y_m) || !(l.min.z_m < l.max.z_m)) {
     return bad("pack bounds are empty (min must be below max on every axis)");
   }
+  if (has_planning_bounds(l)) {
+    const double plan[4] = {l.plan_min.x_m, l.plan_min.y_m, l.plan_max.x_m, l.plan_max.y_m};
+    for (const double v : plan) {
+      if (!std::isfinite(v)) return bad("planning bounds are not finite");
+    }
+    if (!(l.plan_min.x_m < l.plan_max.x_m && l.plan_min.y_m < l.plan_max.y_m && l.plan_min.x_m >= l.min.x_m &&
+          l.plan_max.x_m <= l.max.x_m && l.plan_min.y_m >= l.min.y_m && l.plan_max.y_m <= l.max.y_m)) {
+      return bad("planning bounds must be a non-empty box inside the pack bounds");
+    }
+  }
   if (l.min_segments < 1 || l.min_segments > l.max_segments) {
     return bad("segments: need 1 <= min_segments (" + std::to_string(l.min_segments) +
                ") <= max_segments (" + std::to_string(l.max_segments) + ")");
@@ -348,8 +379,8 @@ Status decode_command(const visvol_msgs_msg_dds__Command_& msg, Command& out) {
 Status validate_command(const Command& c, const CommandLimits& limits) {
   switch (c.kind) {
     case CommandKind::set_endpoints: {
-      VISVOL_RETURN_IF_ERROR(check_inside("start_m", c.endpoints.start, limits));
-      VISVOL_RETURN_IF_ERROR(check_inside("end_m", c.endpoints.end, limits));
+      VISVOL_RETURN_IF_ERROR(check_endpoint("start_m", c.endpoints.start, limits));
+      VISVOL_RETURN_IF_ERROR(check_endpoint("end_m", c.endpoints.end, limits));
       const WorldPoint& a = c.endpoints.start;
       const WorldPoint& b = c.endpoints.end;
       if (a.x_m == b.x_m && a.y_m == b.y_m && a.z_m == b.z_m) {

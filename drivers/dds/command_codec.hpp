@@ -31,6 +31,10 @@ inline constexpr std::size_t kMaxKnownPacks = 16;
 struct CommandLimits {
   WorldPoint min{};  // pack bounds, world metres, inclusive: endpoints and
   WorldPoint max{};  // observers must lie inside
+  // The pack's planning bounds (x and y, inclusive), where F_p counts every
+  // observer: endpoints must lie inside them too. Both zero: unset.
+  WorldPoint plan_min{};
+  WorldPoint plan_max{};
   std::uint32_t min_segments = 2;
   std::uint32_t max_segments = kMaxPathVertices - 1;  // rope segments reserved
   std::uint32_t max_constraints = kMaxConstraints;    // constraints reserved

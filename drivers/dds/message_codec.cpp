@@ -247,6 +247,8 @@ Status TerrainMessage::fill(const TerrainInfo& info) {
   msg_.min_m = to_point(info.min);
   msg_.max_m = to_point(info.max);
   msg_.post_spacing_m = info.post_spacing_m;
+  msg_.planning_min_m = to_point(info.planning_min);
+  msg_.planning_max_m = to_point(info.planning_max);
   return Status();
 }
 

@@ -184,6 +184,8 @@ struct TerrainInfo {
   WorldPoint min;                  // pack bounds
   WorldPoint max;
   double post_spacing_m;
+  WorldPoint planning_min;         // planning bounds (x, y; z unused): endpoints inside them
+  WorldPoint planning_max;
 };
 
 // Commands -----------------------------------------------------------------

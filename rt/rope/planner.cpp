@@ -42,7 +42,8 @@ Status validate(const PlanRequest& r) {
     }
   }
   // The rope's steps cannot be interrupted within a level: bound their work.
-  const double vertex_steps = (r.segments + 1.0) * (r.max_seconds_per_level / r.dt_s);
+  // at the smallest step the planner may take (kMinPlanStep_s, or a smaller request)
+  const double vertex_steps = (r.segments + 1.0) * (r.max_seconds_per_level / std::min(r.dt_s, kMinPlanStep_s));
   if (vertex_steps > kMaxVertexStepsPerLevel) {
     msg.precision(3);
     msg << "plan: " << r.segments << " segments for " << r.max_seconds_per_level
@@ -179,6 +180,20 @@ RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, d
   p.bend_spring_npm = 0.2 * p.stretch_stiffness_npm;
   p.verlet_damping = 0.0;
   return p;
+}
+
+double stable_step_s(const RopeParams& p, double accel_ref, double clearance_margin_m) {
+  double omega2 = 0;  // 1/s^2
+  if (p.model == RopeModel::spring) {
+    omega2 = 4.0 * p.stretch_stiffness_npm / p.mass_kg;  // a chain's highest mode: twice one spring's frequency
+  } else {
+    const double r = p.capsule_radius_m, l = 4.0 * r;  // scaled_rope_params: r = l / 4
+    const double i_perp = p.mass_kg * (3 * r * r + l * l) / 12.0;
+    omega2 = 4.0 * p.bend_stiffness_nm / i_perp;
+  }
+  // the clearance push: kSaturation reference accelerations per half margin
+  omega2 = std::max(omega2, 2.0 * 3.0 * accel_ref / std::max(clearance_margin_m, 1e-3));
+  return omega2 > 0 ? 0.4 / std::sqrt(omega2) : 1.0;
 }
 
 std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m) {

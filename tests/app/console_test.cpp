@@ -164,6 +164,7 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--visible-to " + xyz(post(10, 10, -40)), "visible-to point 1"},
       {"--max-agl 100 --from " + xyz(post(10, 48, 150)), "start: "},
       {"--to " + xyz(post(90, 48, 150)), "is outside " + *pack_ + "'s planning bounds"},
+      {"--from nan 1 2", "--from: X Y Z must be finite"},
       {"--max-altitude 100", "above the ceiling"},
       {"--vehicle /nonexistent.toml", "--vehicle /nonexistent.toml"},
       {"--vehicle glider", "--vehicle glider"},
@@ -249,6 +250,9 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
 // The path the console sends and writes is the rope's, fitted into the
 // vehicle's envelope as `visvol plan` fits its answer: judged here from
 // path.csv alone (every segment's climb and descent), and by the exact check.
+// The limits are what the default ends allow here: the fit changes heights
+// only (it does not go round a ridge), and between ends inside the planning
+// bounds this fractal's ridges need climbs of about 9 degrees.
 TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   const std::string out = out_dir("vehicle");
   const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
@@ -516,7 +520,7 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
           applied += ack.sequence == 2 && ack.result == AckResult::applied;
         },
         16);
-    ASSERT_TRUE(a.ok());
+    EXPECT_TRUE(a.ok());
   };
   // as an operator would: the refusal read before the next command (the
   // switch ends this session's participant, and with it what it had not sent)

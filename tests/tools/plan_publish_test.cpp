@@ -117,6 +117,11 @@ TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
         EXPECT_NEAR(m.post_spacing_m, 30.0, 1e-9);
         EXPECT_LE(m.min_m.x, 550300);
         EXPECT_GE(m.max_m.x, 550850);
+        // the planning bounds, inside the pack, around the ends
+        EXPECT_GT(m.planning_min_m.x, m.min_m.x);
+        EXPECT_LT(m.planning_max_m.y, m.max_m.y);
+        EXPECT_LE(m.planning_min_m.x, 550300);
+        EXPECT_GE(m.planning_max_m.x, 550850);
       });
   ASSERT_TRUE(t.ok());
   EXPECT_EQ(terrains, 1);

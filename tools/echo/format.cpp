@@ -99,10 +99,11 @@ std::string format_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m) {
 std::string format_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m) {
   std::string out;
   add(out, "terrain stamp=%s frame=%s pack=%s crs=%s min_m=(%.3f, %.3f, %.3f) "
-           "max_m=(%.3f, %.3f, %.3f) post_spacing_m=%.3f wkt_chars=%zu",
+           "max_m=(%.3f, %.3f, %.3f) post_spacing_m=%.3f planning_m=x %.3f..%.3f, y %.3f..%.3f wkt_chars=%zu",
       stamp(m.header.stamp).c_str(), quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(),
       quoted(m.crs).c_str(), m.min_m.x, m.min_m.y, m.min_m.z, m.max_m.x, m.max_m.y, m.max_m.z,
-      m.post_spacing_m, m.crs_wkt ? std::string(m.crs_wkt).size() : 0);
+      m.post_spacing_m, m.planning_min_m.x, m.planning_max_m.x, m.planning_min_m.y, m.planning_max_m.y,
+      m.crs_wkt ? std::string(m.crs_wkt).size() : 0);
   return out;
 }
 

@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -58,7 +59,7 @@ struct CommandOptions {
   std::string kind;
   std::string source;
   bool source_given = false;  // --source "" is an error, not the default
-  std::uint64_t sequence = 1;
+  std::optional<std::uint64_t> sequence;  // default: milliseconds since 1970
   double timeout_s = 5.0;
   bool wait_applied = false;
   std::vector<double> numbers;  // endpoints, weights, stiffness
@@ -223,7 +224,12 @@ std::string default_source() {
 
 Result<Command> build_command(const CommandOptions& o) {
   Command c{};
-  c.sequence = o.sequence;
+  // a new number each run: the console keeps its last acknowledgements for
+  // late joiners, and one of an earlier run under the same source and number
+  // would pass for this one's
+  c.sequence = o.sequence.value_or(static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count()));
   const std::string source = o.source_given ? o.source : default_source();
   VISVOL_RETURN_IF_ERROR(check_source(source).with_context("--source"));
   copy_text(c.source, source);
@@ -414,7 +420,7 @@ int main(int argc, char** argv) {
       "  visvol-echo path --count 1          the latest path (kept for late joiners), then exit\n"
       "  visvol-echo watch --topics path,health,acks\n"
       "  visvol-echo command set-objective hide\n"
-      "  visvol-echo command set-endpoints 541000 4181000 120 550000 4190000 80\n"
+      "  visvol-echo command set-endpoints 546600 4184900 150 552400 4184900 150\n"
       "  visvol-echo --domain 7 --config /etc/visvol/cyclone.xml --namespace console_a command stop\n"
       "\nExit status: 0 success (a command accepted), 1 failure while working (a command\n"
       "rejected or unanswered, too few messages within --timeout), 2 bad arguments.");
@@ -449,7 +455,8 @@ int main(int argc, char** argv) {
   CLI::Option* source_option = command_app->add_option(
       "--source", command.source,
       "sender name in the acknowledgement (default visvol-echo@HOST:PID)");
-  command_app->add_option("--sequence", command.sequence, "the command's number (default 1)")
+  command_app->add_option("--sequence", command.sequence,
+                          "the command's number (default: milliseconds since 1970, new each run)")
       ->check(CLI::NonNegativeNumber);
   command_app->add_option("--timeout", command.timeout_s,
                           "seconds to wait for the console and its answer (default 5)")

@@ -50,6 +50,9 @@ dds::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack
   t.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
   t.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m()};
   t.post_spacing_m = g.spacing_m;
+  const fields::Bounds2D b = storage::planning_bounds(pack);
+  t.planning_min = {b.xmin_m, b.ymin_m, 0.0};
+  t.planning_max = {b.xmax_m, b.ymax_m, 0.0};
   return t;
 }
 

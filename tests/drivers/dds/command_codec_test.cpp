@@ -263,6 +263,33 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   EXPECT_EQ(verdict(t, none), "pack_id: 'taunus': this console has no other packs");
 }
 
+// Endpoints inside the planning bounds; observers anywhere on the pack.
+TEST(ValidateCommand, EndpointsStayInsideThePlanningBoundsObserversNeedNot) {
+  CommandLimits l = limits();
+  l.plan_min = {100.0, 200.0, 0.0};
+  l.plan_max = {900.0, 1800.0, 0.0};
+  ASSERT_TRUE(validate_limits(l).ok());
+  Command c{};
+  c.kind = CommandKind::set_endpoints;
+  c.endpoints.start = {50.0, 1000.0, 100.0};
+  c.endpoints.end = {500.0, 1000.0, 100.0};
+  EXPECT_EQ(validate_command(c, l).message(),
+            "start_m.x: 50 m is outside the pack's planning bounds, x [100, 900] m (where F_p counts every observer)");
+  c.endpoints.start.x_m = 100.0;  // inclusive
+  c.endpoints.end.y_m = 1900.0;
+  EXPECT_NE(validate_command(c, l).message().find("end_m.y: 1900 m is outside the pack's planning bounds"),
+            std::string::npos);
+  c.endpoints.end.y_m = 1800.0;
+  EXPECT_TRUE(validate_command(c, l).ok()) << validate_command(c, l).message();
+  Command k{};
+  k.kind = CommandKind::set_constraints;
+  k.constraints.count = 1;
+  k.constraints.items[0] = {ConstraintKind::hidden_from, {50.0, 1950.0, 20.0}, 0.0};  // beyond the bounds, on the pack
+  EXPECT_TRUE(validate_command(k, l).ok()) << validate_command(k, l).message();
+  l.plan_max.x_m = 1500.0;  // beyond the pack
+  EXPECT_NE(validate_limits(l).message().find("inside the pack bounds"), std::string::npos);
+}
+
 // The ceiling: a finite height, above 0 and above the clearance given with
 // it (max-agl), inside the pack's heights (max-altitude); one of each kind.
 TEST(ValidateCommand, CeilingsAreCheckedWithAReason) {

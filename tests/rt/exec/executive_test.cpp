@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <random>
 #include <thread>
 
 #include "../../fields/terrains.hpp"
@@ -295,6 +296,55 @@ TEST_F(ExecutiveTest, EndpointsTooCloseOrNotFiniteAreRefusedAndChangeNothing) {
   EXPECT_EQ(e->rope().segments(), 40);
   EXPECT_EQ(e->rope().ends().start_m, config_.start_m);
   EXPECT_EQ(e->rope().ends().end_m, config_.end_m);
+}
+
+// Property (issue 14): whatever a set-endpoints or set-segment-count command
+// names (ends coincident, sub-metre apart, far off the pack, not finite; any
+// count), each is answered applied or failed with a reason, and the rope the
+// loop steps and hands off stays finite.
+TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  std::mt19937 rng(14);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int counts[] = {0, 1, 2, 3, 40, 64, 65, 5000};
+  int applied = 0, failed = 0;
+  for (std::uint64_t seq = 1; seq <= 24; ++seq) {
+    dds::Command c = command(dds::CommandKind::set_endpoints, seq);
+    const Vec3 a = point_at(*field_, 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 40 + 300 * u(rng));
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0.1 * (u(rng) - 0.5)).normalized();
+    Vec3 b = point_at(*field_, 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 40 + 300 * u(rng));
+    switch (seq % 6) {
+      case 0: b = a; break;
+      case 1: b = a + dir * (0.9 * u(rng)); break;
+      case 2: b = a + dir * 1e6; break;
+      case 3: b.y() = std::nan(""); break;
+      case 4: c.kind = dds::CommandKind::set_segment_count; c.segment_count = static_cast<std::uint32_t>(counts[seq % 8]); break;
+      default: break;  // two points on the pack
+    }
+    c.endpoints.start = {a.x(), a.y(), a.z()};
+    c.endpoints.end = {b.x(), b.y(), b.z()};
+    ASSERT_TRUE(commands_.try_push(c));
+    run(*e, 200);
+    const dds::CommandAck ack = next_ack();
+    EXPECT_EQ(ack.sequence, seq);
+    ASSERT_TRUE(ack.result == dds::AckResult::applied || ack.result == dds::AckResult::failed) << seq;
+    if (ack.result == dds::AckResult::failed) {
+      EXPECT_STRNE(ack.reason, "") << seq;
+    }
+    (ack.result == dds::AckResult::applied ? applied : failed) += 1;
+    for (int i = 0; i <= e->rope().segments(); ++i) {
+      ASSERT_TRUE(e->rope().vertices()[i].allFinite()) << "after command " << seq << ": " << ack.reason;
+    }
+    if (const dds::PathSample* latest = paths_.take()) {
+      for (std::uint32_t i = 0; i < latest->vertex_count; ++i) {
+        const dds::WorldPoint& p = latest->vertices[i].position;
+        ASSERT_TRUE(std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m)) << seq;
+      }
+    }
+  }
+  EXPECT_GT(applied, 4);
+  EXPECT_GT(failed, 8);
 }
 
 // A rope driven unstable (springs far too stiff for the 1 ms step) is laid
@@ -789,7 +839,7 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
   (*field)->set_reader_active(false);
   (*field)->stop_pager();
   const storage::ResidentStats s = (*field)->stats();
-  EXPECT_GT(run.totals.ticks, 12u * 60u);
+  EXPECT_GE(run.totals.ticks, 12u * 60u);
   // not even a minor fault once settled: every page a tick reads is locked and
   // mapped (a read of a brick that is not resident would fault, from the page
   // cache at best). Under AddressSanitizer the shadow of newly touched memory

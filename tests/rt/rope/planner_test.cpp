@@ -262,6 +262,44 @@ TEST_F(RealTerrain, Fig10HiddenFromAndVisibleToHoldByExactSightLines) {
   EXPECT_DOUBLE_EQ(both_seen, 1.0);
 }
 
+// The folded hulls are, post by post, the lowest hidden-from hull and the
+// highest visible-to hull of every observer, however many (here 12 and 3).
+TEST_F(RealTerrain, ObserverHullsFoldEveryObserverOfAKind) {
+  const DenseLevel& level = (*levels_)[1];  // the coarser level: eyes lifted onto its posts too
+  const fields::FieldSampler<DenseLevel> s((*levels_)[0]);
+  std::vector<ConstraintPoint> points;
+  for (int k = 0; k < 15; ++k) {
+    const int i = 6 + (k * 37) % 84, j = 6 + (k * 53) % 84;
+    const double x = terrain_->x_of(i), y = terrain_->y_of(j);
+    points.push_back({k < 12 ? ConstraintKind::hidden_from : ConstraintKind::visible_to,
+                      Vec3(x, y, s.height(x, y) + (k % 3) * 20.0), 2.0});
+  }
+  const Result<detail::ObserverHulls> folded = detail::observer_hulls(level, points);
+  ASSERT_TRUE(folded.ok()) << folded.status().message();
+  ASSERT_EQ(folded->of(ConstraintKind::hidden_from).size(), 1u);
+  ASSERT_EQ(folded->of(ConstraintKind::visible_to).size(), 1u);
+  const std::vector<float>& low = folded->hidden_from->height_m;
+  const std::vector<float>& high = folded->visible_to->height_m;
+  std::vector<float> want_low(low.size(), INFINITY), want_high(high.size(), -INFINITY);
+  for (const ConstraintPoint& c : points) {
+    const Result<detail::ObserverHulls> one = detail::observer_hulls(level, {c});  // a fold of one: its hull
+    ASSERT_TRUE(one.ok());
+    const bool hidden = c.kind == ConstraintKind::hidden_from;
+    const std::vector<float>& h = hidden ? one->hidden_from->height_m : one->visible_to->height_m;
+    ASSERT_EQ(h.size(), low.size());
+    for (std::size_t k = 0; k < h.size(); ++k) {
+      if (hidden) want_low[k] = std::min(want_low[k], h[k]);
+      if (!hidden) want_high[k] = std::max(want_high[k], h[k]);
+    }
+  }
+  EXPECT_EQ(low, want_low);
+  EXPECT_EQ(high, want_high);
+  // none of a kind: no hull
+  const Result<detail::ObserverHulls> none = detail::observer_hulls(level, {points.back()});
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->of(ConstraintKind::hidden_from).empty());
+}
+
 // More observers than the rope's force has slots for (8 a kind): a plan
 // hidden from p1 of Fig. 10, then eleven more observers on the ground that
 // cannot see that path (so a corridor hidden from all twelve exists). The
@@ -448,6 +486,22 @@ TEST(PlanValidate, ObserversAreBoundedOnlyByTheTimeToBuildTheirHulls) {
   EXPECT_TRUE(validate(r).ok()) << validate(r).message();
   r.constraints.push_back(c);
   EXPECT_NE(validate(r).message().find("more than 256 --visible-to points"), std::string::npos) << validate(r).message();
+}
+
+// The planner's step: the 4 ms asked for the articulated ropes it lays on
+// real terrain (a 3 km path of 128 segments, 30 m posts), a little less for
+// the stiffer spring-mass rope, much less for a rope of short stiff springs.
+TEST(PlanStep, IsTheRequestUnlessTheRopeNeedsLess) {
+  const double accel_ref = 30.0 / (0.1 * 0.1);  // FieldForces' reference at 30 m posts
+  const RopeParams articulated = scaled_rope_params(RopeModel::articulated, 128, 1.3 * 3000 / 128, 1.0, accel_ref);
+  EXPECT_GE(stable_step_s(articulated, accel_ref, 6.0), 0.004);
+  const RopeParams spring = scaled_rope_params(RopeModel::spring, 128, 1.3 * 3000 / 128, 1.0, accel_ref);
+  EXPECT_GE(stable_step_s(spring, accel_ref, 6.0), 0.003);
+  const RopeParams stiff = scaled_rope_params(RopeModel::spring, 4096, 1.3 * 3000 / 4096, 1.0, accel_ref);
+  EXPECT_LT(stable_step_s(stiff, accel_ref, 6.0), 0.001);
+  // and the push of a thin clearance margin alone
+  const RopeParams usual = scaled_rope_params(RopeModel::articulated, 128, 30.0, 1.0, accel_ref);
+  EXPECT_LT(stable_step_s(usual, 100 * accel_ref, 1.0), 0.001);
 }
 
 TEST(PlanValidate, InitialPathPointsOutsideThePlanningBoundsAreRefusedByIndex) {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "rt/base/alloc_counter.hpp"
 #include "rt/rope/articulated_rope.hpp"
@@ -131,6 +132,65 @@ TEST(ArticulatedRope, StaysInextensibleUnderStrongForces) {
     EXPECT_LT((a.vertices()[0] - a.ends().start_m).norm(), 1e-4 * segment);
     EXPECT_LT((a.vertices()[segments] - a.ends().end_m).norm(), 1e-4 * segment);
   }
+}
+
+// Property (issue 14): for ends anywhere (coincident, sub-metre apart, a
+// few metres, kilometres, 100 km) and any segment count, a rope either
+// refuses the lay (leaving its state as it was) or stays finite while it
+// steps in a strong field; an articulated one keeps its length.
+TEST(Rope, RandomEndsAndSegmentsNeverGiveANonFinitePosition) {
+  std::mt19937 rng(20261123);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int counts[] = {2, 3, 7, 33, 64};
+  int laid = 0, refused = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const RopeModel model = trial % 2 ? RopeModel::spring : RopeModel::articulated;
+    const int segments = counts[trial % 5];
+    const Vec3 from(5000 * (u(rng) - 0.5), 5000 * (u(rng) - 0.5), 500 * u(rng));
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0.2 * (u(rng) - 0.5)).normalized();
+    const double apart[] = {0.0, 0.5 * u(rng), 1 + 9 * u(rng), 300 + 3000 * u(rng), 1e5};
+    const Vec3 to = from + dir * apart[(trial / 2) % 5];
+    // the rope is sized as its callers size it: the segment from the ends
+    // (a tiny one when they coincide), the field's reference acceleration
+    const double segment_m = std::max(1.3 * (to - from).norm() / segments, 1e-3);
+    RopeParams p = scaled_rope_params(model, segments, segment_m, 1.0, 1000.0);
+    auto made = make_rope(p);
+    ASSERT_TRUE(made.ok()) << made.status().message();
+    Rope& rope = **made;
+    // laid with 30% slack, as the planner and the console lay it (a taut
+    // rope between fixed ends cannot take a sideways force inextensibly)
+    const std::vector<Vec3> line = with_slack({from, to}, 1.3 * (to - from).norm());
+    RopeEnds ends;
+    ends.start_m = from;
+    ends.end_m = to;
+    rope.set_ends(ends);
+    const int before = rope.segments();
+    if (!rope.reset(line.data(), static_cast<int>(line.size()), segments).ok()) {
+      ++refused;
+      EXPECT_EQ(rope.segments(), before) << "trial " << trial;
+      for (int i = 0; i <= rope.segments(); ++i) ASSERT_TRUE(rope.vertices()[i].allFinite()) << "trial " << trial;
+      continue;
+    }
+    ++laid;
+    const double length = rope.length_m();
+    Wavy field;
+    for (int t = 0; t < 1000; ++t) {
+      rope.step(0.001, field);
+      if (t % 100 != 99) continue;
+      for (int i = 0; i <= rope.segments(); ++i) {
+        ASSERT_TRUE(rope.vertices()[i].allFinite()) << to_string(model) << ", trial " << trial << ", step " << t;
+      }
+      ASSERT_TRUE(std::isfinite(rope.kinetic_energy_j())) << "trial " << trial;
+    }
+    if (model == RopeModel::articulated) {
+      double polyline = 0;
+      for (int i = 0; i < rope.segments(); ++i) polyline += (rope.vertices()[i + 1] - rope.vertices()[i]).norm();
+      EXPECT_NEAR(polyline, length, 1e-3 * length) << "trial " << trial;
+    }
+  }
+  // both outcomes were exercised: coincident and sub-metre ends are refused
+  EXPECT_GT(laid, 10);
+  EXPECT_GT(refused, 5);
 }
 
 TEST(Rope, EnergyStaysBoundedForAMinuteAtOneMillisecond) {

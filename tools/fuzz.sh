@@ -17,8 +17,18 @@ cmake --build build-fuzz --target fuzzers -j "$(nproc)"
 
 mkdir -p build-fuzz/artifacts
 scratch=$(mktemp -d)
-# an interrupt stops the fuzzers still running and removes their corpora
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$scratch"' EXIT
+# on the way out (an interrupt, a failure) the fuzzers still running are
+# stopped (they are the children of the fuzz_one jobs), then their corpora removed
+stop_fuzzers() {
+  local job
+  for job in $(jobs -p); do
+    pkill -TERM -P "$job" 2>/dev/null || true
+    kill "$job" 2>/dev/null || true
+  done
+  wait 2>/dev/null || true
+  rm -rf "$scratch"
+}
+trap stop_fuzzers EXIT
 
 # fuzz_one NAME BINARY: runs one target on a copy of its corpus; its report
 # goes to build-fuzz/NAME.log (printed when it ends), its exit status to

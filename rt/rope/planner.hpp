@@ -125,9 +125,10 @@ RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, d
                               double accel_ref);
 
 // The largest time step that keeps a rope of `p` well resolved in a field of
-// reference acceleration `accel_ref` (m/s^2) with a clearance push ramping
-// over `clearance_margin_m`: a fifth of the explicit limit 2/omega of the
-// stiffest of a chain's highest spring mode and the push.
+// reference acceleration `accel_ref` (m/s^2, times the largest gain) with a
+// clearance push ramping over `clearance_margin_m`: 0.4/omega of the stiffest
+// of a chain's highest spring mode and the push, about a third of the limit
+// (about 1.1/omega with the rope's explicit damping).
 double stable_step_s(const RopeParams& p, double accel_ref, double clearance_margin_m);
 
 // `polyline` lengthened to `length_m` by lifting it along a half sine: a
@@ -333,7 +334,9 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   // coarse to fine, at a step the stiffest level takes
   double accel_ref = 0;
   for (const auto& e : envs) accel_ref = std::max(accel_ref, e->reference_acceleration());
-  const double stable = stable_step_s(rp, accel_ref, std::max(0.2 * envelope.clearance_m, 1.0));
+  // the field's pushes grow with its gains
+  const double gain = std::max({1.0, std::fabs(gains.k1_visibility), gains.k2_terrain});
+  const double stable = stable_step_s(rp, gain * accel_ref, std::max(0.2 * envelope.clearance_m, 1.0));
   const double dt = std::min(request.dt_s, std::max(stable, kMinPlanStep_s));
   const int steps_per_check = std::max(1, static_cast<int>(std::lround(0.02 / dt)));
   const int checks_per_candidate =

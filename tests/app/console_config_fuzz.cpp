@@ -40,9 +40,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   CLI::App cli{"visvol-console"};
   visvol::app::ConsoleOptions o;
   visvol::app::add_console_options(cli, o);
-  const char* argv[] = {"visvol-console", "--config", path.c_str()};
+  // --pack must name a file that exists: the command line gives one (it
+  // overrides the file), so that the rest of the file reaches validate()
+  const char* argv[] = {"visvol-console", "--pack", "/proc/self/exe", "--config", path.c_str()};
   try {
-    cli.parse(3, argv);
+    cli.parse(5, argv);
   } catch (const CLI::ParseError&) {
     close(fd);  // refused by CLI11, with its message (or --help asked for)
     return 0;

@@ -308,18 +308,22 @@ TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
   std::mt19937 rng(14);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const int counts[] = {0, 1, 2, 3, 40, 64, 65, 5000};
-  int applied = 0, failed = 0;
-  for (std::uint64_t seq = 1; seq <= 24; ++seq) {
+  int applied = 0, failed = 0, counted = 0;
+  for (std::uint64_t seq = 1; seq <= 32; ++seq) {
     dds::Command c = command(dds::CommandKind::set_endpoints, seq);
     const Vec3 a = point_at(*field_, 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 40 + 300 * u(rng));
     const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0.1 * (u(rng) - 0.5)).normalized();
     Vec3 b = point_at(*field_, 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 40 + 300 * u(rng));
-    switch (seq % 6) {
+    switch (seq % 8) {
       case 0: b = a; break;
       case 1: b = a + dir * (0.9 * u(rng)); break;
       case 2: b = a + dir * 1e6; break;
       case 3: b.y() = std::nan(""); break;
-      case 4: c.kind = dds::CommandKind::set_segment_count; c.segment_count = static_cast<std::uint32_t>(counts[seq % 8]); break;
+      case 4:
+      case 5:  // every count once over the run
+        c.kind = dds::CommandKind::set_segment_count;
+        c.segment_count = static_cast<std::uint32_t>(counts[counted++ % 8]);
+        break;
       default: break;  // two points on the pack
     }
     c.endpoints.start = {a.x(), a.y(), a.z()};

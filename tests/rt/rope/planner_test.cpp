@@ -337,6 +337,26 @@ TEST_F(RealTerrain, TwelveHiddenFromObserversAreAllHeld) {
   EXPECT_GE(densest_clearance(all->final_path), r.envelope.clearance_m - 0.01);
 }
 
+// The planner's 4 ms step settles on the path the console's 1 ms step does.
+TEST_F(RealTerrain, TheStepDoesNotChangeTheAnswer) {
+  PlanRequest r = hide_request(RopeModel::articulated);
+  r.init = InitialPath::straight;  // the rope's own work, not the search's
+  r.max_seconds_per_level = 10;
+  PlanRequest fine = r;
+  fine.dt_s = 0.001;
+  const Result<PlanResult> coarse_step = plan(pointers(*levels_), r);
+  const Result<PlanResult> fine_step = plan(pointers(*levels_), fine);
+  ASSERT_TRUE(coarse_step.ok() && fine_step.ok());
+  std::cout << "F_c from " << fine_step->initial.fc << ": at 4 ms " << coarse_step->final_metrics.fc << " ("
+            << coarse_step->chosen << "), at 1 ms " << fine_step->final_metrics.fc << " (" << fine_step->chosen << ")\n";
+  // the rope's answer in both, not the start's
+  EXPECT_EQ(coarse_step->chosen, "rope");
+  EXPECT_EQ(fine_step->chosen, "rope");
+  EXPECT_NEAR(coarse_step->final_metrics.fc, fine_step->final_metrics.fc, 0.02 * fine_step->final_metrics.fc);
+  EXPECT_EQ(coarse_step->final_check.all_met, fine_step->final_check.all_met);
+  EXPECT_FALSE(coarse_step->diverged);
+}
+
 TEST_F(RealTerrain, NoCorridorIsReportedUnmetNotHidden) {
   // an observer right beside the start sees it: no path can be hidden from it
   const fields::FieldSampler<DenseLevel> s((*levels_)[0]);

@@ -81,24 +81,22 @@ Status check_range(const std::string& field, double v, double lo, double hi,
   return Status();
 }
 
+// One coordinate of a point against [lo, hi] (finite, checked before):
+// "FIELD.AXIS: V m is outside the pack's RANGE [LO, HI] m" and `why`.
+Status check_axis(const std::string& field, const char* axis, double v, double lo, double hi,
+                  const std::string& range, const char* why) {
+  if (!(v < lo || v > hi)) return Status();
+  return reject(field + "." + axis, number(v) + " m is outside the pack's " + range + " [" + number(lo) + ", " +
+                                        number(hi) + "] m" + why);
+}
+
 Status check_inside(const std::string& field, const WorldPoint& p, const CommandLimits& limits) {
   VISVOL_RETURN_IF_ERROR(check_finite(field + ".x", p.x_m));
   VISVOL_RETURN_IF_ERROR(check_finite(field + ".y", p.y_m));
   VISVOL_RETURN_IF_ERROR(check_finite(field + ".z", p.z_m));
-  const auto outside = [&](const char* axis, double v, double lo, double hi) {
-    return reject(field + "." + axis, number(v) + " m is outside the pack's " + axis + " range [" +
-                                          number(lo) + ", " + number(hi) + "] m");
-  };
-  if (p.x_m < limits.min.x_m || p.x_m > limits.max.x_m) {
-    return outside("x", p.x_m, limits.min.x_m, limits.max.x_m);
-  }
-  if (p.y_m < limits.min.y_m || p.y_m > limits.max.y_m) {
-    return outside("y", p.y_m, limits.min.y_m, limits.max.y_m);
-  }
-  if (p.z_m < limits.min.z_m || p.z_m > limits.max.z_m) {
-    return outside("z", p.z_m, limits.min.z_m, limits.max.z_m);
-  }
-  return Status();
+  VISVOL_RETURN_IF_ERROR(check_axis(field, "x", p.x_m, limits.min.x_m, limits.max.x_m, "x range", ""));
+  VISVOL_RETURN_IF_ERROR(check_axis(field, "y", p.y_m, limits.min.y_m, limits.max.y_m, "y range", ""));
+  return check_axis(field, "z", p.z_m, limits.min.z_m, limits.max.z_m, "z range", "");
 }
 
 bool has_planning_bounds(const CommandLimits& l) {
@@ -109,17 +107,10 @@ bool has_planning_bounds(const CommandLimits& l) {
 Status check_endpoint(const std::string& field, const WorldPoint& p, const CommandLimits& limits) {
   VISVOL_RETURN_IF_ERROR(check_inside(field, p, limits));
   if (!has_planning_bounds(limits)) return Status();
-  const auto outside = [&](const char* axis, double v, double lo, double hi) {
-    return reject(field + "." + axis, number(v) + " m is outside the pack's planning bounds, " + axis + " [" +
-                                          number(lo) + ", " + number(hi) + "] m (where F_p counts every observer)");
-  };
-  if (p.x_m < limits.plan_min.x_m || p.x_m > limits.plan_max.x_m) {
-    return outside("x", p.x_m, limits.plan_min.x_m, limits.plan_max.x_m);
-  }
-  if (p.y_m < limits.plan_min.y_m || p.y_m > limits.plan_max.y_m) {
-    return outside("y", p.y_m, limits.plan_min.y_m, limits.plan_max.y_m);
-  }
-  return Status();
+  const char* why = " (where F_p counts every observer)";
+  VISVOL_RETURN_IF_ERROR(
+      check_axis(field, "x", p.x_m, limits.plan_min.x_m, limits.plan_max.x_m, "planning bounds, x", why));
+  return check_axis(field, "y", p.y_m, limits.plan_min.y_m, limits.plan_max.y_m, "planning bounds, y", why);
 }
 
 WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return WorldPoint{p.x, p.y, p.z}; }

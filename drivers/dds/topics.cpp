@@ -99,6 +99,11 @@ QosPtr make_qos(Profile profile, bool reader) {
         dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
       } else {
         dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, kAckHistoryDepth);
+        // What a late joiner gets is the durability service's depth, not the
+        // history's: Cyclone's default of 1 would hand over only the newest.
+        dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, kAckHistoryDepth,
+                                    DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
+                                    DDS_LENGTH_UNLIMITED);
       }
       break;
   }

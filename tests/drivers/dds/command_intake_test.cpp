@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -137,30 +138,41 @@ TEST(CommandIntake, ValidCommandIsQueuedAndAccepted) {
 // Discovery is not symmetric: a sender may see the intake's ack writer
 // before that writer sees the sender's reader. An answer written in between
 // must still reach it.
-TEST(CommandIntake, AnAckWrittenBeforeTheSendersReaderMatchedStillArrives) {
+TEST(CommandIntake, AcksWrittenBeforeTheSendersReaderMatchedStillArrive) {
   Fixture f(default_config());
   ASSERT_NE(f.intake, nullptr);
   Result<Writer> writer = Writer::create(*f.operator_side, Topic::command);
   ASSERT_TRUE(writer.ok());
   ASSERT_TRUE(writer->wait_for_readers(1, 5.0).ok());
-  Command o = base(CommandKind::set_objective, 41);
-  o.objective = Objective::show;
+  // several answers, not one: a late joiner must get every stored ack, not
+  // only the newest (Cyclone keeps one unless the durability service says more)
   CommandMessage m;
-  ASSERT_EQ(writer->write(&m.fill(o)), 0);
-  Command got{};
-  ASSERT_TRUE(wait_until([&] { return f.queue.try_pop(got); }, 5.0));
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the ack is out, to nobody
+  for (std::uint64_t seq = 41; seq <= 43; ++seq) {
+    Command o = base(CommandKind::set_objective, seq);
+    o.objective = Objective::show;
+    ASSERT_EQ(writer->write(&m.fill(o)), 0);
+  }
+  int popped = 0;
+  ASSERT_TRUE(wait_until([&] {
+    Command got{};
+    while (f.queue.try_pop(got)) ++popped;
+    return popped == 3;
+  }, 5.0));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the acks are out, to nobody
 
   Result<Reader> acks = Reader::create(*f.operator_side, Topic::command_ack);
   ASSERT_TRUE(acks.ok());
   ASSERT_TRUE(acks->wait_for_writers(1, 5.0).ok());
-  CommandAck ack{};
+  std::set<std::uint64_t> accepted;
   ASSERT_TRUE(wait_until([&] {
     (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
-        [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) { ack = decode_ack(a); }, 8);
-    return ack.sequence == 41u;
-  }, 5.0));
-  EXPECT_EQ(ack.result, AckResult::accepted);
+        [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
+          const CommandAck ack = decode_ack(a);
+          if (ack.result == AckResult::accepted) accepted.insert(ack.sequence);
+        }, 8);
+    return accepted.size() == 3;
+  }, 5.0)) << accepted.size() << " of 3 acks arrived";
+  EXPECT_EQ(accepted, (std::set<std::uint64_t>{41, 42, 43}));
 }
 
 TEST(CommandIntake, BadCommandsAreRejectedWithReasonsAndIntakeGoesOn) {

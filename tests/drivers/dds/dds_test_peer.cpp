@@ -9,9 +9,10 @@
 //   publish DOMAIN NS COUNT LINGER_S      what `visvol plan --publish` does:
 //       wait for a subscriber, publish paths 1..COUNT, wait for delivery;
 //       print "delivered" and exit 0, or the reason and exit 1
-//   commands DOMAIN NS TIMEOUT_S          send bad commands and one good one;
-//       print "ack SEQ RESULT REASON" for each acknowledgement; exit 0 when
-//       all are acknowledged, 3 on timeout
+//   commands DOMAIN NS TIMEOUT_S [SOURCE] send bad commands and one good one
+//       as SOURCE (default "peer"); print "ack SEQ RESULT REASON" for each
+//       acknowledgement to SOURCE; exit 0 when all are acknowledged, 3 on
+//       timeout
 //
 // Exit 2 on bad arguments. Output lines are flushed as they are printed.
 #include <chrono>
@@ -145,7 +146,7 @@ int publish(Participant& p, std::uint64_t count, double linger_s) {
   return 0;
 }
 
-int commands(Participant& p, double timeout_s) {
+int commands(Participant& p, double timeout_s, const std::string& source) {
   Result<Writer> writer = Writer::create(p, Topic::command);
   Result<Reader> acks = Reader::create(p, Topic::command_ack);
   if (!writer.ok() || !acks.ok()) return 1;
@@ -157,7 +158,7 @@ int commands(Participant& p, double timeout_s) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   CommandMessage m;
   Command c{};
-  copy_text(c.source, "peer");
+  copy_text(c.source, source);
   c.kind = CommandKind::set_endpoints;
   c.sequence = 1;
   c.endpoints = {{nan, 0.0, 0.0}, {1.0, 1.0, 1.0}};
@@ -171,7 +172,7 @@ int commands(Participant& p, double timeout_s) {
   raw.kind = 250;
   (void)writer->write(&raw);
   c = Command{};
-  copy_text(c.source, "peer");
+  copy_text(c.source, source);
   c.kind = CommandKind::start;
   c.sequence = 4;
   (void)writer->write(&m.fill(c));
@@ -182,7 +183,7 @@ int commands(Participant& p, double timeout_s) {
     (void)acks->wait(0.05);
     (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
         [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
-          if (std::string(a.source) != "peer") return;
+          if (std::string(a.source) != source) return;
           answered.insert(a.sequence_number);
           const char* result = to_string(static_cast<AckResult>(a.result));
           std::printf("ack %llu %s %s\n", static_cast<unsigned long long>(a.sequence_number),
@@ -212,7 +213,7 @@ int main(int argc, char** argv) {
   int rc = 2;
   if (mode == "listen") rc = listen(*p, static_cast<std::uint64_t>(arg), arg2);
   if (mode == "publish") rc = publish(*p, static_cast<std::uint64_t>(arg), arg2);
-  if (mode == "commands") rc = commands(*p, arg);
+  if (mode == "commands") rc = commands(*p, arg, argc > 5 ? argv[5] : "peer");
   std::fflush(stdout);
   return rc;
 }

@@ -139,9 +139,11 @@ TEST(Interprocess, CommandsFromAnotherProcessAreValidatedAndAnswered) {
   EXPECT_EQ(c.kind, CommandKind::start);
   EXPECT_EQ(text_of(c.source), "peer");
   EXPECT_FALSE(queue.try_pop(c));
-  // and this process carries on: the same intake answers a second sender
-  Child again(peer("commands", "20"));
+  // and this process carries on: the same intake answers a second sender (a
+  // source of its own, so the first one's stored acks cannot pass for its own)
+  Child again(peer("commands", "20", "peer2"));
   ASSERT_EQ(again.wait(30.0), 0) << again.output();
+  EXPECT_NE(again.output().find("ack 4 accepted"), std::string::npos) << again.output();
   EXPECT_EQ((*intake)->stats().commands.received, 8u);
 }
 

@@ -1,5 +1,6 @@
 #include "app/console_options.hpp"
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 

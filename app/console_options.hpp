@@ -2,7 +2,6 @@
 // configuration file (INI or TOML, the same names as the long options).
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -12,6 +11,10 @@
 #include "app/mission_options.hpp"
 #include "rt/base/status.hpp"
 #include "rt/rope/vehicle.hpp"
+
+namespace CLI {
+class App;  // <CLI/CLI.hpp> only where the options are parsed: it is the heaviest header
+}
 
 namespace visvol::app {
 

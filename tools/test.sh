@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command: installs what it needs, builds, and runs the whole suite
-# twice (optimised, then under AddressSanitizer + UndefinedBehaviorSanitizer),
-# the threaded tests under ThreadSanitizer, then the fuzzers. Prints each
+# twice (optimised, then under AddressSanitizer + UndefinedBehaviorSanitizer,
+# less the long numerical runs labelled `numeric`), the threaded tests under
+# ThreadSanitizer, then the fuzzers. Prints each
 # stage's time as it ends and all of them at the end, passed or not.
 #   VISVOL_FUZZ_SECONDS   time per fuzz target (default here 20)
 set -euo pipefail
@@ -66,7 +67,8 @@ stage "build: optimised" build_tree build
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
-  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs"
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs" \
+  -LE numeric
 # The tests labelled `threaded` (ctest -L threaded; target visvol_threaded_tests):
 # real threads sharing state (hand-offs, the loop, the executive, the hull
 # builder, the tile pager, the DDS publisher and intake, the renderer and the
@@ -74,6 +76,6 @@ stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 stage "build: TSan (threaded tests)" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
   -- visvol_threaded_tests
 stage "tests: TSan" env TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
-  ctest --test-dir build-tsan -L threaded --output-on-failure -j "$jobs"
+  ctest --test-dir build-tsan -L threaded -LE numeric --output-on-failure -j "$jobs"
 stage "fuzzing: build and run" tools/fuzz.sh
 echo "== all tests passed (optimised, ASan+UBSan, TSan, fuzzing)"

@@ -217,6 +217,16 @@ Status fsync_directory_of(const std::string& path) {
 
 }  // namespace
 
+Status check_output_path(const std::string& path) {
+  VISVOL_RETURN_IF_ERROR(check_destination(path));
+  const std::string dir = directory_of(path);
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) != 0) return errno_status(errno, path + ": directory " + dir);
+  if (!S_ISDIR(st.st_mode)) return invalid_argument(path + ": " + dir + " is not a directory");
+  if (::access(dir.c_str(), W_OK) != 0) return errno_status(errno, path + ": directory " + dir);
+  return Status::ok_status();
+}
+
 // --- OutputFile ------------------------------------------------------------------
 
 Result<OutputFile> OutputFile::create(const std::string& path) {
@@ -226,10 +236,17 @@ Result<OutputFile> OutputFile::create(const std::string& path) {
   f.path_ = path;
   f.temp_path_ = temp_name_for(path);
   f.write_path_ = f.temp_path_;
-  f.fd_ = ::open(f.temp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (f.fd_ < 0) return creation_error(errno, path, f.temp_path_);
-  f.done_ = false;
+  // registered before it exists: a signal (to any thread) between the two
+  // would otherwise leave it behind
   f.slot_ = register_live(f.temp_path_, f.write_path_, false);
+  f.fd_ = ::open(f.temp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (f.fd_ < 0) {
+    const int e = errno;
+    unregister_live(f.temp_path_, f.slot_);
+    f.slot_ = -1;
+    return creation_error(e, path, f.temp_path_);
+  }
+  f.done_ = false;
   return f;
 }
 
@@ -241,9 +258,14 @@ Result<OutputFile> OutputFile::create_for_library(const std::string& path) {
   f.temp_path_ = temp_name_for(path);
   f.write_path_ = f.temp_path_ + "/" + base_of(path);
   f.is_directory_ = true;
-  if (::mkdir(f.temp_path_.c_str(), 0700) != 0) return creation_error(errno, path, f.temp_path_);
+  f.slot_ = register_live(f.temp_path_, f.write_path_, true);  // before it exists, as above
+  if (::mkdir(f.temp_path_.c_str(), 0700) != 0) {
+    const int e = errno;
+    unregister_live(f.temp_path_, f.slot_);
+    f.slot_ = -1;
+    return creation_error(e, path, f.temp_path_);
+  }
   f.done_ = false;
-  f.slot_ = register_live(f.temp_path_, f.write_path_, true);
   return f;
 }
 

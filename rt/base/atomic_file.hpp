@@ -73,6 +73,12 @@ class OutputFile {
   bool done_ = true;        // committed or discarded
 };
 
+// What OutputFile::create would refuse about `path` itself (an existing
+// symlink, device, FIFO or directory; no such directory; an empty name),
+// checked before long work so that a bad output name costs nothing. Creates
+// nothing; the write itself checks again.
+Status check_output_path(const std::string& path);
+
 // Writes a whole file: `path` holds the old content or `bytes`, never part.
 Status write_file_atomically(const std::string& path, const std::string& bytes);
 

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "cli.hpp"
+#include "rt/base/atomic_file.hpp"
 #include "commands.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/sampler.hpp"
@@ -252,6 +253,7 @@ int run_export(const ExportOptions& o) {
   if (!layer.ok()) return fail("export", layer.status());
   Result<storage::ExportFormat> format = storage::parse_export_format(o.format);
   if (!format.ok()) return fail("export", format.status());
+  if (Status s = check_output_path(o.out); !s.ok()) return fail("export", s.with_context("-o"));
   Result<std::shared_ptr<const Pack>> pack = Pack::open(o.path);
   if (!pack.ok()) return fail("export", pack.status());
   Result<PackLevel> level = PackLevel::open(*pack, o.lod);

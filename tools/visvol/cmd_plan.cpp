@@ -140,6 +140,7 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
 }
 
 int run_plan(const PlanOptions& o) {
+  if (Status s = check_path_outputs(o.out); !s.ok()) return fail("plan", s.with_context("-o"));
   Result<PlanningPack> opened = open_planning_pack(o.pack);
   if (!opened.ok()) return fail("plan", opened.status());
   const PlanningPack& planning = *opened;

@@ -9,6 +9,7 @@
 #include "fields/gdal/dem_io.hpp"
 #include "fields/viewshed.hpp"
 #include "import_cli.hpp"
+#include "rt/base/atomic_file.hpp"
 
 namespace visvol::cli {
 
@@ -23,6 +24,7 @@ struct ViewshedOptions {
 };
 
 int run_viewshed(ViewshedOptions& o) {
+  if (Status s = check_output_path(o.out); !s.ok()) return fail("viewshed", s.with_context("-o"));
   const auto t0 = std::chrono::steady_clock::now();
   fields::ImportReport imported;
   Result<fields::Heightfield> hf = import(o.dem, o.import, &imported);

@@ -909,6 +909,13 @@ Status write_output(const std::string& file, const std::string& text, std::vecto
 
 }  // namespace
 
+Status check_path_outputs(const std::string& base) {
+  for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
+    VISVOL_RETURN_IF_ERROR(check_output_path(base + extension));
+  }
+  return Status::ok_status();
+}
+
 Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
   VISVOL_RETURN_IF_ERROR(validate_report(r));
   const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt);

@@ -163,4 +163,9 @@ inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as
 Status write_path_outputs(const std::string& base, const PathReport& report,
                           std::vector<std::string>& written);
 
+// What write_path_outputs would refuse about its four file names (an existing
+// symlink, device, FIFO or directory, no such directory), checked before the
+// planning so that a bad -o costs nothing.
+Status check_path_outputs(const std::string& base);
+
 }  // namespace visvol::cli

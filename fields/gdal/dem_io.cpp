@@ -5,6 +5,7 @@
 #include <gdal_alg.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -42,11 +43,46 @@ std::string last_gdal_error() {
   return (msg && *msg) ? std::string(msg) : std::string("no details from GDAL");
 }
 
+// GDAL's virtual file systems (/vsi...): an archive reader over a local file
+// gets that file checked as any input (a FIFO or a device would block or
+// worse inside GDAL's open); memory files (/vsimem/, the fuzzer's) touch no
+// file; any other, the network ones above all (/vsicurl/, /vsis3/, ...), is
+// refused: the tools read local files only.
+Status check_virtual_path(const std::string& path) {
+  if (path.rfind("/vsimem/", 0) == 0) return Status::ok_status();
+  std::string rest;
+  bool archive_reader = false;
+  for (const char* archive : {"/vsizip/", "/vsigzip/", "/vsitar/"}) {
+    if (path.rfind(archive, 0) != 0) continue;
+    rest = path.substr(std::strlen(archive));
+    archive_reader = true;
+  }
+  if (!archive_reader) {
+    return invalid_argument(path + ": not a GDAL file system visvol reads; a DEM is a local file, plain or in "
+                            "a zip, gzip or tar archive (/vsizip/, /vsigzip/, /vsitar/)");
+  }
+  if (rest.empty()) return invalid_argument(path + ": names no archive");
+  if (rest.rfind("/vsi", 0) == 0) return check_virtual_path(rest);  // an archive in an archive
+  if (rest.front() == '{') {  // /vsizip/{ARCHIVE}/MEMBER
+    const std::size_t close = rest.find('}');
+    return close == std::string::npos ? invalid_argument(path + ": no '}' closes the archive's name")
+                                      : check_input_file(rest.substr(1, close - 1));
+  }
+  // The archive is the longest leading part that names something other than
+  // a directory; the rest is the member inside it. None: GDAL says "cannot open".
+  for (std::size_t end = rest.size(); end != std::string::npos && end > 0; end = rest.rfind('/', end - 1)) {
+    const std::string archive = rest.substr(0, end);
+    struct stat st {};
+    if (::lstat(archive.c_str(), &st) == 0 && !S_ISDIR(st.st_mode)) return check_input_file(archive);
+  }
+  return Status::ok_status();
+}
+
 Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::string>& drivers) {
   register_gdal();
-  // GDAL also opens /vsi paths; only plain paths get the OS's reason.
-  // (and a FIFO or a device would block or worse inside GDAL's open)
-  if (path.rfind("/vsi", 0) != 0) {
+  if (path.rfind("/vsi", 0) == 0) {
+    VISVOL_RETURN_IF_ERROR(check_virtual_path(path));
+  } else {  // only plain paths get the OS's reason, and side files to check
     VISVOL_RETURN_IF_ERROR(check_input_file(path));
     VISVOL_RETURN_IF_ERROR(check_side_files(path));
   }

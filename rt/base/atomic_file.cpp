@@ -53,7 +53,7 @@ Status errno_status(int e, const std::string& message) {
 // Every temporary this process has open, for the sweep (which must not remove
 // one of its own that is still being written).
 std::mutex g_live_mutex;
-std::set<std::string> g_live;
+std::multiset<std::string> g_live;  // one entry per OutputFile, even of one name
 
 // The same for the signal handler, which can neither lock nor allocate: fixed
 // slots of paths, each guarded by a sequence number (odd while it changes) so
@@ -100,7 +100,8 @@ void unregister_live(const std::string& temp, int slot) {
     s.claimed.store(false);
   }
   std::lock_guard<std::mutex> lock(g_live_mutex);
-  g_live.erase(temp);
+  const auto one = g_live.find(temp);  // this writer's entry, not another's of the same name
+  if (one != g_live.end()) g_live.erase(one);
 }
 
 bool is_live(const std::string& temp) {
@@ -108,7 +109,45 @@ bool is_live(const std::string& temp) {
   return g_live.count(temp) != 0;
 }
 
-// Async-signal-safe: unlink, rmdir, signal and raise only.
+// The handler runs on names registered before they were created (so that no
+// signal between the two leaves one behind): it removes only what this
+// process could have made there, never through a link. All async-signal-safe
+// (lstat, geteuid, unlink, open, fstat, getdents64, unlinkat, close, rmdir).
+
+// A temporary file: a regular file of this user, else nothing.
+void remove_file_in_handler(const char* file) {
+  struct stat st {};
+  if (::lstat(file, &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid()) ::unlink(file);
+}
+
+// The private directory of create_for_library (this user's, closed to
+// others), with what the library put in it (the file, GDAL's .aux.xml).
+void remove_directory_in_handler(const char* directory) {
+  const int fd = ::open(directory, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) return;  // absent, or a link planted at its name: left alone
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || st.st_uid != ::geteuid() || (st.st_mode & 077) != 0) {
+    ::close(fd);
+    return;
+  }
+  {
+    alignas(dirent64) char entries[4096];
+    ssize_t n = 0;
+    while ((n = ::getdents64(fd, entries, sizeof entries)) > 0) {
+      for (ssize_t at = 0; at < n;) {
+        const auto* e = reinterpret_cast<const dirent64*>(entries + at);
+        at += e->d_reclen;
+        const char* name = e->d_name;
+        const bool dots = name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'));
+        if (!dots) ::unlinkat(fd, name, 0);
+      }
+    }
+  }
+  ::close(fd);
+  ::rmdir(directory);
+}
+
+// Async-signal-safe: the removals above, signal and raise only.
 extern "C" void remove_temporaries_and_reraise(int sig) {
   const int saved_errno = errno;
   for (Slot& s : g_slots) {
@@ -120,8 +159,11 @@ extern "C" void remove_temporaries_and_reraise(int sig) {
     std::memcpy(file, s.file, sizeof file);
     std::memcpy(directory, s.directory, sizeof directory);
     if (s.sequence.load() != before) continue;
-    if (file[0] != '\0') ::unlink(file);
-    if (directory[0] != '\0') ::rmdir(directory);
+    if (directory[0] != '\0') {
+      remove_directory_in_handler(directory);  // the file is inside it
+    } else if (file[0] != '\0') {
+      remove_file_in_handler(file);
+    }
   }
   std::signal(sig, SIG_DFL);
   std::raise(sig);  // delivered with the default action once this returns

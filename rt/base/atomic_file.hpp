@@ -74,7 +74,8 @@ class OutputFile {
 };
 
 // What OutputFile::create would refuse about `path` itself (an existing
-// symlink, device, FIFO or directory; no such directory; an empty name),
+// symlink, device, FIFO or directory; a directory that does not exist or
+// cannot be written; an empty name),
 // checked before long work so that a bad output name costs nothing. Creates
 // nothing; the write itself checks again.
 Status check_output_path(const std::string& path);

@@ -132,19 +132,26 @@ TEST_F(Outputs, ALinkADeviceOrAFifoAtTheOutputIsRefusedAndLeftAsItIs) {
 
 // A bad output is refused before the work, not after it: plan writes none of
 // its four files when one of them is a link (it wrote the CSV first before),
-// and nothing runs far enough to report a result.
+// where the same plan with a good -o succeeds.
 TEST_F(Outputs, ABadOutputIsRefusedBeforeAnyWorkAndNothingIsWritten) {
+  const std::string plan = "plan " + *pack_ +
+                           " --from 550300 4181900 200 --to 550800 4182400 200 --objective hide"
+                           " --init straight --segments 16 --max-seconds 1 -o ";
   const std::string base = *dir_ + "/early";
   ASSERT_EQ(::symlink(victim().c_str(), (base + ".kml").c_str()), 0);
-  const Outcome r = visvol("plan " + *pack_ + " --from 550100 4181700 300 --to 551000 4182600 300 --objective hide -o " +
-                           base);
+  const Outcome r = visvol(plan + base);
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("-o: " + base + ".kml: is a symbolic link"), std::string::npos) << r.err;
   EXPECT_FALSE(exists(base + ".csv"));
   EXPECT_EQ(r.out, "");
   EXPECT_EQ(slurp(victim()), "precious");
   std::remove((base + ".kml").c_str());
+  const Outcome good = visvol(plan + base);
+  EXPECT_NE(good.status, 2) << good.err;  // 0, or 1 naming a requirement unmet
+  EXPECT_TRUE(exists(base + ".csv")) << good.err;
+  for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) std::remove((base + extension).c_str());
 
+  // the other writers: a directory that does not exist, named before anything is printed
   const std::string nowhere = *dir_ + "/no_such_directory/out";
   for (const std::string& w : writers()) {
     if (w.rfind("build", 0) == 0) continue;  // the pack writer opens its output first already

@@ -456,7 +456,9 @@ int main(int argc, char** argv) {
       "--source", command.source,
       "sender name in the acknowledgement (default visvol-echo@HOST:PID)");
   command_app->add_option("--sequence", command.sequence,
-                          "the command's number (default: milliseconds since 1970, new each run)")
+                          "the command's number (default: milliseconds since 1970, new each run); "
+                          "the console keeps its last 1024 answers, so a number this --source used "
+                          "before may be answered by the old acknowledgement")
       ->check(CLI::NonNegativeNumber);
   command_app->add_option("--timeout", command.timeout_s,
                           "seconds to wait for the console and its answer (default 5)")

@@ -1,9 +1,11 @@
 #include "fields/gdal/dem_io.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "../terrains.hpp"
 #include "hostile_rasters.hpp"
@@ -55,6 +57,39 @@ TEST(DemIo, MissingFileIsAnIoErrorNamingIt) {
   ASSERT_FALSE(hf.ok());
   EXPECT_EQ(hf.status().code(), Errc::io);
   EXPECT_NE(hf.status().message().find("/nonexistent/dem.tif"), std::string::npos);
+}
+
+// GDAL's virtual file systems: a DEM in a gzip archive reads; the archive is
+// checked as any input (a FIFO there is refused at once, where GDAL would
+// block); the network ones are refused before GDAL sees them.
+TEST(DemIo, ArchivesReadLocalFilesOnlyAndTheArchiveIsChecked) {
+  Heightfield hf = fractal(20, 3);
+  hf.crs_wkt.clear();
+  const std::string path = temp_name("zipped");
+  ASSERT_TRUE(write_geotiff_f32(path, hf, hf.height_m, -9999.0).ok());
+  ASSERT_EQ(std::system(("gzip -f " + path).c_str()), 0);
+  const Result<Heightfield> back = read_heightfield("/vsigzip/" + path + ".gz");
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->height_m, hf.height_m);
+  std::remove((path + ".gz").c_str());
+
+  const std::string fifo = temp_name("fifo") + ".gz";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  for (const std::string& virtual_path : {"/vsigzip/" + fifo, "/vsizip/{" + fifo + "}/dem.tif",
+                                          "/vsitar//vsigzip/" + fifo + "/dem.tif"}) {
+    const Result<Heightfield> f = read_heightfield(virtual_path);
+    ASSERT_FALSE(f.ok()) << virtual_path;
+    EXPECT_NE(f.status().message().find(fifo + ": is a FIFO"), std::string::npos) << f.status().message();
+  }
+  std::remove(fifo.c_str());
+
+  for (const char* remote : {"/vsicurl/http://127.0.0.1:9/dem.tif", "/vsis3/bucket/dem.tif", "/vsistdin/"}) {
+    const Result<Heightfield> r = read_heightfield(remote);
+    ASSERT_FALSE(r.ok()) << remote;
+    EXPECT_EQ(r.status().code(), Errc::invalid_argument) << remote;
+    EXPECT_NE(r.status().message().find("not a GDAL file system visvol reads"), std::string::npos)
+        << r.status().message();
+  }
 }
 
 TEST(DemIo, GeoTiffRoundTripKeepsGridAndValues) {

@@ -216,6 +216,8 @@ std::string killed_while_writing(const std::string& out, int sig, bool library, 
     if (!f.ok()) ::_exit(3);
     if (library) {
       write_text(f->write_path(), "partial");
+      // and a side file of the library's own, as GDAL writes (.aux.xml)
+      write_text(f->write_path() + ".aux.xml", "<PAMDataset/>");
     } else if (!f->write("partial", 7).ok()) {
       ::_exit(4);
     }

@@ -29,6 +29,10 @@
 
 namespace visvol::app {
 
+static_assert(app::kMaxObserversPerKind == rt::kMaxObserversPerKind &&
+                  app::kMaxObservers == rt::ConstraintHulls::kMaxObservers,
+              "the console's options take what its hull builder folds");
+
 namespace {
 
 constexpr std::uint64_t kMiB = 1024 * 1024;
@@ -384,7 +388,7 @@ Status Console::Impl::start() {
   }
   VISVOL_RETURN_IF_ERROR(start_fitter());
   release_pack_pages();  // the fitter read the finest terrain once
-  budget.reserve("flyable path (finest terrain, a hull of it per observer, fit)",
+  budget.reserve("flyable path (finest terrain, two folded hulls of it, fit)",
                  PathFitter::bytes(pack->geometry(0), observers) + 8 * sizeof(dds::PathSample) + 1024 * 1024 +
                      (observers > 0 ? rt::ConstraintHulls::build_bytes(pack->geometry(0)) : 0));
   const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
@@ -394,7 +398,7 @@ Status Console::Impl::start() {
   budget.reserve("loop stack (prefaulted)", rtc.stack_prefault_bytes);
   if (o.device == "sim") budget.reserve("simulated device and bus", 2 * 4096 * sizeof(can::CanFrame) + 64 * 1024);
   if (observers > 0) {
-    budget.reserve("constraint hulls (3 sets of " + std::to_string(observers) + ", one build)",
+    budget.reserve("constraint hulls (3 sets of 2 folded hulls, one build)",
                    rt::ConstraintHulls::reserved_bytes(g, observers) + rt::ConstraintHulls::build_bytes(g));
   }
   VISVOL_RETURN_IF_ERROR(budget.check(1, "tiles"));
@@ -462,9 +466,10 @@ Status Console::Impl::start() {
   return loop->start(loop_config);
 }
 
-// Hulls for the observers given and, with DDS, for those commands may
-// send: --max-observers, or 16 where three sets of 16 take at most a quarter
-// of the budget, fewer where they would take more (never fewer than given).
+// Observers a set may name (each kind is folded into one hull, so the
+// number costs build time, not memory): --max-observers; else, with DDS, all
+// a command may send where three sets of two hulls take at most a quarter of
+// the budget, and otherwise (or without DDS) those given.
 int Console::Impl::observers_reserved(const fields::VolumeGeometry& g) const {
   const int given = static_cast<int>(o.hidden_from.size() + o.visible_to.size());
   if (o.max_observers >= 0) return o.max_observers;

@@ -44,17 +44,18 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   cli::add_envelope_options(app, o.envelope);
   app.add_option("--hidden-from", o.hidden_from,
                  "Stay hidden from an observer standing at X Y Z (pack CRS, m; at or above the terrain); repeatable, "
-                 "at most 8")
+                 "at most 256")
       ->expected(3)
       ->allow_extra_args(false);
-  app.add_option("--visible-to", o.visible_to, "Stay visible to an observer at X Y Z; repeatable, at most 8")
+  app.add_option("--visible-to", o.visible_to, "Stay visible to an observer at X Y Z; repeatable, at most 256")
       ->expected(3)
       ->allow_extra_args(false);
   app.add_option("--eye-height", o.eye_height_m, "Observers' eyes above the points named (options and commands), m")
       ->capture_default_str();
   app.add_option("--max-observers", o.max_observers,
-                 "Hidden-from and visible-to points reserved for (three hulls of the rope's level each), 0..16 "
-                 "(default: 16, or as many as fit in a quarter of --budget-mib)");
+                 "Hidden-from and visible-to points a constraint set may name, 0..512 (each kind is folded into one "
+                 "hull of the rope's level: three sets of two are reserved whatever the number; default: 512 "
+                 "where they fit in a quarter of --budget-mib, else only those given)");
   app.add_option("--k1", o.k1, "Visibility gain (sign from the objective)")->capture_default_str();
   app.add_option("--k2", o.k2, "Terrain force field gain")->capture_default_str();
   app.add_option("--k3", o.k3, "Operator pull gain")->capture_default_str();
@@ -127,11 +128,13 @@ Status validate_ceilings(const cli::EnvelopeOptions& e) {
   return {};
 }
 
-// The observers: X Y Z each, finite, at most 8 of a kind and no more than
-// --max-observers reserves (where/whether inside the pack: at start-up).
+// The observers: X Y Z each, finite, at most 256 of a kind and no more than
+// --max-observers allows (where/whether inside the pack: at start-up).
 Status validate_observers(const ConsoleOptions& o) {
   for (const auto& [name, points] : {std::pair{"--hidden-from", &o.hidden_from}, {"--visible-to", &o.visible_to}}) {
-    if (points->size() > 8) return invalid_argument(std::string(name) + ": at most 8 points");
+    if (points->size() > static_cast<std::size_t>(kMaxObserversPerKind)) {
+      return invalid_argument(std::string(name) + ": at most " + std::to_string(kMaxObserversPerKind) + " points");
+    }
     for (const std::vector<double>& p : *points) {
       if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
         return invalid_argument(std::string(name) + ": needs X Y Z, three finite numbers (m)");

@@ -35,11 +35,11 @@ struct ConsoleOptions {
   // The paths the console sends are fitted into it (app/flyable_path.hpp).
   cli::EnvelopeOptions envelope;
   // The observers, as `visvol plan` names them (pack CRS, metres): points to
-  // stay hidden from and visible to (X Y Z each, at most 8 of a kind), their
+  // stay hidden from and visible to (X Y Z each, at most 256 of a kind), their
   // observers' eyes above them.
   std::vector<std::vector<double>> hidden_from, visible_to;
   double eye_height_m = 2.0;
-  int max_observers = -1;             // hulls reserved for commands; -1: as the budget allows (see add_console_options)
+  int max_observers = -1;             // observers a set may name; -1: as the budget allows (see add_console_options)
   double k1 = 1, k2 = 1, k3 = 1;
   // Real time.
   double budget_mib = 256;
@@ -82,7 +82,9 @@ Status validate(const ConsoleOptions& o);
 // The vehicle (preset or file) with the options' overrides, validated.
 Result<rt::VehicleEnvelope> resolve_vehicle(const ConsoleOptions& o);
 
-// Most observers (hidden-from and visible-to points together) a console holds.
-inline constexpr int kMaxObservers = 16;
+// Most observers of a kind, and of both kinds together, a console holds (as
+// rt::kMaxObserversPerKind; console.cpp checks they agree).
+inline constexpr int kMaxObserversPerKind = 256;
+inline constexpr int kMaxObservers = 2 * kMaxObserversPerKind;
 
 }  // namespace visvol::app

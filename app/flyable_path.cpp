@@ -28,35 +28,45 @@ Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const sto
   f->top_m_ = f->finest_->geometry().top_m();
   f->field_ = std::make_unique<rt::FieldForces<storage::PackLevel>>(*f->finest_, rt::ForceGains{});
   f->terrain_ = rt::level_terrain(*f->finest_);
-  f->hulls_.reserve(static_cast<std::size_t>(std::max(0, max_observers)));
+  f->observers_allowed_ = max_observers > 0;
   return f;
 }
 
 std::uint64_t PathFitter::bytes(const fields::VolumeGeometry& g, int observers) {
   const auto posts = static_cast<std::uint64_t>(g.nx) * static_cast<std::uint64_t>(g.ny);
-  return posts * sizeof(float) * static_cast<std::uint64_t>(1 + std::max(0, observers));
+  return posts * sizeof(float) * static_cast<std::uint64_t>(observers > 0 ? 3 : 1);
 }
 
 void PathFitter::set_observers(const rt::HullRequest& r) {
   if (r.sequence == observers_sequence_) return;
-  hulls_.clear();
+  hidden_.reset();
+  visible_.reset();
   below_.clear();
   above_.clear();
-  auto add = [&](const double (&p)[3], std::vector<const rt::PointHull*>& to, const char* name) {
-    if (hulls_.size() == hulls_.capacity()) return void(++hull_failures_);  // never moves the hulls
+  auto add = [&](const double (&p)[3], bool hidden) {
+    if (!observers_allowed_) return void(++hull_failures_);
     const rt::ConstraintPoint c{rt::ConstraintKind::hidden_from, rt::HullRequest::point(p), r.eye_height_m};
     // on its post, as the executive's hull builder puts it (a point accepted
     // on the bilinear terrain may be under the nearest post)
     rt::Vec3 eye = c.eye_m();
     int i = 0, j = 0;
     if (rt::hull_post(finest_->geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(finest_->post(i, j)) + 0.01);
-    Result<rt::PointHull> h = rt::point_hull(*finest_, eye, name);
+    Result<rt::PointHull> h = rt::point_hull(*finest_, eye, hidden ? "hidden-from" : "visible-to");
     if (!h.ok()) return void(++hull_failures_);
-    hulls_.push_back(std::move(*h));
-    to.push_back(&hulls_.back());
+    std::optional<rt::PointHull>& folded = hidden ? hidden_ : visible_;
+    if (!folded) {
+      folded = std::move(*h);
+      return;
+    }
+    std::vector<float>& into = folded->height_m;
+    for (std::size_t k = 0; k < into.size(); ++k) {
+      into[k] = hidden ? std::min(into[k], h->height_m[k]) : std::max(into[k], h->height_m[k]);
+    }
   };
-  for (int k = 0; k < r.hidden_count; ++k) add(r.hidden_from_m[k], below_, "hidden-from");
-  for (int k = 0; k < r.visible_count; ++k) add(r.visible_to_m[k], above_, "visible-to");
+  for (int k = 0; k < r.hidden_count; ++k) add(r.hidden_from_m[k], true);
+  for (int k = 0; k < r.visible_count; ++k) add(r.visible_to_m[k], false);
+  if (hidden_) below_.push_back(&*hidden_);
+  if (visible_) above_.push_back(&*visible_);
   // last: a build that threw (out of memory) is tried again with the next fit
   observers_sequence_ = r.sequence;
 }

@@ -27,6 +27,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -50,10 +51,11 @@ class PathFitter {
 
   // The vehicle's limits with the clearance and the ceilings in force.
   rt::VehicleEnvelope envelope(const rt::ForceGains& gains) const;
-  // Builds the hulls of a set of observers on the finest level, unless they
-  // are those of the last set (same sequence). An observer whose hull cannot
-  // be built (outside the pack: the executive refused it already) is left
-  // out and counted in hull_failures().
+  // Builds the hulls of a set of observers on the finest level, each kind
+  // folded into one (the lowest hidden-from, the highest visible-to hull),
+  // unless they are those of the last set (same sequence). An observer whose
+  // hull cannot be built (outside the pack: the executive refused it
+  // already) is left out and counted in hull_failures().
   void set_observers(const rt::HullRequest& observers);
   // The path (at most dds::kMaxPathVertices vertices: more are thinned
   // evenly, ends kept) fitted into the envelope; the fit has at most that
@@ -64,7 +66,7 @@ class PathFitter {
   void describe(const std::vector<rt::Vec3>& path, dds::PathSample& out) const;
 
   const fields::Heightfield& terrain() const { return terrain_; }
-  // Bytes held: the finest terrain, and a hull of it per observer.
+  // Bytes held: the finest terrain, and two folded hulls of it with observers.
   static std::uint64_t bytes(const fields::VolumeGeometry& finest, int observers);
   int hull_failures() const { return hull_failures_; }
 
@@ -78,8 +80,9 @@ class PathFitter {
   std::unique_ptr<rt::FieldForces<storage::PackLevel>> field_;
   fields::Heightfield terrain_;
   std::uint64_t observers_sequence_ = 0;
-  std::vector<rt::PointHull> hulls_;                 // reserved at create()
-  std::vector<const rt::PointHull*> below_, above_;  // hidden-from, visible-to
+  std::optional<rt::PointHull> hidden_, visible_;    // the folded hull of each kind
+  std::vector<const rt::PointHull*> below_, above_;  // to them, or empty
+  bool observers_allowed_ = false;                   // max_observers > 0
   int hull_failures_ = 0;
 };
 

@@ -209,7 +209,7 @@ Status validate_constraints(const Command::Constraints& cs, const CommandLimits&
   }
   if (hidden + visible > limits.max_observers) {
     return reject("constraints", std::to_string(hidden + visible) +
-                                     " hidden-from and visible-to points, the console reserved hulls for " +
+                                     " hidden-from and visible-to points, the console takes at most " +
                                      std::to_string(limits.max_observers));
   }
   if (seen.clearance >= 0 && seen.max_agl >= 0) {

@@ -27,10 +27,12 @@ namespace visvol::dds {
 // Capacities reserved at start-up. A sample never holds more; a command asking
 // for more is rejected with a reason.
 inline constexpr std::size_t kMaxPathVertices = 512;
-inline constexpr std::size_t kMaxConstraints = 16;
 // Observers (hidden-from and visible-to points) of one kind in a command at
-// most: what the rope's forces hold (rt::kMaxConstraintHulls).
-inline constexpr std::size_t kMaxObserversPerKind = 8;
+// most, as `visvol plan` takes them (the console folds each kind into one
+// hull, so the number costs build time, not memory: rt/exec/constraint_hulls.hpp).
+inline constexpr std::size_t kMaxObserversPerKind = 256;
+// Both kinds of observers, and one clearance, max-agl and max-altitude.
+inline constexpr std::size_t kMaxConstraints = 2 * kMaxObserversPerKind + 3;
 inline constexpr std::size_t kMaxThumbnailBytes = 256 * 1024;  // PNG file bytes
 inline constexpr std::size_t kPackIdCapacity = 64;      // bytes with the NUL
 inline constexpr std::size_t kSourceCapacity = 64;

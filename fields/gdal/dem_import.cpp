@@ -48,7 +48,9 @@ std::string number(double v) {
 Result<OGRSpatialReference> parse_srs(const std::string& text, const std::string& what) {
   OGRSpatialReference srs;
   srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  if (srs.SetFromUserInput(text.c_str()) != OGRERR_NONE) {
+  // the limited forms: no URL fetched, no file read (EPSG:, WKT, PROJ strings)
+  if (srs.SetFromUserInput(text.c_str(), OGRSpatialReference::SET_FROM_USER_INPUT_LIMITATIONS_get()) !=
+      OGRERR_NONE) {
     return invalid_argument(what + " '" + text + "' is not a CRS GDAL knows (try EPSG:<code>)");
   }
   return srs;
@@ -124,6 +126,7 @@ Status plan_source_srs(GDALDataset& src, const std::string& path, const ImportOp
   plan.source_srs = *a;
   plan.has_srs = true;
   Args a_args;
+  // the text passed the limited parse above: no URL or file name reaches GDAL's utilities
   a_args.add("-of").add("VRT").add("-a_srs").add(options.assume_srs);
   Result<DatasetPtr> vrt = run_translate(src, a_args, path);
   if (!vrt.ok()) return vrt.status();

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <climits>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -33,6 +34,8 @@ void register_gdal() {
     GDALAllRegister();
     // Never write .aux.xml side files next to the user's data.
     CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
+    // nor the .properties file /vsigzip/ writes beside an archive it measured
+    CPLSetConfigOption("CPL_VSIL_GZIP_WRITE_PROPERTIES", "NO");
     // Errors come back through CPLGetLastErrorMsg; keep stderr for our messages.
     CPLSetErrorHandler(CPLQuietErrorHandler);
   });
@@ -49,6 +52,7 @@ std::string last_gdal_error() {
 // file; any other, the network ones above all (/vsicurl/, /vsis3/, ...), is
 // refused: the tools read local files only.
 Status check_virtual_path(const std::string& path) {
+  if (path.size() > PATH_MAX) return invalid_argument(path.substr(0, 64) + "...: a path longer than PATH_MAX");
   if (path.rfind("/vsimem/", 0) == 0) return Status::ok_status();
   std::string rest;
   bool archive_reader = false;
@@ -69,11 +73,16 @@ Status check_virtual_path(const std::string& path) {
                                       : check_input_file(rest.substr(1, close - 1));
   }
   // The archive is the longest leading part that names something other than
-  // a directory; the rest is the member inside it. None: GDAL says "cannot open".
+  // a directory; the rest is the member inside it. None: GDAL says "cannot
+  // open". The archive's side files (a grid's DEM.asc.prj beside DEM.asc.gz,
+  // which GDAL looks for there) are checked as a plain DEM's.
   for (std::size_t end = rest.size(); end != std::string::npos && end > 0; end = rest.rfind('/', end - 1)) {
     const std::string archive = rest.substr(0, end);
     struct stat st {};
-    if (::lstat(archive.c_str(), &st) == 0 && !S_ISDIR(st.st_mode)) return check_input_file(archive);
+    if (::stat(archive.c_str(), &st) == 0 && !S_ISDIR(st.st_mode)) {
+      VISVOL_RETURN_IF_ERROR(check_input_file(archive));
+      return check_side_files(archive);
+    }
   }
   return Status::ok_status();
 }
@@ -422,7 +431,8 @@ Result<Heightfield> read_heightfield(const std::string& path, const DemReadOptio
 }
 
 Result<std::vector<float>> read_raster_like(const std::string& path, const Heightfield& like) {
-  Result<DatasetPtr> opened = open_raster(path);
+  // the terrain formats only: a VRT or WMS file could name network or device sources
+  Result<DatasetPtr> opened = open_raster(path, dem_drivers());
   if (!opened.ok()) return opened.status();
   GDALDataset& ds = **opened;
   if (ds.GetRasterXSize() != like.nx || ds.GetRasterYSize() != like.ny) {
@@ -449,7 +459,7 @@ Result<std::vector<float>> read_raster_like(const std::string& path, const Heigh
 }
 
 Result<RasterBand> read_band(const std::string& path) {
-  Result<DatasetPtr> opened = open_raster(path);
+  Result<DatasetPtr> opened = open_raster(path, dem_drivers());
   if (!opened.ok()) return opened.status();
   GDALDataset& ds = **opened;
   RasterBand band;

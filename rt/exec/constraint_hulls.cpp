@@ -60,20 +60,18 @@ ConstraintHulls::~ConstraintHulls() { stop(); }
 
 HullSet ConstraintHulls::reserve_set() const {
   HullSet s;
-  s.hulls.resize(static_cast<std::size_t>(max_observers_));
+  s.hulls.resize(max_observers_ > 0 ? 2 : 0);  // the folded hidden-from and visible-to hulls
   for (PointHull& h : s.hulls) size_hull(h, level_->geometry());
   return s;
 }
 
 std::uint64_t ConstraintHulls::reserved_bytes(const fields::VolumeGeometry& g, int max_observers) {
-  const std::uint64_t n = max_observers > 0 ? static_cast<std::uint64_t>(max_observers) : 0;
-  return 3 * n * posts(g) * sizeof(float);
+  const std::uint64_t hulls = max_observers > 0 ? 2 : 0;
+  return 3 * hulls * posts(g) * sizeof(float);
 }
 
 int ConstraintHulls::observers_within(const fields::VolumeGeometry& g, std::uint64_t bytes) {
-  const std::uint64_t one = reserved_bytes(g, 1);
-  if (one == 0) return kMaxObservers;
-  return static_cast<int>(std::min<std::uint64_t>(bytes / one, kMaxObservers));
+  return reserved_bytes(g, 1) <= bytes ? kMaxObservers : 0;
 }
 
 std::uint64_t ConstraintHulls::build_bytes(const fields::VolumeGeometry& g) {
@@ -127,11 +125,11 @@ HullStats ConstraintHulls::stats() const {
 
 Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
   const int n = r.hidden_count + r.visible_count;
-  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxConstraintHulls ||
-      r.visible_count > kMaxConstraintHulls || n > static_cast<int>(out.hulls.size())) {
+  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxObserversPerKind ||
+      r.visible_count > kMaxObserversPerKind || n > max_observers_ || (n > 0 && out.hulls.size() < 2)) {
     return invalid_argument(std::to_string(r.hidden_count) + " hidden-from and " + std::to_string(r.visible_count) +
-                            " visible-to points: hulls are reserved for " + std::to_string(out.hulls.size()) +
-                            " (at most " + std::to_string(kMaxConstraintHulls) + " of a kind)");
+                            " visible-to points: this console takes " + std::to_string(max_observers_) +
+                            " (at most " + std::to_string(kMaxObserversPerKind) + " of a kind)");
   }
   for (int k = 0; k < n; ++k) {
     const bool hidden = k < r.hidden_count;
@@ -139,11 +137,22 @@ Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
     Result<PointHull> h = point_hull(*level_, eye_on(*level_, p, r.eye_height_m),
                                      hidden ? "hidden-from point" : "visible-to point");
     if (!h.ok()) return h.status();
-    PointHull& slot = out.hulls[static_cast<std::size_t>(k)];
-    copy_hull(*h, slot);
-    (hidden ? out.hidden[static_cast<std::size_t>(k)] : out.visible[static_cast<std::size_t>(k - r.hidden_count)]) =
-        &slot;
+    // the first of a kind is copied, the others folded in: hidden from all is
+    // below the lowest hull, visible to all above the highest
+    const bool first = hidden ? k == 0 : k == r.hidden_count;
+    std::vector<float>& into = out.hulls[hidden ? 0 : 1].height_m;
+    if (first) {
+      copy_hull(*h, out.hulls[hidden ? 0 : 1]);
+    } else if (hidden) {
+      std::transform(into.begin(), into.end(), h->height_m.begin(), into.begin(),
+                     [](float a, float b) { return std::min(a, b); });
+    } else {
+      std::transform(into.begin(), into.end(), h->height_m.begin(), into.begin(),
+                     [](float a, float b) { return std::max(a, b); });
+    }
   }
+  out.hidden = r.hidden_count > 0 ? &out.hulls[0] : nullptr;
+  out.visible = r.visible_count > 0 ? &out.hulls[1] : nullptr;
   out.request = r;
   return Status::ok_status();
 }

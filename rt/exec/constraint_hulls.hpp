@@ -1,6 +1,9 @@
 // Hidden-from and visible-to constraints for the executive: the hull of each
 // observer (rt/rope/field_forces.hpp, point_hull) is built on a thread of its
-// own, never the real-time one, and handed to the loop whole.
+// own, never the real-time one, and folded by kind into the one hull the
+// forces take (below every hidden-from hull, above every visible-to hull:
+// the lowest and the highest of them post by post), then handed to the loop
+// whole. Observers therefore cost build time (one hull each), not memory.
 //
 //   loop thread                     builder thread
 //   request(points)   --latest-->   builds every hull into a free set
@@ -9,11 +12,12 @@
 // Both hand-offs are triple buffers (rt/base/handoff.hpp): wait-free for the
 // loop, the newest value wins, and a set the loop has taken is never written
 // until the loop takes another. The three sets are sized at create(): each
-// holds `max_observers` hulls of the level's posts (hidden-from and
-// visible-to together, at most kMaxConstraintHulls of a kind). A request for
-// more is refused, with a reason, by the executive before it gets here (and
-// by build() again). A build allocates only on the builder thread (the padded
-// terrain and horizon of point_hull, transient, one hull at a time).
+// holds the two folded hulls of the level's posts. A request for more than
+// `max_observers` observers (hidden-from and visible-to together, at most
+// kMaxObserversPerKind of a kind) is refused, with a reason, by the executive
+// before it gets here (and by build() again). A build allocates only on the
+// builder thread (each observer's hull and point_hull's padded terrain and
+// horizon, transient, one observer at a time).
 //
 // Observers are as the planner takes them (rt/rope/path_check.hpp,
 // ConstraintPoint): a point standing at or above the terrain, the eye
@@ -41,14 +45,17 @@
 
 namespace visvol::rt {
 
-// What the loop asks for: up to kMaxConstraintHulls observers of each kind
+// Observers of one kind a request holds at most (as `visvol plan` takes them).
+inline constexpr int kMaxObserversPerKind = 256;
+
+// What the loop asks for: up to kMaxObserversPerKind observers of each kind
 // (none: that kind off). Plain data, for LatestValue.
 struct HullRequest {
   std::uint64_t sequence = 0;   // the command's
   int hidden_count = 0, visible_count = 0;
   double eye_height_m = 2.0;    // the observers' eyes above their points
-  double hidden_from_m[kMaxConstraintHulls][3] = {};  // standing points, world metres of the pack's CRS
-  double visible_to_m[kMaxConstraintHulls][3] = {};
+  double hidden_from_m[kMaxObserversPerKind][3] = {};  // standing points, world metres of the pack's CRS
+  double visible_to_m[kMaxObserversPerKind][3] = {};
 
   // Appends an observer; false when that kind is full. Real-time safe.
   bool add_hidden_from(const Vec3& p) { return add(hidden_from_m, hidden_count, p); }
@@ -57,8 +64,8 @@ struct HullRequest {
   static Vec3 point(const double (&p)[3]) { return Vec3(p[0], p[1], p[2]); }
 
  private:
-  static bool add(double (&to)[kMaxConstraintHulls][3], int& count, const Vec3& p) {
-    if (count >= kMaxConstraintHulls) return false;
+  static bool add(double (&to)[kMaxObserversPerKind][3], int& count, const Vec3& p) {
+    if (count >= kMaxObserversPerKind) return false;
     double* d = to[count++];
     d[0] = p.x();
     d[1] = p.y();
@@ -67,13 +74,14 @@ struct HullRequest {
   }
 };
 
-// A built set: the request it answers and a hull per observer, hidden-from
-// first. hidden[0..hidden_count) and visible[0..visible_count) point into
-// `hulls` (reserved at create(), never reallocated).
+// A built set: the request it answers and the folded hull of each kind
+// (null: no observer of that kind), pointing into `hulls` (two, reserved at
+// create(), never reallocated).
 struct HullSet {
   HullRequest request;
   std::vector<PointHull> hulls;
-  std::array<const PointHull*, kMaxConstraintHulls> hidden{}, visible{};
+  const PointHull* hidden = nullptr;   // the lowest of the hidden-from hulls
+  const PointHull* visible = nullptr;  // the highest of the visible-to hulls
   std::uint64_t sequence() const { return request.sequence; }
   int hidden_count() const { return request.hidden_count; }
   int visible_count() const { return request.visible_count; }
@@ -88,22 +96,24 @@ struct HullStats {
 
 class ConstraintHulls {
  public:
-  // The most observers a set may hold (kMaxConstraintHulls of each kind).
-  static constexpr int kMaxObservers = 2 * kMaxConstraintHulls;
+  // The most observers a set may fold (kMaxObserversPerKind of each kind).
+  static constexpr int kMaxObservers = 2 * kMaxObserversPerKind;
 
-  // Reserves three sets of `max_observers` (0..kMaxObservers) hulls over
-  // `level`'s posts; invalid_argument outside that range.
+  // Reserves three sets of two hulls over `level`'s posts (none when
+  // `max_observers` is 0: constraints off) for up to `max_observers`
+  // (0..kMaxObservers) observers a request; invalid_argument outside that range.
   static Result<std::unique_ptr<ConstraintHulls>> create(const storage::ResidentLevel& level, int max_observers);
   ~ConstraintHulls();
   ConstraintHulls(const ConstraintHulls&) = delete;
   ConstraintHulls& operator=(const ConstraintHulls&) = delete;
 
   // What create() reserves for a level of this geometry and `max_observers`
-  // (3 sets x max_observers hulls x 4 bytes a post), and the most a build
-  // adds on the builder thread (bytes): for the memory budget.
+  // (3 sets x 2 hulls x 4 bytes a post, none for 0 observers), and the most a
+  // build adds on the builder thread (bytes): for the memory budget.
   static std::uint64_t reserved_bytes(const fields::VolumeGeometry& g, int max_observers);
   static std::uint64_t build_bytes(const fields::VolumeGeometry& g);
-  // The most observers whose sets fit in `bytes` (0..kMaxObservers).
+  // The most observers whose sets fit in `bytes`: kMaxObservers when the two
+  // folded hulls of three sets fit, else 0.
   static int observers_within(const fields::VolumeGeometry& g, std::uint64_t bytes);
 
   int max_observers() const { return max_observers_; }

@@ -13,8 +13,8 @@ namespace visvol::rt {
 
 namespace {
 
-static_assert(dds::kMaxObserversPerKind == static_cast<std::size_t>(kMaxConstraintHulls),
-              "a command's observers of a kind are what the forces hold");
+static_assert(dds::kMaxObserversPerKind == static_cast<std::size_t>(kMaxObserversPerKind),
+              "a command's observers of a kind are what a hull request holds");
 
 constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt::PathChecker)
 
@@ -441,8 +441,8 @@ Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
   }
   if (hulls != nullptr && r.observers() > hulls->max_observers()) {
     return invalid_argument("executive: " + std::to_string(r.observers()) +
-                            " hidden-from and visible-to points, hulls are reserved for " +
-                            std::to_string(hulls->max_observers()));
+                            " hidden-from and visible-to points, the console takes " +
+                            std::to_string(hulls->max_observers()) + " (--max-observers)");
   }
   hulls_ = hulls;
   if (hulls_ != nullptr && r.observers() > 0) {
@@ -454,12 +454,12 @@ Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
   return Status::ok_status();
 }
 
-// The configured observers: at most kMaxConstraintHulls of a kind, each
+// The configured observers: at most kMaxObserversPerKind of a kind, each
 // inside the pack and at or above the finest terrain.
 Status Executive::check_observers(const HullRequest& r) const {
-  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxConstraintHulls ||
-      r.visible_count > kMaxConstraintHulls) {
-    return invalid_argument("executive: at most " + std::to_string(kMaxConstraintHulls) +
+  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxObserversPerKind ||
+      r.visible_count > kMaxObserversPerKind) {
+    return invalid_argument("executive: at most " + std::to_string(kMaxObserversPerKind) +
                             " hidden-from and as many visible-to points");
   }
   const fields::VolumeGeometry& g = field_.level(0).geometry();
@@ -558,8 +558,8 @@ Errc Executive::read_constraints(const dds::Command& c, ForceGains& gains, HullR
     }
     const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
     if (!(k.kind == dds::ConstraintKind::hidden_from ? r.add_hidden_from(p) : r.add_visible_to(p))) {
-      static_assert(kMaxConstraintHulls == 8, "the reason names the number");
-      reason = "more than 8 hidden-from or 8 visible-to points";
+      static_assert(kMaxObserversPerKind == 256, "the reason names the number");
+      reason = "more than 256 hidden-from or 256 visible-to points";
       return Errc::invalid_argument;
     }
   }
@@ -571,7 +571,7 @@ Errc Executive::read_constraints(const dds::Command& c, ForceGains& gains, HullR
 // the clearance or under the rope's ends. Real-time safe.
 const char* Executive::constraints_problem(const ForceGains& g, const HullRequest& r) const {
   if (hulls_ != nullptr && r.observers() > hulls_->max_observers()) {
-    return "more hidden-from and visible-to points than the console reserved hulls for (--max-observers)";
+    return "more hidden-from and visible-to points than the console takes (--max-observers)";
   }
   if (!(std::isfinite(g.clearance_m) && g.clearance_m >= 0) || std::isnan(g.max_agl_m) || std::isnan(g.max_altitude_m)) {
     return "a clearance or ceiling is not a height";
@@ -594,8 +594,8 @@ void Executive::install_hulls() {
   const HullSet* set = hulls_->take();
   if (set == nullptr) return;
   if (set->sequence() == hull_pending_) hull_pending_ = 0;
-  forces_->set_hidden_from(set->hidden.data(), set->hidden_count());
-  forces_->set_visible_to(set->visible.data(), set->visible_count());
+  forces_->set_hidden_from(set->hidden);  // each kind folded into one hull
+  forces_->set_visible_to(set->visible);
   in_force_ = set;
   ++counters_.hull_sets;
   equilibrium_.reset();

@@ -146,8 +146,8 @@ TEST_F(Console, FifoInputsAndAMissingScriptExitTwoAtOnce) {
 TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
   const std::string base = "--pack " + *pack_ + " --no-dds --seconds 1 --thumbnail-view none ";
   const std::string p = " " + xyz(post(40, 40, 20));
-  std::string nine;
-  for (int k = 0; k < 9; ++k) nine += " --hidden-from" + p;
+  std::string too_many;
+  for (int k = 0; k < 257; ++k) too_many += " --hidden-from" + p;  // one more than a kind holds
   const std::pair<std::string, std::string> cases[] = {
       {"--max-agl 20", "--max-agl: 20 m is not above --clearance 30 m"},
       {"--max-agl 50 --clearance 50", "--max-agl: 50 m is not above --clearance 50 m"},
@@ -155,10 +155,10 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--max-agl nan", "--max-agl"},
       {"--max-altitude inf", "--max-altitude"},
       {"--hidden-from 1 2", "--hidden-from"},
-      {nine, "--hidden-from: at most 8 points"},
+      {too_many, "--hidden-from: at most 256 points"},
       {"--visible-to 1 2 nan", "--visible-to"},
       {"--eye-height -1", "--eye-height"},
-      {"--max-observers 17", "--max-observers"},
+      {"--max-observers 513", "--max-observers: must be in 0..512"},
       {"--max-observers 1 --hidden-from" + p + " --visible-to" + p, "--max-observers: 1 is fewer than the 2"},
       {"--hidden-from 1 2 3", "hidden-from point 1: (1.000000, 2.000000) is outside the pack"},
       {"--visible-to " + xyz(post(10, 10, -40)), "visible-to point 1"},
@@ -465,7 +465,7 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   EXPECT_EQ(k["built"].get<int>(), 1);
   EXPECT_EQ(k["sets_in_force"].get<int>(), 1);
   EXPECT_EQ(k["refused"].get<int>(), 0);
-  EXPECT_EQ(k["max_observers"].get<int>(), 16);  // a small pack: all fit in a quarter of the budget
+  EXPECT_EQ(k["max_observers"].get<int>(), 512);  // a small pack: the folded hulls fit in a quarter of the budget
   EXPECT_EQ(k["hidden_from"].size(), 3u);
   EXPECT_EQ(k["visible_to"].size(), 1u);
   EXPECT_EQ(k["max_agl_m"].get<double>(), 250.0);

@@ -32,7 +32,7 @@ struct Msg {
   visvol_msgs_msg_dds__Command_ m{};
   std::string source = "op";
   std::string pack = "";
-  visvol_msgs_msg_dds__Constraint_ constraints[20] = {};
+  visvol_msgs_msg_dds__Constraint_ constraints[kMaxConstraints + 1] = {};
   explicit Msg(std::uint8_t kind) {
     m.kind = kind;
     m.sequence_number = 42;
@@ -176,8 +176,8 @@ TEST(DecodeCommand, StructuralProblemsNameTheField) {
   EXPECT_EQ(verdict(md), "model: 3 is not known (1 spring-mass, 2 articulated)");
 
   Msg c(kind(CommandKind::set_constraints));
-  c.m.constraints._length = 17;
-  EXPECT_EQ(verdict(c), "constraints: 17 given, at most 16 fit");
+  c.m.constraints._length = kMaxConstraints + 1;
+  EXPECT_EQ(verdict(c), "constraints: 516 given, at most 515 fit");
   c.m.constraints._length = 2;
   c.constraints[0] = {3, {}, 10.0};
   c.constraints[1] = {6, {}, 10.0};
@@ -335,27 +335,28 @@ TEST(ValidateCommand, CeilingsAreCheckedWithAReason) {
 }
 
 // Observers: up to kMaxObserversPerKind of each kind, no more than the
-// console reserved hulls for.
-TEST(ValidateCommand, ObserversFitWhatTheConsoleReserved) {
+// console takes (--max-observers).
+TEST(ValidateCommand, ObserversFitWhatTheConsoleTakes) {
   CommandLimits l = limits();
   l.max_constraints = static_cast<std::uint32_t>(kMaxConstraints);
   Msg c(kind(CommandKind::set_constraints));
-  for (int i = 0; i < 8; ++i) {
+  const auto per_kind = static_cast<std::uint32_t>(kMaxObserversPerKind);
+  for (std::uint32_t i = 0; i < per_kind; ++i) {
     c.constraints[i] = {1, {10.0 + i, 20.0, 30.0}, 0.0};
-    c.constraints[8 + i] = {2, {20.0, 10.0 + i, 30.0}, 0.0};
+    c.constraints[per_kind + i] = {2, {20.0, 10.0 + i, 30.0}, 0.0};
   }
-  c.m.constraints._length = 16;
-  EXPECT_EQ(verdict(c, l), "") << "eight of each kind";
-  c.constraints[15] = {1, {1.0, 1.0, 1.0}, 0.0};
-  EXPECT_EQ(verdict(c, l), "constraints: 9 hidden-from and 7 visible-to points, at most 8 of a kind");
-  c.constraints[15] = {2, {1.0, 1.0, 1.0}, 0.0};
+  c.m.constraints._length = 2 * per_kind;
+  EXPECT_EQ(verdict(c, l), "") << "256 of each kind";
+  c.constraints[2 * per_kind - 1] = {1, {1.0, 1.0, 1.0}, 0.0};
+  EXPECT_EQ(verdict(c, l), "constraints: 257 hidden-from and 255 visible-to points, at most 256 of a kind");
+  c.constraints[2 * per_kind - 1] = {2, {1.0, 1.0, 1.0}, 0.0};
   l.max_observers = 12;
-  EXPECT_EQ(verdict(c, l), "constraints: 16 hidden-from and visible-to points, the console reserved hulls for 12");
+  EXPECT_EQ(verdict(c, l), "constraints: 512 hidden-from and visible-to points, the console takes at most 12");
   c.m.constraints._length = 12;
   EXPECT_EQ(verdict(c, l), "");
   l.max_observers = 0;
   c.m.constraints._length = 1;
-  EXPECT_NE(verdict(c, l).find("reserved hulls for 0"), std::string::npos);
+  EXPECT_NE(verdict(c, l).find("the console takes at most 0"), std::string::npos);
   c.constraints[0] = {4, {}, 100.0};  // no observer: none needed
   EXPECT_EQ(verdict(c, l), "");
   l.max_observers = 2 * kMaxObserversPerKind + 1;

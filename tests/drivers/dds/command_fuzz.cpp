@@ -16,7 +16,7 @@
 // values inside the limits. set-constraints is judged both ways against a
 // model of its rules written from the message alone (at most one clearance,
 // max-agl and max-altitude each, a max-agl above the clearance, kinds 1..5,
-// at most 8 observers of a kind and `max_observers` (3 here) in all): a
+// at most 256 observers of a kind and `max_observers` (3 here) in all): a
 // command the rules allow is accepted unless the rate limit refused it, and
 // one they forbid is rejected.
 #include <fuzzer/FuzzedDataProvider.h>
@@ -50,7 +50,7 @@ CommandLimits make_limits() {
   l.max = {551100.0, 4194000.0, 900.0};
   l.max_segments = 200;
   l.max_constraints = 8;
-  l.max_observers = 3;  // below the 8 of a kind and the 8 constraints: the total bound is met
+  l.max_observers = 3;  // below the 256 of a kind and the 8 constraints: the total bound is met
   l.max_weight = 100.0;
   check(add_known_pack(l, "sf_north").ok());
   check(add_known_pack(l, "taunus").ok());

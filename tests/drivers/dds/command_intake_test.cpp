@@ -224,13 +224,13 @@ TEST(CommandIntake, BadCommandsAreRejectedWithReasonsAndIntakeGoesOn) {
   raw.source = bad_source;
   sender.send(raw);
   expect[18] = "source: holds characters outside printable ASCII";
-  visvol_msgs_msg_dds__Constraint_ many[40] = {};
+  std::vector<visvol_msgs_msg_dds__Constraint_> many(kMaxConstraints + 1);  // one more than fit
   raw = m.fill(base(CommandKind::set_constraints, 19));
-  raw.constraints._buffer = many;
-  raw.constraints._length = 40;
-  raw.constraints._maximum = 40;
+  raw.constraints._buffer = many.data();
+  raw.constraints._length = static_cast<std::uint32_t>(many.size());
+  raw.constraints._maximum = static_cast<std::uint32_t>(many.size());
   sender.send(raw);
-  expect[19] = "constraints: 40 given, at most 16 fit";
+  expect[19] = "constraints: 516 given, at most 515 fit";
 
   // and a good one after all that
   sender.send(base(CommandKind::start, 20));

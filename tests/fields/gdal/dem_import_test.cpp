@@ -200,6 +200,26 @@ TEST(DemImport, ANegativeCellSizeIsRefusedNotWarpedUpsideDown) {
   std::remove(path.c_str());
 }
 
+// A CRS is text (EPSG:, WKT, PROJ): GDAL would read a file or fetch a URL
+// named there; both are refused as CRSs it does not know.
+TEST(DemImport, ACrsThatNamesAFileOrAUrlIsRefused) {
+  const std::string path = write_text("crs_text", ".asc", asc_text(40, "30"));
+  const std::string prj = write_text("crs_file", ".prj", "PROJCS[\"WGS 84 / UTM zone 33N\"]");
+  for (const std::string& text : {prj, std::string("http://127.0.0.1:9/crs.prj")}) {
+    ImportOptions o;
+    o.assume_srs = text;
+    const Result<Heightfield> hf = import_dem(path, o);
+    ASSERT_FALSE(hf.ok()) << text;
+    EXPECT_NE(hf.status().message().find("--assume-srs '" + text + "' is not a CRS GDAL knows"), std::string::npos)
+        << hf.status().message();
+  }
+  ImportOptions good;
+  good.assume_srs = "EPSG:32633";
+  EXPECT_TRUE(import_dem(path, good).ok());
+  std::remove(prj.c_str());
+  std::remove(path.c_str());
+}
+
 TEST(DemImport, RotatedAndAbsurdGridsAreRefusedBeforeAnyWarp) {
   const struct {
     std::string cellsize, xll, message;

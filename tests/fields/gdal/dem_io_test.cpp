@@ -71,6 +71,14 @@ TEST(DemIo, ArchivesReadLocalFilesOnlyAndTheArchiveIsChecked) {
   const Result<Heightfield> back = read_heightfield("/vsigzip/" + path + ".gz");
   ASSERT_TRUE(back.ok()) << back.status().message();
   EXPECT_EQ(back->height_m, hf.height_m);
+  EXPECT_NE(::access((path + ".gz.properties").c_str(), F_OK), 0) << "GDAL wrote beside the archive";
+  // a FIFO where GDAL looks for the archive's side file (DEM.tif.prj) is refused too
+  const std::string side = path + ".prj";
+  ASSERT_EQ(::mkfifo(side.c_str(), 0644), 0);
+  const Result<Heightfield> blocked = read_heightfield("/vsigzip/" + path + ".gz");
+  std::remove(side.c_str());
+  ASSERT_FALSE(blocked.ok());
+  EXPECT_NE(blocked.status().message().find(side + ": is a FIFO"), std::string::npos) << blocked.status().message();
   std::remove((path + ".gz").c_str());
 
   const std::string fifo = temp_name("fifo") + ".gz";

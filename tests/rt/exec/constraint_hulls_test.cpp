@@ -92,8 +92,10 @@ TEST_F(ConstraintHullsTest, BuildsWhatPointHullBuildsAndClearsOnAnEmptyRequest) 
   ASSERT_EQ(set->hidden_count(), 1);
   EXPECT_EQ(set->visible_count(), 0);
   const PointHull expected = direct(HullRequest::point(r.hidden_from_m[0]), 0.0);
-  EXPECT_EQ(set->hidden[0]->height_m, expected.height_m);
-  EXPECT_EQ(set->hidden[0]->nx, expected.nx);
+  ASSERT_NE(set->hidden, nullptr);
+  EXPECT_EQ(set->visible, nullptr);
+  EXPECT_EQ(set->hidden->height_m, expected.height_m);
+  EXPECT_EQ(set->hidden->nx, expected.nx);
   EXPECT_GT(hulls_->stats().last_build_ms, 0.0);
 
   HullRequest none;
@@ -104,34 +106,55 @@ TEST_F(ConstraintHullsTest, BuildsWhatPointHullBuildsAndClearsOnAnEmptyRequest) 
   EXPECT_EQ(set->sequence(), 8u);
   EXPECT_EQ(set->hidden_count(), 0);
   EXPECT_EQ(set->visible_count(), 0);
+  EXPECT_EQ(set->hidden, nullptr);
   EXPECT_EQ(hulls_->stats().built, 2u);
 }
 
-// Eight observers of each kind in one set, each hull its own observer's, in
-// the order asked, with the eye lifted by the eye height.
-TEST_F(ConstraintHullsTest, EveryObserverOfAFullSetGetsItsOwnHull) {
+// Observers of a kind are folded into one hull: post by post the lowest of
+// the hidden-from hulls (hidden from all of them) and the highest of the
+// visible-to hulls (visible to all), each observer's eye lifted by the eye
+// height. A request holds kMaxObserversPerKind of a kind and no more.
+TEST_F(ConstraintHullsTest, EveryObserverIsFoldedIntoItsKindsHull) {
   HullRequest r;
   r.sequence = 3;
   r.eye_height_m = 2.0;
-  for (int k = 0; k < kMaxConstraintHulls; ++k) {
-    ASSERT_TRUE(r.add_hidden_from(post(4 + 7 * k, 10, 30 + k)));
-    ASSERT_TRUE(r.add_visible_to(post(60 - 6 * k, 50, 5 + k)));
-  }
-  EXPECT_FALSE(r.add_hidden_from(post(1, 1, 1))) << "a ninth of a kind";
-  EXPECT_FALSE(r.add_visible_to(post(1, 1, 1)));
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(r.add_hidden_from(post(4 + 11 * k, 10 + 6 * k, 30 + k)));
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE(r.add_visible_to(post(60 - 9 * k, 50 - 5 * k, 5 + k)));
   hulls_->request(r);
   const HullSet* set = wait_for_set(60.0);
   ASSERT_NE(set, nullptr);
-  ASSERT_EQ(set->hidden_count(), kMaxConstraintHulls);
-  ASSERT_EQ(set->visible_count(), kMaxConstraintHulls);
-  for (int k = 0; k < kMaxConstraintHulls; ++k) {
-    const auto i = static_cast<std::size_t>(k);
-    EXPECT_EQ(set->hidden[i]->height_m, direct(HullRequest::point(r.hidden_from_m[k]), 2.0).height_m) << k;
-    EXPECT_EQ(set->visible[i]->height_m, direct(HullRequest::point(r.visible_to_m[k]), 2.0).height_m) << k;
+  ASSERT_EQ(set->hidden_count(), 5);
+  ASSERT_EQ(set->visible_count(), 4);
+  ASSERT_NE(set->hidden, nullptr);
+  ASSERT_NE(set->visible, nullptr);
+  std::vector<float> lowest = direct(HullRequest::point(r.hidden_from_m[0]), 2.0).height_m;
+  std::vector<float> highest = direct(HullRequest::point(r.visible_to_m[0]), 2.0).height_m;
+  bool folded_differs = false;  // the fold is not just the first hull
+  for (int k = 1; k < 5; ++k) {
+    const std::vector<float> h = direct(HullRequest::point(r.hidden_from_m[k]), 2.0).height_m;
+    for (std::size_t i = 0; i < h.size(); ++i) {
+      folded_differs |= h[i] < lowest[i];
+      lowest[i] = std::min(lowest[i], h[i]);
+    }
   }
-  EXPECT_NE(set->hidden[0]->height_m, set->hidden[1]->height_m);
+  for (int k = 1; k < 4; ++k) {
+    const std::vector<float> h = direct(HullRequest::point(r.visible_to_m[k]), 2.0).height_m;
+    for (std::size_t i = 0; i < h.size(); ++i) highest[i] = std::max(highest[i], h[i]);
+  }
+  EXPECT_TRUE(folded_differs);
+  EXPECT_EQ(set->hidden->height_m, lowest);
+  EXPECT_EQ(set->visible->height_m, highest);
   EXPECT_EQ(set->request.eye_height_m, 2.0);
-  EXPECT_EQ(set->request.visible_to_m[7][0], r.visible_to_m[7][0]);
+  EXPECT_EQ(set->request.visible_to_m[3][0], r.visible_to_m[3][0]);
+
+  HullRequest full;
+  for (int k = 0; k < kMaxObserversPerKind; ++k) {
+    ASSERT_TRUE(full.add_hidden_from(post(1, 1, 1)));
+    ASSERT_TRUE(full.add_visible_to(post(1, 1, 1)));
+  }
+  EXPECT_FALSE(full.add_hidden_from(post(1, 1, 1))) << "one more than a kind holds";
+  EXPECT_FALSE(full.add_visible_to(post(1, 1, 1)));
+  EXPECT_EQ(full.observers(), ConstraintHulls::kMaxObservers);
 }
 
 TEST_F(ConstraintHullsTest, ARefusedPointLeavesTheSetInForceAndSaysWhy) {
@@ -150,8 +173,8 @@ TEST_F(ConstraintHullsTest, ARefusedPointLeavesTheSetInForceAndSaysWhy) {
   EXPECT_EQ(hulls_->take(), nullptr);
 }
 
-// A builder reserved for two observers refuses three, naming both counts, and
-// its sets hold two hulls.
+// A builder that takes two observers refuses three, naming both counts; its
+// sets hold the two folded hulls whatever the number.
 TEST_F(ConstraintHullsTest, MoreObserversThanReservedAreRefusedWithAReason) {
   auto small = ConstraintHulls::create(field_->level(0), 2);
   ASSERT_TRUE(small.ok());
@@ -166,7 +189,7 @@ TEST_F(ConstraintHullsTest, MoreObserversThanReservedAreRefusedWithAReason) {
   ASSERT_TRUE(r.add_visible_to(post(30, 30, 20)));
   const Status s = (*small)->build(r, set);
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.message().find("1 hidden-from and 2 visible-to points: hulls are reserved for 2"), std::string::npos)
+  EXPECT_NE(s.message().find("1 hidden-from and 2 visible-to points: this console takes 2"), std::string::npos)
       << s.message();
   EXPECT_FALSE(ConstraintHulls::create(field_->level(0), ConstraintHulls::kMaxObservers + 1).ok());
   EXPECT_FALSE(ConstraintHulls::create(field_->level(0), -1).ok());
@@ -176,7 +199,7 @@ TEST_F(ConstraintHullsTest, TheNewestRequestWinsAndAHeldSetIsNeverRewritten) {
   hulls_->request(hidden_from_post(5, 5, 30, 1));
   const HullSet* held = wait_for_set();
   ASSERT_NE(held, nullptr);
-  const std::vector<float> before = held->hidden[0]->height_m;
+  const std::vector<float> before = held->hidden->height_m;
   // two more sets from elsewhere, built while the loop holds the first
   for (std::uint64_t seq : {2u, 3u}) {
     hulls_->request(hidden_from_post(50 + static_cast<int>(seq), 40, 80, seq));
@@ -187,24 +210,25 @@ TEST_F(ConstraintHullsTest, TheNewestRequestWinsAndAHeldSetIsNeverRewritten) {
   }
   EXPECT_EQ(hulls_->stats().built, 3u);
   EXPECT_EQ(held->sequence(), 1u);
-  EXPECT_EQ(held->hidden[0]->height_m, before);
+  EXPECT_EQ(held->hidden->height_m, before);
   const HullSet* newest = hulls_->take();
   ASSERT_NE(newest, nullptr);
   EXPECT_EQ(newest->sequence(), 3u);
-  EXPECT_NE(newest->hidden[0]->height_m, before);
+  EXPECT_NE(newest->hidden->height_m, before);
   EXPECT_EQ(hulls_->take(), nullptr);
 }
 
-TEST(ConstraintHullsBudget, ReservesThreeSetsOfTheObserversAndStatesWhatABuildAdds) {
+TEST(ConstraintHullsBudget, ReservesThreeSetsOfTwoFoldedHullsAndStatesWhatABuildAdds) {
   fields::VolumeGeometry g;
   g.nx = 370;
   g.ny = 466;
-  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 16), 3u * 16 * 370 * 466 * 4);
-  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 2), 3u * 2 * 370 * 466 * 4);
+  // observers cost no memory: three sets of two hulls for any number, none for none
+  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, ConstraintHulls::kMaxObservers), 3u * 2 * 370 * 466 * 4);
+  EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 1), 3u * 2 * 370 * 466 * 4);
   EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 0), 0u);
-  // the most observers within a number of bytes
-  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 5)), 5);
-  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 5) - 1), 4);
+  // all observers where the sets fit, none where they do not
+  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 1)), ConstraintHulls::kMaxObservers);
+  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 1) - 1), 0);
   EXPECT_EQ(ConstraintHulls::observers_within(g, std::uint64_t{1} << 40), ConstraintHulls::kMaxObservers);
   // heightfield and hull, horizon 931^2, and the terrain padded by the radius
   // on every side (a height and a ground level, 8 bytes, a post)

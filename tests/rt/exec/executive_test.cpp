@@ -463,17 +463,20 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   hulls->stop();
 }
 
-// Several observers of each kind in one command: every one's hull is in
-// force (the forces hold three of each), with no allocation on the ticks
-// that take the command and put the set in force.
-TEST_F(ExecutiveTest, SeveralObserversOfEachKindComeIntoForce) {
+// Many observers of each kind in one command (more than the eight a command
+// held before the hulls were folded): every one's hull is in force, folded
+// into one a kind (the lowest hidden-from, the highest visible-to hull), with
+// no allocation on the ticks that take the command and put the set in force.
+TEST_F(ExecutiveTest, ManyObserversOfEachKindComeIntoForceFolded) {
   auto e = make();
   ASSERT_TRUE(e);
-  auto hulls = make_hulls(*e, 6);
+  auto hulls = make_hulls(*e, 15);
   ASSERT_TRUE(hulls);
   dds::Command set = command(dds::CommandKind::set_constraints, 1);
-  const Vec3 hidden[3] = {point_at(*field_, 0.5, 0.5, 60), point_at(*field_, 0.2, 0.8, 40),
-                          point_at(*field_, 0.8, 0.3, 20)};
+  std::vector<Vec3> hidden;
+  for (int k = 0; k < 12; ++k) {
+    hidden.push_back(point_at(*field_, 0.1 + 0.07 * k, 0.85 - 0.06 * k, 20.0 + 5.0 * k));
+  }
   const Vec3 visible[3] = {point_at(*field_, 0.3, 0.6, 80), point_at(*field_, 0.7, 0.7, 30),
                            point_at(*field_, 0.4, 0.1, 50)};
   for (const Vec3& p : hidden) add(set, dds::ConstraintKind::hidden_from, p);
@@ -485,8 +488,8 @@ TEST_F(ExecutiveTest, SeveralObserversOfEachKindComeIntoForce) {
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
   EXPECT_EQ(next_ack().result, dds::AckResult::applied);
   ASSERT_EQ(e->counters().hull_sets, 1u);
-  ASSERT_EQ(e->forces().hidden_from_count(), 3);
-  ASSERT_EQ(e->forces().visible_to_count(), 3);
+  ASSERT_EQ(e->forces().hidden_from_count(), 1);
+  ASSERT_EQ(e->forces().visible_to_count(), 1);
   EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 25.0);
   // the path with its limits goes to the fitter in one hand-off, allocating nothing
   while (limited_.take() != nullptr) {
@@ -500,22 +503,33 @@ TEST_F(ExecutiveTest, SeveralObserversOfEachKindComeIntoForce) {
   EXPECT_EQ(lp->path.sequence, sent->sequence);  // the same path, not one before or after
   EXPECT_EQ(lp->path.vertex_count, sent->vertex_count);
   EXPECT_DOUBLE_EQ(lp->limits.gains.clearance_m, 25.0);
-  EXPECT_EQ(lp->limits.observers.hidden_count, 3);
+  EXPECT_EQ(lp->limits.observers.hidden_count, 12);
   EXPECT_EQ(lp->limits.observers.visible_count, 3);
   EXPECT_EQ(lp->limits.observers.sequence, e->hulls_in_force()->sequence());
-  for (int k = 0; k < 3; ++k) {
-    Result<PointHull> h = point_hull(field_->level(0), hidden[k] + Vec3(0, 0, 2), "h");
-    Result<PointHull> v = point_hull(field_->level(0), visible[k] + Vec3(0, 0, 2), "v");
-    ASSERT_TRUE(h.ok() && v.ok());
-    const PointHull* hidden_hull = e->forces().hidden_from(k);
-    const PointHull* visible_hull = e->forces().visible_to(k);
-    ASSERT_TRUE(hidden_hull != nullptr && visible_hull != nullptr);
-    EXPECT_TRUE(hidden_hull->height_m == h->height_m) << k;
-    EXPECT_TRUE(visible_hull->height_m == v->height_m) << k;
+  // the folds, post by post, of every observer's own hull
+  std::vector<float> lowest, highest;
+  auto fold = [](std::vector<float>& into, const std::vector<float>& h, bool low) {
+    if (into.empty()) return void(into = h);
+    for (std::size_t i = 0; i < h.size(); ++i) into[i] = low ? std::min(into[i], h[i]) : std::max(into[i], h[i]);
+  };
+  for (const Vec3& p : hidden) {
+    Result<PointHull> h = point_hull(field_->level(0), p + Vec3(0, 0, 2), "h");
+    ASSERT_TRUE(h.ok());
+    fold(lowest, h->height_m, true);
   }
+  for (const Vec3& p : visible) {
+    Result<PointHull> v = point_hull(field_->level(0), p + Vec3(0, 0, 2), "v");
+    ASSERT_TRUE(v.ok());
+    fold(highest, v->height_m, false);
+  }
+  const PointHull* hidden_hull = e->forces().hidden_from(0);
+  const PointHull* visible_hull = e->forces().visible_to(0);
+  ASSERT_TRUE(hidden_hull != nullptr && visible_hull != nullptr);
+  EXPECT_TRUE(hidden_hull->height_m == lowest);
+  EXPECT_TRUE(visible_hull->height_m == highest);
   const HullSet* in_force = e->hulls_in_force();
   ASSERT_NE(in_force, nullptr);
-  EXPECT_EQ(in_force->request.hidden_from_m[2][0], hidden[2].x());
+  EXPECT_EQ(in_force->request.hidden_from_m[11][0], hidden[11].x());
   EXPECT_EQ(in_force->request.visible_to_m[1][1], visible[1].y());
   EXPECT_FALSE(e->hulls_pending());
   hulls->stop();
@@ -534,7 +548,7 @@ TEST_F(ExecutiveTest, ConfiguredObserversComeIntoForceWithTheBuilder) {
   ASSERT_TRUE(small.ok());
   const Status refused = e->set_constraint_hulls(small->get());
   ASSERT_FALSE(refused.ok());
-  EXPECT_NE(refused.message().find("3 hidden-from and visible-to points, hulls are reserved for 2"), std::string::npos)
+  EXPECT_NE(refused.message().find("3 hidden-from and visible-to points, the console takes 2"), std::string::npos)
       << refused.message();
   EXPECT_FALSE(e->set_constraint_hulls(nullptr).ok());
   auto hulls = make_hulls(*e, 3);
@@ -542,8 +556,9 @@ TEST_F(ExecutiveTest, ConfiguredObserversComeIntoForceWithTheBuilder) {
   EXPECT_TRUE(e->hulls_pending());
   wait_for_sets(*e, 1);
   EXPECT_FALSE(e->hulls_pending());
-  EXPECT_EQ(e->forces().hidden_from_count(), 2);
+  EXPECT_EQ(e->forces().hidden_from_count(), 1);  // the two folded into one
   EXPECT_EQ(e->forces().visible_to_count(), 1);
+  EXPECT_EQ(e->hulls_in_force()->hidden_count(), 2);
   ASSERT_NE(e->hulls_in_force(), nullptr);
   EXPECT_EQ(e->hulls_in_force()->request.eye_height_m, 5.0);
   hulls->stop();
@@ -568,8 +583,8 @@ TEST_F(ExecutiveTest, BadConstraintsFailWithAReasonAndChangeNothing) {
   dds::Command three = command(dds::CommandKind::set_constraints, 1);
   for (int k = 0; k < 3; ++k) add(three, dds::ConstraintKind::visible_to, p);
   add(three, dds::ConstraintKind::clearance, Vec3::Zero(), 45);
-  dds::Command nine = command(dds::CommandKind::set_constraints, 2);
-  for (int k = 0; k < 9; ++k) add(nine, dds::ConstraintKind::hidden_from, p);
+  dds::Command too_many = command(dds::CommandKind::set_constraints, 2);  // one more than a kind holds
+  for (int k = 0; k <= kMaxObserversPerKind; ++k) add(too_many, dds::ConstraintKind::hidden_from, p);
   dds::Command low = command(dds::CommandKind::set_constraints, 3);  // under the clearance in force (30 m)
   add(low, dds::ConstraintKind::max_agl, Vec3::Zero(), 20);
   dds::Command both = command(dds::CommandKind::set_constraints, 4);  // under the clearance it sets
@@ -583,14 +598,14 @@ TEST_F(ExecutiveTest, BadConstraintsFailWithAReasonAndChangeNothing) {
   add(nan, dds::ConstraintKind::max_agl, Vec3::Zero(), std::nan(""));
   dds::Command outside = command(dds::CommandKind::set_constraints, 8);
   add(outside, dds::ConstraintKind::hidden_from, p + Vec3(1e6, 0, 0));
-  for (const dds::Command& c : {three, nine, low, both, over_ends, datum, nan, outside}) {
+  for (const dds::Command& c : {three, too_many, low, both, over_ends, datum, nan, outside}) {
     ASSERT_TRUE(commands_.try_push(c));
   }
   const std::uint64_t allocations = testing::thread_allocation_count();
   run(*e, 1);
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
-  EXPECT_NE(next_failure().find("reserved hulls for"), std::string::npos);
-  EXPECT_NE(next_failure().find("more than 8 hidden-from"), std::string::npos);
+  EXPECT_NE(next_failure().find("than the console takes (--max-observers)"), std::string::npos);
+  EXPECT_NE(next_failure().find("more than 256 hidden-from"), std::string::npos);
   EXPECT_NE(next_failure().find("max-agl is not above the clearance"), std::string::npos);
   EXPECT_NE(next_failure().find("max-agl is not above the clearance"), std::string::npos);
   EXPECT_NE(next_failure().find("ends are above that ceiling"), std::string::npos);

@@ -38,7 +38,7 @@ struct CommandLimits {
   std::uint32_t min_segments = 2;
   std::uint32_t max_segments = kMaxPathVertices - 1;  // rope segments reserved
   std::uint32_t max_constraints = kMaxConstraints;    // constraints reserved
-  // hidden-from and visible-to points together: the hulls the console reserved
+  // hidden-from and visible-to points together: what the console takes (--max-observers)
   std::uint32_t max_observers = 2 * kMaxObserversPerKind;
   double max_weight = 1e6;                            // each of k1..k4 in [0, max]
   double max_stretch_stiffness_n_per_m = 1e6;         // in (0, max]

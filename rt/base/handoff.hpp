@@ -46,11 +46,15 @@ class LatestValue {
     publish();
   }
 
+  // Consumer: whether a value was published since the last take() (a peek:
+  // take() still returns it).
+  bool fresh() const { return (middle_.load(std::memory_order_acquire) & kFresh) != 0; }
+
   // Consumer: the newest published value, or nullptr when nothing new was
   // published since the last take(). The pointer stays valid until the next
   // take().
   const T* take() {
-    if ((middle_.load(std::memory_order_acquire) & kFresh) == 0) return nullptr;
+    if (!fresh()) return nullptr;
     const unsigned prev = middle_.exchange(front_, std::memory_order_acq_rel);
     front_ = prev & kIndex;
     return &slots_[front_];

@@ -86,6 +86,7 @@ void ConstraintHulls::start() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (thread_.joinable()) return;
   stopping_ = false;
+  abandon_.store(false, std::memory_order_relaxed);
   thread_ = std::thread([this] { run(); });
 }
 
@@ -95,6 +96,7 @@ void ConstraintHulls::stop() {
     if (!thread_.joinable()) return;
     stopping_ = true;
   }
+  abandon_.store(true, std::memory_order_relaxed);
   wake_.notify_all();
   thread_.join();
 }
@@ -132,6 +134,7 @@ Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
                             " (at most " + std::to_string(kMaxObserversPerKind) + " of a kind)");
   }
   for (int k = 0; k < n; ++k) {
+    if (k > 0 && superseded()) return Status(Errc::state, "hulls: superseded by a newer request, or stopped");
     const bool hidden = k < r.hidden_count;
     const double(&p)[3] = hidden ? r.hidden_from_m[k] : r.visible_to_m[k - r.hidden_count];
     Result<PointHull> h = point_hull(*level_, eye_on(*level_, p, r.eye_height_m),
@@ -181,6 +184,8 @@ void ConstraintHulls::run() {
       if (s.ok()) {
         publish_set();
         built_.fetch_add(1, std::memory_order_relaxed);
+      } else if (superseded()) {
+        // given up for a newer request (built next) or for stop(): not refused
       } else {
         refused_sequence_.store(r->sequence, std::memory_order_release);
         failed_.fetch_add(1, std::memory_order_relaxed);

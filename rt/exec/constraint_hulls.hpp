@@ -135,7 +135,8 @@ class ConstraintHulls {
   const storage::ResidentLevel& level() const { return *level_; }
 
   // Builds what `r` asks for into `out`, one of this object's sets (or one
-  // from reserve_set()). The builder thread's work, public for tests.
+  // from reserve_set()); gives up (Errc::state) when superseded. The builder
+  // thread's work, public for tests.
   Status build(const HullRequest& r, HullSet& out) const;
   // A set sized as create() sizes them (allocates).
   HullSet reserve_set() const;
@@ -144,6 +145,9 @@ class ConstraintHulls {
   ConstraintHulls(const storage::ResidentLevel& level, int max_observers);
   void run();
   void publish_set();
+  // A build in progress gives way (between observers) to a newer request or
+  // to stop(): a set of many observers takes seconds to minutes.
+  bool superseded() const { return abandon_.load(std::memory_order_relaxed) || requests_.fresh(); }
 
   const storage::ResidentLevel* level_;
   int max_observers_;
@@ -157,6 +161,7 @@ class ConstraintHulls {
   std::atomic<std::uint64_t> built_{0}, failed_{0};
   std::atomic<std::int64_t> last_build_us_{0};
   std::atomic<std::uint64_t> refused_sequence_{0};
+  std::atomic<bool> abandon_{false};  // stop() asked: the build in progress ends
   mutable std::mutex mutex_;  // last_error_, stopping_
   std::condition_variable wake_;
   std::string last_error_;

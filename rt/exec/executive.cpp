@@ -13,6 +13,7 @@ namespace visvol::rt {
 
 namespace {
 
+static_assert(kMaxPlanObservers == kMaxObserversPerKind, "the console takes as many observers as the planner");
 static_assert(dds::kMaxObserversPerKind == static_cast<std::size_t>(kMaxObserversPerKind),
               "a command's observers of a kind are what a hull request holds");
 

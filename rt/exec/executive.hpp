@@ -172,7 +172,7 @@ class Executive final : public PeriodicTask {
   // Hidden-from and visible-to constraints (set-constraints) need a hull
   // builder on the executive's level; without one they are refused as
   // unsupported. Requests the configured observers (refused when they are
-  // more than the builder reserved). Set before the loop starts; `hulls`
+  // more than the builder takes). Set before the loop starts; `hulls`
   // must outlive the executive.
   Status set_constraint_hulls(ConstraintHulls* hulls);
 

@@ -186,7 +186,10 @@ bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
     }
   }
   if (envelope[3] > 1 || envelope[4] > 1 || envelope[5] > 1) return false;
-  if (envelope[1] > 8 || envelope[2] > 8 || envelope[1] + envelope[2] > 3) return false;
+  const auto hidden = static_cast<std::size_t>(envelope[1]), visible = static_cast<std::size_t>(envelope[2]);
+  if (hidden > kMaxObserversPerKind || visible > kMaxObserversPerKind || hidden + visible > l.max_observers) {
+    return false;
+  }
   return !(envelope[3] == 1 && envelope[4] == 1 && !(max_agl_m > clearance_m));
 }
 

@@ -157,6 +157,36 @@ TEST_F(ConstraintHullsTest, EveryObserverIsFoldedIntoItsKindsHull) {
   EXPECT_EQ(full.observers(), ConstraintHulls::kMaxObservers);
 }
 
+// A build of many observers gives way to a newer request between observers:
+// the newest set comes into force and the one given up is not a refusal.
+TEST_F(ConstraintHullsTest, ANewerRequestSupersedesABuildInProgress) {
+  HullRequest many;
+  many.sequence = 1;
+  for (int k = 0; k < 60; ++k) ASSERT_TRUE(many.add_hidden_from(post(2 + k, 10 + (k % 40), 30)));
+  hulls_->request(many);
+  hulls_->request(hidden_from_post(32, 20, 40, 2));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  const HullSet* newest = nullptr;
+  while (std::chrono::steady_clock::now() < end) {
+    if (const HullSet* s = hulls_->take()) newest = s;
+    if (newest != nullptr && newest->sequence() == 2u) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_NE(newest, nullptr);
+  EXPECT_EQ(newest->sequence(), 2u);
+  EXPECT_EQ(newest->hidden_count(), 1);
+  EXPECT_EQ(hulls_->stats().failed, 0u);
+  EXPECT_EQ(hulls_->refused_sequence(), 0u);
+  // and a single build told to give up says so
+  HullSet set = hulls_->reserve_set();
+  hulls_->request(hidden_from_post(5, 5, 30, 3));  // fresh, not yet taken: supersedes what follows
+  hulls_->stop();
+  const Status s = hulls_->build(many, set);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.code(), Errc::state);
+  EXPECT_NE(s.message().find("superseded"), std::string::npos) << s.message();
+}
+
 TEST_F(ConstraintHullsTest, ARefusedPointLeavesTheSetInForceAndSaysWhy) {
   HullRequest outside = hidden_from_post(10, 10, 5, 1);
   outside.hidden_from_m[0][0] -= 1e6;  // far west of the pack

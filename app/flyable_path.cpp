@@ -45,22 +45,16 @@ void PathFitter::set_observers(const rt::HullRequest& r) {
   above_.clear();
   auto add = [&](const double (&p)[3], bool hidden) {
     if (!observers_allowed_) return void(++hull_failures_);
-    const rt::ConstraintPoint c{rt::ConstraintKind::hidden_from, rt::HullRequest::point(p), r.eye_height_m};
     // on its post, as the executive's hull builder puts it (a point accepted
     // on the bilinear terrain may be under the nearest post)
-    rt::Vec3 eye = c.eye_m();
-    int i = 0, j = 0;
-    if (rt::hull_post(finest_->geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(finest_->post(i, j)) + 0.01);
+    const rt::Vec3 eye = rt::eye_on_level(*finest_, rt::HullRequest::point(p) + rt::Vec3(0, 0, r.eye_height_m));
     Result<rt::PointHull> h = rt::point_hull(*finest_, eye, hidden ? "hidden-from" : "visible-to");
     if (!h.ok()) return void(++hull_failures_);
     std::optional<rt::PointHull>& folded = hidden ? hidden_ : visible_;
-    if (!folded) {
+    if (folded) {
+      rt::fold_hull(*folded, *h, hidden);
+    } else {
       folded = std::move(*h);
-      return;
-    }
-    std::vector<float>& into = folded->height_m;
-    for (std::size_t k = 0; k < into.size(); ++k) {
-      into[k] = hidden ? std::min(into[k], h->height_m[k]) : std::max(into[k], h->height_m[k]);
     }
   };
   for (int k = 0; k < r.hidden_count; ++k) add(r.hidden_from_m[k], true);

@@ -109,6 +109,23 @@ bool is_live(const std::string& temp) {
   return g_live.count(temp) != 0;
 }
 
+// Unlinks every entry of the open directory `dir_fd`, never following one.
+// Async-signal-safe (getdents64, unlinkat): the signal handler and the
+// removals below share it.
+void unlink_entries(int dir_fd) {
+  alignas(dirent64) char entries[4096];
+  ssize_t n = 0;
+  while ((n = ::getdents64(dir_fd, entries, sizeof entries)) > 0) {
+    for (ssize_t at = 0; at < n;) {
+      const auto* e = reinterpret_cast<const dirent64*>(entries + at);
+      at += e->d_reclen;
+      const char* name = e->d_name;
+      const bool dots = name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'));
+      if (!dots) ::unlinkat(dir_fd, name, 0);
+    }
+  }
+}
+
 // The handler runs on names registered before they were created (so that no
 // signal between the two leaves one behind): it removes only what this
 // process could have made there, never through a link. All async-signal-safe
@@ -130,19 +147,7 @@ void remove_directory_in_handler(const char* directory) {
     ::close(fd);
     return;
   }
-  {
-    alignas(dirent64) char entries[4096];
-    ssize_t n = 0;
-    while ((n = ::getdents64(fd, entries, sizeof entries)) > 0) {
-      for (ssize_t at = 0; at < n;) {
-        const auto* e = reinterpret_cast<const dirent64*>(entries + at);
-        at += e->d_reclen;
-        const char* name = e->d_name;
-        const bool dots = name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'));
-        if (!dots) ::unlinkat(fd, name, 0);
-      }
-    }
-  }
+  unlink_entries(fd);
   ::close(fd);
   ::rmdir(directory);
 }
@@ -177,15 +182,8 @@ extern "C" void remove_temporaries_and_reraise(int sig) {
 void remove_private_directory(int parent_fd, const char* name) {
   const int fd = ::openat(parent_fd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
   if (fd >= 0) {
-    if (DIR* d = ::fdopendir(fd)) {
-      while (const dirent* e = ::readdir(d)) {
-        if (std::strcmp(e->d_name, ".") == 0 || std::strcmp(e->d_name, "..") == 0) continue;
-        ::unlinkat(fd, e->d_name, 0);
-      }
-      ::closedir(d);  // closes fd
-    } else {
-      ::close(fd);
-    }
+    unlink_entries(fd);
+    ::close(fd);
   }
   ::unlinkat(parent_fd, name, AT_REMOVEDIR);
 }

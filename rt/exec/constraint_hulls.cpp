@@ -30,16 +30,6 @@ void copy_hull(const PointHull& from, PointHull& to) {
   std::copy(from.height_m.begin(), from.height_m.end(), to.height_m.begin());
 }
 
-// The observer's eye: above its point, and at least on the level's terrain
-// (a coarser level's post may stand higher than the finest terrain).
-template <class Level>
-Vec3 eye_on(const Level& level, const double (&point)[3], double eye_height_m) {
-  Vec3 eye = HullRequest::point(point) + Vec3(0, 0, eye_height_m);
-  int i = 0, j = 0;
-  if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
-  return eye;
-}
-
 }  // namespace
 
 ConstraintHulls::ConstraintHulls(const storage::ResidentLevel& level, int max_observers)
@@ -137,21 +127,16 @@ Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
     if (k > 0 && superseded()) return Status(Errc::state, "hulls: superseded by a newer request, or stopped");
     const bool hidden = k < r.hidden_count;
     const double(&p)[3] = hidden ? r.hidden_from_m[k] : r.visible_to_m[k - r.hidden_count];
-    Result<PointHull> h = point_hull(*level_, eye_on(*level_, p, r.eye_height_m),
-                                     hidden ? "hidden-from point" : "visible-to point");
+    const Vec3 eye = eye_on_level(*level_, HullRequest::point(p) + Vec3(0, 0, r.eye_height_m));
+    Result<PointHull> h = point_hull(*level_, eye, hidden ? "hidden-from point" : "visible-to point");
     if (!h.ok()) return h.status();
-    // the first of a kind is copied, the others folded in: hidden from all is
-    // below the lowest hull, visible to all above the highest
-    const bool first = hidden ? k == 0 : k == r.hidden_count;
-    std::vector<float>& into = out.hulls[hidden ? 0 : 1].height_m;
-    if (first) {
-      copy_hull(*h, out.hulls[hidden ? 0 : 1]);
-    } else if (hidden) {
-      std::transform(into.begin(), into.end(), h->height_m.begin(), into.begin(),
-                     [](float a, float b) { return std::min(a, b); });
+    // the first of a kind is copied, the others folded in (into the
+    // reserved hull: no reallocation)
+    PointHull& kind_hull = out.hulls[hidden ? 0 : 1];
+    if (k == 0 || k == r.hidden_count) {
+      copy_hull(*h, kind_hull);
     } else {
-      std::transform(into.begin(), into.end(), h->height_m.begin(), into.begin(),
-                     [](float a, float b) { return std::max(a, b); });
+      fold_hull(kind_hull, *h, hidden);
     }
   }
   out.hidden = r.hidden_count > 0 ? &out.hulls[0] : nullptr;

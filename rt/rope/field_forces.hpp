@@ -103,6 +103,26 @@ inline bool hull_post(const fields::VolumeGeometry& g, const Vec3& p, int& i, in
   return true;
 }
 
+// An observer's eye on a level: at least a centimetre above the post it
+// stands on there (a coarser level's post may stand higher than the finest
+// terrain the point was accepted on).
+template <class Level>
+Vec3 eye_on_level(const Level& level, Vec3 eye) {
+  int i = 0, j = 0;
+  if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
+  return eye;
+}
+
+// Folds `hull` into `into` (the same grid) post by post: for hidden-from
+// hulls the lowest (below it, hidden from all of them), for visible-to hulls
+// the highest (above it, visible to all). Writes in place, never reallocates.
+inline void fold_hull(PointHull& into, const PointHull& hull, bool hidden_from) {
+  std::vector<float>& to = into.height_m;
+  for (std::size_t k = 0; k < to.size(); ++k) {
+    to[k] = hidden_from ? std::min(to[k], hull.height_m[k]) : std::max(to[k], hull.height_m[k]);
+  }
+}
+
 // `Sampler` answers the queries (fields::FieldSampler<Level>, or one that
 // picks the level per query, like storage::ResidentSampler).
 template <class Level, class Sampler = fields::FieldSampler<Level>>

@@ -166,20 +166,14 @@ template <class Level>
 Result<ObserverHulls> observer_hulls(const Level& level, const std::vector<ConstraintPoint>& constraints) {
   ObserverHulls out;
   for (const ConstraintPoint& c : constraints) {
-    Vec3 eye = c.eye_m();
-    int i = 0, j = 0;
-    if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
     const bool hidden = c.kind == ConstraintKind::hidden_from;
-    Result<PointHull> h = point_hull(level, eye, hidden ? "--hidden-from" : "--visible-to");
+    Result<PointHull> h = point_hull(level, eye_on_level(level, c.eye_m()), hidden ? "--hidden-from" : "--visible-to");
     if (!h.ok()) return h.status();
     std::optional<PointHull>& folded = hidden ? out.hidden_from : out.visible_to;
-    if (!folded) {
+    if (folded) {
+      fold_hull(*folded, *h, hidden);
+    } else {
       folded = std::move(*h);
-      continue;
-    }
-    std::vector<float>& into = folded->height_m;
-    for (std::size_t k = 0; k < into.size(); ++k) {
-      into[k] = hidden ? std::min(into[k], h->height_m[k]) : std::max(into[k], h->height_m[k]);
     }
   }
   return out;

@@ -43,12 +43,14 @@ void PathFitter::set_observers(const rt::HullRequest& r) {
   visible_.reset();
   below_.clear();
   above_.clear();
+  std::optional<rt::PointHullMaker> make;  // the terrain padded once for the set
+  if (observers_allowed_ && r.hidden_count + r.visible_count > 0) make.emplace(*finest_);
   auto add = [&](const double (&p)[3], bool hidden) {
-    if (!observers_allowed_) return void(++hull_failures_);
+    if (!make) return void(++hull_failures_);
     // on its post, as the executive's hull builder puts it (a point accepted
     // on the bilinear terrain may be under the nearest post)
     const rt::Vec3 eye = rt::eye_on_level(*finest_, rt::HullRequest::point(p) + rt::Vec3(0, 0, r.eye_height_m));
-    Result<rt::PointHull> h = rt::point_hull(*finest_, eye, hidden ? "hidden-from" : "visible-to");
+    Result<rt::PointHull> h = (*make)(eye, hidden ? "hidden-from" : "visible-to");
     if (!h.ok()) return void(++hull_failures_);
     std::optional<rt::PointHull>& folded = hidden ? hidden_ : visible_;
     if (folded) {

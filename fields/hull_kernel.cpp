@@ -35,81 +35,88 @@ int ring_index(int dx, int dy, int m) {
 }
 
 void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape,
-                         double range_m, int stride, std::vector<HullEntry>& out) {
+                         double range_m, int stride, std::vector<HullEntry>& out, const OffsetBox& box) {
   const std::size_t first = out.size();
   out.resize(first + static_cast<std::size_t>(ring_size(m)));
-  for (int dy = -m; dy <= m; ++dy) {
-    for (int dx = -m; dx <= m; ++dx) {
-      if (std::max(std::abs(dx), std::abs(dy)) != m) continue;
-      HullEntry e;
-      e.dx = static_cast<std::int16_t>(dx);
-      e.dy = static_cast<std::int16_t>(dy);
-      const double d_posts = std::hypot(static_cast<double>(dx), static_cast<double>(dy));
-      const double d = d_posts * spacing_m;
-      e.d_m = static_cast<float>(d);
-      e.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
-      e.span_m = sphere_span_m(shape, range_m, d);
+  // the ring's cells only: the top and bottom rows, then the two sides
+  auto cell = [&](int dx, int dy) {
+    if (!box.contains(dx, dy)) return;
+    HullEntry e;
+    e.dx = static_cast<std::int16_t>(dx);
+    e.dy = static_cast<std::int16_t>(dy);
+    const double d_posts = std::hypot(static_cast<double>(dx), static_cast<double>(dy));
+    const double d = d_posts * spacing_m;
+    e.d_m = static_cast<float>(d);
+    e.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
+    e.span_m = sphere_span_m(shape, range_m, d);
 
-      // Work in (major, minor) axes: the major axis is the one where |offset| = m.
-      const bool x_major = std::abs(dx) == m;
-      const int major_sign = x_major ? (dx > 0 ? 1 : -1) : (dy > 0 ? 1 : -1);
-      const double minor = x_major ? dy : dx;
-      auto to_dxdy = [&](int major, int minor_posts, int& ox, int& oy) {
-        ox = x_major ? major : minor_posts;
-        oy = x_major ? minor_posts : major;
-      };
-      auto terrain_offset = [&](int major, int minor_posts) {
-        int ox = 0, oy = 0;
-        to_dxdy(major, minor_posts, ox, oy);
-        return static_cast<std::int32_t>(oy * stride + ox);
-      };
-      auto prev_index = [&](int major, int minor_posts) {
-        int ox = 0, oy = 0;
-        to_dxdy(major, minor_posts, ox, oy);
-        return static_cast<std::uint16_t>(ring_index(ox, oy, m - 1));
-      };
+    // Work in (major, minor) axes: the major axis is the one where |offset| = m.
+    const bool x_major = std::abs(dx) == m;
+    const int major_sign = x_major ? (dx > 0 ? 1 : -1) : (dy > 0 ? 1 : -1);
+    const double minor = x_major ? dy : dx;
+    auto to_dxdy = [&](int major, int minor_posts, int& ox, int& oy) {
+      ox = x_major ? major : minor_posts;
+      oy = x_major ? minor_posts : major;
+    };
+    auto terrain_offset = [&](int major, int minor_posts) {
+      int ox = 0, oy = 0;
+      to_dxdy(major, minor_posts, ox, oy);
+      return static_cast<std::int32_t>(oy * stride + ox);
+    };
+    auto prev_index = [&](int major, int minor_posts) {
+      int ox = 0, oy = 0;
+      to_dxdy(major, minor_posts, ox, oy);
+      return static_cast<std::uint16_t>(ring_index(ox, oy, m - 1));
+    };
 
-      // Crossing of ring m-1's grid line (major = +-(m-1)).
-      const int major_prev = major_sign * (m - 1);
-      const double minor_at_prev = minor * (m - 1) / m;
-      const double lo = std::floor(minor_at_prev);
-      const double t = minor_at_prev - lo;
-      const int i0 = static_cast<int>(lo);
-      const int i1 = t > 0 ? i0 + 1 : i0;
-      e.a = prev_index(major_prev, i0);
-      e.b = prev_index(major_prev, i1);
-      e.t = static_cast<float>(t);
-      e.ta = terrain_offset(major_prev, i0);
-      e.tb = terrain_offset(major_prev, i1);
-      const double d1 = d * (m - 1) / m;
-      e.inv_d1 = static_cast<float>(1.0 / d1);
-      e.drop1_m = static_cast<float>(curvature_drop_m(curvature_coeff, d1));
+    // Crossing of ring m-1's grid line (major = +-(m-1)).
+    const int major_prev = major_sign * (m - 1);
+    const double minor_at_prev = minor * (m - 1) / m;
+    const double lo = std::floor(minor_at_prev);
+    const double t = minor_at_prev - lo;
+    const int i0 = static_cast<int>(lo);
+    const int i1 = t > 0 ? i0 + 1 : i0;
+    e.a = prev_index(major_prev, i0);
+    e.b = prev_index(major_prev, i1);
+    e.t = static_cast<float>(t);
+    e.ta = terrain_offset(major_prev, i0);
+    e.tb = terrain_offset(major_prev, i1);
+    const double d1 = d * (m - 1) / m;
+    e.inv_d1 = static_cast<float>(1.0 / d1);
+    e.drop1_m = static_cast<float>(curvature_drop_m(curvature_coeff, d1));
 
-      // A grid line of the minor axis strictly between ring m-1 and ring m: the
-      // sight line's minor coordinate passes an integer k there.
-      const double seg_lo = std::min(minor_at_prev, minor);
-      const double seg_hi = std::max(minor_at_prev, minor);
-      double k = std::ceil(seg_hi) - 1.0;
-      if (k > seg_lo && k < seg_hi) {
-        const double major_abs = m * k / minor;  // |major coordinate| at minor = k
-        const double f = std::floor(major_abs);
-        const int kk = static_cast<int>(k);
-        e.tc = terrain_offset(major_sign * static_cast<int>(f), kk);
-        e.td = terrain_offset(major_sign * (static_cast<int>(f) + 1), kk);
-        e.t2 = static_cast<float>(major_abs - f);
-        const double d2 = d * k / minor;
-        e.inv_d2 = static_cast<float>(1.0 / d2);
-        e.drop2_m = static_cast<float>(curvature_drop_m(curvature_coeff, d2));
-      } else {
-        // No second crossing: repeat the first (max() makes it harmless).
-        e.tc = e.ta;
-        e.td = e.tb;
-        e.t2 = e.t;
-        e.inv_d2 = e.inv_d1;
-        e.drop2_m = e.drop1_m;
-      }
-      out[first + static_cast<std::size_t>(ring_index(dx, dy, m))] = e;
+    // A grid line of the minor axis strictly between ring m-1 and ring m: the
+    // sight line's minor coordinate passes an integer k there.
+    const double seg_lo = std::min(minor_at_prev, minor);
+    const double seg_hi = std::max(minor_at_prev, minor);
+    double k = std::ceil(seg_hi) - 1.0;
+    if (k > seg_lo && k < seg_hi) {
+      const double major_abs = m * k / minor;  // |major coordinate| at minor = k
+      const double f = std::floor(major_abs);
+      const int kk = static_cast<int>(k);
+      e.tc = terrain_offset(major_sign * static_cast<int>(f), kk);
+      e.td = terrain_offset(major_sign * (static_cast<int>(f) + 1), kk);
+      e.t2 = static_cast<float>(major_abs - f);
+      const double d2 = d * k / minor;
+      e.inv_d2 = static_cast<float>(1.0 / d2);
+      e.drop2_m = static_cast<float>(curvature_drop_m(curvature_coeff, d2));
+    } else {
+      // No second crossing: repeat the first (max() makes it harmless).
+      e.tc = e.ta;
+      e.td = e.tb;
+      e.t2 = e.t;
+      e.inv_d2 = e.inv_d1;
+      e.drop2_m = e.drop1_m;
     }
+    out[first + static_cast<std::size_t>(ring_index(dx, dy, m))] = e;
+  };
+  for (int dx = -m; dx <= m; ++dx) {
+    cell(dx, -m);
+    cell(dx, m);
+  }
+  for (int dy = -m + 1; dy <= m - 1; ++dy) {
+    cell(-m, dy);
+    cell(m, dy);
   }
 }
 
@@ -384,7 +391,7 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
 
 void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
                       double spacing_m, double curvature_coeff, int pi, int pj,
-                      double eye_z_m, std::vector<float>& horizon) {
+                      double eye_z_m, std::vector<float>& horizon, bool grid_only) {
   const int side = 2 * radius + 1;
   horizon.assign(static_cast<std::size_t>(side) * static_cast<std::size_t>(side), kNoHorizon);
   const float* t0 = terrain.height_m.data() + terrain.index(pi, pj);
@@ -405,13 +412,20 @@ void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
   auto lerp_terrain = [&](std::int32_t a, std::int32_t b, double t) {
     return t0[a] + t * (static_cast<double>(t0[b]) - t0[a]);
   };
-  for (int m = 2; m <= radius; ++m) {
+  OffsetBox box;
+  int last_ring = radius;
+  if (grid_only) {
+    box = {-pi, terrain.nx - 1 - pi, -pj, terrain.ny - 1 - pj};
+    last_ring = std::min(radius, std::max({pi, terrain.nx - 1 - pi, pj, terrain.ny - 1 - pj}));
+  }
+  for (int m = 2; m <= last_ring; ++m) {
     ring.clear();
     append_ring_entries(m, spacing_m, curvature_coeff, RangeShape::none, 0.0, terrain.stride,
-                        ring);
+                        ring, box);
     cur.assign(ring.size(), kNoHorizon);
     for (std::size_t n = 0; n < ring.size(); ++n) {
       const HullEntry& e = ring[n];
+      if (e.d_m == 0) continue;  // outside the box
       double h = kNoHorizon;
       if (m <= exact_rings) {
         crossings.clear();

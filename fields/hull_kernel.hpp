@@ -20,6 +20,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "fields/field_params.hpp"
@@ -71,10 +72,18 @@ void append_crossings(int dx, int dy, double spacing_m, double curvature_coeff, 
 int ring_index(int dx, int dy, int m);
 inline int ring_size(int m) { return m == 0 ? 1 : 8 * m; }
 
+// Offsets from an observer: dx in dx_lo..dx_hi, dy in dy_lo..dy_hi.
+struct OffsetBox {
+  int dx_lo = std::numeric_limits<int>::min(), dx_hi = std::numeric_limits<int>::max();
+  int dy_lo = std::numeric_limits<int>::min(), dy_hi = std::numeric_limits<int>::max();
+  bool contains(int dx, int dy) const { return dx >= dx_lo && dx <= dx_hi && dy >= dy_lo && dy <= dy_hi; }
+};
+
 // Appends the entries of ring m (m >= 2) in ring_index order. Terrain offsets
-// are flat indices for a terrain stored with row stride `stride`.
+// are flat indices for a terrain stored with row stride `stride`. Only the
+// entries inside `box` are filled; the others keep HullEntry{} (d_m 0).
 void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape,
-                         double range_m, int stride, std::vector<HullEntry>& out);
+                         double range_m, int stride, std::vector<HullEntry>& out, const OffsetBox& box = {});
 
 // All rings 2..radius, stored for reuse by every observer. Rings up to
 // exact_rings are evaluated exactly (every crossing; that is where neighbouring
@@ -186,10 +195,16 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
                        std::uint8_t* out);
 
 // The horizon slope H of every target around one observer (scalar; for
-// viewsheds and tests), by the same rules as the kernel. `horizon` receives (2r+1)^2 values indexed
-// (dy + r) * (2r + 1) + (dx + r); rings 0 and 1 get kNoHorizon.
+// viewsheds, point hulls and tests), by the same rules as the kernel.
+// `horizon` receives (2r+1)^2 values indexed (dy + r) * (2r + 1) + (dx + r);
+// rings 0 and 1 get kNoHorizon. With `grid_only`, only the targets on the
+// terrain's grid are computed (the others get kNoHorizon): a grid target's
+// horizon depends on grid targets only (its sight line stays on the grid, and
+// the posts either side of it where it crosses a ring are grid posts), so
+// those values are the same, at the cost of the grid's posts rather than the
+// (2r+1)^2 square's. The terrain then needs a padding of 2 posts only.
 void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
                       double spacing_m, double curvature_coeff, int pi, int pj,
-                      double eye_z_m, std::vector<float>& horizon);
+                      double eye_z_m, std::vector<float>& horizon, bool grid_only = false);
 
 }  // namespace visvol::fields

@@ -55,11 +55,12 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
   g.nz = 1;
   g.z0_m = 0;
   g.dz_m = 1;
-  const PaddedTerrain terrain = pad_terrain(hf, g, radius);
+  // grid targets only: their horizons need two posts of padding, not the radius
+  const PaddedTerrain terrain = pad_terrain(hf, g, 2);
   const double eye = hf.at(vs.observer_i, vs.observer_j) + p.observer_height_m;
   std::vector<float> horizon;
   observer_horizon(terrain, radius, p.exact_rings, hf.spacing_m, p.curvature_coeff,
-                   vs.observer_i, vs.observer_j, eye, horizon);
+                   vs.observer_i, vs.observer_j, eye, horizon, true);
 
   const int side = 2 * radius + 1;
   vs.value.assign(hf.size(), kViewshedOutside);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <optional>
 
 #include "fields/hull_kernel.hpp"
 
@@ -65,11 +66,11 @@ int ConstraintHulls::observers_within(const fields::VolumeGeometry& g, std::uint
 }
 
 std::uint64_t ConstraintHulls::build_bytes(const fields::VolumeGeometry& g) {
-  // point_hull: the heightfield, the terrain padded by the largest radius on
-  // every side, the horizon over the square of that radius, the hull
+  // PointHullMaker (the heightfield and its padding), the horizon over the
+  // square of the largest radius, the hull
   const int radius = std::max(g.nx, g.ny) - 1;
   const std::uint64_t side = 2 * static_cast<std::uint64_t>(radius) + 1;
-  return (2 * posts(g) + side * side) * sizeof(float) + fields::padded_terrain_bytes(g.nx, g.ny, radius);
+  return PointHullMaker::bytes(g.nx, g.ny) + (posts(g) + side * side) * sizeof(float);
 }
 
 void ConstraintHulls::start() {
@@ -123,12 +124,14 @@ Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
                             " visible-to points: this console takes " + std::to_string(max_observers_) +
                             " (at most " + std::to_string(kMaxObserversPerKind) + " of a kind)");
   }
+  std::optional<PointHullMaker> make;  // the level's terrain padded once for all of them
+  if (n > 0) make.emplace(*level_);
   for (int k = 0; k < n; ++k) {
     if (k > 0 && superseded()) return Status(Errc::state, "hulls: superseded by a newer request, or stopped");
     const bool hidden = k < r.hidden_count;
     const double(&p)[3] = hidden ? r.hidden_from_m[k] : r.visible_to_m[k - r.hidden_count];
     const Vec3 eye = eye_on_level(*level_, HullRequest::point(p) + Vec3(0, 0, r.eye_height_m));
-    Result<PointHull> h = point_hull(*level_, eye, hidden ? "hidden-from point" : "visible-to point");
+    Result<PointHull> h = (*make)(eye, hidden ? "hidden-from point" : "visible-to point");
     if (!h.ok()) return h.status();
     // the first of a kind is copied, the others folded in (into the
     // reserved hull: no reallocation)

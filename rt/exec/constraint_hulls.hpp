@@ -16,8 +16,8 @@
 // `max_observers` observers (hidden-from and visible-to together, at most
 // kMaxObserversPerKind of a kind) is refused, with a reason, by the executive
 // before it gets here (and by build() again). A build allocates only on the
-// builder thread (each observer's hull and point_hull's padded terrain and
-// horizon, transient, one observer at a time).
+// builder thread (the level's padded terrain once a build, PointHullMaker;
+// each observer's hull and horizon, transient, one observer at a time).
 //
 // Observers are as the planner takes them (rt/rope/path_check.hpp,
 // ConstraintPoint): a point standing at or above the terrain, the eye

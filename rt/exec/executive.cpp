@@ -162,6 +162,7 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   rope_ = ropes_[index_of(c.model)].get();
   scratch_ = std::make_unique<Vec3[]>(static_cast<std::size_t>(c.max_segments) + 1);
   path_sample_ = std::make_unique<dds::PathSample>();
+  held_ = std::make_unique<dds::Command>();
   if (start_run() != Errc::ok) return invalid_argument("executive: the rope could not be laid between the endpoints");
   counters_.running = c.start_running;
   counters_.fc = path_fc(rope_->vertices(), rope_->segments() + 1, *forces_, c.fc_samples);
@@ -277,11 +278,29 @@ void Executive::set_ends(const Vec3& start, const Vec3& end) {
 
 // ---- commands -------------------------------------------------------------
 
+namespace {
+// The items a command has the loop check: a set-constraints command's
+// constraints (up to dds::kMaxConstraints), one for any other command.
+int command_items(const dds::Command& c) {
+  if (c.kind != dds::CommandKind::set_constraints) return 1;
+  return static_cast<int>(std::clamp<std::uint32_t>(c.constraints.count, 1, static_cast<std::uint32_t>(dds::kMaxConstraints)));
+}
+}  // namespace
+
+// A tick's work on commands is bounded: at most kMaxCommandsPerTick of them,
+// and their items at most one full set-constraints command's. The command
+// that would pass that bound waits, taken from the queue, for the next tick,
+// so a burst of large sets is spread over ticks, one a tick.
 void Executive::apply_commands() {
   if (commands_ == nullptr) return;
-  dds::Command c;
-  // a bounded number per tick: a burst is spread over ticks, never a long tick
-  for (int n = 0; n < 8 && commands_->try_pop(c); ++n) {
+  int items = 0;
+  for (int n = 0; n < kMaxCommandsPerTick; ++n) {
+    dds::Command& c = *held_;
+    if (!holding_ && !commands_->try_pop(c)) return;
+    const int cost = command_items(c);
+    holding_ = n > 0 && items + cost > static_cast<int>(dds::kMaxConstraints);
+    if (holding_) return;
+    items += cost;
     const char* reason = "";
     const Errc e = apply(c, reason);
     if (e == Errc::ok) {

@@ -2,7 +2,9 @@
 //
 // Each tick, in this order (the stages of DESIGN.md):
 //   1. apply queued commands   (DDS command intake -> CommandQueue; each one
-//                               acknowledged applied or failed on the AckQueue),
+//                               acknowledged applied or failed on the AckQueue;
+//                               at most kMaxCommandsPerTick, and constraint
+//                               items of one full set-constraints at most),
 //                               then put in force hull constraints built since
 //                               (every hidden-from and visible-to observer of
 //                               the newest set; the clearance and the ceiling
@@ -55,6 +57,9 @@
 #include "storage/resident_pack.hpp"
 
 namespace visvol::rt {
+
+// Commands a tick applies at most (a burst waits in the queue for later ticks).
+inline constexpr int kMaxCommandsPerTick = 8;
 
 // Runs at stage 2 on the loop thread: a simulated device stepping on the
 // in-process bus (real-time safe).
@@ -258,6 +263,8 @@ class Executive final : public PeriodicTask {
   EquilibriumDetector equilibrium_;
   std::unique_ptr<Vec3[]> scratch_;      // max_segments + 1 points
   std::unique_ptr<dds::PathSample> path_sample_;  // filled, then copied into each hand-off
+  std::unique_ptr<dds::Command> held_;   // the command being applied, or waiting for the next tick
+  bool holding_ = false;                 // held_ waits: the last tick's items were spent
   double user_force_per_n_ = 0.0;        // rope newtons per servo coupling newton
   double max_user_force_n_ = 0.0;
   bool grasping_ = false;

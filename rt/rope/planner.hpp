@@ -165,9 +165,11 @@ struct ObserverHulls {
 template <class Level>
 Result<ObserverHulls> observer_hulls(const Level& level, const std::vector<ConstraintPoint>& constraints) {
   ObserverHulls out;
+  if (constraints.empty()) return out;
+  const PointHullMaker make(level);  // the level's terrain padded once for all of them
   for (const ConstraintPoint& c : constraints) {
     const bool hidden = c.kind == ConstraintKind::hidden_from;
-    Result<PointHull> h = point_hull(level, eye_on_level(level, c.eye_m()), hidden ? "--hidden-from" : "--visible-to");
+    Result<PointHull> h = make(eye_on_level(level, c.eye_m()), hidden ? "--hidden-from" : "--visible-to");
     if (!h.ok()) return h.status();
     std::optional<PointHull>& folded = hidden ? out.hidden_from : out.visible_to;
     if (folded) {

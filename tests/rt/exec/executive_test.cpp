@@ -260,6 +260,49 @@ TEST_F(ExecutiveTest, CommandsAreAppliedOrFailWithAReason) {
   EXPECT_EQ(e->counters().runs, 2u);
 }
 
+// A tick's command work is bounded: eight commands, and the constraint
+// items of one full set-constraints command. Large sets in a burst go one a
+// tick, in order, each acknowledged; small commands still go eight a tick.
+TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  auto full_set = [&](std::uint64_t sequence, double clearance_m) {
+    dds::Command c = command(dds::CommandKind::set_constraints, sequence);
+    while (c.constraints.count < dds::kMaxConstraints) add(c, dds::ConstraintKind::clearance, Vec3::Zero(), clearance_m);
+    return c;
+  };
+  dds::Command show = command(dds::CommandKind::set_objective, 1);
+  show.objective = dds::Objective::show;
+  dds::Command hide = command(dds::CommandKind::set_objective, 3);
+  hide.objective = dds::Objective::hide;
+  dds::Command stop = command(dds::CommandKind::stop, 5);
+  for (const dds::Command& c : {show, full_set(2, 40), hide, full_set(4, 45), stop}) ASSERT_TRUE(commands_.try_push(c));
+  const std::uint64_t allocations = testing::thread_allocation_count();
+  // tick by tick: what was applied, the clearance then in force
+  const struct {
+    std::uint64_t applied;
+    double clearance_m;
+  } expected[] = {{1, 30}, {2, 40}, {3, 40}, {4, 45}, {5, 45}};
+  for (const auto& x : expected) {
+    run(*e, 1);
+    EXPECT_EQ(e->counters().commands_applied, x.applied);
+    EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, x.clearance_m);
+  }
+  EXPECT_EQ(testing::thread_allocation_count(), allocations);
+  for (std::uint64_t sequence = 1; sequence <= 5; ++sequence) {
+    const dds::CommandAck a = next_ack();
+    EXPECT_EQ(a.sequence, sequence);
+    EXPECT_EQ(a.result, dds::AckResult::applied) << a.reason;
+  }
+  EXPECT_FALSE(e->counters().running);
+  // ten small commands: eight in a tick, the other two in the next
+  for (std::uint64_t k = 0; k < 10; ++k) ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::start, 10 + k)));
+  run(*e, 1);
+  EXPECT_EQ(e->counters().commands_applied, 5u + kMaxCommandsPerTick);
+  run(*e, 1);
+  EXPECT_EQ(e->counters().commands_applied, 15u);
+}
+
 // Red-team findings (issue 14): ends too close for the segments, or not
 // finite, are refused and change nothing; a refused stiffness is not kept.
 TEST_F(ExecutiveTest, EndpointsTooCloseOrNotFiniteAreRefusedAndChangeNothing) {

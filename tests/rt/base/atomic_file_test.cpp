@@ -236,9 +236,10 @@ std::string killed_while_writing(const std::string& out, int sig, bool library, 
   return told && was_there ? temp : "(the child never wrote its temporary)";
 }
 
-TEST_F(AtomicFile, SigintAndSigtermRemoveTheTemporariesThenEndTheProcessBySignal) {
+// SIGHUP too: a console's terminal closing ends its writes the same way.
+TEST_F(AtomicFile, SigintSigtermAndSighupRemoveTheTemporariesThenEndTheProcessBySignal) {
   for (const bool library : {false, true}) {
-    for (const int sig : {SIGINT, SIGTERM}) {
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
       const std::string out = dir_ + "/killed.vvp";
       int status = 0;
       const std::string temp = killed_while_writing(out, sig, library, status);

@@ -67,10 +67,17 @@ Status check_virtual_path(const std::string& path) {
   }
   if (rest.empty()) return invalid_argument(path + ": names no archive");
   if (rest.rfind("/vsi", 0) == 0) return check_virtual_path(rest);  // an archive in an archive
-  if (rest.front() == '{') {  // /vsizip/{ARCHIVE}/MEMBER
-    const std::size_t close = rest.find('}');
-    return close == std::string::npos ? invalid_argument(path + ": no '}' closes the archive's name")
-                                      : check_input_file(rest.substr(1, close - 1));
+  if (rest.front() == '{') {  // /vsizip/{ARCHIVE}/MEMBER, ARCHIVE itself braced or virtual
+    std::size_t close = 0;
+    for (int depth = 0; close < rest.size(); ++close) {
+      depth += rest[close] == '{' ? 1 : rest[close] == '}' ? -1 : 0;
+      if (depth == 0) break;
+    }
+    if (close == rest.size()) return invalid_argument(path + ": no '}' closes the archive's name");
+    const std::string archive = rest.substr(1, close - 1);
+    if (archive.rfind("/vsi", 0) == 0) return check_virtual_path(archive);
+    VISVOL_RETURN_IF_ERROR(check_input_file(archive));
+    return check_side_files(archive);
   }
   // The archive is the longest leading part that names something other than
   // a directory; the rest is the member inside it. None: GDAL says "cannot

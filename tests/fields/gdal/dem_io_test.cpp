@@ -83,13 +83,19 @@ TEST(DemIo, ArchivesReadLocalFilesOnlyAndTheArchiveIsChecked) {
 
   const std::string fifo = temp_name("fifo") + ".gz";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  // braced names nest: the innermost archive is the one checked
   for (const std::string& virtual_path : {"/vsigzip/" + fifo, "/vsizip/{" + fifo + "}/dem.tif",
-                                          "/vsitar//vsigzip/" + fifo + "/dem.tif"}) {
+                                          "/vsitar//vsigzip/" + fifo + "/dem.tif",
+                                          "/vsizip/{/vsigzip/" + fifo + "}/dem.tif",
+                                          "/vsizip/{/vsizip/{" + fifo + "}/inner.zip}/dem.tif"}) {
     const Result<Heightfield> f = read_heightfield(virtual_path);
     ASSERT_FALSE(f.ok()) << virtual_path;
     EXPECT_NE(f.status().message().find(fifo + ": is a FIFO"), std::string::npos) << f.status().message();
   }
   std::remove(fifo.c_str());
+  const Result<Heightfield> unclosed = read_heightfield("/vsizip/{/vsizip/{" + fifo + "}/inner.zip/dem.tif");
+  ASSERT_FALSE(unclosed.ok());
+  EXPECT_NE(unclosed.status().message().find("no '}' closes"), std::string::npos) << unclosed.status().message();
 
   for (const char* remote : {"/vsicurl/http://127.0.0.1:9/dem.tif", "/vsis3/bucket/dem.tif", "/vsistdin/"}) {
     const Result<Heightfield> r = read_heightfield(remote);

@@ -1,6 +1,7 @@
 #include "fields/hull_kernel.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -412,6 +413,9 @@ void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
   auto lerp_terrain = [&](std::int32_t a, std::int32_t b, double t) {
     return t0[a] + t * (static_cast<double>(t0[b]) - t0[a]);
   };
+  // grid-only targets read at most a post past the grid (ring 1), the others
+  // up to the radius
+  assert(terrain.pad >= (grid_only ? 1 : radius + 1));
   OffsetBox box;
   int last_ring = radius;
   if (grid_only) {
@@ -425,7 +429,7 @@ void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
     cur.assign(ring.size(), kNoHorizon);
     for (std::size_t n = 0; n < ring.size(); ++n) {
       const HullEntry& e = ring[n];
-      if (e.d_m == 0) continue;  // outside the box
+      if (grid_only && e.d_m == 0) continue;  // outside the box: left HullEntry{}
       double h = kNoHorizon;
       if (m <= exact_rings) {
         crossings.clear();

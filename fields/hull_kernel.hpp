@@ -38,7 +38,7 @@ inline constexpr float kNoHorizon = -1.0e30f;
 
 // One target cell of a ring, relative to the observer.
 struct HullEntry {
-  std::uint16_t a = 0, b = 0;    // stencil cells, as indices into the previous ring
+  std::uint16_t a = 0, b = 0;    // stencil cells, as indices into the previous ring (kMaxHullRing)
   std::int16_t dx = 0, dy = 0;   // offset from the observer, posts
   float t = 0;                   // weight of b (and of post tb) at the ring m-1 crossing
   std::int32_t ta = 0, tb = 0;   // terrain offsets of the ring m-1 crossing's posts
@@ -66,6 +66,10 @@ struct Crossing {
 // (dx, dy): R3's exact set.
 void append_crossings(int dx, int dy, double spacing_m, double curvature_coeff, int stride,
                       std::vector<Crossing>& out);
+
+// The farthest ring a horizon reaches: a ring's indices (8 m of them) fit the
+// 16-bit stencil indices of HullEntry.
+inline constexpr int kMaxHullRing = 8191;
 
 // Index of cell (dx, dy) within Chebyshev ring m (m >= 1): the top row left to
 // right, then the left and right cells of each middle row, then the bottom row.
@@ -202,7 +206,8 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
 // horizon depends on grid targets only (its sight line stays on the grid, and
 // the posts either side of it where it crosses a ring are grid posts), so
 // those values are the same, at the cost of the grid's posts rather than the
-// (2r+1)^2 square's. The terrain then needs a padding of 2 posts only.
+// (2r+1)^2 square's. The terrain then needs a padding of one post only
+// (pad_terrain(hf, g, 2) gives kLanes + 4), not the radius.
 void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
                       double spacing_m, double curvature_coeff, int pi, int pj,
                       double eye_z_m, std::vector<float>& horizon, bool grid_only = false);

@@ -51,11 +51,18 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
       ? static_cast<int>(std::min<double>(full, std::ceil(p.max_distance_m / hf.spacing_m)))
       : full;
 
+  if (radius > kMaxHullRing) {
+    msg.str("");
+    msg << "viewshed: " << radius << " posts from the observer is over the " << kMaxHullRing
+        << " a horizon reaches; give a --max-distance of at most " << kMaxHullRing * hf.spacing_m << " m";
+    return invalid_argument(msg.str());
+  }
+
   VolumeGeometry g;  // only the ground levels of the padding are unused here
   g.nz = 1;
   g.z0_m = 0;
   g.dz_m = 1;
-  // grid targets only: their horizons need two posts of padding, not the radius
+  // grid targets only: their horizons need a post of padding, not the radius
   const PaddedTerrain terrain = pad_terrain(hf, g, 2);
   const double eye = hf.at(vs.observer_i, vs.observer_j) + p.observer_height_m;
   std::vector<float> horizon;

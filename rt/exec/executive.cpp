@@ -278,19 +278,27 @@ void Executive::set_ends(const Vec3& start, const Vec3& end) {
 
 // ---- commands -------------------------------------------------------------
 
-namespace {
-// The items a command has the loop check: a set-constraints command's
-// constraints (up to dds::kMaxConstraints), one for any other command.
-int command_items(const dds::Command& c) {
-  if (c.kind != dds::CommandKind::set_constraints) return 1;
-  return static_cast<int>(std::clamp<std::uint32_t>(c.constraints.count, 1, static_cast<std::uint32_t>(dds::kMaxConstraints)));
+// The work a command makes the loop do, in items: a set-constraints command's
+// constraints (up to dds::kMaxConstraints); a command that lays the rope
+// again (start, set-endpoints, set-segments, set-model), its vertices (at
+// most kMaxConstraints: a rope of more takes a tick of its own); one for any
+// other command.
+int Executive::command_items(const dds::Command& c) const {
+  auto bounded = [](std::int64_t n) { return static_cast<int>(std::clamp<std::int64_t>(n, 1, dds::kMaxConstraints)); };
+  switch (c.kind) {
+    case dds::CommandKind::set_constraints: return bounded(c.constraints.count);
+    case dds::CommandKind::set_segment_count: return bounded(std::int64_t{c.segment_count} + 1);
+    case dds::CommandKind::start:
+    case dds::CommandKind::set_endpoints:
+    case dds::CommandKind::set_model: return bounded(rope_->segments() + 1);
+    default: return 1;
+  }
 }
-}  // namespace
 
 // A tick's work on commands is bounded: at most kMaxCommandsPerTick of them,
 // and their items at most one full set-constraints command's. The command
 // that would pass that bound waits, taken from the queue, for the next tick,
-// so a burst of large sets is spread over ticks, one a tick.
+// so a burst of large sets or of rope rebuilds is spread over ticks.
 void Executive::apply_commands() {
   if (commands_ == nullptr) return;
   int items = 0;

@@ -3,8 +3,9 @@
 // Each tick, in this order (the stages of DESIGN.md):
 //   1. apply queued commands   (DDS command intake -> CommandQueue; each one
 //                               acknowledged applied or failed on the AckQueue;
-//                               at most kMaxCommandsPerTick, and constraint
-//                               items of one full set-constraints at most),
+//                               at most kMaxCommandsPerTick, and work of one
+//                               full set-constraints at most: constraint items,
+//                               rope vertices laid again),
 //                               then put in force hull constraints built since
 //                               (every hidden-from and visible-to observer of
 //                               the newest set; the clearance and the ceiling
@@ -208,6 +209,7 @@ class Executive final : public PeriodicTask {
               const ExecutiveOutputs& outputs);
 
   void apply_commands();
+  int command_items(const dds::Command& c) const;
   void install_hulls();
   Status check_observers(const HullRequest& r) const;
   Status check_ceiling(const char* name, const Vec3& p, const ForceGains& g) const;

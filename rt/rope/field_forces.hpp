@@ -89,7 +89,7 @@ fields::Heightfield level_terrain(const Level& level) {
 // so many observers pay for that once): every column's lowest height that
 // sees the point (the point's own column and its neighbours see it from the
 // ground up). A hull costs the horizon of the level's grid around the point
-// (grid-only rings: about 0.05 s for 512 x 512 posts). Refuses a point
+// (grid-only rings: 0.013 s for SF North's 370 x 466 posts). Refuses a point
 // outside the grid or below the terrain, naming it. Offline: allocates.
 class PointHullMaker {
  public:

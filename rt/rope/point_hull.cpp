@@ -15,6 +15,11 @@ Result<PointHull> PointHullMaker::operator()(const Vec3& p, const char* name) co
                             " m below the terrain");
   }
   const int radius = std::max(g_.nx, g_.ny) - 1;
+  if (radius > fields::kMaxHullRing) {
+    return invalid_argument(std::string(name) + ": the level is " + std::to_string(radius + 1) +
+                            " posts across, over the " + std::to_string(fields::kMaxHullRing + 1) +
+                            " an observer's hull reaches");
+  }
   std::vector<float> horizon;
   fields::observer_horizon(padded_, radius, 64, g_.spacing_m, 0.0, pi, pj, p.z(), horizon, true);
   PointHull hull;

@@ -177,8 +177,8 @@ TEST_F(Flyable, ObserversInForceAreBuiltOnceAndKeptUnderTheirHull) {
   double sum_with = 0, sum_without = 0;
   for (std::size_t k = 1; k + 1 < with.path.size(); ++k) sum_with += with.path[k].z();
   for (std::size_t k = 1; k + 1 < without.path.size(); ++k) sum_without += without.path[k].z();
-  EXPECT_LT(sum_with / std::max<std::size_t>(1, with.path.size() - 2),
-            sum_without / std::max<std::size_t>(1, without.path.size() - 2));
+  EXPECT_LT(sum_with / static_cast<double>(std::max<std::size_t>(1, with.path.size() - 2)),
+            sum_without / static_cast<double>(std::max<std::size_t>(1, without.path.size() - 2)));
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ struct Fixture {
     // F = 0.01 i + 0.02 j + 0.1 k: linear, so trilinear sampling is exact.
     for (int k = 0; k < 4; ++k)
       for (int j = 0; j < 5; ++j)
-        for (int i = 0; i < 6; ++i) field.values[field.geometry.index(i, j, k)] = 0.01f * i + 0.02f * j + 0.1f * k;
+        for (int i = 0; i < 6; ++i) field.values[field.geometry.index(i, j, k)] = 0.01f * static_cast<float>(i) + 0.02f * static_cast<float>(j) + 0.1f * static_cast<float>(k);
   }
 };
 

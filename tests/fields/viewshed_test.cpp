@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "fields/gdal/dem_io.hpp"
+#include "fields/hull_kernel.hpp"
 #include "terrains.hpp"
 
 namespace visvol::fields {
@@ -23,6 +24,27 @@ TEST(Viewshed, FlatGroundIsAllVisible) {
   EXPECT_EQ(vs->observer_i, 4);
   EXPECT_EQ(vs->observer_j, 9);
   for (std::uint8_t v : vs->value) ASSERT_EQ(v, kViewshedVisible);
+}
+
+// A horizon reaches kMaxHullRing posts (16-bit stencil indices): a DEM
+// longer than that from the observer is refused with the distance to give,
+// never computed with wrapped indices; within it, computed.
+TEST(Viewshed, ADemBeyondAHorizonsReachIsRefusedUnlessTheDistanceIsBounded) {
+  Heightfield hf = flat(2);
+  hf.nx = kMaxHullRing + 2;
+  hf.height_m.assign(hf.size(), 10.0f);
+  ViewshedParams p;
+  p.observer_x = hf.x_of(0);
+  p.observer_y = hf.y_of(0);
+  p.exact_rings = 4;
+  const Result<Viewshed> refused = compute_viewshed(hf, p);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("--max-distance"), std::string::npos) << refused.status().message();
+  p.max_distance_m = 100 * hf.spacing_m;
+  const Result<Viewshed> bounded = compute_viewshed(hf, p);
+  ASSERT_TRUE(bounded.ok()) << bounded.status().message();
+  EXPECT_EQ(bounded->value[50], kViewshedVisible);
+  EXPECT_EQ(bounded->value[500], kViewshedOutside);
 }
 
 TEST(Viewshed, WallShadowsTheFarSide) {
@@ -126,7 +148,7 @@ TEST(Viewshed, AgreesWithGrassRviewshedReference) {
     visible_ours += ours;
     visible_ref += ref.visible[n];
   }
-  const double fraction = double(agree) / ref.visible.size();
+  const double fraction = double(agree) / static_cast<double>(ref.visible.size());
   RecordProperty("agreement", std::to_string(fraction));
   std::cout << "r.viewshed reference: " << agree << " of " << ref.visible.size()
             << " cells agree (" << 100.0 * fraction << "%); visible ours " << visible_ours

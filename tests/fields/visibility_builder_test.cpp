@@ -175,7 +175,8 @@ TEST(VisibilityField, SightLinesAreSymmetric) {
   for (int n = 0; n < 2000; ++n) {
     const int ai = static_cast<int>(rng() % 40u), aj = static_cast<int>(rng() % 40u);
     const int bi = static_cast<int>(rng() % 40u), bj = static_cast<int>(rng() % 40u);
-    const double az = hf.at(ai, aj) + 2.0 + (rng() % 50u), bz = hf.at(bi, bj) + (rng() % 80u);
+    const double az = hf.at(ai, aj) + 2.0 + static_cast<double>(rng() % 50u),
+                 bz = hf.at(bi, bj) + static_cast<double>(rng() % 80u);
     ASSERT_EQ(r3_visible(hf, ai, aj, az, bi, bj, bz, 0.0), r3_visible(hf, bi, bj, bz, ai, aj, az, 0.0));
   }
 }

@@ -294,13 +294,55 @@ TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
     EXPECT_EQ(a.sequence, sequence);
     EXPECT_EQ(a.result, dds::AckResult::applied) << a.reason;
   }
+  dds::CommandAck extra{};
+  EXPECT_FALSE(acks_.try_pop(extra)) << "a command acknowledged twice: " << extra.sequence;
   EXPECT_FALSE(e->counters().running);
-  // ten small commands: eight in a tick, the other two in the next
-  for (std::uint64_t k = 0; k < 10; ++k) ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::start, 10 + k)));
+  // two partial sets within one full set's items go in one tick
+  dds::Command part_a = command(dds::CommandKind::set_constraints, 6), part_b = command(dds::CommandKind::set_constraints, 7);
+  while (part_a.constraints.count < 200) add(part_a, dds::ConstraintKind::clearance, Vec3::Zero(), 33);
+  while (part_b.constraints.count < 300) add(part_b, dds::ConstraintKind::clearance, Vec3::Zero(), 35);
+  ASSERT_TRUE(commands_.try_push(part_a) && commands_.try_push(part_b));
   run(*e, 1);
-  EXPECT_EQ(e->counters().commands_applied, 5u + kMaxCommandsPerTick);
+  EXPECT_EQ(e->counters().commands_applied, 7u);
+  EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 35.0);
+  // eight small commands fill a tick: a full set behind them waits
+  for (std::uint64_t k = 0; k < 8; ++k) ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::stop, 20 + k)));
+  ASSERT_TRUE(commands_.try_push(full_set(28, 50)));
   run(*e, 1);
   EXPECT_EQ(e->counters().commands_applied, 15u);
+  EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 35.0);
+  run(*e, 1);
+  EXPECT_EQ(e->counters().commands_applied, 16u);
+  EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 50.0);
+  while (acks_.try_pop(extra)) {
+  }
+  // ten small commands: eight in a tick, the other two in the next
+  for (std::uint64_t k = 0; k < 10; ++k) ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::start, 30 + k)));
+  run(*e, 1);
+  EXPECT_EQ(e->counters().commands_applied, 16u + kMaxCommandsPerTick);
+  run(*e, 1);
+  EXPECT_EQ(e->counters().commands_applied, 26u);
+}
+
+// Laying the rope again costs its vertices: with 480 segments, a burst of
+// starts and segment counts goes one a tick.
+TEST_F(ExecutiveTest, RopeRebuildsOfALongRopeAreSpreadOverTicks) {
+  config_.segments = 480;
+  config_.max_segments = 512;
+  auto e = make();
+  ASSERT_TRUE(e);
+  dds::Command fewer = command(dds::CommandKind::set_segment_count, 3);
+  fewer.segment_count = 500;
+  for (const dds::Command& c : {command(dds::CommandKind::start, 1), command(dds::CommandKind::start, 2), fewer}) {
+    ASSERT_TRUE(commands_.try_push(c));
+  }
+  const std::uint64_t allocations = testing::thread_allocation_count();
+  for (std::uint64_t applied = 1; applied <= 3; ++applied) {
+    run(*e, 1);
+    EXPECT_EQ(e->counters().commands_applied, applied);
+  }
+  EXPECT_EQ(testing::thread_allocation_count(), allocations);
+  EXPECT_EQ(e->rope().segments(), 500);
 }
 
 // Red-team findings (issue 14): ends too close for the segments, or not

@@ -37,7 +37,8 @@ TEST(DurationHistogram, NeverUnderstatesAPercentile) {
   }
   std::sort(samples.begin(), samples.end());
   for (double p : {0.5, 0.9, 0.99, 0.999}) {
-    const double exact_us = samples[static_cast<std::size_t>(std::ceil(p * samples.size())) - 1] * 1e-3;
+    const double exact_us =
+        static_cast<double>(samples[static_cast<std::size_t>(std::ceil(p * static_cast<double>(samples.size()))) - 1]) * 1e-3;
     const double got = h.percentile_us(p);
     EXPECT_GE(got, exact_us) << p;
     // within one bin: 1 us below 1 ms, 10 us below 10 ms, 100 us below 100 ms

@@ -7,7 +7,8 @@
 //    on the finest level of at most `max_search_voxels` (its optimum is the
 //    bar the answer must clear).
 // 2. A rope laid on the start settles in the field, coarse level of detail
-//    first, then the finer ones, until it reaches equilibrium on the finest.
+//    first (from the level the global search's start was found on, else the
+//    coarsest), then the finer ones, until it reaches equilibrium on the finest.
 //    An inextensible (articulated) rope gets `slack` extra length, bent
 //    sideways (rt/rope/slack.hpp). Equilibrium: over the last half second the
 //    rope's RMS speed stays under a tenth of a post spacing per second and F_c
@@ -337,7 +338,11 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   const int steps_per_check = std::max(1, static_cast<int>(std::lround(0.02 / dt)));
   const int checks_per_candidate =
       std::max(1, static_cast<int>(std::lround(request.candidate_interval_s / (steps_per_check * dt))));
-  for (int level = static_cast<int>(levels.size()) - 1; level >= 0; --level) {
+  // Coarse to fine from the level the start was found on: a start found on a
+  // finer level is already that level's optimum, and a coarser field only
+  // drags it to a coarser one that the finer level must then undo.
+  const int first_level = result.has_global ? result.global_level : static_cast<int>(levels.size()) - 1;
+  for (int level = first_level; level >= 0; --level) {
     const FieldForces<Level>& env = *envs[static_cast<std::size_t>(level)];
     const double spacing = levels[static_cast<std::size_t>(level)]->geometry().spacing_m;
     EquilibriumCriteria criteria;

@@ -175,6 +175,22 @@ TEST_F(RealTerrain, GlobalStartIsRefinedNotLost) {
   // The rope smooths the voxel path's corners: it stays within 10% of it.
   EXPECT_LE(res->final_metrics.fc, res->global.fc * 1.10);
   EXPECT_GE(densest_clearance(res->final_path), r.envelope.clearance_m);
+  // Found on the finest lattice, the start is settled on the finest level
+  // alone: the coarse level would drag it off the optimum it already is.
+  ASSERT_EQ(res->global_level, 0);
+  EXPECT_TRUE(res->converged);
+  EXPECT_DOUBLE_EQ(res->simulated_s, res->equilibrium_s);
+}
+
+TEST_F(RealTerrain, AStartFromTheCoarsestLevelIsSettledCoarseToFine) {
+  PlanRequest r = hide_request(RopeModel::articulated);
+  r.init = InitialPath::global;
+  r.max_search_voxels = 1;  // only the coarsest level is searched
+  const Result<PlanResult> res = plan(pointers(*levels_), r);
+  ASSERT_TRUE(res.ok()) << res.status().message();
+  ASSERT_TRUE(res->has_global);
+  ASSERT_EQ(res->global_level, 1);
+  EXPECT_GT(res->simulated_s, res->equilibrium_s);  // time on the coarse level first
 }
 
 // The share of a path's length (sampled every metre) that an observer sees,

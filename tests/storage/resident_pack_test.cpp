@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -164,11 +165,16 @@ TEST_F(ResidentPackTest, MovingTheFocusEvictsAndStaysWithinTheBudget) {
 TEST_F(ResidentPackTest, ACorruptBrickStaysOutAndIsNamed) {
   const std::string bad = pack_path("resident_bad");
   {
-    std::ifstream in(*path_, std::ios::binary);
-    std::vector<char> bytes{std::istreambuf_iterator<char>(in), {}};
+    // a copy with one byte of a tile flipped (not read through a stream
+    // iterator: byte by byte, 27 MiB took 20 s under ThreadSanitizer)
+    std::filesystem::copy_file(*path_, bad, std::filesystem::copy_options::overwrite_existing);
     const TileEntry& t = (*pack_)->tile(0, Layer::visibility, 12, 12);
-    bytes[t.offset + 100] ^= 0x5a;
-    std::ofstream(bad, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::fstream f(bad, std::ios::binary | std::ios::in | std::ios::out);
+    const auto at = static_cast<std::streamoff>(t.offset + 100);
+    char byte = 0;
+    ASSERT_TRUE(f.seekg(at).get(byte));
+    byte = static_cast<char>(byte ^ 0x5a);
+    ASSERT_TRUE(f.seekp(at).put(byte).flush());
   }
   auto pack = Pack::open(bad);
   ASSERT_TRUE(pack.ok()) << pack.status().message();

@@ -82,7 +82,7 @@ tools/deps.sh hil fuzz >"$late_log" 2>&1 &
 late_install=$!
 stage "build: optimised" build_tree build -DVISVOL_HIL_QEMU=OFF
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
-stage "install: VM, fuzzer packages (beside)" wait_for_late_packages
+stage "install: VM + fuzz packages" wait_for_late_packages
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs" \

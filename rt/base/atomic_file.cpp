@@ -57,18 +57,35 @@ std::multiset<std::string> g_live;  // one entry per OutputFile, even of one nam
 
 // The same for the signal handler, which can neither lock nor allocate: fixed
 // slots of paths, each guarded by a sequence number (odd while it changes) so
-// the handler only acts on a path it read whole.
+// the handler only acts on a path it read whole. A seqlock: the paths are
+// atomics read and written relaxed (a plain char array would be a data race
+// when the signal lands on another thread than the writer's), and the
+// handler's fence keeps its reads of a path before its second read of the
+// sequence (an acquire load alone lets earlier reads move past it: harmless on
+// x86, not on weaker memory models).
 constexpr int kSlots = 16;
+using PathChars = std::atomic<char>[PATH_MAX];
+static_assert(std::atomic<char>::is_always_lock_free, "the signal handler reads paths without a lock");
 struct Slot {
   std::atomic<bool> claimed{false};
   std::atomic<unsigned> sequence{0};
-  char file[PATH_MAX];
-  char directory[PATH_MAX];  // empty unless create_for_library
+  PathChars file{};
+  PathChars directory{};  // empty unless create_for_library
 };
 Slot g_slots[kSlots];
 
-void copy_path(char* out, const std::string& in) {
-  std::memcpy(out, in.c_str(), in.size() + 1);
+// `in` fits: the caller checked its size against PATH_MAX.
+void store_path(PathChars& out, const std::string& in) {
+  for (std::size_t i = 0; i <= in.size(); ++i) out[i].store(in.c_str()[i], std::memory_order_relaxed);
+}
+
+// Async-signal-safe; the copy ends at the terminator (or PATH_MAX, terminated).
+void load_path(const PathChars& in, char* out) {
+  for (std::size_t i = 0; i < PATH_MAX; ++i) {
+    out[i] = in[i].load(std::memory_order_relaxed);
+    if (out[i] == '\0') return;
+  }
+  out[PATH_MAX - 1] = '\0';
 }
 
 int register_live(const std::string& temp, const std::string& file, bool is_directory) {
@@ -82,8 +99,9 @@ int register_live(const std::string& temp, const std::string& file, bool is_dire
     if (!g_slots[n].claimed.compare_exchange_strong(expected, true)) continue;
     Slot& s = g_slots[n];
     s.sequence.fetch_add(1);  // odd: changing
-    copy_path(s.file, file);
-    copy_path(s.directory, is_directory ? temp : std::string());
+    std::atomic_thread_fence(std::memory_order_release);  // a handler that reads what follows sees it odd
+    store_path(s.file, file);
+    store_path(s.directory, is_directory ? temp : std::string());
     s.sequence.fetch_add(1);  // even: whole
     return n;
   }
@@ -94,8 +112,9 @@ void unregister_live(const std::string& temp, int slot) {
   if (slot >= 0) {
     Slot& s = g_slots[slot];
     s.sequence.fetch_add(1);
-    s.file[0] = '\0';
-    s.directory[0] = '\0';
+    std::atomic_thread_fence(std::memory_order_release);
+    s.file[0].store('\0', std::memory_order_relaxed);
+    s.directory[0].store('\0', std::memory_order_relaxed);
     s.sequence.fetch_add(1);
     s.claimed.store(false);
   }
@@ -161,9 +180,10 @@ extern "C" void remove_temporaries_and_reraise(int sig) {
     if (before % 2 != 0) continue;
     char file[PATH_MAX];
     char directory[PATH_MAX];
-    std::memcpy(file, s.file, sizeof file);
-    std::memcpy(directory, s.directory, sizeof directory);
-    if (s.sequence.load() != before) continue;
+    load_path(s.file, file);
+    load_path(s.directory, directory);
+    std::atomic_thread_fence(std::memory_order_acquire);  // the reads above stay before the check
+    if (s.sequence.load(std::memory_order_relaxed) != before) continue;
     if (directory[0] != '\0') {
       remove_directory_in_handler(directory);  // the file is inside it
     } else if (file[0] != '\0') {

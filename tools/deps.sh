@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages a visvol command needs: only the missing ones,
 # quietly, and nothing at all when everything is present.
-#   tools/deps.sh SET...   with SET one of: build storage dds render hil fuzz rt all
+#   tools/deps.sh SET...   with SET one of: build storage dds render hil (= can vm) can vm fuzz rt all
 set -euo pipefail
 
 build_packages=(
@@ -19,7 +19,8 @@ build_packages=(
 storage_packages=(libisal-dev libssl-dev)           # CRC32C of pack tiles, SHA-256 of sources
 dds_packages=(cyclonedds-dev cyclonedds-tools)      # DDS participants, idlc
 render_packages=(libosmesa6-dev libpng-dev)         # offscreen GL, PNG thumbnails
-hil_packages=(qemu-system-x86 linux-image-amd64 busybox-static can-utils cpio)  # vcan in a VM
+can_packages=(can-utils)                            # candump (the vcan suite, native or in the VM)
+vm_packages=(qemu-system-x86 linux-image-amd64 busybox-static cpio)  # vcan in a VM
 fuzz_packages=(clang libclang-rt-14-dev)            # libFuzzer targets
 rt_packages=(rt-tests)                              # cyclictest, beside the executive benchmark
 
@@ -30,14 +31,16 @@ for set in "${@:-build}"; do
     storage) wanted+=("${storage_packages[@]}") ;;
     dds) wanted+=("${dds_packages[@]}") ;;
     render) wanted+=("${render_packages[@]}") ;;
-    hil) wanted+=("${hil_packages[@]}") ;;
+    hil) wanted+=("${can_packages[@]}" "${vm_packages[@]}") ;;
+    can) wanted+=("${can_packages[@]}") ;;
+    vm) wanted+=("${vm_packages[@]}") ;;
     fuzz) wanted+=("${fuzz_packages[@]}") ;;
     rt) wanted+=("${rt_packages[@]}") ;;
     all) wanted+=("${build_packages[@]}" "${storage_packages[@]}" "${dds_packages[@]}"
-                  "${render_packages[@]}" "${hil_packages[@]}" "${fuzz_packages[@]}"
+                  "${render_packages[@]}" "${can_packages[@]}" "${vm_packages[@]}" "${fuzz_packages[@]}"
                   "${rt_packages[@]}") ;;
     *) echo "tools/deps.sh: unknown package set '$set'" \
-            "(known: build storage dds render hil fuzz rt all)" >&2
+            "(known: build storage dds render hil can vm fuzz rt all)" >&2
        exit 2 ;;
   esac
 done

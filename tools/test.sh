@@ -14,8 +14,8 @@ stage_names=()
 stage_seconds=()
 started=$SECONDS
 
-report_times() {
-  local status=$?
+report_times_of() {
+  local status=$1
   echo "== stage times (2 cores: $(nproc))"
   local i
   for i in "${!stage_names[@]}"; do
@@ -24,7 +24,6 @@ report_times() {
   printf '   %-36s %4d s (%d min)\n' "total" $((SECONDS - started)) $(((SECONDS - started + 59) / 60))
   return $status
 }
-trap report_times EXIT
 
 # stage NAME COMMAND...: runs COMMAND and records how long it took.
 stage() {
@@ -64,25 +63,47 @@ build_tree() {  # build_tree BUILD_DIR [cmake options...] [-- targets...]
 
 # The packages only the VM test and the fuzzers need (qemu, a kernel, clang:
 # about half of what a fresh machine downloads) are installed beside the
-# optimised tree's build and tests, which need none of them (that tree runs
-# no VM: the ASan+UBSan tree runs the same suite in it).
+# optimised build, which needs none of them, and waited for before any test
+# runs (an install beside a test would load the machine under it). As root
+# only: a password prompt cannot be answered from the background.
+late_install=""
 late_log=$(mktemp)
 wait_for_late_packages() {
   local rc=0
-  wait "$late_install" || rc=$?
-  cat "$late_log"
-  rm -f "$late_log"
+  if [[ -n "$late_install" ]]; then
+    wait "$late_install" || rc=$?
+    late_install=""
+    cat "$late_log"
+  fi
   ((rc == 0)) || echo "== installing the VM and fuzzer packages failed (exit $rc)" >&2
   return $rc
 }
+# On the way out, even after a failure: an install is never left to run unseen
+# (nor stopped: dpkg must finish what it unpacks).
+finish() {
+  local status=$?
+  if [[ -n "$late_install" ]]; then
+    echo "== waiting for the package install beside the build"
+    wait_for_late_packages || true
+  fi
+  rm -f "$late_log"
+  report_times_of "$status"
+}
+trap finish EXIT
 
 export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-10}
-stage "install packages" tools/deps.sh build storage dds render
-tools/deps.sh hil fuzz >"$late_log" 2>&1 &
-late_install=$!
+if [[ $(id -u) -eq 0 ]]; then
+  stage "install packages" tools/deps.sh build storage dds render can
+  tools/deps.sh vm fuzz >"$late_log" 2>&1 &
+  late_install=$!
+else
+  stage "install packages" tools/deps.sh build storage dds render can vm fuzz
+fi
+# The VM runs in the ASan+UBSan tree only (the same suite, the socket code
+# under the sanitizers); natively, where the kernel has vcan, in both.
 stage "build: optimised" build_tree build -DVISVOL_HIL_QEMU=OFF
-stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "install: VM + fuzz packages" wait_for_late_packages
+stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs" \

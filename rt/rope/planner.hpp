@@ -14,7 +14,8 @@
 //    rope's RMS speed stays under a tenth of a post spacing per second and F_c
 //    changes by less than 0.2% of itself per second (plus 1e-6).
 // 3. Every path seen (the start, each search, the rope every
-//    `candidate_interval_s` on the finest level and at the end of every level)
+//    `candidate_interval_s` on the finest level and at the end of every level
+//    it settled on)
 //    is fitted into the flight envelope (rt/rope/envelope_fit.hpp) and judged
 //    by rt::PathChecker: exact sight lines and limits on the finest terrain.
 //    The answer is the best of them: every requirement met first, then the
@@ -109,6 +110,7 @@ struct PlanResult {
   PathCheck initial_check, final_check;        // exact, on the finest terrain
   bool has_global = false;
   int global_level = -1;       // the level the kept global search ran on
+  int first_level = -1;        // the level the rope settled on first (then every finer one)
   std::string chosen;          // which path is the answer: "start", "global search", "rope"
   int candidates = 0;          // paths judged
   double simulated_s = 0;      // all levels
@@ -341,8 +343,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   // Coarse to fine from the level the start was found on: a start found on a
   // finer level is already that level's optimum, and a coarser field only
   // drags it to a coarser one that the finer level must then undo.
-  const int first_level = result.has_global ? result.global_level : static_cast<int>(levels.size()) - 1;
-  for (int level = first_level; level >= 0; --level) {
+  result.first_level = result.has_global ? result.global_level : static_cast<int>(levels.size()) - 1;
+  for (int level = result.first_level; level >= 0; --level) {
     const FieldForces<Level>& env = *envs[static_cast<std::size_t>(level)];
     const double spacing = levels[static_cast<std::size_t>(level)]->geometry().spacing_m;
     EquilibriumCriteria criteria;

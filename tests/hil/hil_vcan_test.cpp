@@ -146,7 +146,7 @@ class Vcan : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!skip_reason()) skip_reason() = probe(true);
-    if (!skip_reason()->empty()) GTEST_SKIP() << *skip_reason() << "; the suite runs in a VM instead (hil_vcan_qemu)";
+    if (!skip_reason()->empty()) GTEST_SKIP() << *skip_reason() << "; hil_vcan_qemu runs the suite in a VM (where VISVOL_HIL_QEMU is on)";
   }
   static std::unique_ptr<can::SocketCanBus> open(std::vector<can::CanFilter> filters = {}, bool errors = true,
                                                  int rcvbuf = 0) {

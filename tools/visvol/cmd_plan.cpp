@@ -167,9 +167,10 @@ int run_plan(const PlanOptions& o) {
   }
 
   Progress progress("planning");
-  const double budget = o.max_seconds * static_cast<double>(levels.size());
+  int first_level = -1;  // the rope settles from this level to the finest
   Result<rt::PlanResult> res = rt::plan(pointers, r, [&](const rt::PlanProgress& p) {
-    progress.update(std::min(0.99, p.simulated_s / budget));
+    if (first_level < 0) first_level = p.level;
+    progress.update(std::min(0.99, p.simulated_s / (o.max_seconds * (first_level + 1))));
     if (publisher) publisher->progress(p.vertices, p.vertex_count, p.fc);
   });
   if (!res.ok()) return fail("plan", res.status());
@@ -238,10 +239,10 @@ int run_plan(const PlanOptions& o) {
     }
     std::printf("length     %.0f m, %zu waypoints, %.0f s at %.1f m/s\n", b.length_m, res->final_path.size(),
                 check.duration_s, r.envelope.speed_mps);
-    std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %zu levels), %.2f s wall\n",
+    std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %d levels), %.2f s wall\n",
                 res->diverged ? "NO (the rope diverged; the best path before stands)"
                 : res->converged ? "at equilibrium" : "NOT at equilibrium (time limit)",
-                res->equilibrium_s, res->simulated_s, levels.size(), res->wall_s);
+                res->equilibrium_s, res->simulated_s, res->first_level + 1, res->wall_s);
     print_check(check, r.envelope);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
     if (publisher) {

@@ -178,10 +178,13 @@ TEST_F(RealTerrain, GlobalStartIsRefinedNotLost) {
   // Found on the finest lattice, the start is settled on the finest level
   // alone: the coarse level would drag it off the optimum it already is.
   ASSERT_EQ(res->global_level, 0);
+  EXPECT_EQ(res->first_level, 0);
   EXPECT_TRUE(res->converged);
   EXPECT_DOUBLE_EQ(res->simulated_s, res->equilibrium_s);
 }
 
+// The other side: a start from the coarsest lattice still goes coarse to fine
+// (fails if every rope started on the finest level).
 TEST_F(RealTerrain, AStartFromTheCoarsestLevelIsSettledCoarseToFine) {
   PlanRequest r = hide_request(RopeModel::articulated);
   r.init = InitialPath::global;
@@ -192,6 +195,7 @@ TEST_F(RealTerrain, AStartFromTheCoarsestLevelIsSettledCoarseToFine) {
   ASSERT_TRUE(res.ok()) << res.status().message();
   ASSERT_TRUE(res->has_global);
   ASSERT_EQ(res->global_level, 1);
+  EXPECT_EQ(res->first_level, 1);
   EXPECT_GT(res->simulated_s, res->equilibrium_s);  // time on the coarse level first
 }
 

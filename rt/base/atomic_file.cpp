@@ -57,12 +57,13 @@ std::multiset<std::string> g_live;  // one entry per OutputFile, even of one nam
 
 // The same for the signal handler, which can neither lock nor allocate: fixed
 // slots of paths, each guarded by a sequence number (odd while it changes) so
-// the handler only acts on a path it read whole. A seqlock: the paths are
-// atomics read and written relaxed (a plain char array would be a data race
-// when the signal lands on another thread than the writer's), and the
-// handler's fence keeps its reads of a path before its second read of the
-// sequence (an acquire load alone lets earlier reads move past it: harmless on
-// x86, not on weaker memory models).
+// the handler only acts on a path it read whole. A seqlock whose paths are
+// atomics (a plain char array would be a data race when the signal lands on
+// another thread than the writer's), written with release and read with
+// acquire: a handler that reads a character written after the sequence went
+// odd then sees the sequence odd or moved on, and its second read of the
+// sequence cannot move before its reads of the path. No fences: GCC's
+// ThreadSanitizer refuses them (and on x86 these are plain moves).
 constexpr int kSlots = 16;
 using PathChars = std::atomic<char>[PATH_MAX];
 static_assert(std::atomic<char>::is_always_lock_free, "the signal handler reads paths without a lock");
@@ -76,13 +77,13 @@ Slot g_slots[kSlots];
 
 // `in` fits: the caller checked its size against PATH_MAX.
 void store_path(PathChars& out, const std::string& in) {
-  for (std::size_t i = 0; i <= in.size(); ++i) out[i].store(in.c_str()[i], std::memory_order_relaxed);
+  for (std::size_t i = 0; i <= in.size(); ++i) out[i].store(in.c_str()[i], std::memory_order_release);
 }
 
 // Async-signal-safe; the copy ends at the terminator (or PATH_MAX, terminated).
 void load_path(const PathChars& in, char* out) {
   for (std::size_t i = 0; i < PATH_MAX; ++i) {
-    out[i] = in[i].load(std::memory_order_relaxed);
+    out[i] = in[i].load(std::memory_order_acquire);
     if (out[i] == '\0') return;
   }
   out[PATH_MAX - 1] = '\0';
@@ -99,7 +100,6 @@ int register_live(const std::string& temp, const std::string& file, bool is_dire
     if (!g_slots[n].claimed.compare_exchange_strong(expected, true)) continue;
     Slot& s = g_slots[n];
     s.sequence.fetch_add(1);  // odd: changing
-    std::atomic_thread_fence(std::memory_order_release);  // a handler that reads what follows sees it odd
     store_path(s.file, file);
     store_path(s.directory, is_directory ? temp : std::string());
     s.sequence.fetch_add(1);  // even: whole
@@ -112,9 +112,8 @@ void unregister_live(const std::string& temp, int slot) {
   if (slot >= 0) {
     Slot& s = g_slots[slot];
     s.sequence.fetch_add(1);
-    std::atomic_thread_fence(std::memory_order_release);
-    s.file[0].store('\0', std::memory_order_relaxed);
-    s.directory[0].store('\0', std::memory_order_relaxed);
+    s.file[0].store('\0', std::memory_order_release);
+    s.directory[0].store('\0', std::memory_order_release);
     s.sequence.fetch_add(1);
     s.claimed.store(false);
   }
@@ -182,8 +181,7 @@ extern "C" void remove_temporaries_and_reraise(int sig) {
     char directory[PATH_MAX];
     load_path(s.file, file);
     load_path(s.directory, directory);
-    std::atomic_thread_fence(std::memory_order_acquire);  // the reads above stay before the check
-    if (s.sequence.load(std::memory_order_relaxed) != before) continue;
+    if (s.sequence.load(std::memory_order_relaxed) != before) continue;  // after the acquire reads above
     if (directory[0] != '\0') {
       remove_directory_in_handler(directory);  // the file is inside it
     } else if (file[0] != '\0') {

@@ -199,6 +199,42 @@ TEST_F(RealTerrain, AStartFromTheCoarsestLevelIsSettledCoarseToFine) {
   EXPECT_GT(res->simulated_s, res->equilibrium_s);  // time on the coarse level first
 }
 
+// Three levels, the finest too large to search: the start found on the middle
+// level is settled there, then on the finest, never on the coarsest (fails if
+// the rope started on the coarsest or skipped the middle level).
+TEST(PlannerLevels, AStartFromAMiddleLevelSettlesFromThereToTheFinest) {
+  const fields::Heightfield terrain = two_prisms(64, 10.0, 60.0f);
+  fields::FieldParams fp;
+  fp.nz = 48;
+  fp.ceiling_m = 150;
+  fp.range_shape = fields::RangeShape::cube;
+  fp.range_posts = 16;
+  fields::TffParams tp;
+  tp.band_offset_m = 30;
+  tp.band_levels = 12;
+  auto levels = fields::build_dense_levels(terrain, fp, 3, tp);
+  ASSERT_TRUE(levels.ok()) << levels.status().message();
+  ASSERT_EQ(levels->size(), 3u);
+  PlanRequest r;
+  r.from = {terrain.x_of(16), terrain.y_of(4), 100};
+  r.to = {terrain.x_of(16), terrain.y_of(59), 100};
+  r.objective = Objective::show;
+  r.envelope = paper_envelope();
+  r.init = InitialPath::global;
+  r.segments = 32;
+  r.max_seconds_per_level = 1.0;  // what is tested is the order of the levels, not where the rope ends
+  r.max_search_voxels = (*levels)[1].geometry().voxel_count();  // the middle level, not the finest
+  std::vector<int> order;  // the levels in the order the rope settled on them
+  const Result<PlanResult> res = plan(pointers(*levels), r, [&](const PlanProgress& p) {
+    if (order.empty() || order.back() != p.level) order.push_back(p.level);
+  });
+  ASSERT_TRUE(res.ok()) << res.status().message();
+  ASSERT_TRUE(res->has_global);
+  ASSERT_EQ(res->global_level, 1) << "the middle lattice's path is expected to beat the coarsest one's";
+  EXPECT_EQ(res->first_level, 1);
+  EXPECT_EQ(order, (std::vector<int>{1, 0}));
+}
+
 // The share of a path's length (sampled every metre) that an observer sees,
 // by Franklin & Ray's R3 on the terrain itself: the independent check.
 double seen_share_r3(const fields::Heightfield& t, const Vec3& eye, const std::vector<Vec3>& path) {

@@ -12,6 +12,8 @@
 #include "app/flyable_path.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
+#include "drivers/haptic/can_device.hpp"
+#include "drivers/hapticsim/simulated_device.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/message_codec.hpp"
@@ -21,7 +23,6 @@
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
-#include "rt/exec/simulated_device.hpp"
 #include "rt/rope/check_json.hpp"
 #include "rt/rope/path_check.hpp"
 #include "storage/pack_identity.hpp"
@@ -120,7 +121,7 @@ nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
 }
 
 // The flyable path's figures, and how many paths were sent.
-nlohmann::json flyable_json(const dds::PathSample& p, bool inside_envelope, const FlyableStats& sent) {
+nlohmann::json flyable_json(const msg::PathSample& p, bool inside_envelope, const FlyableStats& sent) {
   return {{"vertices", p.vertex_count},
           {"fc", p.f_c},
           {"length_m", p.length_m},
@@ -132,13 +133,13 @@ nlohmann::json flyable_json(const dds::PathSample& p, bool inside_envelope, cons
           {"observers_left_out", sent.hull_failures}};
 }
 
-dds::TimingSummary summary_of(const rt::DurationHistogram& h) {
+msg::TimingSummary summary_of(const rt::DurationHistogram& h) {
   return {h.min_us(), h.mean_us(), h.percentile_us(0.99), h.max_us(), static_cast<std::uint32_t>(h.count())};
 }
 
 const char* device_text(const rt::ExecutiveCounters& c) {
   if (!c.haptics) return "none";
-  return haptic::state_name(c.device_state);
+  return rt::to_string(c.device_state);
 }
 
 }  // namespace
@@ -157,12 +158,13 @@ struct Console::Impl {
   std::unique_ptr<dds::Participant> participant;
   // Destroyed in reverse: the publisher before the intake it reads counters
   // from, the intake before the queues it fills (their documented lifetimes).
-  dds::CommandQueue commands;
-  dds::AckQueue acks;
+  msg::CommandQueue commands;
+  msg::AckQueue acks;
   std::unique_ptr<dds::CommandIntake> intake;
   std::unique_ptr<dds::LivePublisher> publisher;
-  std::unique_ptr<rt::SimulatedDevice> sim;
+  std::unique_ptr<hapticsim::SimulatedDevice> sim;
   std::unique_ptr<can::SocketCanBus> socket_bus;
+  std::optional<haptic::CanDevice> device;      // on sim's or socket_bus's bus (after them: destroyed first)
   std::unique_ptr<ThumbnailThread> thumbs;
   std::unique_ptr<rt::ConstraintHulls> hulls;  // with DDS or observers given: hidden-from / visible-to
   int observers = 0;                           // hulls reserved for (observers_reserved())
@@ -195,7 +197,7 @@ struct Console::Impl {
   nlohmann::json check_path(std::string& line) const;
   void release_pack_pages();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
-  dds::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
+  msg::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
 };
 
 Console::Console(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -283,12 +285,12 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   auto pub = dds::LivePublisher::start(*participant, dds::PublisherConfig(), intake.get());
   if (!pub.ok()) return pub.status();
   publisher = std::move(*pub);
-  dds::TerrainInfo& t = publisher->terrain().back();
-  t = dds::TerrainInfo{};
-  t.stamp_ns = dds::now_stamp_ns();
-  dds::copy_text(t.pack_id, pack_id);
-  dds::copy_text(t.crs, storage::epsg_from_wkt(pack->metadata().crs_wkt));
-  if (!dds::copy_text(t.crs_wkt, pack->metadata().crs_wkt)) t.crs_wkt[0] = '\0';
+  msg::TerrainInfo& t = publisher->terrain().back();
+  t = msg::TerrainInfo{};
+  t.stamp_ns = msg::now_stamp_ns();
+  msg::copy_text(t.pack_id, pack_id);
+  msg::copy_text(t.crs, storage::epsg_from_wkt(pack->metadata().crs_wkt));
+  if (!msg::copy_text(t.crs_wkt, pack->metadata().crs_wkt)) t.crs_wkt[0] = '\0';
   t.min = ic.limits.min;
   t.max = {ic.limits.max.x_m, ic.limits.max.y_m, g.top_m()};
   t.post_spacing_m = g.spacing_m;
@@ -389,11 +391,11 @@ Status Console::Impl::start() {
   VISVOL_RETURN_IF_ERROR(start_fitter());
   release_pack_pages();  // the fitter read the finest terrain once
   budget.reserve("flyable path (finest terrain, two folded hulls of it, fit)",
-                 PathFitter::bytes(pack->geometry(0), observers) + 8 * sizeof(dds::PathSample) + 1024 * 1024 +
+                 PathFitter::bytes(pack->geometry(0), observers) + 8 * sizeof(msg::PathSample) + 1024 * 1024 +
                      (observers > 0 ? rt::ConstraintHulls::build_bytes(pack->geometry(0)) : 0));
   const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
   budget.reserve("ropes (both models, max segments)", 2 * segments * 1024);
-  budget.reserve("executive (samples, scratch)", sizeof(dds::PathSample) * 2 + segments * 64 + 64 * 1024);
+  budget.reserve("executive (samples, scratch)", sizeof(msg::PathSample) * 2 + segments * 64 + 64 * 1024);
   budget.reserve("loop (histograms, reports)", sizeof(rt::LoopReport) * 3 + sizeof(rt::LoopRun) * 2);
   budget.reserve("loop stack (prefaulted)", rtc.stack_prefault_bytes);
   if (o.device == "sim") budget.reserve("simulated device and bus", 2 * 4096 * sizeof(can::CanFrame) + 64 * 1024);
@@ -425,7 +427,7 @@ Status Console::Impl::start() {
       if (!s.ok()) return s.status();
       script = std::move(*s);
     }
-    auto s = rt::SimulatedDevice::create(sc, std::move(script), rt::monotonic_ns());
+    auto s = hapticsim::SimulatedDevice::create(sc, std::move(script), rt::monotonic_ns());
     if (!s.ok()) return s.status();
     sim = std::move(*s);
     bus = &sim->console_bus();
@@ -438,6 +440,13 @@ Status Console::Impl::start() {
     socket_bus = std::move(*b);
     bus = socket_bus.get();
   }
+  if (bus != nullptr) {
+    haptic::DriverConfig dc;
+    dc.node_id = static_cast<std::uint8_t>(o.node);
+    auto d = haptic::CanDevice::create(dc, *bus);
+    if (!d.ok()) return d.status().with_context("haptic driver");
+    device.emplace(std::move(*d));
+  }
 
   // the executive
   const rt::ExecutiveConfig ec = executive_config();
@@ -449,7 +458,7 @@ Status Console::Impl::start() {
   if (flyable) {
     out.limited_path = &flyable->rope_paths();
   }
-  auto e = rt::Executive::create(ec, *field, bus, sim.get(), &commands, out);
+  auto e = rt::Executive::create(ec, *field, device ? &*device : nullptr, sim.get(), &commands, out);
   if (!e.ok()) return e.status();
   exec = std::move(*e);
   fc_start = exec->counters().fc;
@@ -519,12 +528,11 @@ rt::ExecutiveConfig Console::Impl::executive_config() const {
   ec.k3_user = o.k3;
   ec.level = o.level;
   ec.period_s = o.period_us * 1e-6;
-  ec.driver.node_id = static_cast<std::uint8_t>(o.node);
   ec.eye_height_m = o.eye_height_m;
   ec.planning_bounds = bounds;
   for (const std::vector<double>& p : o.hidden_from) ec.observers.add_hidden_from(rt::Vec3(p[0], p[1], p[2]));
   for (const std::vector<double>& p : o.visible_to) ec.observers.add_visible_to(rt::Vec3(p[0], p[1], p[2]));
-  dds::copy_text(ec.pack_id, pack_id);
+  msg::copy_text(ec.pack_id, pack_id);
   return ec;
 }
 
@@ -608,18 +616,18 @@ Status Console::Impl::start_thumbnails() {
   return {};
 }
 
-dds::HealthSample Console::Impl::health(const rt::LoopReport& r, const rt::ExecutiveCounters& c,
+msg::HealthSample Console::Impl::health(const rt::LoopReport& r, const rt::ExecutiveCounters& c,
                                         std::uint64_t seq) const {
-  dds::HealthSample h{};
+  msg::HealthSample h{};
   h.sequence = seq;
-  h.stamp_ns = dds::now_stamp_ns();
+  h.stamp_ns = msg::now_stamp_ns();
   h.period_us = o.period_us;
   h.wakeup_latency = summary_of(r.wake_latency);
   h.compute_time = summary_of(r.compute);
   h.overruns = r.totals.overruns;
   h.misses = r.totals.misses;
   h.safe_state = c.servo_reason != servo::SafeReason::none;
-  dds::copy_text(h.safe_state_reason, h.safe_state ? servo::safe_reason_name(c.servo_reason) : "");
+  msg::copy_text(h.safe_state_reason, h.safe_state ? servo::safe_reason_name(c.servo_reason) : "");
   return h;
 }
 
@@ -641,7 +649,7 @@ Status Console::run(const std::atomic<bool>& stop) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     if (const rt::LoopReport* r = m.loop->reports().take()) last = *r;
     if (const rt::ExecutiveCounters* c = m.exec->snapshot().take()) counters = *c;
-    char next[dds::kPackIdCapacity];
+    char next[msg::kPackIdCapacity];
     if (m.exec->terrain_switch(next)) {
       m.switch_to = next;
       std::fprintf(stderr, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
@@ -704,13 +712,13 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   const rt::Rope& rope = exec->rope();
   fit_final_path();
-  auto flyable_sample = std::make_unique<dds::PathSample>();
+  auto flyable_sample = std::make_unique<msg::PathSample>();
   path_fitter().describe(final_path, *flyable_sample);
-  const dds::PathSample& fp = *flyable_sample;
+  const msg::PathSample& fp = *flyable_sample;
   std::string csv = "x_m,y_m,z_m,fp,clearance_m\n";
   char line[192];
   for (std::uint32_t i = 0; i < fp.vertex_count; ++i) {
-    const dds::PathVertex& v = fp.vertices[i];
+    const msg::PathVertex& v = fp.vertices[i];
     std::snprintf(line, sizeof line, "%.3f,%.3f,%.3f,%.6f,%.2f\n", v.position.x_m, v.position.y_m, v.position.z_m,
                   v.visibility, v.clearance_m);
     csv += line;

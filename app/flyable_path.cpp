@@ -80,7 +80,7 @@ rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::F
     if (!vertices[i].allFinite()) return {};
   }
   std::vector<rt::Vec3> path;
-  const int keep = std::min(count, static_cast<int>(dds::kMaxPathVertices));
+  const int keep = std::min(count, static_cast<int>(msg::kMaxPathVertices));
   for (int k = 0; k < keep; ++k) {
     // evenly spaced, both ends kept (as the executive thins what it sends)
     const int i = keep == count ? k : static_cast<int>(std::lround(static_cast<double>(k) * (count - 1) / (keep - 1)));
@@ -91,18 +91,18 @@ rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::F
   spec.envelope = envelope(gains);
   spec.top_m = top_m_;
   spec.planning_bounds = bounds_;
-  spec.max_points = dds::kMaxPathVertices;
+  spec.max_points = msg::kMaxPathVertices;
   spec.below = below_;
   spec.above = above_;
   return rt::fit_to_envelope(path, spec, terrain_);
 }
 
-void PathFitter::describe(const std::vector<rt::Vec3>& path, dds::PathSample& out) const {
-  const int n = static_cast<int>(std::min(path.size(), dds::kMaxPathVertices));
+void PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const {
+  const int n = static_cast<int>(std::min(path.size(), msg::kMaxPathVertices));
   double lowest = INFINITY;
   for (int k = 0; k < n; ++k) {
     const rt::Vec3& x = path[static_cast<std::size_t>(k)];
-    dds::PathVertex& v = out.vertices[k];
+    msg::PathVertex& v = out.vertices[k];
     v.position = {x.x(), x.y(), x.z()};
     v.visibility = field_->visibility(x);
     v.clearance_m = x.z() - field_->terrain_height_m(x.x(), x.y());
@@ -118,19 +118,19 @@ void PathFitter::describe(const std::vector<rt::Vec3>& path, dds::PathSample& ou
 
 // ---- the thread -------------------------------------------------------------
 
-FlyablePath::FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<dds::PathSample>* to_publisher,
-                         LatestValue<dds::PathSample>* to_renderer, double poll_s)
+FlyablePath::FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<msg::PathSample>* to_publisher,
+                         LatestValue<msg::PathSample>* to_renderer, double poll_s)
     : fitter_(std::move(fitter)),
       to_publisher_(to_publisher),
       to_renderer_(to_renderer),
       poll_s_(poll_s),
-      out_(std::make_unique<dds::PathSample>()) {
-  rope_.reserve(dds::kMaxPathVertices);
+      out_(std::make_unique<msg::PathSample>()) {
+  rope_.reserve(msg::kMaxPathVertices);
 }
 
 Result<std::unique_ptr<FlyablePath>> FlyablePath::start(std::unique_ptr<PathFitter> fitter,
-                                                        LatestValue<dds::PathSample>* to_publisher,
-                                                        LatestValue<dds::PathSample>* to_renderer, double poll_s) {
+                                                        LatestValue<msg::PathSample>* to_publisher,
+                                                        LatestValue<msg::PathSample>* to_renderer, double poll_s) {
   if (!fitter) return invalid_argument("flyable path: no fitter");
   if (!(poll_s > 0 && poll_s <= 1)) return invalid_argument("flyable path: poll interval outside (0, 1] s");
   std::unique_ptr<FlyablePath> f(new FlyablePath(std::move(fitter), to_publisher, to_renderer, poll_s));
@@ -169,11 +169,11 @@ void FlyablePath::run() {
 }
 
 void FlyablePath::send(const rt::LimitedPath& limited) {
-  const dds::PathSample& rope = limited.path;
+  const msg::PathSample& rope = limited.path;
   const rt::PathLimits& limits = limited.limits;
   rope_.clear();
-  for (std::uint32_t k = 0; k < rope.vertex_count && k < dds::kMaxPathVertices; ++k) {
-    const dds::WorldPoint& w = rope.vertices[k].position;
+  for (std::uint32_t k = 0; k < rope.vertex_count && k < msg::kMaxPathVertices; ++k) {
+    const msg::WorldPoint& w = rope.vertices[k].position;
     rope_.emplace_back(w.x_m, w.y_m, w.z_m);
   }
   if (rope_.size() < 2) return;
@@ -181,7 +181,7 @@ void FlyablePath::send(const rt::LimitedPath& limited) {
   hull_failures_.store(fitter_->hull_failures(), std::memory_order_relaxed);
   const rt::EnvelopeFit fit = fitter_->fit(rope_.data(), static_cast<int>(rope_.size()), limits.gains);
   if (fit.path.size() < 2) return;
-  dds::PathSample& out = *out_;
+  msg::PathSample& out = *out_;
   // the header as the rope's: its run, its time, its state of rest
   out.sequence = rope.sequence;
   out.stamp_ns = rope.stamp_ns;
@@ -190,7 +190,7 @@ void FlyablePath::send(const rt::LimitedPath& limited) {
   out.converged = rope.converged;
   out.inside_envelope = fit.feasible;
   fitter_->describe(fit.path, out);
-  for (LatestValue<dds::PathSample>* sink : {to_publisher_, to_renderer_}) {
+  for (LatestValue<msg::PathSample>* sink : {to_publisher_, to_renderer_}) {
     if (sink != nullptr) sink->write(out);
   }
   fitted_.fetch_add(1, std::memory_order_relaxed);

@@ -31,8 +31,8 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/dds/samples.hpp"
 #include "fields/heightfield.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/handoff.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/rope/envelope_fit.hpp"
@@ -57,13 +57,13 @@ class PathFitter {
   // hull cannot be built (outside the pack: the executive refused it
   // already) is left out and counted in hull_failures().
   void set_observers(const rt::HullRequest& observers);
-  // The path (at most dds::kMaxPathVertices vertices: more are thinned
+  // The path (at most msg::kMaxPathVertices vertices: more are thinned
   // evenly, ends kept) fitted into the envelope; the fit has at most that
   // many vertices too. A path that is not finite gives an empty fit.
   rt::EnvelopeFit fit(const rt::Vec3* vertices, int count, const rt::ForceGains& gains) const;
   // `path` into `out`'s vertices and figures (F_c, length, lowest clearance
   // on the finest level); the header fields are left as they are.
-  void describe(const std::vector<rt::Vec3>& path, dds::PathSample& out) const;
+  void describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const;
 
   const fields::Heightfield& terrain() const { return terrain_; }
   // Bytes held: the finest terrain, and two folded hulls of it with observers.
@@ -97,8 +97,8 @@ class FlyablePath {
  public:
   // Starts the thread; `to_publisher` and `to_renderer` may be null.
   static Result<std::unique_ptr<FlyablePath>> start(std::unique_ptr<PathFitter> fitter,
-                                                    LatestValue<dds::PathSample>* to_publisher,
-                                                    LatestValue<dds::PathSample>* to_renderer,
+                                                    LatestValue<msg::PathSample>* to_publisher,
+                                                    LatestValue<msg::PathSample>* to_renderer,
                                                     double poll_s = 0.02);
   ~FlyablePath();
   FlyablePath(const FlyablePath&) = delete;
@@ -113,17 +113,17 @@ class FlyablePath {
   PathFitter& fitter() { return *fitter_; }  // after stop()
 
  private:
-  FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<dds::PathSample>* to_publisher,
-              LatestValue<dds::PathSample>* to_renderer, double poll_s);
+  FlyablePath(std::unique_ptr<PathFitter> fitter, LatestValue<msg::PathSample>* to_publisher,
+              LatestValue<msg::PathSample>* to_renderer, double poll_s);
   void run();
   void send(const rt::LimitedPath& rope);
 
   std::unique_ptr<PathFitter> fitter_;
-  LatestValue<dds::PathSample>* to_publisher_;
-  LatestValue<dds::PathSample>* to_renderer_;
+  LatestValue<msg::PathSample>* to_publisher_;
+  LatestValue<msg::PathSample>* to_renderer_;
   double poll_s_;
   LatestValue<rt::LimitedPath> rope_paths_;
-  std::unique_ptr<dds::PathSample> out_;  // large: filled here, copied into the sinks
+  std::unique_ptr<msg::PathSample> out_;  // large: filled here, copied into the sinks
   std::vector<rt::Vec3> rope_;
   std::atomic<std::uint64_t> fitted_{0}, unflyable_{0}, failed_{0};
   std::atomic<int> hull_failures_{0};

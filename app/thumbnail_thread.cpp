@@ -21,16 +21,16 @@ constexpr auto kPoll = std::chrono::milliseconds(20);
 
 Result<std::unique_ptr<ThumbnailThread>> ThumbnailThread::start(std::shared_ptr<const storage::Pack> pack,
                                                                 const ThumbnailConfig& config,
-                                                                LatestValue<dds::ThumbnailSample>* sink) {
+                                                                LatestValue<msg::ThumbnailSample>* sink) {
   if (!(config.max_hz > 0 && config.max_hz <= 50)) {
     return invalid_argument("thumbnail rate: " + std::to_string(config.max_hz) + " Hz is not in (0, 50]");
   }
   std::unique_ptr<ThumbnailThread> t(new ThumbnailThread());
   t->config_ = config;
   t->sink_ = sink;
-  t->scratch_ = std::make_unique<render::PathPoint[]>(dds::kMaxPathVertices);
-  t->last_ = std::make_unique<dds::ThumbnailSample>();
-  t->newest_ = std::make_unique<dds::PathSample>();
+  t->scratch_ = std::make_unique<render::PathPoint[]>(msg::kMaxPathVertices);
+  t->last_ = std::make_unique<msg::ThumbnailSample>();
+  t->newest_ = std::make_unique<msg::PathSample>();
   // The renderer is made on its own thread: its GL context stays bound there.
   Status created;
   std::atomic<bool> ready{false};
@@ -67,7 +67,7 @@ void ThumbnailThread::run(std::shared_ptr<const storage::Pack> pack, Status* cre
   if (!ok) return;
   bool drawn_since_rest = false;
   while (!stop_.load(std::memory_order_acquire)) {
-    if (const dds::PathSample* p = paths_.take()) {
+    if (const msg::PathSample* p = paths_.take()) {
       *newest_ = *p;
       have_newest_ = true;
       newest_drawn_ = false;
@@ -81,7 +81,7 @@ void ThumbnailThread::run(std::shared_ptr<const storage::Pack> pack, Status* cre
     std::this_thread::sleep_for(kPoll);
   }
   // the last picture shows where the rope ended
-  if (const dds::PathSample* p = paths_.take()) {
+  if (const msg::PathSample* p = paths_.take()) {
     *newest_ = *p;
     have_newest_ = true;
     newest_drawn_ = false;
@@ -89,11 +89,11 @@ void ThumbnailThread::run(std::shared_ptr<const storage::Pack> pack, Status* cre
   if (have_newest_ && !newest_drawn_) draw(*newest_, steady_ns());
 }
 
-bool ThumbnailThread::due(const dds::PathSample&, std::int64_t now_ns) const {
+bool ThumbnailThread::due(const msg::PathSample&, std::int64_t now_ns) const {
   return rendered_.load() == 0 || static_cast<double>(now_ns - last_draw_ns_) >= 1e9 / config_.max_hz;
 }
 
-void ThumbnailThread::draw(const dds::PathSample& path, std::int64_t now_ns) {
+void ThumbnailThread::draw(const msg::PathSample& path, std::int64_t now_ns) {
   if (path.vertex_count < 2) return;
   render::Frame frame;
   frame.view = config_.view;

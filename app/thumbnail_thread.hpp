@@ -14,8 +14,8 @@
 #include <string>
 #include <thread>
 
-#include "drivers/dds/samples.hpp"
 #include "drivers/render/renderer.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/handoff.hpp"
 #include "rt/base/status.hpp"
 #include "storage/pack_reader.hpp"
@@ -41,13 +41,13 @@ class ThumbnailThread {
   // null) receives every thumbnail (the DDS publisher's slot).
   static Result<std::unique_ptr<ThumbnailThread>> start(std::shared_ptr<const storage::Pack> pack,
                                                         const ThumbnailConfig& config,
-                                                        LatestValue<dds::ThumbnailSample>* sink);
+                                                        LatestValue<msg::ThumbnailSample>* sink);
   ~ThumbnailThread();
   ThumbnailThread(const ThumbnailThread&) = delete;
   ThumbnailThread& operator=(const ThumbnailThread&) = delete;
 
   // The executive's path hand-off to this thread (ExecutiveOutputs::path_render).
-  LatestValue<dds::PathSample>& paths() { return paths_; }
+  LatestValue<msg::PathSample>& paths() { return paths_; }
 
   // Stops the thread after one last thumbnail of the newest path (converged
   // or not), so the outputs show where the rope ended. Idempotent.
@@ -61,16 +61,16 @@ class ThumbnailThread {
  private:
   ThumbnailThread() = default;
   void run(std::shared_ptr<const storage::Pack> pack, Status* created, std::atomic<bool>* ready);
-  bool due(const dds::PathSample& path, std::int64_t now_ns) const;
-  void draw(const dds::PathSample& path, std::int64_t now_ns);
+  bool due(const msg::PathSample& path, std::int64_t now_ns) const;
+  void draw(const msg::PathSample& path, std::int64_t now_ns);
 
   ThumbnailConfig config_;
-  LatestValue<dds::ThumbnailSample>* sink_ = nullptr;
-  LatestValue<dds::PathSample> paths_;
+  LatestValue<msg::ThumbnailSample>* sink_ = nullptr;
+  LatestValue<msg::PathSample> paths_;
   std::unique_ptr<render::Renderer> renderer_;
   std::unique_ptr<render::PathPoint[]> scratch_;
-  std::unique_ptr<dds::ThumbnailSample> last_;  // owned by the thread until it stops
-  std::unique_ptr<dds::PathSample> newest_;     // newest path seen
+  std::unique_ptr<msg::ThumbnailSample> last_;  // owned by the thread until it stops
+  std::unique_ptr<msg::PathSample> newest_;     // newest path seen
   bool have_newest_ = false, newest_drawn_ = false, have_last_ = false;
   std::int64_t last_draw_ns_ = 0;
   std::atomic<std::uint64_t> rendered_{0}, failed_{0};

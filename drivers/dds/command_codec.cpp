@@ -11,40 +11,40 @@
 namespace visvol::dds {
 namespace {
 
-static_assert(static_cast<int>(CommandKind::set_endpoints) ==
+static_assert(static_cast<int>(msg::CommandKind::set_endpoints) ==
               visvol_msgs_msg_dds__COMMAND_SET_ENDPOINTS);
-static_assert(static_cast<int>(CommandKind::set_objective) ==
+static_assert(static_cast<int>(msg::CommandKind::set_objective) ==
               visvol_msgs_msg_dds__COMMAND_SET_OBJECTIVE);
-static_assert(static_cast<int>(CommandKind::set_weights) ==
+static_assert(static_cast<int>(msg::CommandKind::set_weights) ==
               visvol_msgs_msg_dds__COMMAND_SET_WEIGHTS);
-static_assert(static_cast<int>(CommandKind::set_stiffness) ==
+static_assert(static_cast<int>(msg::CommandKind::set_stiffness) ==
               visvol_msgs_msg_dds__COMMAND_SET_STIFFNESS);
-static_assert(static_cast<int>(CommandKind::set_model) == visvol_msgs_msg_dds__COMMAND_SET_MODEL);
-static_assert(static_cast<int>(CommandKind::set_segment_count) ==
+static_assert(static_cast<int>(msg::CommandKind::set_model) == visvol_msgs_msg_dds__COMMAND_SET_MODEL);
+static_assert(static_cast<int>(msg::CommandKind::set_segment_count) ==
               visvol_msgs_msg_dds__COMMAND_SET_SEGMENT_COUNT);
-static_assert(static_cast<int>(CommandKind::set_constraints) ==
+static_assert(static_cast<int>(msg::CommandKind::set_constraints) ==
               visvol_msgs_msg_dds__COMMAND_SET_CONSTRAINTS);
-static_assert(static_cast<int>(CommandKind::start) == visvol_msgs_msg_dds__COMMAND_START);
-static_assert(static_cast<int>(CommandKind::stop) == visvol_msgs_msg_dds__COMMAND_STOP);
-static_assert(static_cast<int>(CommandKind::switch_terrain) ==
+static_assert(static_cast<int>(msg::CommandKind::start) == visvol_msgs_msg_dds__COMMAND_START);
+static_assert(static_cast<int>(msg::CommandKind::stop) == visvol_msgs_msg_dds__COMMAND_STOP);
+static_assert(static_cast<int>(msg::CommandKind::switch_terrain) ==
               visvol_msgs_msg_dds__COMMAND_SWITCH_TERRAIN);
-static_assert(static_cast<int>(RopeModel::spring_mass) == visvol_msgs_msg_dds__MODEL_SPRING_MASS);
-static_assert(static_cast<int>(RopeModel::articulated) == visvol_msgs_msg_dds__MODEL_ARTICULATED);
-static_assert(static_cast<int>(ConstraintKind::hidden_from) ==
+static_assert(static_cast<int>(msg::RopeModel::spring_mass) == visvol_msgs_msg_dds__MODEL_SPRING_MASS);
+static_assert(static_cast<int>(msg::RopeModel::articulated) == visvol_msgs_msg_dds__MODEL_ARTICULATED);
+static_assert(static_cast<int>(msg::ConstraintKind::hidden_from) ==
               visvol_msgs_msg_dds__CONSTRAINT_HIDDEN_FROM);
-static_assert(static_cast<int>(ConstraintKind::visible_to) ==
+static_assert(static_cast<int>(msg::ConstraintKind::visible_to) ==
               visvol_msgs_msg_dds__CONSTRAINT_VISIBLE_TO);
-static_assert(static_cast<int>(ConstraintKind::clearance) ==
+static_assert(static_cast<int>(msg::ConstraintKind::clearance) ==
               visvol_msgs_msg_dds__CONSTRAINT_CLEARANCE);
-static_assert(static_cast<int>(ConstraintKind::max_agl) == visvol_msgs_msg_dds__CONSTRAINT_MAX_AGL);
-static_assert(static_cast<int>(ConstraintKind::max_altitude) ==
+static_assert(static_cast<int>(msg::ConstraintKind::max_agl) == visvol_msgs_msg_dds__CONSTRAINT_MAX_AGL);
+static_assert(static_cast<int>(msg::ConstraintKind::max_altitude) ==
               visvol_msgs_msg_dds__CONSTRAINT_MAX_ALTITUDE);
-static_assert(static_cast<int>(AckResult::accepted) == visvol_msgs_msg_dds__ACK_ACCEPTED);
-static_assert(static_cast<int>(AckResult::rejected) == visvol_msgs_msg_dds__ACK_REJECTED);
-static_assert(static_cast<int>(AckResult::applied) == visvol_msgs_msg_dds__ACK_APPLIED);
-static_assert(static_cast<int>(AckResult::failed) == visvol_msgs_msg_dds__ACK_FAILED);
+static_assert(static_cast<int>(msg::AckResult::accepted) == visvol_msgs_msg_dds__ACK_ACCEPTED);
+static_assert(static_cast<int>(msg::AckResult::rejected) == visvol_msgs_msg_dds__ACK_REJECTED);
+static_assert(static_cast<int>(msg::AckResult::applied) == visvol_msgs_msg_dds__ACK_APPLIED);
+static_assert(static_cast<int>(msg::AckResult::failed) == visvol_msgs_msg_dds__ACK_FAILED);
 
-constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(CommandKind::switch_terrain);
+constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(msg::CommandKind::switch_terrain);
 
 std::string number(double v) {
   char buf[32];
@@ -90,7 +90,7 @@ Status check_axis(const std::string& field, const char* axis, double v, double l
                                         number(hi) + "] m" + why);
 }
 
-Status check_inside(const std::string& field, const WorldPoint& p, const CommandLimits& limits) {
+Status check_inside(const std::string& field, const msg::WorldPoint& p, const CommandLimits& limits) {
   VISVOL_RETURN_IF_ERROR(check_finite(field + ".x", p.x_m));
   VISVOL_RETURN_IF_ERROR(check_finite(field + ".y", p.y_m));
   VISVOL_RETURN_IF_ERROR(check_finite(field + ".z", p.z_m));
@@ -104,7 +104,7 @@ bool has_planning_bounds(const CommandLimits& l) {
 }
 
 // An endpoint: inside the pack, and inside its planning bounds when set.
-Status check_endpoint(const std::string& field, const WorldPoint& p, const CommandLimits& limits) {
+Status check_endpoint(const std::string& field, const msg::WorldPoint& p, const CommandLimits& limits) {
   VISVOL_RETURN_IF_ERROR(check_inside(field, p, limits));
   if (!has_planning_bounds(limits)) return Status();
   const char* why = " (where F_p counts every observer)";
@@ -113,34 +113,34 @@ Status check_endpoint(const std::string& field, const WorldPoint& p, const Comma
   return check_axis(field, "y", p.y_m, limits.plan_min.y_m, limits.plan_max.y_m, "planning bounds, y", why);
 }
 
-WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return WorldPoint{p.x, p.y, p.z}; }
+msg::WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return msg::WorldPoint{p.x, p.y, p.z}; }
 
 bool is_pack_char(char c) {
   return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
          c == '.' || c == '_' || c == '-';
 }
 
-Status decode_constraints(const visvol_msgs_msg_dds__Command_& msg, Command& out) {
-  const std::uint32_t n = msg.constraints._length;
-  if (n > kMaxConstraints) {
+Status decode_constraints(const visvol_msgs_msg_dds__Command_& wire, msg::Command& out) {
+  const std::uint32_t n = wire.constraints._length;
+  if (n > msg::kMaxConstraints) {
     return reject("constraints", std::to_string(n) + " given, at most " +
-                                     std::to_string(kMaxConstraints) + " fit");
+                                     std::to_string(msg::kMaxConstraints) + " fit");
   }
-  if (n > 0 && msg.constraints._buffer == nullptr) {
+  if (n > 0 && wire.constraints._buffer == nullptr) {
     return reject("constraints", "malformed sequence (no elements)");
   }
   out.constraints.count = n;
   for (std::uint32_t i = 0; i < n; ++i) {
-    const visvol_msgs_msg_dds__Constraint_& c = msg.constraints._buffer[i];
+    const visvol_msgs_msg_dds__Constraint_& c = wire.constraints._buffer[i];
     const std::string field = "constraints[" + std::to_string(i) + "]";
-    if (c.kind < static_cast<std::uint8_t>(ConstraintKind::hidden_from) ||
-        c.kind > static_cast<std::uint8_t>(ConstraintKind::max_altitude)) {
+    if (c.kind < static_cast<std::uint8_t>(msg::ConstraintKind::hidden_from) ||
+        c.kind > static_cast<std::uint8_t>(msg::ConstraintKind::max_altitude)) {
       return reject(field + ".kind", std::to_string(c.kind) +
                                          " is not a known constraint (1 hidden-from, "
                                          "2 visible-to, 3 clearance, 4 max-agl, 5 max-altitude)");
     }
     out.constraints.items[i] =
-        Constraint{static_cast<ConstraintKind>(c.kind), to_world(c.position_m), c.height_m};
+        msg::Constraint{static_cast<msg::ConstraintKind>(c.kind), to_world(c.position_m), c.height_m};
   }
   return Status();
 }
@@ -153,19 +153,19 @@ struct EnvelopeItems {
 std::string item(std::uint32_t i) { return "constraints[" + std::to_string(i) + "]"; }
 
 // One item's own values.
-Status validate_item(const Constraint& k, std::uint32_t i, const CommandLimits& limits) {
+Status validate_item(const msg::Constraint& k, std::uint32_t i, const CommandLimits& limits) {
   const std::string height = item(i) + ".height_m";
   switch (k.kind) {
-    case ConstraintKind::hidden_from:
-    case ConstraintKind::visible_to:
+    case msg::ConstraintKind::hidden_from:
+    case msg::ConstraintKind::visible_to:
       return check_inside(item(i) + ".position_m", k.position, limits);
-    case ConstraintKind::clearance:
+    case msg::ConstraintKind::clearance:
       return check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m");
-    case ConstraintKind::max_agl:
+    case msg::ConstraintKind::max_agl:
       VISVOL_RETURN_IF_ERROR(check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m"));
       if (k.height_m == 0.0) return reject(height, "a max-agl of 0 m leaves no height to fly (> 0)");
       return Status();
-    case ConstraintKind::max_altitude:
+    case msg::ConstraintKind::max_altitude:
       return check_range(height, k.height_m, limits.min.z_m, limits.max.z_m,
                          " m (the pack's heights)");
   }
@@ -173,10 +173,10 @@ Status validate_item(const Constraint& k, std::uint32_t i, const CommandLimits& 
 }
 
 // Where item i's kind is an envelope limit: it must be the only one of its kind.
-Status note_envelope_item(const Constraint& k, std::uint32_t i, EnvelopeItems& seen) {
-  int* slot = k.kind == ConstraintKind::clearance ? &seen.clearance
-              : k.kind == ConstraintKind::max_agl ? &seen.max_agl
-              : k.kind == ConstraintKind::max_altitude ? &seen.max_altitude
+Status note_envelope_item(const msg::Constraint& k, std::uint32_t i, EnvelopeItems& seen) {
+  int* slot = k.kind == msg::ConstraintKind::clearance ? &seen.clearance
+              : k.kind == msg::ConstraintKind::max_agl ? &seen.max_agl
+              : k.kind == msg::ConstraintKind::max_altitude ? &seen.max_altitude
                                                        : nullptr;
   if (slot == nullptr) return Status();
   if (*slot >= 0) {
@@ -187,25 +187,25 @@ Status note_envelope_item(const Constraint& k, std::uint32_t i, EnvelopeItems& s
   return Status();
 }
 
-Status validate_constraints(const Command::Constraints& cs, const CommandLimits& limits) {
+Status validate_constraints(const msg::Command::Constraints& cs, const CommandLimits& limits) {
   if (cs.count > limits.max_constraints) {
     return reject("constraints", std::to_string(cs.count) + " given, at most " +
                                      std::to_string(limits.max_constraints) + " reserved");
   }
-  const std::uint32_t n = cs.count < kMaxConstraints ? cs.count : static_cast<std::uint32_t>(kMaxConstraints);
+  const std::uint32_t n = cs.count < msg::kMaxConstraints ? cs.count : static_cast<std::uint32_t>(msg::kMaxConstraints);
   EnvelopeItems seen;
   std::size_t hidden = 0, visible = 0;
   for (std::uint32_t i = 0; i < n; ++i) {
-    const Constraint& k = cs.items[i];
+    const msg::Constraint& k = cs.items[i];
     VISVOL_RETURN_IF_ERROR(validate_item(k, i, limits));
     VISVOL_RETURN_IF_ERROR(note_envelope_item(k, i, seen));
-    hidden += k.kind == ConstraintKind::hidden_from;
-    visible += k.kind == ConstraintKind::visible_to;
+    hidden += k.kind == msg::ConstraintKind::hidden_from;
+    visible += k.kind == msg::ConstraintKind::visible_to;
   }
-  if (hidden > kMaxObserversPerKind || visible > kMaxObserversPerKind) {
+  if (hidden > msg::kMaxObserversPerKind || visible > msg::kMaxObserversPerKind) {
     return reject("constraints", std::to_string(hidden) + " hidden-from and " + std::to_string(visible) +
                                      " visible-to points, at most " +
-                                     std::to_string(kMaxObserversPerKind) + " of a kind");
+                                     std::to_string(msg::kMaxObserversPerKind) + " of a kind");
   }
   if (hidden + visible > limits.max_observers) {
     return reject("constraints", std::to_string(hidden + visible) +
@@ -227,9 +227,9 @@ Status validate_constraints(const Command::Constraints& cs, const CommandLimits&
 
 Status check_source(std::string_view source) {
   if (source.empty()) return reject("source", "empty (name the sender)");
-  if (source.size() >= kSourceCapacity) {
+  if (source.size() >= msg::kSourceCapacity) {
     return reject("source", std::to_string(source.size()) + " characters, at most " +
-                                std::to_string(kSourceCapacity - 1));
+                                std::to_string(msg::kSourceCapacity - 1));
   }
   if (!printable(source)) return reject("source", "holds characters outside printable ASCII");
   return Status();
@@ -238,9 +238,9 @@ Status check_source(std::string_view source) {
 Status check_pack_id(std::string_view field, std::string_view pack_id) {
   const std::string f(field);
   if (pack_id.empty()) return reject(f, "empty");
-  if (pack_id.size() >= kPackIdCapacity) {
+  if (pack_id.size() >= msg::kPackIdCapacity) {
     return reject(f, std::to_string(pack_id.size()) + " characters, at most " +
-                         std::to_string(kPackIdCapacity - 1));
+                         std::to_string(msg::kPackIdCapacity - 1));
   }
   for (const char c : pack_id) {
     if (!is_pack_char(c)) {
@@ -275,17 +275,17 @@ Status validate_limits(const CommandLimits& l) {
     return bad("segments: need 1 <= min_segments (" + std::to_string(l.min_segments) +
                ") <= max_segments (" + std::to_string(l.max_segments) + ")");
   }
-  if (l.max_segments > kMaxPathVertices - 1) {
+  if (l.max_segments > msg::kMaxPathVertices - 1) {
     return bad("max_segments " + std::to_string(l.max_segments) + " above the " +
-               std::to_string(kMaxPathVertices - 1) + " a path sample holds");
+               std::to_string(msg::kMaxPathVertices - 1) + " a path sample holds");
   }
-  if (l.max_observers > 2 * kMaxObserversPerKind) {
+  if (l.max_observers > 2 * msg::kMaxObserversPerKind) {
     return bad("max_observers " + std::to_string(l.max_observers) + " above the " +
-               std::to_string(2 * kMaxObserversPerKind) + " a command holds");
+               std::to_string(2 * msg::kMaxObserversPerKind) + " a command holds");
   }
-  if (l.max_constraints > kMaxConstraints) {
+  if (l.max_constraints > msg::kMaxConstraints) {
     return bad("max_constraints " + std::to_string(l.max_constraints) + " above the " +
-               std::to_string(kMaxConstraints) + " a command holds");
+               std::to_string(msg::kMaxConstraints) + " a command holds");
   }
   const double maxima[4] = {l.max_weight, l.max_stretch_stiffness_n_per_m,
                             l.max_bend_stiffness_n_m_per_rad, l.max_clearance_m};
@@ -298,7 +298,7 @@ Status validate_limits(const CommandLimits& l) {
   }
   for (std::uint32_t i = 0; i < l.pack_count; ++i) {
     VISVOL_RETURN_IF_ERROR(
-        check_pack_id("packs[" + std::to_string(i) + "]", text_of(l.packs[i]))
+        check_pack_id("packs[" + std::to_string(i) + "]", msg::text_of(l.packs[i]))
             .with_context("command limits"));
   }
   return Status();
@@ -310,76 +310,76 @@ Status add_known_pack(CommandLimits& limits, std::string_view pack_id) {
     return invalid_argument("command limits: more than " + std::to_string(kMaxKnownPacks) +
                             " packs");
   }
-  copy_text(limits.packs[limits.pack_count++], pack_id);
+  msg::copy_text(limits.packs[limits.pack_count++], pack_id);
   return Status();
 }
 
-Status decode_command(const visvol_msgs_msg_dds__Command_& msg, Command& out) {
-  out = Command{};
-  VISVOL_RETURN_IF_ERROR(check_source(view(msg.source)));
-  copy_text(out.source, view(msg.source));
-  out.sequence = msg.sequence_number;
-  if (msg.kind < 1 || msg.kind > kLastKind) {
-    return reject("kind", std::to_string(msg.kind) + " is not a known command (1.." +
+Status decode_command(const visvol_msgs_msg_dds__Command_& wire, msg::Command& out) {
+  out = msg::Command{};
+  VISVOL_RETURN_IF_ERROR(check_source(view(wire.source)));
+  msg::copy_text(out.source, view(wire.source));
+  out.sequence = wire.sequence_number;
+  if (wire.kind < 1 || wire.kind > kLastKind) {
+    return reject("kind", std::to_string(wire.kind) + " is not a known command (1.." +
                               std::to_string(kLastKind) + ")");
   }
-  out.kind = static_cast<CommandKind>(msg.kind);
+  out.kind = static_cast<msg::CommandKind>(wire.kind);
   switch (out.kind) {
-    case CommandKind::set_endpoints:
-      out.endpoints = Command::Endpoints{to_world(msg.start_m), to_world(msg.end_m)};
+    case msg::CommandKind::set_endpoints:
+      out.endpoints = msg::Command::Endpoints{to_world(wire.start_m), to_world(wire.end_m)};
       return Status();
-    case CommandKind::set_objective:
-      if (msg.objective != static_cast<std::uint8_t>(Objective::hide) &&
-          msg.objective != static_cast<std::uint8_t>(Objective::show)) {
+    case msg::CommandKind::set_objective:
+      if (wire.objective != static_cast<std::uint8_t>(msg::Objective::hide) &&
+          wire.objective != static_cast<std::uint8_t>(msg::Objective::show)) {
         return reject("objective",
-                      std::to_string(msg.objective) + " is not known (1 hide, 2 show)");
+                      std::to_string(wire.objective) + " is not known (1 hide, 2 show)");
       }
-      out.objective = static_cast<Objective>(msg.objective);
+      out.objective = static_cast<msg::Objective>(wire.objective);
       return Status();
-    case CommandKind::set_weights:
-      out.weights = Weights{msg.k1_visibility, msg.k2_terrain, msg.k3_user, msg.k4_constraint};
+    case msg::CommandKind::set_weights:
+      out.weights = msg::Weights{wire.k1_visibility, wire.k2_terrain, wire.k3_user, wire.k4_constraint};
       return Status();
-    case CommandKind::set_stiffness:
+    case msg::CommandKind::set_stiffness:
       out.stiffness =
-          Command::Stiffness{msg.stretch_stiffness_n_per_m, msg.bend_stiffness_n_m_per_rad};
+          msg::Command::Stiffness{wire.stretch_stiffness_n_per_m, wire.bend_stiffness_n_m_per_rad};
       return Status();
-    case CommandKind::set_model:
-      if (msg.model != static_cast<std::uint8_t>(RopeModel::spring_mass) &&
-          msg.model != static_cast<std::uint8_t>(RopeModel::articulated)) {
-        return reject("model", std::to_string(msg.model) +
+    case msg::CommandKind::set_model:
+      if (wire.model != static_cast<std::uint8_t>(msg::RopeModel::spring_mass) &&
+          wire.model != static_cast<std::uint8_t>(msg::RopeModel::articulated)) {
+        return reject("model", std::to_string(wire.model) +
                                    " is not known (1 spring-mass, 2 articulated)");
       }
-      out.model = static_cast<RopeModel>(msg.model);
+      out.model = static_cast<msg::RopeModel>(wire.model);
       return Status();
-    case CommandKind::set_segment_count:
-      out.segment_count = msg.segment_count;
+    case msg::CommandKind::set_segment_count:
+      out.segment_count = wire.segment_count;
       return Status();
-    case CommandKind::set_constraints:
-      return decode_constraints(msg, out);
-    case CommandKind::start:
-    case CommandKind::stop:
+    case msg::CommandKind::set_constraints:
+      return decode_constraints(wire, out);
+    case msg::CommandKind::start:
+    case msg::CommandKind::stop:
       return Status();
-    case CommandKind::switch_terrain:
-      VISVOL_RETURN_IF_ERROR(check_pack_id("pack_id", view(msg.pack_id)));
-      copy_text(out.pack_id, view(msg.pack_id));
+    case msg::CommandKind::switch_terrain:
+      VISVOL_RETURN_IF_ERROR(check_pack_id("pack_id", view(wire.pack_id)));
+      msg::copy_text(out.pack_id, view(wire.pack_id));
       return Status();
   }
   return reject("kind", "unhandled");  // unreachable: the range was checked
 }
 
-Status validate_command(const Command& c, const CommandLimits& limits) {
+Status validate_command(const msg::Command& c, const CommandLimits& limits) {
   switch (c.kind) {
-    case CommandKind::set_endpoints: {
+    case msg::CommandKind::set_endpoints: {
       VISVOL_RETURN_IF_ERROR(check_endpoint("start_m", c.endpoints.start, limits));
       VISVOL_RETURN_IF_ERROR(check_endpoint("end_m", c.endpoints.end, limits));
-      const WorldPoint& a = c.endpoints.start;
-      const WorldPoint& b = c.endpoints.end;
+      const msg::WorldPoint& a = c.endpoints.start;
+      const msg::WorldPoint& b = c.endpoints.end;
       if (a.x_m == b.x_m && a.y_m == b.y_m && a.z_m == b.z_m) {
         return reject("end_m", "equals start_m (the rope needs two distinct ends)");
       }
       return Status();
     }
-    case CommandKind::set_weights:
+    case msg::CommandKind::set_weights:
       VISVOL_RETURN_IF_ERROR(check_range("k1_visibility", c.weights.k1_visibility, 0.0,
                                          limits.max_weight, ""));
       VISVOL_RETURN_IF_ERROR(
@@ -387,7 +387,7 @@ Status validate_command(const Command& c, const CommandLimits& limits) {
       VISVOL_RETURN_IF_ERROR(
           check_range("k3_user", c.weights.k3_user, 0.0, limits.max_weight, ""));
       return check_range("k4_constraint", c.weights.k4_constraint, 0.0, limits.max_weight, "");
-    case CommandKind::set_stiffness:
+    case msg::CommandKind::set_stiffness:
       VISVOL_RETURN_IF_ERROR(check_range("stretch_stiffness_n_per_m", c.stiffness.stretch_n_per_m,
                                          0.0, limits.max_stretch_stiffness_n_per_m, " N/m"));
       if (c.stiffness.stretch_n_per_m == 0.0) {
@@ -395,7 +395,7 @@ Status validate_command(const Command& c, const CommandLimits& limits) {
       }
       return check_range("bend_stiffness_n_m_per_rad", c.stiffness.bend_n_m_per_rad, 0.0,
                          limits.max_bend_stiffness_n_m_per_rad, " N m/rad");
-    case CommandKind::set_segment_count:
+    case msg::CommandKind::set_segment_count:
       if (c.segment_count < limits.min_segments || c.segment_count > limits.max_segments) {
         return reject("segment_count", std::to_string(c.segment_count) + " is outside the " +
                                            std::to_string(limits.min_segments) + ".." +
@@ -403,39 +403,39 @@ Status validate_command(const Command& c, const CommandLimits& limits) {
                                            " segments reserved");
       }
       return Status();
-    case CommandKind::set_constraints:
+    case msg::CommandKind::set_constraints:
       return validate_constraints(c.constraints, limits);
-    case CommandKind::switch_terrain: {
-      const std::string_view id = text_of(c.pack_id);
+    case msg::CommandKind::switch_terrain: {
+      const std::string_view id = msg::text_of(c.pack_id);
       if (limits.pack_count == 0) {
         return reject("pack_id", "'" + std::string(id) + "': this console has no other packs");
       }
       for (std::uint32_t i = 0; i < limits.pack_count && i < kMaxKnownPacks; ++i) {
-        if (text_of(limits.packs[i]) == id) return Status();
+        if (msg::text_of(limits.packs[i]) == id) return Status();
       }
       return reject("pack_id", "'" + std::string(id) + "' is not a pack on this console");
     }
-    case CommandKind::set_objective:
-    case CommandKind::set_model:
-    case CommandKind::start:
-    case CommandKind::stop:
+    case msg::CommandKind::set_objective:
+    case msg::CommandKind::set_model:
+    case msg::CommandKind::start:
+    case msg::CommandKind::stop:
       return Status();  // decode checked their values
   }
   return reject("kind", std::to_string(static_cast<int>(c.kind)) + " is not a known command");
 }
 
-Status decode_and_validate(const visvol_msgs_msg_dds__Command_& msg, const CommandLimits& limits,
-                           Command& out) {
-  VISVOL_RETURN_IF_ERROR(decode_command(msg, out));
+Status decode_and_validate(const visvol_msgs_msg_dds__Command_& wire, const CommandLimits& limits,
+                           msg::Command& out) {
+  VISVOL_RETURN_IF_ERROR(decode_command(wire, out));
   return validate_command(out, limits);
 }
 
 // Sender side ------------------------------------------------------------------
 
-const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const Command& c) {
+const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const msg::Command& c) {
   msg_ = visvol_msgs_msg_dds__Command_{};
-  copy_text(source_, text_of(c.source));
-  copy_text(pack_id_, text_of(c.pack_id));
+  msg::copy_text(source_, msg::text_of(c.source));
+  msg::copy_text(pack_id_, msg::text_of(c.pack_id));
   msg_.source = source_;
   msg_.pack_id = pack_id_;
   msg_.sequence_number = c.sequence;
@@ -452,17 +452,17 @@ const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const Command& c) {
   msg_.model = static_cast<std::uint8_t>(c.model);
   msg_.segment_count = c.segment_count;
   const std::uint32_t n =
-      c.constraints.count < kMaxConstraints ? c.constraints.count
-                                            : static_cast<std::uint32_t>(kMaxConstraints);
+      c.constraints.count < msg::kMaxConstraints ? c.constraints.count
+                                            : static_cast<std::uint32_t>(msg::kMaxConstraints);
   for (std::uint32_t i = 0; i < n; ++i) {
-    const Constraint& k = c.constraints.items[i];
+    const msg::Constraint& k = c.constraints.items[i];
     constraints_[i] = visvol_msgs_msg_dds__Constraint_{
         static_cast<std::uint8_t>(k.kind), {k.position.x_m, k.position.y_m, k.position.z_m},
         k.height_m};
   }
   msg_.constraints._buffer = constraints_;
   msg_.constraints._length = n;
-  msg_.constraints._maximum = static_cast<std::uint32_t>(kMaxConstraints);
+  msg_.constraints._maximum = static_cast<std::uint32_t>(msg::kMaxConstraints);
   msg_.constraints._release = false;
   return msg_;
 }
@@ -473,23 +473,23 @@ AckMessage::AckMessage(std::string frame_id) : frame_id_(std::move(frame_id)) {
   msg_.reason = reason_;
 }
 
-const visvol_msgs_msg_dds__CommandAck_& AckMessage::fill(const CommandAck& ack) {
-  msg_.header.stamp = to_ros_time(now_stamp_ns());
-  copy_text(source_, text_of(ack.source));
-  copy_text(reason_, text_of(ack.reason));
+const visvol_msgs_msg_dds__CommandAck_& AckMessage::fill(const msg::CommandAck& ack) {
+  msg_.header.stamp = to_ros_time(msg::now_stamp_ns());
+  msg::copy_text(source_, msg::text_of(ack.source));
+  msg::copy_text(reason_, msg::text_of(ack.reason));
   msg_.sequence_number = ack.sequence;
   msg_.kind = ack.kind;
   msg_.result = static_cast<std::uint8_t>(ack.result);
   return msg_;
 }
 
-CommandAck decode_ack(const visvol_msgs_msg_dds__CommandAck_& msg) {
-  CommandAck ack{};
-  copy_text(ack.source, view(msg.source));
-  copy_text(ack.reason, view(msg.reason));
-  ack.sequence = msg.sequence_number;
-  ack.kind = msg.kind;
-  ack.result = static_cast<AckResult>(msg.result);
+msg::CommandAck decode_ack(const visvol_msgs_msg_dds__CommandAck_& wire) {
+  msg::CommandAck ack{};
+  msg::copy_text(ack.source, view(wire.source));
+  msg::copy_text(ack.reason, view(wire.reason));
+  ack.sequence = wire.sequence_number;
+  ack.kind = wire.kind;
+  ack.result = static_cast<msg::AckResult>(wire.result);
   return ack;
 }
 

@@ -1,4 +1,4 @@
-// Commands between DDS and the plain Command of samples.hpp: decoding,
+// Commands between DDS and the plain Command of msg/samples.hpp: decoding,
 // validation against what the console reserved and loaded, and encoding for
 // senders. Pure: no DDS entities, no I/O, no globals; libFuzzer drives it
 // (tests/drivers/dds/command_fuzz.cpp).
@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/status.hpp"
 #include "visvol_msgs.h"
 
@@ -29,28 +29,28 @@ inline constexpr std::size_t kMaxKnownPacks = 16;
 // configuration (ranges, the packs on the console), and replaces it after a
 // terrain switch.
 struct CommandLimits {
-  WorldPoint min{};  // pack bounds, world metres, inclusive: endpoints and
-  WorldPoint max{};  // observers must lie inside
+  msg::WorldPoint min{};  // pack bounds, world metres, inclusive: endpoints and
+  msg::WorldPoint max{};  // observers must lie inside
   // The pack's planning bounds (x and y, inclusive), where F_p counts every
   // observer: endpoints must lie inside them too. Both zero: unset.
-  WorldPoint plan_min{};
-  WorldPoint plan_max{};
+  msg::WorldPoint plan_min{};
+  msg::WorldPoint plan_max{};
   std::uint32_t min_segments = 2;
-  std::uint32_t max_segments = kMaxPathVertices - 1;  // rope segments reserved
-  std::uint32_t max_constraints = kMaxConstraints;    // constraints reserved
+  std::uint32_t max_segments = msg::kMaxPathVertices - 1;  // rope segments reserved
+  std::uint32_t max_constraints = msg::kMaxConstraints;    // constraints reserved
   // hidden-from and visible-to points together: what the console takes (--max-observers)
-  std::uint32_t max_observers = 2 * kMaxObserversPerKind;
+  std::uint32_t max_observers = 2 * msg::kMaxObserversPerKind;
   double max_weight = 1e6;                            // each of k1..k4 in [0, max]
   double max_stretch_stiffness_n_per_m = 1e6;         // in (0, max]
   double max_bend_stiffness_n_m_per_rad = 1e6;        // in [0, max]
   double max_clearance_m = 10000.0;                   // clearance in [0, max], max-agl in (0, max];
                                                       // max-altitude within the pack's z range
   std::uint32_t pack_count = 0;                       // packs a terrain switch may name
-  char packs[kMaxKnownPacks][kPackIdCapacity] = {};
+  char packs[kMaxKnownPacks][msg::kPackIdCapacity] = {};
 };
 
 // Checks the limits themselves (console configuration): finite, ordered
-// bounds, capacities within samples.hpp, known pack ids well-formed.
+// bounds, capacities within msg/samples.hpp, known pack ids well-formed.
 Status validate_limits(const CommandLimits& limits);
 // Adds a pack a terrain switch may name (checked like a command's pack_id).
 Status add_known_pack(CommandLimits& limits, std::string_view pack_id);
@@ -62,16 +62,16 @@ Status check_pack_id(std::string_view field, std::string_view pack_id);
 
 // Structure: a known kind, well-formed text, counts that fit, known enum
 // values. Fills `out` (zeroed first: fields of other kinds stay zero).
-Status decode_command(const visvol_msgs_msg_dds__Command_& msg, Command& out);
+Status decode_command(const visvol_msgs_msg_dds__Command_& msg, msg::Command& out);
 // Values: finite numbers, positions inside the pack, counts within what was
 // reserved, ranges of the limits, a pack the console has. set-constraints:
 // at most one each of clearance, max-agl and max-altitude, a max-agl above
 // the clearance given with it, at most kMaxObserversPerKind observers of a
 // kind and max_observers in all.
-Status validate_command(const Command& command, const CommandLimits& limits);
+Status validate_command(const msg::Command& command, const CommandLimits& limits);
 // Both, as command intake applies them.
 Status decode_and_validate(const visvol_msgs_msg_dds__Command_& msg,
-                           const CommandLimits& limits, Command& out);
+                           const CommandLimits& limits, msg::Command& out);
 
 // Sender side: a Command as the DDS message, in buffers this object owns.
 class CommandMessage {
@@ -80,12 +80,12 @@ class CommandMessage {
   CommandMessage(const CommandMessage&) = delete;
   CommandMessage& operator=(const CommandMessage&) = delete;
   // Valid until the next fill().
-  const visvol_msgs_msg_dds__Command_& fill(const Command& command);
+  const visvol_msgs_msg_dds__Command_& fill(const msg::Command& command);
 
  private:
-  char source_[kSourceCapacity] = {};
-  char pack_id_[kPackIdCapacity] = {};
-  visvol_msgs_msg_dds__Constraint_ constraints_[kMaxConstraints] = {};
+  char source_[msg::kSourceCapacity] = {};
+  char pack_id_[msg::kPackIdCapacity] = {};
+  visvol_msgs_msg_dds__Constraint_ constraints_[msg::kMaxConstraints] = {};
   visvol_msgs_msg_dds__Command_ msg_{};
 };
 
@@ -96,17 +96,17 @@ class AckMessage {
   AckMessage(const AckMessage&) = delete;
   AckMessage& operator=(const AckMessage&) = delete;
   // Valid until the next fill(). Stamps it now.
-  const visvol_msgs_msg_dds__CommandAck_& fill(const CommandAck& ack);
+  const visvol_msgs_msg_dds__CommandAck_& fill(const msg::CommandAck& ack);
 
  private:
   std::string frame_id_;
-  char source_[kSourceCapacity] = {};
-  char reason_[kReasonCapacity] = {};
+  char source_[msg::kSourceCapacity] = {};
+  char reason_[msg::kReasonCapacity] = {};
   visvol_msgs_msg_dds__CommandAck_ msg_{};
 };
 
 // A received acknowledgement back into the plain struct (texts truncated to
 // fit; result kept as received even when unknown).
-CommandAck decode_ack(const visvol_msgs_msg_dds__CommandAck_& msg);
+msg::CommandAck decode_ack(const visvol_msgs_msg_dds__CommandAck_& msg);
 
 }  // namespace visvol::dds

@@ -18,8 +18,8 @@ double monotonic_s() {
 
 Result<std::unique_ptr<CommandIntake>> CommandIntake::start(const Participant& participant,
                                                             const IntakeConfig& config,
-                                                            CommandQueue& commands,
-                                                            AckQueue* executive_acks) {
+                                                            msg::CommandQueue& commands,
+                                                            msg::AckQueue* executive_acks) {
   if (!std::isfinite(config.ack_poll_interval_s) || config.ack_poll_interval_s < 0.001 ||
       config.ack_poll_interval_s > 1.0) {
     return invalid_argument("command intake: ack_poll_interval_s must lie in [0.001, 1] s");
@@ -39,8 +39,8 @@ Result<std::unique_ptr<CommandIntake>> CommandIntake::start(const Participant& p
 }
 
 CommandIntake::CommandIntake(const IntakeConfig& config, CommandProcessor processor,
-                             Reader reader, Writer ack_writer, CommandQueue& commands,
-                             AckQueue* executive_acks)
+                             Reader reader, Writer ack_writer, msg::CommandQueue& commands,
+                             msg::AckQueue* executive_acks)
     : config_(config),
       commands_(commands),
       executive_acks_(executive_acks),
@@ -92,12 +92,12 @@ void CommandIntake::run() {
 void CommandIntake::handle_commands() {
   for (;;) {
     const Result<int> taken =
-        reader_.take<visvol_msgs_msg_dds__Command_>([this](const visvol_msgs_msg_dds__Command_& msg,
+        reader_.take<visvol_msgs_msg_dds__Command_>([this](const visvol_msgs_msg_dds__Command_& wire,
                                                            const dds_sample_info_t&) {
-          CommandAck ack;
+          msg::CommandAck ack;
           {
             std::lock_guard<std::mutex> lock(mutex_);
-            processor_.process(msg, monotonic_s(), commands_, ack);
+            processor_.process(wire, monotonic_s(), commands_, ack);
           }
           write_ack(ack);
         });
@@ -112,7 +112,7 @@ void CommandIntake::handle_commands() {
 
 void CommandIntake::publish_executive_acks() {
   if (!executive_acks_) return;
-  CommandAck ack;
+  msg::CommandAck ack;
   while (executive_acks_->try_pop(ack)) {
     write_ack(ack);
     std::lock_guard<std::mutex> lock(mutex_);
@@ -120,7 +120,7 @@ void CommandIntake::publish_executive_acks() {
   }
 }
 
-void CommandIntake::write_ack(const CommandAck& ack) {
+void CommandIntake::write_ack(const msg::CommandAck& ack) {
   const dds_return_t rc = ack_writer_.write(&ack_msg_.fill(ack));
   if (rc < 0) {
     std::lock_guard<std::mutex> lock(mutex_);

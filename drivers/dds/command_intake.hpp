@@ -53,8 +53,8 @@ class CommandIntake {
   // starts the thread. `executive_acks` may be null.
   static Result<std::unique_ptr<CommandIntake>> start(const Participant& participant,
                                                       const IntakeConfig& config,
-                                                      CommandQueue& commands,
-                                                      AckQueue* executive_acks = nullptr);
+                                                      msg::CommandQueue& commands,
+                                                      msg::AckQueue* executive_acks = nullptr);
   ~CommandIntake();  // stop()
   CommandIntake(const CommandIntake&) = delete;
   CommandIntake& operator=(const CommandIntake&) = delete;
@@ -69,15 +69,15 @@ class CommandIntake {
 
  private:
   CommandIntake(const IntakeConfig& config, CommandProcessor processor, Reader reader,
-                Writer ack_writer, CommandQueue& commands, AckQueue* executive_acks);
+                Writer ack_writer, msg::CommandQueue& commands, msg::AckQueue* executive_acks);
   void run();
   void handle_commands();
   void publish_executive_acks();
-  void write_ack(const CommandAck& ack);
+  void write_ack(const msg::CommandAck& ack);
 
   const IntakeConfig config_;
-  CommandQueue& commands_;
-  AckQueue* const executive_acks_;
+  msg::CommandQueue& commands_;
+  msg::AckQueue* const executive_acks_;
   Reader reader_;
   Writer ack_writer_;
   AckMessage ack_msg_;  // intake thread only

@@ -7,10 +7,10 @@
 
 namespace visvol::dds {
 
-void sanitize_source(const char* source, char (&out)[kSourceCapacity]) {
+void sanitize_source(const char* source, char (&out)[msg::kSourceCapacity]) {
   std::size_t n = 0;
   if (source) {
-    for (; n + 1 < kSourceCapacity && source[n] != '\0'; ++n) {
+    for (; n + 1 < msg::kSourceCapacity && source[n] != '\0'; ++n) {
       const char c = source[n];
       out[n] = (c >= 0x20 && c <= 0x7e) ? c : '?';
     }
@@ -47,14 +47,14 @@ void RateLimiter::refill(Bucket& b, double now_s, double per_s, double burst) {
 RateLimiter::Source& RateLimiter::find_or_add(std::string_view source, double now_s) {
   Source* oldest = &sources_[0];
   for (Source& s : sources_) {
-    if (s.used && text_of(s.name) == source) return s;
+    if (s.used && msg::text_of(s.name) == source) return s;
     if (!s.used) {
       oldest = &s;
       break;
     }
     if (s.bucket.last_s < oldest->bucket.last_s) oldest = &s;
   }
-  copy_text(oldest->name, source);
+  msg::copy_text(oldest->name, source);
   oldest->bucket = Bucket{rate_.per_source_burst, now_s};
   oldest->used = true;
   return *oldest;
@@ -86,27 +86,27 @@ Status CommandProcessor::set_limits(const CommandLimits& limits) {
   return Status();
 }
 
-void CommandProcessor::reject(CommandAck& ack, std::string_view reason) {
+void CommandProcessor::reject(msg::CommandAck& ack, std::string_view reason) {
   ++counts_.rejected;
-  ack.result = AckResult::rejected;
-  copy_text(ack.reason, reason);
+  ack.result = msg::AckResult::rejected;
+  msg::copy_text(ack.reason, reason);
 }
 
-void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& msg, double now_s,
-                               CommandQueue& queue, CommandAck& ack) {
+void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& wire, double now_s,
+                               msg::CommandQueue& queue, msg::CommandAck& ack) {
   ++counts_.received;
-  ack = CommandAck{};
-  sanitize_source(msg.source, ack.source);
-  ack.sequence = msg.sequence_number;
-  ack.kind = msg.kind;
+  ack = msg::CommandAck{};
+  sanitize_source(wire.source, ack.source);
+  ack.sequence = wire.sequence_number;
+  ack.kind = wire.kind;
 
   // rate limit first: a flood costs no decoding
-  const RateLimiter::Verdict verdict = limiter_.allow(text_of(ack.source), now_s);
+  const RateLimiter::Verdict verdict = limiter_.allow(msg::text_of(ack.source), now_s);
   if (verdict != RateLimiter::Verdict::pass) {
     ++counts_.rate_limited;
     const RateLimit& r = limiter_.rate();
     const bool per_source = verdict == RateLimiter::Verdict::source_limited;
-    char reason[kReasonCapacity];
+    char reason[msg::kReasonCapacity];
     std::snprintf(reason, sizeof reason,
                   "rate limit: %s sent more than %.0f commands at once or %.0f per second",
                   per_source ? "this source" : "all sources together",
@@ -117,7 +117,7 @@ void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& msg, double 
   }
 
   // decode and validate in full
-  const Status status = decode_and_validate(msg, limits_, scratch_);
+  const Status status = decode_and_validate(wire, limits_, scratch_);
   if (!status.ok()) {
     reject(ack, status.message());
     return;
@@ -130,7 +130,7 @@ void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& msg, double 
     return;
   }
   ++counts_.accepted;
-  ack.result = AckResult::accepted;
+  ack.result = msg::AckResult::accepted;
 }
 
 }  // namespace visvol::dds

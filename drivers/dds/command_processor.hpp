@@ -12,18 +12,12 @@
 #include <string_view>
 
 #include "drivers/dds/command_codec.hpp"
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/handoff.hpp"
 #include "rt/base/status.hpp"
 #include "visvol_msgs.h"
 
 namespace visvol::dds {
-
-// Accepted commands, to the real-time thread (its consumer), and
-// acknowledgements from it (applied or failed) back to command intake.
-inline constexpr std::size_t kCommandQueueCapacity = 64;
-using CommandQueue = SpscQueue<Command, kCommandQueueCapacity>;
-using AckQueue = SpscQueue<CommandAck, kCommandQueueCapacity>;
 
 // Token buckets: each sender (by its source name) and all senders together
 // may send `burst` commands at once and `per_s` per second after that.
@@ -59,7 +53,7 @@ class RateLimiter {
     double last_s;
   };
   struct Source {
-    char name[kSourceCapacity];
+    char name[msg::kSourceCapacity];
     Bucket bucket;
     bool used;
   };
@@ -91,24 +85,24 @@ class CommandProcessor {
 
   // Handles one received command: rate limit, decode, validate, push. Fills
   // `ack` in every case: accepted (queued), or rejected with the reason.
-  void process(const visvol_msgs_msg_dds__Command_& msg, double now_s, CommandQueue& queue,
-               CommandAck& ack);
+  void process(const visvol_msgs_msg_dds__Command_& wire, double now_s, msg::CommandQueue& queue,
+               msg::CommandAck& ack);
 
   const CommandCounts& counts() const { return counts_; }
 
  private:
   CommandProcessor(const CommandLimits& limits, const RateLimit& rate)
       : limits_(limits), limiter_(rate) {}
-  void reject(CommandAck& ack, std::string_view reason);
+  void reject(msg::CommandAck& ack, std::string_view reason);
 
   CommandLimits limits_;
   RateLimiter limiter_;
-  Command scratch_{};
+  msg::Command scratch_{};
   CommandCounts counts_;
 };
 
 // The source as it may be echoed: printable ASCII ('?' for anything else),
 // truncated to fit.
-void sanitize_source(const char* source, char (&out)[kSourceCapacity]);
+void sanitize_source(const char* source, char (&out)[msg::kSourceCapacity]);
 
 }  // namespace visvol::dds

@@ -80,7 +80,7 @@ LivePublisher::LivePublisher(const PublisherConfig& config, const CommandIntake*
       device_writer_(std::move(device)),
       health_msg_(config.frame_id),
       device_msg_(config.frame_id),
-      held_path_(std::make_unique<PathSample>()) {
+      held_path_(std::make_unique<msg::PathSample>()) {
   path_stream_.min_interval_ns = to_ns(1.0 / config.path_hz);
   health_stream_.min_interval_ns = to_ns(1.0 / config.health_hz);
   device_stream_.min_interval_ns = to_ns(1.0 / config.device_status_hz);
@@ -171,9 +171,9 @@ void LivePublisher::service(Stream& stream, LatestValue<T>& handoff, std::int64_
 void LivePublisher::pass(std::int64_t now, bool final) {
   // terrain first: a subscriber learns the CRS before the first path in it
   service(terrain_stream_, terrain_, now, final,
-          [this](const TerrainInfo& t) { return paths_->publish(t); });
+          [this](const msg::TerrainInfo& t) { return paths_->publish(t); });
   service_path(now, final);
-  service(health_stream_, health_, now, final, [this](const HealthSample& h) {
+  service(health_stream_, health_, now, final, [this](const msg::HealthSample& h) {
     LayerCounters counters;
     if (intake_) {
       const IntakeStats s = intake_->stats();
@@ -185,16 +185,16 @@ void LivePublisher::pass(std::int64_t now, bool final) {
     const dds_return_t rc = health_writer_.write(&health_msg_.message());
     return rc < 0 ? dds_error("writing health", rc) : Status();
   });
-  service(device_stream_, device_, now, final, [this](const DeviceStatusSample& d) {
+  service(device_stream_, device_, now, final, [this](const msg::DeviceStatusSample& d) {
     VISVOL_RETURN_IF_ERROR(device_msg_.fill(d));
     const dds_return_t rc = device_writer_.write(&device_msg_.message());
     return rc < 0 ? dds_error("writing device status", rc) : Status();
   });
   service(thumbnail_stream_, thumbnail_, now, final,
-          [this](const ThumbnailSample& t) { return paths_->publish(t); });
+          [this](const msg::ThumbnailSample& t) { return paths_->publish(t); });
 }
 
-void LivePublisher::publish_path(const PathSample& sample, std::int64_t now) {
+void LivePublisher::publish_path(const msg::PathSample& sample, std::int64_t now) {
   path_stream_.next_allowed_ns = now + path_stream_.min_interval_ns;
   holding_path_ = false;
   const Status status = paths_->publish(sample);
@@ -205,7 +205,7 @@ void LivePublisher::publish_path(const PathSample& sample, std::int64_t now) {
   }
 }
 
-void LivePublisher::note_path_producer(const PathSample& sample) {
+void LivePublisher::note_path_producer(const msg::PathSample& sample) {
   if (last_path_sequence_ != 0 && sample.sequence > last_path_sequence_ && sample.stamp_ns > last_path_stamp_ns_) {
     path_period_ns_ = (sample.stamp_ns - last_path_stamp_ns_) /
                       static_cast<std::int64_t>(sample.sequence - last_path_sequence_);
@@ -218,10 +218,10 @@ void LivePublisher::note_path_producer(const PathSample& sample) {
 
 void LivePublisher::service_path(std::int64_t now, bool final) {
   if (!final && now < path_stream_.next_allowed_ns) return;
-  if (const PathSample* sample = path_.take()) {
+  if (const msg::PathSample* sample = path_.take()) {
     path_stream_.last_fresh_ns = now;
     note_path_producer(*sample);
-    const std::int64_t age_ns = now_stamp_ns() - sample->stamp_ns;
+    const std::int64_t age_ns = msg::now_stamp_ns() - sample->stamp_ns;
     const bool fresh = age_ns <= to_ns(config_.poll_interval_s);
     const std::int64_t wait_ns = to_ns(config_.path_refresh_wait_s);
     const bool newer_soon = path_period_ns_ < 0 || path_period_ns_ <= wait_ns;

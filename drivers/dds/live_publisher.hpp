@@ -50,7 +50,7 @@
 #include "drivers/dds/message_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/path_publisher.hpp"
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/handoff.hpp"
 #include "rt/base/status.hpp"
 
@@ -99,11 +99,11 @@ class LivePublisher {
   LivePublisher& operator=(const LivePublisher&) = delete;
 
   // The hand-offs (see the table above). Real-time safe for their producer.
-  LatestValue<PathSample>& path() { return path_; }
-  LatestValue<HealthSample>& health() { return health_; }
-  LatestValue<DeviceStatusSample>& device_status() { return device_; }
-  LatestValue<ThumbnailSample>& thumbnail() { return thumbnail_; }
-  LatestValue<TerrainInfo>& terrain() { return terrain_; }
+  LatestValue<msg::PathSample>& path() { return path_; }
+  LatestValue<msg::HealthSample>& health() { return health_; }
+  LatestValue<msg::DeviceStatusSample>& device_status() { return device_; }
+  LatestValue<msg::ThumbnailSample>& thumbnail() { return thumbnail_; }
+  LatestValue<msg::TerrainInfo>& terrain() { return terrain_; }
 
   // Stops the thread after a last pass that publishes every fresh sample
   // regardless of rates, then waits up to linger_s for reliable delivery.
@@ -127,7 +127,7 @@ class LivePublisher {
   void run();
   void pass(std::int64_t now_ns, bool final);
   void service_path(std::int64_t now_ns, bool final);
-  void publish_path(const PathSample& sample, std::int64_t now_ns);
+  void publish_path(const msg::PathSample& sample, std::int64_t now_ns);
   std::int64_t next_wake_ns(std::int64_t now_ns) const;
   template <typename T, typename Publish>
   void service(Stream& stream, LatestValue<T>& handoff, std::int64_t now_ns, bool final,
@@ -137,11 +137,11 @@ class LivePublisher {
   const PublisherConfig config_;
   const CommandIntake* const intake_;
 
-  LatestValue<PathSample> path_;
-  LatestValue<HealthSample> health_;
-  LatestValue<DeviceStatusSample> device_;
-  LatestValue<ThumbnailSample> thumbnail_;
-  LatestValue<TerrainInfo> terrain_;
+  LatestValue<msg::PathSample> path_;
+  LatestValue<msg::HealthSample> health_;
+  LatestValue<msg::DeviceStatusSample> device_;
+  LatestValue<msg::ThumbnailSample> thumbnail_;
+  LatestValue<msg::TerrainInfo> terrain_;
 
   // Publisher thread only.
   std::unique_ptr<PathPublisher> paths_;
@@ -150,13 +150,13 @@ class LivePublisher {
   HealthMessage health_msg_;
   DeviceStatusMessage device_msg_;
   Stream path_stream_, health_stream_, device_stream_, thumbnail_stream_, terrain_stream_;
-  std::unique_ptr<PathSample> held_path_;  // a stale path kept while a newer one may come
+  std::unique_ptr<msg::PathSample> held_path_;  // a stale path kept while a newer one may come
   bool holding_path_ = false;
   // the path producer's hand-off period, from the paths taken (-1: unknown)
   std::uint64_t last_path_sequence_ = 0;
   std::int64_t last_path_stamp_ns_ = 0;
   std::int64_t path_period_ns_ = -1;
-  void note_path_producer(const PathSample& sample);
+  void note_path_producer(const msg::PathSample& sample);
   std::int64_t hold_until_ns_ = 0;
 
   std::atomic<std::uint64_t> errors_{0};

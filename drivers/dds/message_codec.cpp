@@ -1,7 +1,5 @@
 #include "drivers/dds/message_codec.hpp"
 
-#include <time.h>
-
 #include <cstring>
 #include <limits>
 #include <utility>
@@ -9,14 +7,14 @@
 namespace visvol::dds {
 namespace {
 
-static_assert(static_cast<int>(Objective::hide) == visvol_msgs_msg_dds__OBJECTIVE_HIDE);
-static_assert(static_cast<int>(Objective::show) == visvol_msgs_msg_dds__OBJECTIVE_SHOW);
-static_assert(static_cast<int>(DeviceState::unknown) == visvol_msgs_msg_dds__DEVICE_UNKNOWN);
-static_assert(static_cast<int>(DeviceState::disconnected) ==
+static_assert(static_cast<int>(msg::Objective::hide) == visvol_msgs_msg_dds__OBJECTIVE_HIDE);
+static_assert(static_cast<int>(msg::Objective::show) == visvol_msgs_msg_dds__OBJECTIVE_SHOW);
+static_assert(static_cast<int>(msg::DeviceState::unknown) == visvol_msgs_msg_dds__DEVICE_UNKNOWN);
+static_assert(static_cast<int>(msg::DeviceState::disconnected) ==
               visvol_msgs_msg_dds__DEVICE_DISCONNECTED);
-static_assert(static_cast<int>(DeviceState::idle) == visvol_msgs_msg_dds__DEVICE_IDLE);
-static_assert(static_cast<int>(DeviceState::active) == visvol_msgs_msg_dds__DEVICE_ACTIVE);
-static_assert(static_cast<int>(DeviceState::fault) == visvol_msgs_msg_dds__DEVICE_FAULT);
+static_assert(static_cast<int>(msg::DeviceState::idle) == visvol_msgs_msg_dds__DEVICE_IDLE);
+static_assert(static_cast<int>(msg::DeviceState::active) == visvol_msgs_msg_dds__DEVICE_ACTIVE);
+static_assert(static_cast<int>(msg::DeviceState::fault) == visvol_msgs_msg_dds__DEVICE_FAULT);
 
 constexpr std::int64_t kNsPerS = 1000000000;
 constexpr std::uint8_t kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
@@ -26,7 +24,7 @@ char* c_text(std::string& s) { return s.data(); }
 
 template <std::size_t N>
 void copy_terminated(char (&dst)[N], const char (&src)[N]) {
-  copy_text(dst, text_of(src));
+  msg::copy_text(dst, msg::text_of(src));
 }
 
 std_msgs_msg_dds__Header_ header(std::int64_t stamp_ns, std::string& frame_id) {
@@ -36,11 +34,11 @@ std_msgs_msg_dds__Header_ header(std::int64_t stamp_ns, std::string& frame_id) {
   return h;
 }
 
-geometry_msgs_msg_dds__Point_ to_point(const WorldPoint& p) {
+geometry_msgs_msg_dds__Point_ to_point(const msg::WorldPoint& p) {
   return geometry_msgs_msg_dds__Point_{p.x_m, p.y_m, p.z_m};
 }
 
-visvol_msgs_msg_dds__TimingSummary_ to_summary(const TimingSummary& t) {
+visvol_msgs_msg_dds__TimingSummary_ to_summary(const msg::TimingSummary& t) {
   return visvol_msgs_msg_dds__TimingSummary_{t.min_us, t.mean_us, t.p99_us, t.max_us,
                                               t.count};
 }
@@ -66,12 +64,6 @@ std::int64_t from_ros_time(const builtin_interfaces_msg_dds__Time_& time) {
   return static_cast<std::int64_t>(time.sec) * kNsPerS + static_cast<std::int64_t>(time.nanosec);
 }
 
-std::int64_t now_stamp_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
-}
-
 // Path -----------------------------------------------------------------------
 
 PathMessages::PathMessages(std::string frame_id) : frame_id_(std::move(frame_id)) {
@@ -83,28 +75,28 @@ PathMessages::PathMessages(std::string frame_id) : frame_id_(std::move(frame_id)
     pose.pose.orientation.w = 1.0;
   }
   path_.poses._buffer = poses_;
-  path_.poses._maximum = static_cast<std::uint32_t>(kMaxPathVertices);
+  path_.poses._maximum = static_cast<std::uint32_t>(msg::kMaxPathVertices);
   path_.poses._release = false;
   update_.pack_id = pack_id_;
   update_.positions_m._buffer = positions_;
-  update_.positions_m._maximum = static_cast<std::uint32_t>(kMaxPathVertices);
+  update_.positions_m._maximum = static_cast<std::uint32_t>(msg::kMaxPathVertices);
   update_.visibility._buffer = visibility_;
-  update_.visibility._maximum = static_cast<std::uint32_t>(kMaxPathVertices);
+  update_.visibility._maximum = static_cast<std::uint32_t>(msg::kMaxPathVertices);
   update_.clearance_m._buffer = clearance_m_;
-  update_.clearance_m._maximum = static_cast<std::uint32_t>(kMaxPathVertices);
+  update_.clearance_m._maximum = static_cast<std::uint32_t>(msg::kMaxPathVertices);
 }
 
-Status PathMessages::fill(const PathSample& sample) {
-  if (sample.vertex_count > kMaxPathVertices) {
+Status PathMessages::fill(const msg::PathSample& sample) {
+  if (sample.vertex_count > msg::kMaxPathVertices) {
     return invalid_argument("path sample: vertex_count " + std::to_string(sample.vertex_count) +
-                            " above the capacity of " + std::to_string(kMaxPathVertices));
+                            " above the capacity of " + std::to_string(msg::kMaxPathVertices));
   }
   const std::uint32_t n = sample.vertex_count;
   const std_msgs_msg_dds__Header_ h = header(sample.stamp_ns, frame_id_);
   path_.header = h;
   path_.poses._length = n;
   for (std::uint32_t i = 0; i < n; ++i) {
-    const PathVertex& v = sample.vertices[i];
+    const msg::PathVertex& v = sample.vertices[i];
     poses_[i].header.stamp = h.stamp;
     poses_[i].pose.position = to_point(v.position);
     positions_[i] = to_point(v.position);
@@ -126,35 +118,35 @@ Status PathMessages::fill(const PathSample& sample) {
   return Status();
 }
 
-Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& msg, PathSample& out) {
-  const std::uint32_t n = msg.positions_m._length;
-  if (n > kMaxPathVertices) {
+Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& wire, msg::PathSample& out) {
+  const std::uint32_t n = wire.positions_m._length;
+  if (n > msg::kMaxPathVertices) {
     return invalid_argument("path update: " + std::to_string(n) + " vertices, above " +
-                            std::to_string(kMaxPathVertices));
+                            std::to_string(msg::kMaxPathVertices));
   }
-  if (msg.visibility._length != n || msg.clearance_m._length != n) {
+  if (wire.visibility._length != n || wire.clearance_m._length != n) {
     return invalid_argument("path update: " + std::to_string(n) + " positions but " +
-                            std::to_string(msg.visibility._length) + " visibility and " +
-                            std::to_string(msg.clearance_m._length) + " clearance values");
+                            std::to_string(wire.visibility._length) + " visibility and " +
+                            std::to_string(wire.clearance_m._length) + " clearance values");
   }
-  const char* pack = msg.pack_id ? msg.pack_id : "";
-  if (!copy_text(out.pack_id, pack)) {
+  const char* pack = wire.pack_id ? wire.pack_id : "";
+  if (!msg::copy_text(out.pack_id, pack)) {
     return invalid_argument("path update: pack_id longer than " +
-                            std::to_string(kPackIdCapacity - 1) + " characters");
+                            std::to_string(msg::kPackIdCapacity - 1) + " characters");
   }
-  out.sequence = msg.sequence_number;
-  out.stamp_ns = from_ros_time(msg.header.stamp);
-  out.objective = static_cast<Objective>(msg.objective);
-  out.converged = msg.converged;
-  out.inside_envelope = msg.inside_envelope;
-  out.f_c = msg.f_c;
-  out.length_m = msg.length_m;
-  out.min_clearance_m = msg.min_clearance_m;
+  out.sequence = wire.sequence_number;
+  out.stamp_ns = from_ros_time(wire.header.stamp);
+  out.objective = static_cast<msg::Objective>(wire.objective);
+  out.converged = wire.converged;
+  out.inside_envelope = wire.inside_envelope;
+  out.f_c = wire.f_c;
+  out.length_m = wire.length_m;
+  out.min_clearance_m = wire.min_clearance_m;
   out.vertex_count = n;
   for (std::uint32_t i = 0; i < n; ++i) {
-    const geometry_msgs_msg_dds__Point_& p = msg.positions_m._buffer[i];
-    out.vertices[i] = PathVertex{{p.x, p.y, p.z}, msg.visibility._buffer[i],
-                                 msg.clearance_m._buffer[i]};
+    const geometry_msgs_msg_dds__Point_& p = wire.positions_m._buffer[i];
+    out.vertices[i] = msg::PathVertex{{p.x, p.y, p.z}, wire.visibility._buffer[i],
+                                 wire.clearance_m._buffer[i]};
   }
   return Status();
 }
@@ -165,7 +157,7 @@ HealthMessage::HealthMessage(std::string frame_id) : frame_id_(std::move(frame_i
   msg_.safe_state_reason = reason_;
 }
 
-Status HealthMessage::fill(const HealthSample& sample, const LayerCounters& counters) {
+Status HealthMessage::fill(const msg::HealthSample& sample, const LayerCounters& counters) {
   msg_.header = header(sample.stamp_ns, frame_id_);
   msg_.sequence_number = sample.sequence;
   msg_.period_us = sample.period_us;
@@ -188,7 +180,7 @@ DeviceStatusMessage::DeviceStatusMessage(std::string frame_id)
   msg_.device = device_;
 }
 
-Status DeviceStatusMessage::fill(const DeviceStatusSample& sample) {
+Status DeviceStatusMessage::fill(const msg::DeviceStatusSample& sample) {
   msg_.header = header(sample.stamp_ns, frame_id_);
   msg_.sequence_number = sample.sequence;
   copy_terminated(device_, sample.device);
@@ -210,10 +202,10 @@ ThumbnailMessage::ThumbnailMessage(std::string frame_id) : frame_id_(std::move(f
   msg_.data._release = false;
 }
 
-Status ThumbnailMessage::fill(const ThumbnailSample& sample) {
-  if (sample.png_size_bytes == 0 || sample.png_size_bytes > kMaxThumbnailBytes) {
+Status ThumbnailMessage::fill(const msg::ThumbnailSample& sample) {
+  if (sample.png_size_bytes == 0 || sample.png_size_bytes > msg::kMaxThumbnailBytes) {
     return invalid_argument("thumbnail: png_size_bytes " + std::to_string(sample.png_size_bytes) +
-                            " outside 1.." + std::to_string(kMaxThumbnailBytes));
+                            " outside 1.." + std::to_string(msg::kMaxThumbnailBytes));
   }
   if (sample.png_size_bytes < sizeof kPngSignature ||
       std::memcmp(sample.png, kPngSignature, sizeof kPngSignature) != 0) {
@@ -235,9 +227,9 @@ TerrainMessage::TerrainMessage(std::string frame_id) : frame_id_(std::move(frame
   msg_.crs_wkt = crs_wkt_;
 }
 
-Status TerrainMessage::fill(const TerrainInfo& info) {
-  if (text_of(info.pack_id).empty()) return invalid_argument("terrain info: empty pack_id");
-  if (text_of(info.crs).empty() && text_of(info.crs_wkt).empty()) {
+Status TerrainMessage::fill(const msg::TerrainInfo& info) {
+  if (msg::text_of(info.pack_id).empty()) return invalid_argument("terrain info: empty pack_id");
+  if (msg::text_of(info.crs).empty() && msg::text_of(info.crs_wkt).empty()) {
     return invalid_argument("terrain info: neither crs nor crs_wkt is set");
   }
   msg_.header = header(info.stamp_ns, frame_id_);

@@ -1,8 +1,8 @@
-// Conversion of the plain samples (samples.hpp) into the DDS messages visvol
+// Conversion of the plain samples (msg/samples.hpp) into the DDS messages visvol
 // publishes, into storage reserved once, and back for subscribers.
 //
 // Each *Message class owns a generated message and every buffer its pointers
-// refer to, sized for the capacities of samples.hpp: fill() copies a sample in
+// refer to, sized for the capacities of msg/samples.hpp: fill() copies a sample in
 // with no allocation and returns the message to pass to Writer::write. The
 // message stays valid until the next fill() (ThumbnailMessage also points at
 // the sample's PNG bytes: keep the sample until the write returns).
@@ -17,9 +17,9 @@
 #include <cstdint>
 #include <string>
 
-#include "drivers/dds/samples.hpp"
-#include "rt/base/status.hpp"
+#include "msg/samples.hpp"
 #include "ros2.h"
+#include "rt/base/status.hpp"
 #include "visvol_msgs.h"
 
 namespace visvol::dds {
@@ -28,9 +28,6 @@ namespace visvol::dds {
 // clamped (ROS time ends in 2038).
 builtin_interfaces_msg_dds__Time_ to_ros_time(std::int64_t stamp_ns);
 std::int64_t from_ros_time(const builtin_interfaces_msg_dds__Time_& time);
-
-// The system clock now, in Unix-epoch nanoseconds. Real-time safe (vDSO).
-std::int64_t now_stamp_ns();
 
 // The path as nav_msgs/Path (for RViz and ROS 2 nodes) and as visvol's
 // PathUpdate (the same vertices plus visibility, clearance and the measure).
@@ -42,19 +39,19 @@ class PathMessages {
   PathMessages& operator=(const PathMessages&) = delete;
 
   // invalid_argument when vertex_count exceeds kMaxPathVertices.
-  Status fill(const PathSample& sample);
+  Status fill(const msg::PathSample& sample);
   const nav_msgs_msg_dds__Path_& path() const { return path_; }
   const visvol_msgs_msg_dds__PathUpdate_& update() const { return update_; }
 
  private:
   std::string frame_id_;
-  char pack_id_[kPackIdCapacity] = {};
+  char pack_id_[msg::kPackIdCapacity] = {};
   nav_msgs_msg_dds__Path_ path_{};
   visvol_msgs_msg_dds__PathUpdate_ update_{};
-  geometry_msgs_msg_dds__PoseStamped_ poses_[kMaxPathVertices];
-  geometry_msgs_msg_dds__Point_ positions_[kMaxPathVertices];
-  double visibility_[kMaxPathVertices];
-  double clearance_m_[kMaxPathVertices];
+  geometry_msgs_msg_dds__PoseStamped_ poses_[msg::kMaxPathVertices];
+  geometry_msgs_msg_dds__Point_ positions_[msg::kMaxPathVertices];
+  double visibility_[msg::kMaxPathVertices];
+  double clearance_m_[msg::kMaxPathVertices];
 };
 
 // Counters the DDS layer adds to each health report.
@@ -69,12 +66,12 @@ class HealthMessage {
   explicit HealthMessage(std::string frame_id);
   HealthMessage(const HealthMessage&) = delete;
   HealthMessage& operator=(const HealthMessage&) = delete;
-  Status fill(const HealthSample& sample, const LayerCounters& counters);
+  Status fill(const msg::HealthSample& sample, const LayerCounters& counters);
   const visvol_msgs_msg_dds__LoopHealth_& message() const { return msg_; }
 
  private:
   std::string frame_id_;
-  char reason_[kReasonCapacity] = {};
+  char reason_[msg::kReasonCapacity] = {};
   visvol_msgs_msg_dds__LoopHealth_ msg_{};
 };
 
@@ -83,12 +80,12 @@ class DeviceStatusMessage {
   explicit DeviceStatusMessage(std::string frame_id);
   DeviceStatusMessage(const DeviceStatusMessage&) = delete;
   DeviceStatusMessage& operator=(const DeviceStatusMessage&) = delete;
-  Status fill(const DeviceStatusSample& sample);
+  Status fill(const msg::DeviceStatusSample& sample);
   const visvol_msgs_msg_dds__DeviceStatus_& message() const { return msg_; }
 
  private:
   std::string frame_id_;
-  char device_[kDeviceNameCapacity] = {};
+  char device_[msg::kDeviceNameCapacity] = {};
   visvol_msgs_msg_dds__DeviceStatus_ msg_{};
 };
 
@@ -100,7 +97,7 @@ class ThumbnailMessage {
   ThumbnailMessage& operator=(const ThumbnailMessage&) = delete;
   // invalid_argument when png_size_bytes is 0, above kMaxThumbnailBytes, or
   // the bytes do not start with the PNG signature. Points at sample.png.
-  Status fill(const ThumbnailSample& sample);
+  Status fill(const msg::ThumbnailSample& sample);
   const sensor_msgs_msg_dds__CompressedImage_& message() const { return msg_; }
 
  private:
@@ -114,20 +111,20 @@ class TerrainMessage {
   explicit TerrainMessage(std::string frame_id);
   TerrainMessage(const TerrainMessage&) = delete;
   TerrainMessage& operator=(const TerrainMessage&) = delete;
-  Status fill(const TerrainInfo& info);
+  Status fill(const msg::TerrainInfo& info);
   const visvol_msgs_msg_dds__TerrainInfo_& message() const { return msg_; }
 
  private:
   std::string frame_id_;
-  char pack_id_[kPackIdCapacity] = {};
-  char crs_[kCrsCapacity] = {};
-  char crs_wkt_[kCrsWktCapacity] = {};
+  char pack_id_[msg::kPackIdCapacity] = {};
+  char crs_[msg::kCrsCapacity] = {};
+  char crs_wkt_[msg::kCrsWktCapacity] = {};
   visvol_msgs_msg_dds__TerrainInfo_ msg_{};
 };
 
 // Subscriber side: a received PathUpdate back into a PathSample.
 // invalid_argument when it holds more vertices than kMaxPathVertices, its
 // three per-vertex sequences differ in length, or a text does not fit.
-Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& msg, PathSample& out);
+Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& msg, msg::PathSample& out);
 
 }  // namespace visvol::dds

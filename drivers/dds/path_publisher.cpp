@@ -41,7 +41,7 @@ PathPublisher::PathPublisher(std::string frame_id, Writer path, Writer update, W
       thumbnail_(frame_id),
       terrain_(frame_id) {}
 
-Status PathPublisher::publish(const PathSample& path) {
+Status PathPublisher::publish(const msg::PathSample& path) {
   VISVOL_RETURN_IF_ERROR(path_.fill(path));
   // The update first: a subscriber of both sees the measure no later than
   // the geometry.
@@ -49,12 +49,12 @@ Status PathPublisher::publish(const PathSample& path) {
   return write_status(path_writer_, &path_.path());
 }
 
-Status PathPublisher::publish(const ThumbnailSample& thumbnail) {
+Status PathPublisher::publish(const msg::ThumbnailSample& thumbnail) {
   VISVOL_RETURN_IF_ERROR(thumbnail_.fill(thumbnail));
   return write_status(thumbnail_writer_, &thumbnail_.message());
 }
 
-Status PathPublisher::publish(const TerrainInfo& terrain) {
+Status PathPublisher::publish(const msg::TerrainInfo& terrain) {
   VISVOL_RETURN_IF_ERROR(terrain_.fill(terrain));
   return write_status(terrain_writer_, &terrain_.message());
 }

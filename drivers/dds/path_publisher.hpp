@@ -24,7 +24,7 @@
 
 #include "drivers/dds/message_codec.hpp"
 #include "drivers/dds/participant.hpp"
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/status.hpp"
 
 namespace visvol::dds {
@@ -37,11 +37,11 @@ class PathPublisher {
                                                            kDefaultFrameId);
 
   // The path as nav_msgs/Path and as visvol_msgs/PathUpdate.
-  Status publish(const PathSample& path);
+  Status publish(const msg::PathSample& path);
   // The thumbnail as sensor_msgs/CompressedImage ("png").
-  Status publish(const ThumbnailSample& thumbnail);
+  Status publish(const msg::ThumbnailSample& thumbnail);
   // The pack and its CRS.
-  Status publish(const TerrainInfo& terrain);
+  Status publish(const msg::TerrainInfo& terrain);
 
   // Waits until every matched subscriber has acknowledged everything
   // published (reliable delivery), at most timeout_s. A timeout says how many

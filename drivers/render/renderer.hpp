@@ -57,7 +57,7 @@ Result<View> parse_view(const std::string& text);
 
 inline constexpr int kMinSidePx = 32;
 inline constexpr int kMaxSidePx = 4096;
-// The console's path sample holds at most this many vertices (dds::kMaxPathVertices).
+// The console's path sample holds at most this many vertices (msg::kMaxPathVertices).
 inline constexpr std::size_t kDefaultMaxPathVertices = 512;
 inline constexpr std::size_t kDefaultMaxMarkers = 16;
 // F_p is shown this high above the ground when there is no path and no height.
@@ -167,7 +167,7 @@ class Renderer {
   const FrameLayout& layout() const { return layout_; }
 
   // Encodes the last frame as PNG into out[0, capacity_bytes); returns its
-  // size. A dds::ThumbnailSample's png array (kMaxThumbnailBytes) is a valid
+  // size. A msg::ThumbnailSample's png array (kMaxThumbnailBytes) is a valid
   // target. No allocation on success.
   Result<std::size_t> encode_png(std::uint8_t* out, std::size_t capacity_bytes);
 

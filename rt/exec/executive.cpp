@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstring>
 
-#include "drivers/dds/message_codec.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/planner.hpp"
 #include "rt/rope/slack.hpp"
@@ -14,21 +13,21 @@ namespace visvol::rt {
 namespace {
 
 static_assert(kMaxPlanObservers == kMaxObserversPerKind, "the console takes as many observers as the planner");
-static_assert(dds::kMaxObserversPerKind == static_cast<std::size_t>(kMaxObserversPerKind),
+static_assert(msg::kMaxObserversPerKind == static_cast<std::size_t>(kMaxObserversPerKind),
               "a command's observers of a kind are what a hull request holds");
 
 constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt::PathChecker)
 
 std::size_t index_of(RopeModel m) { return m == RopeModel::articulated ? 1 : 0; }
 
-dds::DeviceState device_state_of(haptic::DeviceState s, bool forces) {
+msg::DeviceState device_state_of(HapticState s, bool forces) {
   switch (s) {
-    case haptic::DeviceState::boot: return dds::DeviceState::disconnected;
-    case haptic::DeviceState::pre_operational: return dds::DeviceState::idle;
-    case haptic::DeviceState::operational: return forces ? dds::DeviceState::active : dds::DeviceState::idle;
-    case haptic::DeviceState::fault: return dds::DeviceState::fault;
+    case HapticState::boot: return msg::DeviceState::disconnected;
+    case HapticState::pre_operational: return msg::DeviceState::idle;
+    case HapticState::operational: return forces ? msg::DeviceState::active : msg::DeviceState::idle;
+    case HapticState::fault: return msg::DeviceState::fault;
   }
-  return dds::DeviceState::unknown;
+  return msg::DeviceState::unknown;
 }
 
 // Finite and over the grid: what every endpoint must be (real-time safe).
@@ -82,21 +81,21 @@ Executive::Executive(const ExecutiveConfig& config, storage::ResidentPack& field
 Executive::~Executive() = default;
 
 Result<std::unique_ptr<Executive>> Executive::create(const ExecutiveConfig& config, storage::ResidentPack& field,
-                                                     can::CanBus* bus, DeviceSimulation* simulation,
-                                                     dds::CommandQueue* commands, const ExecutiveOutputs& outputs) {
+                                                     HapticDevice* device, DeviceSimulation* simulation,
+                                                     msg::CommandQueue* commands, const ExecutiveOutputs& outputs) {
   std::unique_ptr<Executive> e(new Executive(config, field));
-  VISVOL_RETURN_IF_ERROR(e->init(bus, simulation, commands, outputs));
+  VISVOL_RETURN_IF_ERROR(e->init(device, simulation, commands, outputs));
   return e;
 }
 
-Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::CommandQueue* commands,
+Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::CommandQueue* commands,
                        const ExecutiveOutputs& outputs) {
   const ExecutiveConfig& c = config_;
   if (c.level < 0 || c.level >= field_.level_count()) {
     return invalid_argument("executive: level " + std::to_string(c.level) + " is not in the pack (0.." +
                             std::to_string(field_.level_count() - 1) + ")");
   }
-  if (c.max_segments < 2 || c.max_segments > 100000 || c.max_segments + 1 > static_cast<int>(dds::kMaxPathVertices) * 64) {
+  if (c.max_segments < 2 || c.max_segments > 100000 || c.max_segments + 1 > static_cast<int>(msg::kMaxPathVertices) * 64) {
     return invalid_argument("executive: max segments " + std::to_string(c.max_segments) + " is outside 2..100000");
   }
   if (c.segments < 2 || c.segments > c.max_segments) {
@@ -161,8 +160,8 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   }
   rope_ = ropes_[index_of(c.model)].get();
   scratch_ = std::make_unique<Vec3[]>(static_cast<std::size_t>(c.max_segments) + 1);
-  path_sample_ = std::make_unique<dds::PathSample>();
-  held_ = std::make_unique<dds::Command>();
+  path_sample_ = std::make_unique<msg::PathSample>();
+  held_ = std::make_unique<msg::Command>();
   if (start_run() != Errc::ok) return invalid_argument("executive: the rope could not be laid between the endpoints");
   counters_.running = c.start_running;
   counters_.fc = path_fc(rope_->vertices(), rope_->segments() + 1, *forces_, c.fc_samples);
@@ -171,7 +170,7 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
   simulation_ = simulation;
   commands_ = commands;
   outputs_ = outputs;
-  if (bus != nullptr) {
+  if (device != nullptr) {
     // the rope's extent onto the device's workspace; the soft joint as the hand feels it
     const double span_m = std::max((c.end_m - c.start_m).head<2>().norm(), 10.0 * g.spacing_m);
     servo::ServoConfig sc = c.servo;
@@ -185,10 +184,7 @@ Status Executive::init(can::CanBus* bus, DeviceSimulation* simulation, dds::Comm
     Result<servo::Servo> servo = servo::Servo::create(sc);
     if (!servo.ok()) return servo.status().with_context("executive: servo");
     servo_.emplace(std::move(*servo));
-    Result<haptic::DeviceDriver> driver = haptic::DeviceDriver::create(c.driver, *bus);
-    if (!driver.ok()) return driver.status().with_context("executive: haptic driver");
-    driver_.emplace(std::move(*driver));
-    bus_ = bus;
+    device_ = device;
     last_proxy_m_ = sc.world_offset_m;
     // 1 mm of hand travel pulls as hard as the saturated field (k3 = 1); the
     // pull is capped at ten times that, which the rope's step still takes
@@ -279,18 +275,18 @@ void Executive::set_ends(const Vec3& start, const Vec3& end) {
 // ---- commands -------------------------------------------------------------
 
 // The work a command makes the loop do, in items: a set-constraints command's
-// constraints (up to dds::kMaxConstraints); a command that lays the rope
+// constraints (up to msg::kMaxConstraints); a command that lays the rope
 // again (start, set-endpoints, set-segments, set-model), its vertices (at
 // most kMaxConstraints: a rope of more takes a tick of its own); one for any
 // other command.
-int Executive::command_items(const dds::Command& c) const {
-  auto bounded = [](std::int64_t n) { return static_cast<int>(std::clamp<std::int64_t>(n, 1, dds::kMaxConstraints)); };
+int Executive::command_items(const msg::Command& c) const {
+  auto bounded = [](std::int64_t n) { return static_cast<int>(std::clamp<std::int64_t>(n, 1, msg::kMaxConstraints)); };
   switch (c.kind) {
-    case dds::CommandKind::set_constraints: return bounded(c.constraints.count);
-    case dds::CommandKind::set_segment_count: return bounded(std::int64_t{c.segment_count} + 1);
-    case dds::CommandKind::start:
-    case dds::CommandKind::set_endpoints:
-    case dds::CommandKind::set_model: return bounded(rope_->segments() + 1);
+    case msg::CommandKind::set_constraints: return bounded(c.constraints.count);
+    case msg::CommandKind::set_segment_count: return bounded(std::int64_t{c.segment_count} + 1);
+    case msg::CommandKind::start:
+    case msg::CommandKind::set_endpoints:
+    case msg::CommandKind::set_model: return bounded(rope_->segments() + 1);
     default: return 1;
   }
 }
@@ -303,10 +299,10 @@ void Executive::apply_commands() {
   if (commands_ == nullptr) return;
   int items = 0;
   for (int n = 0; n < kMaxCommandsPerTick; ++n) {
-    dds::Command& c = *held_;
+    msg::Command& c = *held_;
     if (!holding_ && !commands_->try_pop(c)) return;
     const int cost = command_items(c);
-    holding_ = n > 0 && items + cost > static_cast<int>(dds::kMaxConstraints);
+    holding_ = n > 0 && items + cost > static_cast<int>(msg::kMaxConstraints);
     if (holding_) return;
     items += cost;
     const char* reason = "";
@@ -320,18 +316,18 @@ void Executive::apply_commands() {
   }
 }
 
-void Executive::ack(const dds::Command& c, Errc result, const char* reason) {
+void Executive::ack(const msg::Command& c, Errc result, const char* reason) {
   if (outputs_.acks == nullptr) return;
-  dds::CommandAck a{};
+  msg::CommandAck a{};
   std::memcpy(a.source, c.source, sizeof a.source);
   a.sequence = c.sequence;
   a.kind = static_cast<std::uint8_t>(c.kind);
-  a.result = result == Errc::ok ? dds::AckResult::applied : dds::AckResult::failed;
-  dds::copy_text(a.reason, reason);
+  a.result = result == Errc::ok ? msg::AckResult::applied : msg::AckResult::failed;
+  msg::copy_text(a.reason, reason);
   if (!outputs_.acks->try_push(a)) ++counters_.acks_dropped;
 }
 
-Errc Executive::apply(const dds::Command& c, const char*& reason) {
+Errc Executive::apply(const msg::Command& c, const char*& reason) {
   const storage::ResidentSampler& s = forces_->sampler();
   auto copy_vertices = [&] {
     const int n = rope_->segments() + 1;
@@ -339,7 +335,7 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
     return n;
   };
   switch (c.kind) {
-    case dds::CommandKind::set_endpoints: {
+    case msg::CommandKind::set_endpoints: {
       const Vec3 a(c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m);
       const Vec3 b(c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m);
       const fields::VolumeGeometry& g = s.level().geometry();
@@ -370,12 +366,12 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       }
       return Errc::ok;
     }
-    case dds::CommandKind::set_objective:
-      objective_ = c.objective == dds::Objective::show ? Objective::show : Objective::hide;
+    case msg::CommandKind::set_objective:
+      objective_ = c.objective == msg::Objective::show ? Objective::show : Objective::hide;
       update_gains();
       equilibrium_.reset();
       return Errc::ok;
-    case dds::CommandKind::set_weights: {
+    case msg::CommandKind::set_weights: {
       k1_ = c.weights.k1_visibility;
       k3_ = c.weights.k3_user;
       ForceGains g = forces_->gains();
@@ -386,7 +382,7 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       equilibrium_.reset();
       return Errc::ok;
     }
-    case dds::CommandKind::set_stiffness: {
+    case msg::CommandKind::set_stiffness: {
       const auto old_stretch = stretch_override_, old_bend = bend_override_;
       stretch_override_ = c.stiffness.stretch_n_per_m;
       bend_override_ = c.stiffness.bend_n_m_per_rad;
@@ -400,8 +396,8 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       equilibrium_.reset();
       return Errc::ok;
     }
-    case dds::CommandKind::set_model: {
-      const RopeModel m = c.model == dds::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
+    case msg::CommandKind::set_model: {
+      const RopeModel m = c.model == msg::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
       if (m == rope_->model()) return Errc::ok;
       const int n = copy_vertices();
       if (restart_rope(scratch_.get(), n, rope_->segments(), m) != Errc::ok) {
@@ -410,7 +406,7 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       }
       return Errc::ok;
     }
-    case dds::CommandKind::set_segment_count: {
+    case msg::CommandKind::set_segment_count: {
       const int segments = static_cast<int>(c.segment_count);
       if (segments < 2 || segments > config_.max_segments) {
         reason = "segment count outside what the console reserved";
@@ -423,20 +419,20 @@ Errc Executive::apply(const dds::Command& c, const char*& reason) {
       }
       return Errc::ok;
     }
-    case dds::CommandKind::set_constraints:
+    case msg::CommandKind::set_constraints:
       return apply_constraints(c, reason);
-    case dds::CommandKind::start:
+    case msg::CommandKind::start:
       if (start_run() != Errc::ok) {
         reason = "the rope could not be laid between the endpoints";
         return Errc::invalid_argument;
       }
       counters_.running = true;
       return Errc::ok;
-    case dds::CommandKind::stop:
+    case msg::CommandKind::stop:
       counters_.running = false;
       rope_->clear_point_force();
       return Errc::ok;
-    case dds::CommandKind::switch_terrain:
+    case msg::CommandKind::switch_terrain:
       if (c.pack_id[0] == '\0') {
         reason = "switch-terrain names no pack";
         return Errc::invalid_argument;
@@ -522,7 +518,7 @@ Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGain
 }
 
 // Why an observer of a command cannot be had (null: it can). Real-time safe.
-const char* Executive::observer_problem(const dds::Constraint& k) const {
+const char* Executive::observer_problem(const msg::Constraint& k) const {
   const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
   int pi = 0, pj = 0;
   // on the finest level and on the one the hulls are built on (a coarser
@@ -539,7 +535,7 @@ const char* Executive::observer_problem(const dds::Constraint& k) const {
 // force once the builder has their hulls); the clearance and the ceiling
 // change, at once, where the command gives them. All or nothing: a command
 // refused for any item changes nothing.
-Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
+Errc Executive::apply_constraints(const msg::Command& c, const char*& reason) {
   ForceGains gains = forces_->gains();
   HullRequest r;
   r.eye_height_m = config_.eye_height_m;
@@ -563,17 +559,17 @@ Errc Executive::apply_constraints(const dds::Command& c, const char*& reason) {
 
 // The command's items into `gains` (clearance, ceiling) and `r` (observers,
 // each checked on its own).
-Errc Executive::read_constraints(const dds::Command& c, ForceGains& gains, HullRequest& r,
+Errc Executive::read_constraints(const msg::Command& c, ForceGains& gains, HullRequest& r,
                                  const char*& reason) const {
-  const std::uint32_t n = std::min<std::uint32_t>(c.constraints.count, static_cast<std::uint32_t>(dds::kMaxConstraints));
+  const std::uint32_t n = std::min<std::uint32_t>(c.constraints.count, static_cast<std::uint32_t>(msg::kMaxConstraints));
   for (std::uint32_t i = 0; i < n; ++i) {
-    const dds::Constraint& k = c.constraints.items[i];
+    const msg::Constraint& k = c.constraints.items[i];
     switch (k.kind) {
-      case dds::ConstraintKind::clearance: gains.clearance_m = k.height_m; continue;
-      case dds::ConstraintKind::max_agl: gains.max_agl_m = k.height_m; continue;
-      case dds::ConstraintKind::max_altitude: gains.max_altitude_m = k.height_m; continue;
-      case dds::ConstraintKind::hidden_from:
-      case dds::ConstraintKind::visible_to: break;
+      case msg::ConstraintKind::clearance: gains.clearance_m = k.height_m; continue;
+      case msg::ConstraintKind::max_agl: gains.max_agl_m = k.height_m; continue;
+      case msg::ConstraintKind::max_altitude: gains.max_altitude_m = k.height_m; continue;
+      case msg::ConstraintKind::hidden_from:
+      case msg::ConstraintKind::visible_to: break;
     }
     if (hulls_ == nullptr) {
       reason = "hidden-from and visible-to constraints are not supported without the console's hull builder "
@@ -585,7 +581,7 @@ Errc Executive::read_constraints(const dds::Command& c, ForceGains& gains, HullR
       return Errc::invalid_argument;
     }
     const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
-    if (!(k.kind == dds::ConstraintKind::hidden_from ? r.add_hidden_from(p) : r.add_visible_to(p))) {
+    if (!(k.kind == msg::ConstraintKind::hidden_from ? r.add_hidden_from(p) : r.add_visible_to(p))) {
       static_assert(kMaxObserversPerKind == 256, "the reason names the number");
       reason = "more than 256 hidden-from or 256 visible-to points";
       return Errc::invalid_argument;
@@ -611,7 +607,7 @@ const char* Executive::constraints_problem(const ForceGains& g, const HullReques
   return nullptr;
 }
 
-bool Executive::terrain_switch(char (&pack_id)[dds::kPackIdCapacity]) const {
+bool Executive::terrain_switch(char (&pack_id)[msg::kPackIdCapacity]) const {
   if (!switch_requested_.load(std::memory_order_acquire)) return false;
   std::memcpy(pack_id, switch_pack_id_, sizeof pack_id);
   return true;
@@ -664,17 +660,17 @@ int Executive::nearest_point(const Vec3& p, double& fraction) const {
 }
 
 void Executive::haptics(std::int64_t now_ns, double t_s) {
-  driver_now_ns_ = now_ns;
-  driver_->poll(now_ns);
-  const haptic::DeviceSample& sample = driver_->sample();
+  device_now_ns_ = now_ns;
+  device_->poll(now_ns);
+  const HapticSample& sample = device_->sample();
   servo::ServoInput in;
   in.time_s = t_s;
-  in.device_pos_mm = Eigen::Vector3d(sample.pos_mm[0], sample.pos_mm[1], sample.pos_mm[2]);
-  in.grasp_button = (sample.buttons & haptic::kButtonGrasp) != 0;
-  in.clutch_button = (sample.buttons & haptic::kButtonClutch) != 0;
+  in.device_pos_mm = sample.position_mm;
+  in.grasp_button = sample.grasp_button;
+  in.clutch_button = sample.clutch_button;
   in.sample_fresh = sample.fresh;
   in.sample_valid = sample.valid;
-  in.device_operational = driver_->operational();
+  in.device_operational = device_->state() == HapticState::operational;
   in.point_valid = true;
   if (!grasping_) {
     // the point a grasp would take: nearest the proxy of the last tick
@@ -697,7 +693,7 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
     rope_->clear_point_force();
   }
   counters_.servo_reason = out_.safe_reason;
-  counters_.device_state = driver_->state();
+  counters_.device_state = device_->state();
 }
 
 void Executive::tick(const TickTime& time) {
@@ -705,15 +701,14 @@ void Executive::tick(const TickTime& time) {
   apply_commands();                                        // 1
   if (hulls_ != nullptr) install_hulls();
   if (simulation_ != nullptr) simulation_->step(now_ns);  // 2
-  if (driver_) haptics(now_ns, static_cast<double>(now_ns) * 1e-9);  // 3, 4
+  if (device_ != nullptr) haptics(now_ns, static_cast<double>(now_ns) * 1e-9);  // 3, 4
   if (counters_.running) {                                 // 5
     rope_->step(config_.period_s, *forces_);
     counters_.run_s += config_.period_s;
     if (!finite_rope(*rope_)) recover_rope();
   }
-  if (driver_) {                                           // 6
-    const Errc sent = driver_->command({out_.device_force_n.x(), out_.device_force_n.y(), out_.device_force_n.z()},
-                                       out_.device_enable);
+  if (device_ != nullptr) {                                // 6
+    const Errc sent = device_->command(out_.device_force_n, out_.device_enable);
     if (sent != Errc::ok && sent != Errc::state) ++counters_.send_failures;
   }
   const std::uint64_t n = ++counters_.ticks;               // 7
@@ -721,7 +716,7 @@ void Executive::tick(const TickTime& time) {
   const bool path_due = n % static_cast<std::uint64_t>(config_.path_every_ticks) == 0;
   const bool device_due = n % static_cast<std::uint64_t>(config_.device_every_ticks) == 0;
   if (path_due || device_due) {
-    const std::int64_t stamp = dds::now_stamp_ns();
+    const std::int64_t stamp = msg::now_stamp_ns();
     if (path_due) hand_off_path(stamp);
     if (device_due) {
       hand_off_device(stamp);
@@ -767,25 +762,25 @@ void Executive::measure() {
 void Executive::hand_off_path(std::int64_t stamp_ns) {
   if (outputs_.path == nullptr && outputs_.path_render == nullptr && outputs_.limited_path == nullptr) return;
   if (!finite_rope(*rope_)) return;  // a rope that could not be recovered is not published
-  dds::PathSample& p = *path_sample_;
+  msg::PathSample& p = *path_sample_;
   const storage::ResidentSampler& s = forces_->sampler();
   p.sequence = ++path_sequence_;
   p.stamp_ns = stamp_ns;
   std::memcpy(p.pack_id, config_.pack_id, sizeof p.pack_id);
-  p.objective = objective_ == Objective::show ? dds::Objective::show : dds::Objective::hide;
+  p.objective = objective_ == Objective::show ? msg::Objective::show : msg::Objective::hide;
   p.converged = counters_.converged;
   p.inside_envelope = false;  // the rope's own path: the flyable-path thread fits it
   p.f_c = counters_.fc;
   p.length_m = rope_->length_m();
   const int count = rope_->segments() + 1;
-  const int keep = std::min(count, static_cast<int>(dds::kMaxPathVertices));
+  const int keep = std::min(count, static_cast<int>(msg::kMaxPathVertices));
   const Vec3* v = rope_->vertices();
   double lowest = INFINITY;
   for (int k = 0; k < keep; ++k) {
     // evenly spaced, both ends kept
     const int i = keep == count ? k : static_cast<int>(std::lround(static_cast<double>(k) * (count - 1) / (keep - 1)));
     const Vec3& x = v[i];
-    dds::PathVertex& out = p.vertices[k];
+    msg::PathVertex& out = p.vertices[k];
     out.position = {x.x(), x.y(), x.z()};
     out.visibility = s.visibility(x.x(), x.y(), x.z());
     out.clearance_m = x.z() - s.height(x.x(), x.y());
@@ -800,7 +795,7 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
     l.limits.observers = in_force_ != nullptr ? in_force_->request : HullRequest{};
     outputs_.limited_path->publish();
   }
-  for (LatestValue<dds::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
+  for (LatestValue<msg::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
     if (sink == nullptr) continue;
     std::memcpy(&sink->back(), &p, sizeof p);
     sink->publish();
@@ -809,22 +804,22 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
 }
 
 void Executive::hand_off_device(std::int64_t stamp_ns) {
-  if (outputs_.device == nullptr || !driver_) return;
-  dds::DeviceStatusSample& d = outputs_.device->back();
+  if (outputs_.device == nullptr || device_ == nullptr) return;
+  msg::DeviceStatusSample& d = outputs_.device->back();
   d.sequence = ++device_sequence_;
   d.stamp_ns = stamp_ns;
-  dds::copy_text(d.device, "haptic");
-  d.state = device_state_of(driver_->state(), out_.forces_enabled);
-  d.fault_bits = driver_->report().fault_bits;
-  d.motor_temperature_c = driver_->report().motor_temperature_c;
-  const haptic::DeviceSample& sample = driver_->sample();
+  msg::copy_text(d.device, "haptic");
+  const HapticHealth health = device_->health();
+  d.state = device_state_of(health.state, out_.forces_enabled);
+  d.fault_bits = health.fault_bits;
+  d.motor_temperature_c = health.motor_temperature_c;
+  const HapticSample& sample = device_->sample();
   d.last_position_age_ms =
-      sample.timestamp_ns > 0 ? static_cast<double>(driver_now_ns_ - sample.timestamp_ns) * 1e-6 : INFINITY;
-  const can::CanCounters& bus = bus_->counters();
-  d.can_rx_frames = bus.received;
-  d.can_tx_frames = bus.sent;
-  d.can_errors = bus.error_frames + bus.send_failed + bus.dropped + bus.malformed;
-  d.bus_off_count = static_cast<std::uint32_t>(bus.bus_off);
+      sample.timestamp_ns > 0 ? static_cast<double>(device_now_ns_ - sample.timestamp_ns) * 1e-6 : INFINITY;
+  d.can_rx_frames = health.rx_frames;
+  d.can_tx_frames = health.tx_frames;
+  d.can_errors = health.errors;
+  d.bus_off_count = static_cast<std::uint32_t>(health.bus_off_count);
   outputs_.device->publish();
 }
 

@@ -11,10 +11,10 @@
 //                               the newest set; the clearance and the ceiling
 //                               take effect with their command)
 //   2. simulated device        (only with a simulation on the in-process bus)
-//   3. read CAN                (the haptic driver drains the bus)
+//   3. read the device         (HapticDevice::poll: the CAN driver drains the bus)
 //   4. servo                   (proxy, soft joint, force safety)
 //   5. rope step               (field forces of the resident level + the grasp)
-//   6. write CAN               (the device force command)
+//   6. command the device      (the force; the CAN driver sends one frame)
 //   7. hand off state          (path at path_hz, device status, the rope's box
 //                               to the tile pager, the quiescent point)
 // Commands are applied at the start of a tick, so a tick computes with one
@@ -30,8 +30,8 @@
 // of hand travel pulls as hard as k3 times the saturated field (the paper's
 // k3 U1), capped at ten times that.
 //
-// Ownership: borrows the resident pack, the bus and every queue and hand-off
-// (all must outlive it); owns the ropes, the servo and the driver.
+// Ownership: borrows the resident pack, the haptic device, the simulation and
+// every queue and hand-off (all must outlive it); owns the ropes and the servo.
 // Thread-safety: tick() and safe_state() on the loop thread; counters() from
 // that thread (snapshot() copies them for others through a LatestValue).
 // Cost: create() allocates everything (ropes at max_segments, scratch); a
@@ -43,12 +43,10 @@
 #include <memory>
 #include <optional>
 
-#include "drivers/can/can_bus.hpp"
-#include "drivers/dds/command_processor.hpp"
-#include "drivers/dds/samples.hpp"
-#include "drivers/haptic/device_driver.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/handoff.hpp"
 #include "rt/exec/constraint_hulls.hpp"
+#include "rt/exec/haptic_device.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/rope/equilibrium.hpp"
 #include "rt/rope/field_forces.hpp"
@@ -61,14 +59,6 @@ namespace visvol::rt {
 
 // Commands a tick applies at most (a burst waits in the queue for later ticks).
 inline constexpr int kMaxCommandsPerTick = 8;
-
-// Runs at stage 2 on the loop thread: a simulated device stepping on the
-// in-process bus (real-time safe).
-class DeviceSimulation {
- public:
-  virtual ~DeviceSimulation() = default;
-  virtual void step(std::int64_t now_ns) = 0;
-};
 
 struct ExecutiveConfig {
   // The planning problem at start-up (commands change it later).
@@ -101,14 +91,13 @@ struct ExecutiveConfig {
   int device_every_ticks = 100;     // device status
   int fc_samples = 128;
   double focus_lead_m = 0.0;        // added around the rope's box (the pager adds its margin too)
-  // Haptics (absent without a bus).
+  // Haptics (absent without a device).
   servo::ServoConfig servo;         // mapping and coupling are set from the scene when scale is 0
   double workspace_half_mm = 100.0; // the rope's extent maps onto +-this much hand travel
   double hand_stiffness_n_per_m = 300.0;  // the soft joint as the hand feels it
   double hand_damping_n_s_per_m = 1.0;
   double cue_n = 0.5;               // visibility cue at one reference gradient, N
-  haptic::DriverConfig driver;
-  char pack_id[dds::kPackIdCapacity] = "pack";
+  char pack_id[msg::kPackIdCapacity] = "pack";
   double period_s = 0.001;          // the loop's period: the rope's time step
 };
 
@@ -121,7 +110,7 @@ struct ExecutiveCounters {
   std::uint64_t paths = 0;              // path hand-offs
   std::uint64_t safe_states = 0;        // overrun safe states
   std::uint64_t grasps = 0;
-  std::uint64_t send_failures = 0;      // device commands the bus refused
+  std::uint64_t send_failures = 0;      // device commands refused (the CAN bus: full, down)
   std::uint64_t runs = 0;               // planning runs started
   std::uint64_t hull_sets = 0;          // hidden-from / visible-to hull sets put in force
   std::uint64_t rope_resets = 0;        // the rope's state stopped being finite and was laid again
@@ -131,7 +120,7 @@ struct ExecutiveCounters {
   double length_m = 0.0;
   double equilibrium_s = 0.0;           // simulated time of this run when it converged
   double run_s = 0.0;                   // simulated time of this run
-  haptic::DeviceState device_state = haptic::DeviceState::boot;
+  HapticState device_state = HapticState::boot;
   servo::SafeReason servo_reason = servo::SafeReason::none;
   bool haptics = false;
 };
@@ -144,30 +133,30 @@ struct PathLimits {
 
 // A path and the limits in force when it was handed off (plain data).
 struct LimitedPath {
-  dds::PathSample path;
+  msg::PathSample path;
   PathLimits limits;
 };
 
 // Where the executive's outputs go; every pointer may be null.
 struct ExecutiveOutputs {
-  LatestValue<dds::PathSample>* path = nullptr;            // DDS publisher
-  LatestValue<dds::PathSample>* path_render = nullptr;     // renderer
+  LatestValue<msg::PathSample>* path = nullptr;            // DDS publisher
+  LatestValue<msg::PathSample>* path_render = nullptr;     // renderer
   // Each path with the limits it is held to, in one hand-off: for a
   // consumer that fits it into the envelope.
   LatestValue<LimitedPath>* limited_path = nullptr;
-  LatestValue<dds::DeviceStatusSample>* device = nullptr;  // DDS publisher
-  dds::AckQueue* acks = nullptr;                           // applied/failed, to command intake
+  LatestValue<msg::DeviceStatusSample>* device = nullptr;  // DDS publisher
+  msg::AckQueue* acks = nullptr;                           // applied/failed, to command intake
 };
 
 class Executive final : public PeriodicTask {
  public:
   // Validates the configuration against the pack (endpoints inside and above
-  // the terrain, segments within capacity) and reserves everything. `bus`
-  // may be null (no haptic device); `simulation` may be null.
+  // the terrain, segments within capacity) and reserves everything. `device`
+  // may be null (no haptics); `simulation` may be null.
   static Result<std::unique_ptr<Executive>> create(const ExecutiveConfig& config,
-                                                   storage::ResidentPack& field, can::CanBus* bus,
+                                                   storage::ResidentPack& field, HapticDevice* device,
                                                    DeviceSimulation* simulation,
-                                                   dds::CommandQueue* commands,
+                                                   msg::CommandQueue* commands,
                                                    const ExecutiveOutputs& outputs);
   ~Executive() override;
 
@@ -190,14 +179,14 @@ class Executive final : public PeriodicTask {
   // A switch-terrain command to another pack, once applied: copies its pack
   // id and returns true (any thread; the loop asks nothing more until the
   // console has switched). The console checks the id against its packs first.
-  bool terrain_switch(char (&pack_id)[dds::kPackIdCapacity]) const;
+  bool terrain_switch(char (&pack_id)[msg::kPackIdCapacity]) const;
 
   const ExecutiveCounters& counters() const { return counters_; }
   // The counters, handed to another thread every device_every_ticks.
   LatestValue<ExecutiveCounters>& snapshot() { return snapshot_; }
   const Rope& rope() const { return *rope_; }
   const servo::Servo* servo() const { return servo_ ? &*servo_ : nullptr; }
-  const haptic::DeviceDriver* driver() const { return driver_ ? &*driver_ : nullptr; }
+  const HapticDevice* device() const { return device_; }
   const FieldForces<storage::ResidentLevel, storage::ResidentSampler>& forces() const { return *forces_; }
   const ExecutiveConfig& config() const { return config_; }
   // Where the operator's proxy is (world, m), as of the last tick.
@@ -205,21 +194,21 @@ class Executive final : public PeriodicTask {
 
  private:
   Executive(const ExecutiveConfig& config, storage::ResidentPack& field);
-  Status init(can::CanBus* bus, DeviceSimulation* simulation, dds::CommandQueue* commands,
+  Status init(HapticDevice* device, DeviceSimulation* simulation, msg::CommandQueue* commands,
               const ExecutiveOutputs& outputs);
 
   void apply_commands();
-  int command_items(const dds::Command& c) const;
+  int command_items(const msg::Command& c) const;
   void install_hulls();
   Status check_observers(const HullRequest& r) const;
   Status check_ceiling(const char* name, const Vec3& p, const ForceGains& g) const;
   bool under_ceiling(const Vec3& p, const ForceGains& g) const;
-  const char* observer_problem(const dds::Constraint& k) const;
+  const char* observer_problem(const msg::Constraint& k) const;
   const char* constraints_problem(const ForceGains& g, const HullRequest& r) const;
-  Errc read_constraints(const dds::Command& c, ForceGains& gains, HullRequest& r, const char*& reason) const;
-  Errc apply_constraints(const dds::Command& c, const char*& reason);
-  Errc apply(const dds::Command& c, const char*& reason);
-  void ack(const dds::Command& c, Errc result, const char* reason);
+  Errc read_constraints(const msg::Command& c, ForceGains& gains, HullRequest& r, const char*& reason) const;
+  Errc apply_constraints(const msg::Command& c, const char*& reason);
+  Errc apply(const msg::Command& c, const char*& reason);
+  void ack(const msg::Command& c, Errc result, const char* reason);
   Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
   Errc start_run();
   void set_ends(const Vec3& start, const Vec3& end);
@@ -240,7 +229,7 @@ class Executive final : public PeriodicTask {
   std::unique_ptr<Rope> ropes_[2];   // indexed by RopeModel
   Rope* rope_ = nullptr;
   std::optional<servo::Servo> servo_;
-  std::optional<haptic::DeviceDriver> driver_;
+  HapticDevice* device_ = nullptr;
   DeviceSimulation* simulation_ = nullptr;
   ConstraintHulls* hulls_ = nullptr;
   const HullSet* in_force_ = nullptr;   // the set the forces hold (owned by hulls_)
@@ -248,9 +237,9 @@ class Executive final : public PeriodicTask {
   std::uint64_t hull_requests_ = 0;  // hull requests made (their sequence numbers, from 1)
   std::uint64_t hull_pending_ = 0;   // the one being built, 0: none
   // switch-terrain: the id written by the loop, then the flag (release)
-  char switch_pack_id_[dds::kPackIdCapacity] = {};
+  char switch_pack_id_[msg::kPackIdCapacity] = {};
   std::atomic<bool> switch_requested_{false};
-  dds::CommandQueue* commands_ = nullptr;
+  msg::CommandQueue* commands_ = nullptr;
   ExecutiveOutputs outputs_;
   LatestValue<ExecutiveCounters> snapshot_;
 
@@ -264,8 +253,8 @@ class Executive final : public PeriodicTask {
   bool relaid_ = false;  // this run was laid again after its state stopped being finite
   EquilibriumDetector equilibrium_;
   std::unique_ptr<Vec3[]> scratch_;      // max_segments + 1 points
-  std::unique_ptr<dds::PathSample> path_sample_;  // filled, then copied into each hand-off
-  std::unique_ptr<dds::Command> held_;   // the command being applied, or waiting for the next tick
+  std::unique_ptr<msg::PathSample> path_sample_;  // filled, then copied into each hand-off
+  std::unique_ptr<msg::Command> held_;   // the command being applied, or waiting for the next tick
   bool holding_ = false;                 // held_ waits: the last tick's items were spent
   double user_force_per_n_ = 0.0;        // rope newtons per servo coupling newton
   double max_user_force_n_ = 0.0;
@@ -274,10 +263,9 @@ class Executive final : public PeriodicTask {
   double grasp_fraction_ = 0.0;
   std::uint64_t path_sequence_ = 0;
   std::uint64_t device_sequence_ = 0;
-  can::CanBus* bus_ = nullptr;
   servo::ServoOutput out_;              // this tick's servo output
   Vec3 last_proxy_m_ = Vec3::Zero();    // where a grasp would take the rope
-  std::int64_t driver_now_ns_ = 0;
+  std::int64_t device_now_ns_ = 0;
   ExecutiveCounters counters_;
 };
 

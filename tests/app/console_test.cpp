@@ -343,6 +343,7 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
 
 TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   using namespace visvol::dds;
+  using namespace visvol::msg;
   ParticipantConfig pc;
   pc.domain_id = 223;
   pc.cyclone_xml = std::string(loopback_config());
@@ -483,6 +484,7 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
 // time left, writing the outputs; an unknown pack id is refused by the intake.
 TEST_F(Console, SwitchesTerrainOnCommand) {
   using namespace visvol::dds;
+  using namespace visvol::msg;
   const std::string other = ::testing::TempDir() + "/console_b_" + std::to_string(getpid()) + ".vvp";
   ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
   const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_b_" + std::to_string(getpid());
@@ -601,6 +603,7 @@ TEST_F(Console, RefusesToStartWithABadTerrainPack) {
 // out its time there and names the failure in summary.json.
 TEST_F(Console, ASwitchThatCannotStartGoesBackToThePackItLeft) {
   using namespace visvol::dds;
+  using namespace visvol::msg;
   const std::string other = ::testing::TempDir() + "/console_c_" + std::to_string(getpid()) + ".vvp";
   ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
   const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_c_" + std::to_string(getpid());

@@ -60,7 +60,7 @@ class Flyable : public ::testing::Test {
     const fields::VolumeGeometry g = (*pack_)->geometry(0);
     const std::unique_ptr<PathFitter> f = fitter();
     const double highest = *std::max_element(f->terrain().height_m.begin(), f->terrain().height_m.end());
-    dds::PathSample& s = l.path;
+    msg::PathSample& s = l.path;
     s.sequence = sequence;
     std::snprintf(s.pack_id, sizeof s.pack_id, "flyable");
     s.vertex_count = static_cast<std::uint32_t>(vertices);
@@ -74,19 +74,19 @@ class Flyable : public ::testing::Test {
     l.limits = rt::PathLimits{};
     l.limits.gains.clearance_m = 20;
   }
-  static double steepest_deg(const dds::PathSample& s, bool climb) {
+  static double steepest_deg(const msg::PathSample& s, bool climb) {
     double worst = 0;
     for (std::uint32_t k = 1; k < s.vertex_count; ++k) {
-      const dds::WorldPoint& a = s.vertices[k - 1].position;
-      const dds::WorldPoint& b = s.vertices[k].position;
+      const msg::WorldPoint& a = s.vertices[k - 1].position;
+      const msg::WorldPoint& b = s.vertices[k].position;
       const double angle = std::atan2(b.z_m - a.z_m, std::hypot(b.x_m - a.x_m, b.y_m - a.y_m)) * kDeg;
       worst = std::max(worst, climb ? angle : -angle);
     }
     return worst;
   }
-  static const dds::PathSample* wait_for(LatestValue<dds::PathSample>& sink) {
+  static const msg::PathSample* wait_for(LatestValue<msg::PathSample>& sink) {
     for (int k = 0; k < 500; ++k) {
-      if (const dds::PathSample* s = sink.take()) return s;
+      if (const msg::PathSample* s = sink.take()) return s;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     return nullptr;
@@ -99,14 +99,14 @@ std::string* Flyable::path_ = nullptr;
 std::shared_ptr<const storage::Pack>* Flyable::pack_ = nullptr;
 
 TEST_F(Flyable, ARopesPathReachesBothSinksInsideTheClimbAndDescentLimits) {
-  LatestValue<dds::PathSample> publisher, renderer;
+  LatestValue<msg::PathSample> publisher, renderer;
   auto f = FlyablePath::start(fitter(), &publisher, &renderer);
   ASSERT_TRUE(f.ok()) << f.status().message();
   saw((*f)->rope_paths().back(), 42, 9);
-  const dds::PathSample& rope = (*f)->rope_paths().back().path;
+  const msg::PathSample& rope = (*f)->rope_paths().back().path;
   ASSERT_GT(steepest_deg(rope, true), 20.0);  // the rope's own path is far outside
   (*f)->rope_paths().publish();
-  const dds::PathSample* sent = wait_for(publisher);
+  const msg::PathSample* sent = wait_for(publisher);
   ASSERT_NE(sent, nullptr);
   EXPECT_EQ(sent->sequence, 42u);
   EXPECT_STREQ(sent->pack_id, "flyable");
@@ -122,14 +122,14 @@ TEST_F(Flyable, ARopesPathReachesBothSinksInsideTheClimbAndDescentLimits) {
 }
 
 TEST_F(Flyable, TheLastPathIsSentWhenStopping) {
-  LatestValue<dds::PathSample> publisher;
+  LatestValue<msg::PathSample> publisher;
   auto f = FlyablePath::start(fitter(), &publisher, nullptr, 0.5);  // a slow poll
   ASSERT_TRUE(f.ok());
   std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the thread is asleep
   saw((*f)->rope_paths().back(), 7, 9);
   (*f)->rope_paths().publish();
   (*f)->stop();
-  const dds::PathSample* sent = publisher.take();
+  const msg::PathSample* sent = publisher.take();
   ASSERT_NE(sent, nullptr);
   EXPECT_EQ(sent->sequence, 7u);
 }
@@ -144,7 +144,7 @@ TEST_F(Flyable, ALongRopeIsThinnedAndANonFiniteOneIsNotFitted) {
                       g.origin_y - 0.3 * (g.ny - 1) * g.spacing_m, g.z0_m + 200);
   }
   const rt::EnvelopeFit fit = f->fit(rope.data(), static_cast<int>(rope.size()), rt::ForceGains{});
-  EXPECT_LE(fit.path.size(), dds::kMaxPathVertices);
+  EXPECT_LE(fit.path.size(), msg::kMaxPathVertices);
   ASSERT_GE(fit.path.size(), 2u);
   EXPECT_EQ(fit.path.front(), rope.front());
   EXPECT_EQ(fit.path.back(), rope.back());
@@ -167,7 +167,7 @@ TEST_F(Flyable, ObserversInForceAreBuiltOnceAndKeptUnderTheirHull) {
   saw(l, 1, 9);
   std::vector<rt::Vec3> rope;
   for (std::uint32_t k = 0; k < l.path.vertex_count; ++k) {
-    const dds::WorldPoint& w = l.path.vertices[k].position;
+    const msg::WorldPoint& w = l.path.vertices[k].position;
     rope.emplace_back(w.x_m, w.y_m, w.z_m);
   }
   const rt::EnvelopeFit with = f->fit(rope.data(), static_cast<int>(rope.size()), l.limits.gains);

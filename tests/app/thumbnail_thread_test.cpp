@@ -40,9 +40,9 @@ class Thumbnails : public ::testing::Test {
     delete path_;
   }
   // A straight path across the pack, 100 m above its lowest level.
-  static dds::PathSample path(bool converged, std::uint64_t sequence) {
+  static msg::PathSample path(bool converged, std::uint64_t sequence) {
     const fields::VolumeGeometry g = (*pack_)->geometry(0);
-    dds::PathSample s{};
+    msg::PathSample s{};
     s.sequence = sequence;
     s.converged = converged;
     s.vertex_count = 17;
@@ -54,7 +54,7 @@ class Thumbnails : public ::testing::Test {
     }
     return s;
   }
-  static Result<std::unique_ptr<ThumbnailThread>> start(double max_hz, LatestValue<dds::ThumbnailSample>* sink) {
+  static Result<std::unique_ptr<ThumbnailThread>> start(double max_hz, LatestValue<msg::ThumbnailSample>* sink) {
     ThumbnailConfig c;
     c.view = render::View::top;
     c.width_px = 96;
@@ -77,7 +77,7 @@ std::string* Thumbnails::path_ = nullptr;
 std::shared_ptr<const storage::Pack>* Thumbnails::pack_ = nullptr;
 
 TEST_F(Thumbnails, DrawsWhenTheRopeComesToRestAndPublishesAPng) {
-  LatestValue<dds::ThumbnailSample> sink;
+  LatestValue<msg::ThumbnailSample> sink;
   auto t = start(50.0, &sink);
   ASSERT_TRUE(t.ok()) << t.status().message();
   (*t)->paths().write(path(false, 1));
@@ -85,7 +85,7 @@ TEST_F(Thumbnails, DrawsWhenTheRopeComesToRestAndPublishesAPng) {
   EXPECT_EQ((*t)->stats().rendered, 0u) << "a moving rope is not drawn";
   (*t)->paths().write(path(true, 2));
   ASSERT_TRUE(wait_for([&] { return (*t)->stats().rendered == 1; }, 10.0));
-  const dds::ThumbnailSample* png = sink.take();
+  const msg::ThumbnailSample* png = sink.take();
   ASSERT_NE(png, nullptr);
   ASSERT_GT(png->png_size_bytes, sizeof kPngSignature);
   EXPECT_EQ(std::memcmp(png->png, kPngSignature, sizeof kPngSignature), 0);

@@ -53,6 +53,7 @@ std::string* PlanPublishCli::pack_ = nullptr;
 
 TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
   using namespace visvol::dds;
+  using namespace visvol::msg;
   ParticipantConfig config;
   config.domain_id = kDomain;
   config.cyclone_xml = std::string(loopback_config());

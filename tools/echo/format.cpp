@@ -3,7 +3,7 @@
 #include <cstdarg>
 #include <cstdio>
 
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 
 namespace visvol::echo {
 namespace {
@@ -35,7 +35,7 @@ std::string stamp(const builtin_interfaces_msg_dds__Time_& t) {
 
 template <typename E>
 const char* name_of(std::uint8_t value) {
-  const char* n = dds::to_string(static_cast<E>(value));
+  const char* n = msg::to_string(static_cast<E>(value));
   return n ? n : "unknown";
 }
 
@@ -52,7 +52,7 @@ std::string format_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool w
            "f_c=%.6g min_clearance_m=%.3f converged=%s inside_envelope=%s",
       static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
       quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(),
-      name_of<dds::Objective>(m.objective), m.positions_m._length, m.length_m, m.f_c,
+      name_of<msg::Objective>(m.objective), m.positions_m._length, m.length_m, m.f_c,
       m.min_clearance_m, m.converged ? "yes" : "no", m.inside_envelope ? "yes" : "no");
   if (with_vertices) {
     for (std::uint32_t i = 0; i < m.positions_m._length; ++i) {
@@ -88,7 +88,7 @@ std::string format_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m) {
   add(out, "device seq=%llu stamp=%s name=%s state=%s fault_bits=0x%08x motor_temperature_c=%.1f "
            "last_position_age_ms=%.1f can_rx=%llu can_tx=%llu can_errors=%llu bus_off=%u",
       static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
-      quoted(m.device).c_str(), name_of<dds::DeviceState>(m.state), m.fault_bits,
+      quoted(m.device).c_str(), name_of<msg::DeviceState>(m.state), m.fault_bits,
       m.motor_temperature_c, m.last_position_age_ms,
       static_cast<unsigned long long>(m.can_rx_frames),
       static_cast<unsigned long long>(m.can_tx_frames),
@@ -117,8 +117,8 @@ std::string format_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m) {
 std::string format_ack(const visvol_msgs_msg_dds__CommandAck_& m) {
   std::string out;
   add(out, "ack source=%s seq=%llu kind=%s result=%s", quoted(m.source).c_str(),
-      static_cast<unsigned long long>(m.sequence_number), name_of<dds::CommandKind>(m.kind),
-      name_of<dds::AckResult>(m.result));
+      static_cast<unsigned long long>(m.sequence_number), name_of<msg::CommandKind>(m.kind),
+      name_of<msg::AckResult>(m.result));
   if (m.reason && m.reason[0] != '\0') add(out, " reason=%s", quoted(m.reason).c_str());
   return out;
 }

@@ -34,6 +34,7 @@ namespace {
 
 using namespace visvol;
 using namespace visvol::dds;
+using namespace visvol::msg;
 
 constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;

@@ -8,13 +8,13 @@
 #include <optional>
 #include <sstream>
 
+#include "app/mission_options.hpp"
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "app/mission_options.hpp"
 #include "path_io.hpp"
-#include "planning_pack.hpp"
 #include "plan_publish.hpp"
+#include "planning_pack.hpp"
 #include "rt/rope/planner.hpp"
 #include "storage/pack_identity.hpp"
 #include "storage/pack_reader.hpp"
@@ -40,12 +40,12 @@ struct PlanOptions {
   PublishOptions dds;
 };
 
-dds::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack_path) {
-  dds::TerrainInfo t{};
-  t.stamp_ns = dds::now_stamp_ns();
-  dds::copy_text(t.pack_id, storage::pack_id_from_path(pack_path));
-  dds::copy_text(t.crs, storage::epsg_from_wkt(pack.metadata().crs_wkt));
-  if (!dds::copy_text(t.crs_wkt, pack.metadata().crs_wkt)) t.crs_wkt[0] = '\0';  // never a torn WKT
+msg::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack_path) {
+  msg::TerrainInfo t{};
+  t.stamp_ns = msg::now_stamp_ns();
+  msg::copy_text(t.pack_id, storage::pack_id_from_path(pack_path));
+  msg::copy_text(t.crs, storage::epsg_from_wkt(pack.metadata().crs_wkt));
+  if (!msg::copy_text(t.crs_wkt, pack.metadata().crs_wkt)) t.crs_wkt[0] = '\0';  // never a torn WKT
   const fields::VolumeGeometry g = pack.geometry(0);
   t.min = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.z0_m};
   t.max = {g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y, g.top_m()};
@@ -161,7 +161,7 @@ int run_plan(const PlanOptions& o) {
     };
     Result<std::unique_ptr<PlanPublisher>> p = PlanPublisher::create(
         o.dds, terrain_info(*pack, o.pack),
-        r.objective == rt::Objective::show ? dds::Objective::show : dds::Objective::hide, probe);
+        r.objective == rt::Objective::show ? msg::Objective::show : msg::Objective::hide, probe);
     if (!p.ok()) return fail("plan", p.status());
     publisher = std::move(*p);
   }

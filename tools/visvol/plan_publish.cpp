@@ -40,8 +40,8 @@ std::vector<int> subsample_indices(int n, int max) {
 }
 
 Result<std::unique_ptr<PlanPublisher>> PlanPublisher::create(const PublishOptions& options,
-                                                             const dds::TerrainInfo& terrain,
-                                                             dds::Objective objective, VertexProbe probe) {
+                                                             const msg::TerrainInfo& terrain,
+                                                             msg::Objective objective, VertexProbe probe) {
   VISVOL_RETURN_IF_ERROR(validate(options));
   dds::ParticipantConfig config;
   config.domain_id = options.domain_id;
@@ -64,12 +64,12 @@ Result<std::unique_ptr<PlanPublisher>> PlanPublisher::create(const PublishOption
 }
 
 PlanPublisher::PlanPublisher(const PublishOptions& options, std::unique_ptr<dds::Participant> participant,
-                             std::unique_ptr<dds::PathPublisher> publisher, const dds::TerrainInfo& terrain,
-                             dds::Objective objective, VertexProbe probe)
+                             std::unique_ptr<dds::PathPublisher> publisher, const msg::TerrainInfo& terrain,
+                             msg::Objective objective, VertexProbe probe)
     : options_(options),
       participant_(std::move(participant)),
       publisher_(std::move(publisher)),
-      sample_(std::make_unique<dds::PathSample>()),
+      sample_(std::make_unique<msg::PathSample>()),
       probe_(std::move(probe)) {
   std::memcpy(sample_->pack_id, terrain.pack_id, sizeof sample_->pack_id);
   sample_->objective = objective;
@@ -95,20 +95,20 @@ Status PlanPublisher::finish(const std::vector<rt::Vec3>& vertices, const rt::Pa
 
 Status PlanPublisher::publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
                               double min_clearance_m, bool converged, bool inside_envelope) {
-  dds::PathSample& s = *sample_;
+  msg::PathSample& s = *sample_;
   s.sequence = ++sequence_;
-  s.stamp_ns = dds::now_stamp_ns();
+  s.stamp_ns = msg::now_stamp_ns();
   s.converged = converged;
   // thinned to fit the message, the straight legs between kept vertices are unchecked
-  s.inside_envelope = inside_envelope && count <= static_cast<int>(dds::kMaxPathVertices);
+  s.inside_envelope = inside_envelope && count <= static_cast<int>(msg::kMaxPathVertices);
   s.f_c = f_c;
   s.length_m = length_m;
   s.min_clearance_m = std::numeric_limits<double>::infinity();
-  const std::vector<int> keep = subsample_indices(count, static_cast<int>(dds::kMaxPathVertices));
+  const std::vector<int> keep = subsample_indices(count, static_cast<int>(msg::kMaxPathVertices));
   s.vertex_count = static_cast<std::uint32_t>(keep.size());
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const rt::Vec3& v = vertices[keep[k]];
-    dds::PathVertex& out = s.vertices[k];
+    msg::PathVertex& out = s.vertices[k];
     out.position = {v.x(), v.y(), v.z()};
     probe_(v, out.visibility, out.clearance_m);
     s.min_clearance_m = std::min(s.min_clearance_m, out.clearance_m);

@@ -14,7 +14,7 @@
 
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/path_publisher.hpp"
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 #include "rt/base/status.hpp"
 #include "rt/rope/path_metrics.hpp"
 
@@ -39,8 +39,8 @@ using VertexProbe = std::function<void(const rt::Vec3& v, double& visibility, do
 class PlanPublisher {
  public:
   static Result<std::unique_ptr<PlanPublisher>> create(const PublishOptions& options,
-                                                       const dds::TerrainInfo& terrain,
-                                                       dds::Objective objective, VertexProbe probe);
+                                                       const msg::TerrainInfo& terrain,
+                                                       msg::Objective objective, VertexProbe probe);
 
   // A path while the rope settles: published when rate_hz allows, else dropped.
   // Errors are counted, not returned: publishing never stops planning.
@@ -58,8 +58,8 @@ class PlanPublisher {
 
  private:
   PlanPublisher(const PublishOptions& options, std::unique_ptr<dds::Participant> participant,
-                std::unique_ptr<dds::PathPublisher> publisher, const dds::TerrainInfo& terrain,
-                dds::Objective objective, VertexProbe probe);
+                std::unique_ptr<dds::PathPublisher> publisher, const msg::TerrainInfo& terrain,
+                msg::Objective objective, VertexProbe probe);
   // min_clearance_m NaN: the lowest of the published vertices.
   Status publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
                  double min_clearance_m, bool converged, bool inside_envelope);
@@ -67,7 +67,7 @@ class PlanPublisher {
   PublishOptions options_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<dds::PathPublisher> publisher_;
-  std::unique_ptr<dds::PathSample> sample_;  // 20 KiB: on the heap, reused
+  std::unique_ptr<msg::PathSample> sample_;  // 20 KiB: on the heap, reused
   VertexProbe probe_;
   std::chrono::steady_clock::time_point last_{};
   std::uint64_t sequence_ = 0;

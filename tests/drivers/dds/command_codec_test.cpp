@@ -32,7 +32,7 @@ struct Msg {
   visvol_msgs_msg_dds__Command_ m{};
   std::string source = "op";
   std::string pack = "";
-  visvol_msgs_msg_dds__Constraint_ constraints[kMaxConstraints + 1] = {};
+  visvol_msgs_msg_dds__Constraint_ constraints[msg::kMaxConstraints + 1] = {};
   explicit Msg(std::uint8_t kind) {
     m.kind = kind;
     m.sequence_number = 42;
@@ -48,7 +48,7 @@ struct Msg {
 // The reason decode_and_validate gives, or "" when it accepts.
 std::string verdict(Msg& msg, const CommandLimits& l = limits()) {
   msg.sync();
-  Command out{};
+  msg::Command out{};
   const Status s = decode_and_validate(msg.m, l, out);
   if (!s.ok()) {
     EXPECT_EQ(s.code(), Errc::invalid_argument);
@@ -56,24 +56,24 @@ std::string verdict(Msg& msg, const CommandLimits& l = limits()) {
   return s.ok() ? std::string() : s.message();
 }
 
-constexpr std::uint8_t kind(CommandKind k) { return static_cast<std::uint8_t>(k); }
+constexpr std::uint8_t kind(msg::CommandKind k) { return static_cast<std::uint8_t>(k); }
 
 TEST(DecodeCommand, EachKindDecodesItsFields) {
-  Command out{};
-  Msg e(kind(CommandKind::set_endpoints));
+  msg::Command out{};
+  Msg e(kind(msg::CommandKind::set_endpoints));
   e.m.start_m = {1.0, 2.0, 3.0};
   e.m.end_m = {4.0, 5.0, 6.0};
   e.m.k1_visibility = 99.0;  // not of this kind: ignored
   e.sync();
   ASSERT_TRUE(decode_and_validate(e.m, limits(), out).ok());
-  EXPECT_EQ(out.kind, CommandKind::set_endpoints);
+  EXPECT_EQ(out.kind, msg::CommandKind::set_endpoints);
   EXPECT_EQ(out.sequence, 42u);
-  EXPECT_EQ(text_of(out.source), "op");
+  EXPECT_EQ(msg::text_of(out.source), "op");
   EXPECT_EQ(out.endpoints.start.y_m, 2.0);
   EXPECT_EQ(out.endpoints.end.z_m, 6.0);
   EXPECT_EQ(out.weights.k1_visibility, 0.0);
 
-  Msg w(kind(CommandKind::set_weights));
+  Msg w(kind(msg::CommandKind::set_weights));
   w.m.k1_visibility = 1.0;
   w.m.k2_terrain = 2.0;
   w.m.k3_user = 3.0;
@@ -82,38 +82,38 @@ TEST(DecodeCommand, EachKindDecodesItsFields) {
   ASSERT_TRUE(decode_and_validate(w.m, limits(), out).ok());
   EXPECT_EQ(out.weights.k4_constraint, 4.0);
 
-  Msg s(kind(CommandKind::set_stiffness));
+  Msg s(kind(msg::CommandKind::set_stiffness));
   s.m.stretch_stiffness_n_per_m = 800.0;
   s.m.bend_stiffness_n_m_per_rad = 0.0;
   s.sync();
   ASSERT_TRUE(decode_and_validate(s.m, limits(), out).ok());
   EXPECT_EQ(out.stiffness.stretch_n_per_m, 800.0);
 
-  Msg md(kind(CommandKind::set_model));
+  Msg md(kind(msg::CommandKind::set_model));
   md.m.model = 2;
   md.sync();
   ASSERT_TRUE(decode_and_validate(md.m, limits(), out).ok());
-  EXPECT_EQ(out.model, RopeModel::articulated);
+  EXPECT_EQ(out.model, msg::RopeModel::articulated);
 
-  Msg n(kind(CommandKind::set_segment_count));
+  Msg n(kind(msg::CommandKind::set_segment_count));
   n.m.segment_count = 100;
   n.sync();
   ASSERT_TRUE(decode_and_validate(n.m, limits(), out).ok());
   EXPECT_EQ(out.segment_count, 100u);
 
-  Msg c(kind(CommandKind::set_constraints));
+  Msg c(kind(msg::CommandKind::set_constraints));
   c.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
   c.constraints[1] = {3, {}, 150.0};
   c.m.constraints._length = 2;
   c.sync();
   ASSERT_TRUE(decode_and_validate(c.m, limits(), out).ok());
   ASSERT_EQ(out.constraints.count, 2u);
-  EXPECT_EQ(out.constraints.items[0].kind, ConstraintKind::hidden_from);
+  EXPECT_EQ(out.constraints.items[0].kind, msg::ConstraintKind::hidden_from);
   EXPECT_EQ(out.constraints.items[0].position.z_m, 30.0);
   EXPECT_EQ(out.constraints.items[1].height_m, 150.0);
 
   // every kind at once: observers of both kinds, clearance and both ceilings
-  Msg all(kind(CommandKind::set_constraints));
+  Msg all(kind(msg::CommandKind::set_constraints));
   all.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
   all.constraints[1] = {2, {15.0, 25.0, 35.0}, 0.0};
   all.constraints[2] = {3, {}, 40.0};
@@ -125,27 +125,27 @@ TEST(DecodeCommand, EachKindDecodesItsFields) {
   five.max_constraints = 5;
   ASSERT_TRUE(decode_and_validate(all.m, five, out).ok());
   ASSERT_EQ(out.constraints.count, 5u);
-  EXPECT_EQ(out.constraints.items[3].kind, ConstraintKind::max_agl);
+  EXPECT_EQ(out.constraints.items[3].kind, msg::ConstraintKind::max_agl);
   EXPECT_EQ(out.constraints.items[3].height_m, 120.0);
-  EXPECT_EQ(out.constraints.items[4].kind, ConstraintKind::max_altitude);
+  EXPECT_EQ(out.constraints.items[4].kind, msg::ConstraintKind::max_altitude);
   EXPECT_EQ(out.constraints.items[4].height_m, 450.0);
-  EXPECT_STREQ(to_string(ConstraintKind::max_agl), "max-agl");
-  EXPECT_STREQ(to_string(ConstraintKind::max_altitude), "max-altitude");
+  EXPECT_STREQ(to_string(msg::ConstraintKind::max_agl), "max-agl");
+  EXPECT_STREQ(to_string(msg::ConstraintKind::max_altitude), "max-altitude");
 
-  Msg empty(kind(CommandKind::set_constraints));  // clears the set
+  Msg empty(kind(msg::CommandKind::set_constraints));  // clears the set
   EXPECT_EQ(verdict(empty), "");
 
-  Msg t(kind(CommandKind::switch_terrain));
+  Msg t(kind(msg::CommandKind::switch_terrain));
   t.pack = "sf_north";
   t.sync();
   ASSERT_TRUE(decode_and_validate(t.m, limits(), out).ok());
-  EXPECT_EQ(text_of(out.pack_id), "sf_north");
+  EXPECT_EQ(msg::text_of(out.pack_id), "sf_north");
 
-  for (const CommandKind k : {CommandKind::start, CommandKind::stop}) {
+  for (const msg::CommandKind k : {msg::CommandKind::start, msg::CommandKind::stop}) {
     Msg m(kind(k));
     EXPECT_EQ(verdict(m), "");
   }
-  Msg o(kind(CommandKind::set_objective));
+  Msg o(kind(msg::CommandKind::set_objective));
   o.m.objective = 1;
   EXPECT_EQ(verdict(o), "");
 }
@@ -156,27 +156,27 @@ TEST(DecodeCommand, StructuralProblemsNameTheField) {
   Msg k2(11);
   EXPECT_EQ(verdict(k2), "kind: 11 is not a known command (1..10)");
 
-  Msg s(kind(CommandKind::start));
+  Msg s(kind(msg::CommandKind::start));
   s.source = "";
   EXPECT_EQ(verdict(s), "source: empty (name the sender)");
   s.source = std::string(64, 'a');
   EXPECT_EQ(verdict(s), "source: 64 characters, at most 63");
   s.source = "tab\there";
   EXPECT_EQ(verdict(s), "source: holds characters outside printable ASCII");
-  Msg null_source(kind(CommandKind::start));
+  Msg null_source(kind(msg::CommandKind::start));
   null_source.m.source = nullptr;  // a hand-made message, not from Cyclone
-  Command out{};
+  msg::Command out{};
   EXPECT_FALSE(decode_command(null_source.m, out).ok());
 
-  Msg o(kind(CommandKind::set_objective));
+  Msg o(kind(msg::CommandKind::set_objective));
   o.m.objective = 0;
   EXPECT_EQ(verdict(o), "objective: 0 is not known (1 hide, 2 show)");
-  Msg md(kind(CommandKind::set_model));
+  Msg md(kind(msg::CommandKind::set_model));
   md.m.model = 3;
   EXPECT_EQ(verdict(md), "model: 3 is not known (1 spring-mass, 2 articulated)");
 
-  Msg c(kind(CommandKind::set_constraints));
-  c.m.constraints._length = kMaxConstraints + 1;
+  Msg c(kind(msg::CommandKind::set_constraints));
+  c.m.constraints._length = msg::kMaxConstraints + 1;
   EXPECT_EQ(verdict(c), "constraints: 516 given, at most 515 fit");
   c.m.constraints._length = 2;
   c.constraints[0] = {3, {}, 10.0};
@@ -184,13 +184,13 @@ TEST(DecodeCommand, StructuralProblemsNameTheField) {
   EXPECT_EQ(verdict(c),
             "constraints[1].kind: 6 is not a known constraint (1 hidden-from, 2 visible-to, "
             "3 clearance, 4 max-agl, 5 max-altitude)");
-  Msg hollow(kind(CommandKind::set_constraints));
+  Msg hollow(kind(msg::CommandKind::set_constraints));
   hollow.sync();
   hollow.m.constraints._length = 1;
   hollow.m.constraints._buffer = nullptr;
   EXPECT_FALSE(decode_command(hollow.m, out).ok());
 
-  Msg t(kind(CommandKind::switch_terrain));
+  Msg t(kind(msg::CommandKind::switch_terrain));
   t.pack = "";
   EXPECT_EQ(verdict(t), "pack_id: empty");
   t.pack = "../etc/passwd";
@@ -200,7 +200,7 @@ TEST(DecodeCommand, StructuralProblemsNameTheField) {
 }
 
 TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
-  Msg e(kind(CommandKind::set_endpoints));
+  Msg e(kind(msg::CommandKind::set_endpoints));
   e.m.start_m = {1.0, 2.0, 3.0};
   e.m.end_m = {4.0, 5.0, 6.0};
   e.m.start_m.y = kInf;
@@ -219,14 +219,14 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   e.m.end_m = {1000.0, 2000.0, 500.0};
   EXPECT_EQ(verdict(e), "");
 
-  Msg w(kind(CommandKind::set_weights));
+  Msg w(kind(msg::CommandKind::set_weights));
   w.m.k3_user = 10.5;
   EXPECT_EQ(verdict(w), "k3_user: 10.5 is outside [0, 10]");
   w.m.k3_user = 0.0;
   w.m.k1_visibility = -kInf;
   EXPECT_EQ(verdict(w), "k1_visibility: -inf is not a finite number");
 
-  Msg s(kind(CommandKind::set_stiffness));
+  Msg s(kind(msg::CommandKind::set_stiffness));
   s.m.stretch_stiffness_n_per_m = 0.0;
   EXPECT_EQ(verdict(s), "stretch_stiffness_n_per_m: 0 N/m would let the rope fall apart (> 0)");
   s.m.stretch_stiffness_n_per_m = 6000.0;
@@ -235,13 +235,13 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   s.m.bend_stiffness_n_m_per_rad = -1.0;
   EXPECT_EQ(verdict(s), "bend_stiffness_n_m_per_rad: -1 is outside [0, 50] N m/rad");
 
-  Msg n(kind(CommandKind::set_segment_count));
+  Msg n(kind(msg::CommandKind::set_segment_count));
   n.m.segment_count = 1;
   EXPECT_EQ(verdict(n), "segment_count: 1 is outside the 2..100 segments reserved");
   n.m.segment_count = 101;
   EXPECT_EQ(verdict(n), "segment_count: 101 is outside the 2..100 segments reserved");
 
-  Msg c(kind(CommandKind::set_constraints));
+  Msg c(kind(msg::CommandKind::set_constraints));
   c.m.constraints._length = 4;
   for (int i = 0; i < 4; ++i) c.constraints[i] = {3, {}, 10.0};
   EXPECT_EQ(verdict(c), "constraints: 4 given, at most 3 reserved");
@@ -255,7 +255,7 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   c.constraints[1] = {3, {kNan, kNan, kNan}, 20.0};  // clearance ignores position
   EXPECT_EQ(verdict(c), "");
 
-  Msg t(kind(CommandKind::switch_terrain));
+  Msg t(kind(msg::CommandKind::switch_terrain));
   t.pack = "taunus";
   EXPECT_EQ(verdict(t), "pack_id: 'taunus' is not a pack on this console");
   CommandLimits none = limits();
@@ -269,8 +269,8 @@ TEST(ValidateCommand, EndpointsStayInsideThePlanningBoundsObserversNeedNot) {
   l.plan_min = {100.0, 200.0, 0.0};
   l.plan_max = {900.0, 1800.0, 0.0};
   ASSERT_TRUE(validate_limits(l).ok());
-  Command c{};
-  c.kind = CommandKind::set_endpoints;
+  msg::Command c{};
+  c.kind = msg::CommandKind::set_endpoints;
   c.endpoints.start = {50.0, 1000.0, 100.0};
   c.endpoints.end = {500.0, 1000.0, 100.0};
   EXPECT_EQ(validate_command(c, l).message(),
@@ -281,10 +281,10 @@ TEST(ValidateCommand, EndpointsStayInsideThePlanningBoundsObserversNeedNot) {
             std::string::npos);
   c.endpoints.end.y_m = 1800.0;
   EXPECT_TRUE(validate_command(c, l).ok()) << validate_command(c, l).message();
-  Command k{};
-  k.kind = CommandKind::set_constraints;
+  msg::Command k{};
+  k.kind = msg::CommandKind::set_constraints;
   k.constraints.count = 1;
-  k.constraints.items[0] = {ConstraintKind::hidden_from, {50.0, 1950.0, 20.0}, 0.0};  // beyond the bounds, on the pack
+  k.constraints.items[0] = {msg::ConstraintKind::hidden_from, {50.0, 1950.0, 20.0}, 0.0};  // beyond the bounds, on the pack
   EXPECT_TRUE(validate_command(k, l).ok()) << validate_command(k, l).message();
   l.plan_max.x_m = 1500.0;  // beyond the pack
   EXPECT_NE(validate_limits(l).message().find("inside the pack bounds"), std::string::npos);
@@ -293,7 +293,7 @@ TEST(ValidateCommand, EndpointsStayInsideThePlanningBoundsObserversNeedNot) {
 // The ceiling: a finite height, above 0 and above the clearance given with
 // it (max-agl), inside the pack's heights (max-altitude); one of each kind.
 TEST(ValidateCommand, CeilingsAreCheckedWithAReason) {
-  Msg c(kind(CommandKind::set_constraints));
+  Msg c(kind(msg::CommandKind::set_constraints));
   c.m.constraints._length = 1;
   const std::pair<visvol_msgs_msg_dds__Constraint_, const char*> cases[] = {
       {{4, {}, kNan}, "constraints[0].height_m: nan is not a finite number"},
@@ -338,9 +338,9 @@ TEST(ValidateCommand, CeilingsAreCheckedWithAReason) {
 // console takes (--max-observers).
 TEST(ValidateCommand, ObserversFitWhatTheConsoleTakes) {
   CommandLimits l = limits();
-  l.max_constraints = static_cast<std::uint32_t>(kMaxConstraints);
-  Msg c(kind(CommandKind::set_constraints));
-  const auto per_kind = static_cast<std::uint32_t>(kMaxObserversPerKind);
+  l.max_constraints = static_cast<std::uint32_t>(msg::kMaxConstraints);
+  Msg c(kind(msg::CommandKind::set_constraints));
+  const auto per_kind = static_cast<std::uint32_t>(msg::kMaxObserversPerKind);
   for (std::uint32_t i = 0; i < per_kind; ++i) {
     c.constraints[i] = {1, {10.0 + i, 20.0, 30.0}, 0.0};
     c.constraints[per_kind + i] = {2, {20.0, 10.0 + i, 30.0}, 0.0};
@@ -359,7 +359,7 @@ TEST(ValidateCommand, ObserversFitWhatTheConsoleTakes) {
   EXPECT_NE(verdict(c, l).find("the console takes at most 0"), std::string::npos);
   c.constraints[0] = {4, {}, 100.0};  // no observer: none needed
   EXPECT_EQ(verdict(c, l), "");
-  l.max_observers = 2 * kMaxObserversPerKind + 1;
+  l.max_observers = 2 * msg::kMaxObserversPerKind + 1;
   EXPECT_NE(validate_limits(l).message().find("max_observers"), std::string::npos);
 }
 
@@ -372,13 +372,13 @@ TEST(CommandLimits, ValidationSaysWhatIsWrong) {
   l.max.y_m = l.min.y_m;
   EXPECT_NE(validate_limits(l).message().find("pack bounds are empty"), std::string::npos);
   l = limits();
-  l.max_segments = static_cast<std::uint32_t>(kMaxPathVertices);
+  l.max_segments = static_cast<std::uint32_t>(msg::kMaxPathVertices);
   EXPECT_NE(validate_limits(l).message().find("a path sample holds"), std::string::npos);
   l = limits();
   l.min_segments = 0;
   EXPECT_FALSE(validate_limits(l).ok());
   l = limits();
-  l.max_constraints = kMaxConstraints + 1;
+  l.max_constraints = msg::kMaxConstraints + 1;
   EXPECT_FALSE(validate_limits(l).ok());
   l = limits();
   l.max_weight = 0.0;
@@ -387,7 +387,7 @@ TEST(CommandLimits, ValidationSaysWhatIsWrong) {
   l.pack_count = kMaxKnownPacks + 1;
   EXPECT_FALSE(validate_limits(l).ok());
   l = limits();
-  copy_text(l.packs[0], "bad pack");
+  msg::copy_text(l.packs[0], "bad pack");
   EXPECT_NE(validate_limits(l).message().find("packs[0]"), std::string::npos);
   l = limits();
   EXPECT_FALSE(add_known_pack(l, "no/slash").ok());
@@ -398,43 +398,43 @@ TEST(CommandLimits, ValidationSaysWhatIsWrong) {
 }
 
 TEST(CommandMessage, EncodeThenDecodeGivesTheCommandBack) {
-  Command c{};
-  c.kind = CommandKind::set_constraints;
+  msg::Command c{};
+  c.kind = msg::CommandKind::set_constraints;
   c.sequence = 77;
-  copy_text(c.source, "planner-2");
+  msg::copy_text(c.source, "planner-2");
   c.constraints.count = 3;
-  c.constraints.items[0] = {ConstraintKind::visible_to, {1.0, 2.0, 3.0}, 0.0};
-  c.constraints.items[1] = {ConstraintKind::clearance, {}, 40.0};
-  c.constraints.items[2] = {ConstraintKind::max_agl, {}, 90.0};
+  c.constraints.items[0] = {msg::ConstraintKind::visible_to, {1.0, 2.0, 3.0}, 0.0};
+  c.constraints.items[1] = {msg::ConstraintKind::clearance, {}, 40.0};
+  c.constraints.items[2] = {msg::ConstraintKind::max_agl, {}, 90.0};
   CommandMessage m;
-  Command back{};
+  msg::Command back{};
   ASSERT_TRUE(decode_and_validate(m.fill(c), limits(), back).ok());
   EXPECT_EQ(back.sequence, 77u);
-  EXPECT_EQ(text_of(back.source), "planner-2");
+  EXPECT_EQ(msg::text_of(back.source), "planner-2");
   ASSERT_EQ(back.constraints.count, 3u);
-  EXPECT_EQ(back.constraints.items[0].kind, ConstraintKind::visible_to);
+  EXPECT_EQ(back.constraints.items[0].kind, msg::ConstraintKind::visible_to);
   EXPECT_EQ(back.constraints.items[0].position.y_m, 2.0);
   EXPECT_EQ(back.constraints.items[1].height_m, 40.0);
-  EXPECT_EQ(back.constraints.items[2].kind, ConstraintKind::max_agl);
+  EXPECT_EQ(back.constraints.items[2].kind, msg::ConstraintKind::max_agl);
   EXPECT_EQ(back.constraints.items[2].height_m, 90.0);
 }
 
 TEST(AckMessage, CarriesSourceSequenceAndReason) {
-  CommandAck ack{};
-  copy_text(ack.source, "op");
+  msg::CommandAck ack{};
+  msg::copy_text(ack.source, "op");
   ack.sequence = 5;
   ack.kind = 77;
-  ack.result = AckResult::rejected;
-  copy_text(ack.reason, "kind: 77 is not a known command (1..10)");
+  ack.result = msg::AckResult::rejected;
+  msg::copy_text(ack.reason, "kind: 77 is not a known command (1..10)");
   AckMessage m("visvol_world");
   const visvol_msgs_msg_dds__CommandAck_& msg = m.fill(ack);
   EXPECT_STREQ(msg.header.frame_id, "visvol_world");
   EXPECT_GT(msg.header.stamp.sec, 1600000000);
-  const CommandAck back = decode_ack(msg);
-  EXPECT_EQ(text_of(back.source), "op");
+  const msg::CommandAck back = decode_ack(msg);
+  EXPECT_EQ(msg::text_of(back.source), "op");
   EXPECT_EQ(back.sequence, 5u);
   EXPECT_EQ(back.kind, 77);
-  EXPECT_EQ(back.result, AckResult::rejected);
+  EXPECT_EQ(back.result, msg::AckResult::rejected);
   EXPECT_STREQ(back.reason, ack.reason);
 }
 

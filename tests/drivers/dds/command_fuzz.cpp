@@ -64,7 +64,7 @@ const CommandLimits& limits() {
 
 template <std::size_t N>
 bool terminated_printable(const char (&text)[N]) {
-  const std::string_view v = text_of(text);
+  const std::string_view v = msg::text_of(text);
   if (v.size() >= N) return false;
   for (const char c : v) {
     if (c < 0x20 || c > 0x7e) return false;
@@ -72,7 +72,7 @@ bool terminated_printable(const char (&text)[N]) {
   return true;
 }
 
-bool finite_inside(const WorldPoint& p, const CommandLimits& l) {
+bool finite_inside(const msg::WorldPoint& p, const CommandLimits& l) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) &&
          p.x_m >= l.min.x_m && p.x_m <= l.max.x_m && p.y_m >= l.min.y_m && p.y_m <= l.max.y_m &&
          p.z_m >= l.min.z_m && p.z_m <= l.max.z_m;
@@ -81,72 +81,72 @@ bool finite_inside(const WorldPoint& p, const CommandLimits& l) {
 bool in_range(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 // An accepted command, checked independently of the validator's code.
-void check_accepted(const Command& c, const visvol_msgs_msg_dds__Command_& msg) {
+void check_accepted(const msg::Command& c, const visvol_msgs_msg_dds__Command_& msg) {
   const CommandLimits& l = limits();
   check(c.sequence == msg.sequence_number);
-  check(msg.source != nullptr && text_of(c.source) == msg.source);
+  check(msg.source != nullptr && msg::text_of(c.source) == msg.source);
   check(validate_command(c, l).ok());
   switch (c.kind) {
-    case CommandKind::set_endpoints:
+    case msg::CommandKind::set_endpoints:
       check(finite_inside(c.endpoints.start, l) && finite_inside(c.endpoints.end, l));
       break;
-    case CommandKind::set_objective:
-      check(c.objective == Objective::hide || c.objective == Objective::show);
+    case msg::CommandKind::set_objective:
+      check(c.objective == msg::Objective::hide || c.objective == msg::Objective::show);
       break;
-    case CommandKind::set_weights:
+    case msg::CommandKind::set_weights:
       check(in_range(c.weights.k1_visibility, 0.0, l.max_weight) &&
             in_range(c.weights.k2_terrain, 0.0, l.max_weight) &&
             in_range(c.weights.k3_user, 0.0, l.max_weight) &&
             in_range(c.weights.k4_constraint, 0.0, l.max_weight));
       break;
-    case CommandKind::set_stiffness:
+    case msg::CommandKind::set_stiffness:
       check(in_range(c.stiffness.stretch_n_per_m, 0.0, l.max_stretch_stiffness_n_per_m) &&
             c.stiffness.stretch_n_per_m > 0.0 &&
             in_range(c.stiffness.bend_n_m_per_rad, 0.0, l.max_bend_stiffness_n_m_per_rad));
       break;
-    case CommandKind::set_model:
-      check(c.model == RopeModel::spring_mass || c.model == RopeModel::articulated);
+    case msg::CommandKind::set_model:
+      check(c.model == msg::RopeModel::spring_mass || c.model == msg::RopeModel::articulated);
       break;
-    case CommandKind::set_segment_count:
+    case msg::CommandKind::set_segment_count:
       check(c.segment_count >= l.min_segments && c.segment_count <= l.max_segments);
       break;
-    case CommandKind::set_constraints: {
+    case msg::CommandKind::set_constraints: {
       check(c.constraints.count <= l.max_constraints);
       int clearance = -1, max_agl = -1, max_altitude = -1;  // item index, -1: none
       std::uint32_t hidden = 0, visible = 0;
       for (std::uint32_t i = 0; i < c.constraints.count; ++i) {
-        const Constraint& k = c.constraints.items[i];
+        const msg::Constraint& k = c.constraints.items[i];
         const int at = static_cast<int>(i);
-        if (k.kind == ConstraintKind::clearance) {
+        if (k.kind == msg::ConstraintKind::clearance) {
           check(clearance < 0);
           clearance = at;
           check(in_range(k.height_m, 0.0, l.max_clearance_m));
-        } else if (k.kind == ConstraintKind::max_agl) {
+        } else if (k.kind == msg::ConstraintKind::max_agl) {
           check(max_agl < 0);
           max_agl = at;
           check(in_range(k.height_m, 0.0, l.max_clearance_m) && k.height_m > 0.0);
-        } else if (k.kind == ConstraintKind::max_altitude) {
+        } else if (k.kind == msg::ConstraintKind::max_altitude) {
           check(max_altitude < 0);
           max_altitude = at;
           check(in_range(k.height_m, l.min.z_m, l.max.z_m));
         } else {
-          check(k.kind == ConstraintKind::hidden_from || k.kind == ConstraintKind::visible_to);
+          check(k.kind == msg::ConstraintKind::hidden_from || k.kind == msg::ConstraintKind::visible_to);
           check(finite_inside(k.position, l));
-          (k.kind == ConstraintKind::hidden_from ? hidden : visible) += 1;
+          (k.kind == msg::ConstraintKind::hidden_from ? hidden : visible) += 1;
         }
       }
-      check(hidden <= kMaxObserversPerKind && visible <= kMaxObserversPerKind);
+      check(hidden <= msg::kMaxObserversPerKind && visible <= msg::kMaxObserversPerKind);
       check(hidden + visible <= l.max_observers);
       if (clearance >= 0 && max_agl >= 0) {
         check(c.constraints.items[max_agl].height_m > c.constraints.items[clearance].height_m);
       }
       break;
     }
-    case CommandKind::switch_terrain:
-      check(text_of(c.pack_id) == "sf_north" || text_of(c.pack_id) == "taunus");
+    case msg::CommandKind::switch_terrain:
+      check(msg::text_of(c.pack_id) == "sf_north" || msg::text_of(c.pack_id) == "taunus");
       break;
-    case CommandKind::start:
-    case CommandKind::stop:
+    case msg::CommandKind::start:
+    case msg::CommandKind::stop:
       break;
     default:
       check(false);  // an unknown kind reached the queue
@@ -158,7 +158,7 @@ void check_accepted(const Command& c, const visvol_msgs_msg_dds__Command_& msg) 
 bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
   const CommandLimits& l = limits();
   const std::uint32_t n = msg.constraints._length;
-  if (n > kMaxConstraints || n > l.max_constraints) return false;
+  if (n > msg::kMaxConstraints || n > l.max_constraints) return false;
   if (n > 0 && msg.constraints._buffer == nullptr) return false;
   int envelope[6] = {0, 0, 0, 0, 0, 0};  // items of each kind (1..5)
   double clearance_m = 0, max_agl_m = 0;
@@ -167,7 +167,7 @@ bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
     if (k.kind < 1 || k.kind > 5) return false;
     ++envelope[k.kind];
     const double h = k.height_m;
-    const WorldPoint p{k.position_m.x, k.position_m.y, k.position_m.z};
+    const msg::WorldPoint p{k.position_m.x, k.position_m.y, k.position_m.z};
     switch (k.kind) {
       case 1:
       case 2:
@@ -187,26 +187,26 @@ bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
   }
   if (envelope[3] > 1 || envelope[4] > 1 || envelope[5] > 1) return false;
   const auto hidden = static_cast<std::size_t>(envelope[1]), visible = static_cast<std::size_t>(envelope[2]);
-  if (hidden > kMaxObserversPerKind || visible > kMaxObserversPerKind || hidden + visible > l.max_observers) {
+  if (hidden > msg::kMaxObserversPerKind || visible > msg::kMaxObserversPerKind || hidden + visible > l.max_observers) {
     return false;
   }
   return !(envelope[3] == 1 && envelope[4] == 1 && !(max_agl_m > clearance_m));
 }
 
 // A set-constraints message the processor judged: its verdict is the rules'.
-void check_constraints_verdict(const visvol_msgs_msg_dds__Command_& msg, const CommandAck& ack,
+void check_constraints_verdict(const visvol_msgs_msg_dds__Command_& msg, const msg::CommandAck& ack,
                                const CommandCounts& before, const CommandCounts& after) {
-  if (msg.kind != static_cast<std::uint8_t>(CommandKind::set_constraints)) return;
+  if (msg.kind != static_cast<std::uint8_t>(msg::CommandKind::set_constraints)) return;
   if (after.rate_limited != before.rate_limited || after.queue_full != before.queue_full) return;
   if (!check_source(msg.source != nullptr ? std::string_view(msg.source) : std::string_view()).ok()) return;
-  check((ack.result == AckResult::accepted) == constraints_allowed(msg));
+  check((ack.result == msg::AckResult::accepted) == constraints_allowed(msg));
 }
 
 // One command through the processor, and the oracle.
-void run_one(CommandProcessor& processor, CommandQueue& queue,
+void run_one(CommandProcessor& processor, msg::CommandQueue& queue,
              const visvol_msgs_msg_dds__Command_& msg, double now_s) {
   const CommandCounts before = processor.counts();
-  CommandAck ack;
+  msg::CommandAck ack;
   std::memset(&ack, 0xa5, sizeof ack);  // nothing may be left unset
   processor.process(msg, now_s, queue, ack);
   const CommandCounts& after = processor.counts();
@@ -215,14 +215,14 @@ void run_one(CommandProcessor& processor, CommandQueue& queue,
   check(terminated_printable(ack.reason));
   check(ack.sequence == msg.sequence_number && ack.kind == msg.kind);
   check_constraints_verdict(msg, ack, before, after);
-  Command popped;
-  if (ack.result == AckResult::accepted) {
+  msg::Command popped;
+  if (ack.result == msg::AckResult::accepted) {
     check(ack.reason[0] == '\0');
     check(after.accepted == before.accepted + 1);
     check(queue.try_pop(popped));
     check_accepted(popped, msg);
   } else {
-    check(ack.result == AckResult::rejected);
+    check(ack.result == msg::AckResult::rejected);
     check(ack.reason[0] != '\0');
     check(after.rejected == before.rejected + 1);
     check(!queue.try_pop(popped));
@@ -264,7 +264,7 @@ geometry_msgs_msg_dds__Point_ fuzz_point(FuzzedDataProvider& fdp) {
   return {fuzz_double(fdp), fuzz_double(fdp), fuzz_double(fdp)};
 }
 
-void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, CommandQueue& queue) {
+void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, msg::CommandQueue& queue) {
   double now_s = 0.0;
   for (int i = 0; i < 32 && fdp.remaining_bytes() > 0; ++i) {
     std::string source = fdp.ConsumeBool() ? "operator" : fdp.ConsumeRandomLengthString(80);
@@ -322,7 +322,7 @@ const ddsi_sertype_default& command_sertype() {
 }
 
 void wire(const std::uint8_t* data, std::size_t size, CommandProcessor& processor,
-          CommandQueue& queue) {
+          msg::CommandQueue& queue) {
   if (size < 4 || size > (1u << 20)) return;
   // encapsulation: plain CDR, XCDR1 (0x0000 BE, 0x0001 LE) or XCDR2 (0x0006 BE, 0x0007 LE)
   const unsigned id = (static_cast<unsigned>(data[0]) << 8) | data[1];
@@ -361,7 +361,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const RateLimit rate{4.0, 8.0, 8.0, 16.0};
   Result<CommandProcessor> processor = CommandProcessor::create(limits(), rate);
   check(processor.ok());
-  static CommandQueue queue;  // drained after every command by the oracle
+  static msg::CommandQueue queue;  // drained after every command by the oracle
   if ((data[0] & 1) == 0) {
     FuzzedDataProvider fdp(data + 1, size - 1);
     structured(fdp, *processor, queue);

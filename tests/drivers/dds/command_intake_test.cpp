@@ -11,9 +11,9 @@
 #include <thread>
 #include <vector>
 
+#include "dds_test_support.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
-#include "dds_test_support.hpp"
 #include "test_domains.hpp"
 
 namespace visvol::dds {
@@ -47,12 +47,12 @@ class Sender {
            acks_->wait_for_writers(1, timeout_s).ok();
   }
   void send(const visvol_msgs_msg_dds__Command_& msg) { ASSERT_EQ(writer_->write(&msg), 0); }
-  void send(Command c) {
+  void send(msg::Command c) {
     CommandMessage m;
     send(m.fill(c));
   }
   // Collects acknowledgements until `count` have arrived or the time passes.
-  std::map<std::uint64_t, CommandAck> acks(std::size_t count, double timeout_s) {
+  std::map<std::uint64_t, msg::CommandAck> acks(std::size_t count, double timeout_s) {
     wait_until([&] {
       (void)acks_->take<visvol_msgs_msg_dds__CommandAck_>(
           [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
@@ -67,22 +67,22 @@ class Sender {
  private:
   Result<Writer> writer_;
   Result<Reader> acks_;
-  std::map<std::uint64_t, CommandAck> received_;
+  std::map<std::uint64_t, msg::CommandAck> received_;
 };
 
-Command base(CommandKind kind, std::uint64_t seq, const char* source = "test-operator") {
-  Command c{};
+msg::Command base(msg::CommandKind kind, std::uint64_t seq, const char* source = "test-operator") {
+  msg::Command c{};
   c.kind = kind;
   c.sequence = seq;
-  copy_text(c.source, source);
+  msg::copy_text(c.source, source);
   return c;
 }
 
 struct Fixture {
   std::unique_ptr<Participant> console;
   std::unique_ptr<Participant> operator_side;
-  CommandQueue queue;
-  AckQueue executive_acks;
+  msg::CommandQueue queue;
+  msg::AckQueue executive_acks;
   std::unique_ptr<CommandIntake> intake;
 
   explicit Fixture(const IntakeConfig& config) {
@@ -108,30 +108,30 @@ TEST(CommandIntake, ValidCommandIsQueuedAndAccepted) {
   Sender sender(*f.operator_side);
   ASSERT_TRUE(sender.ready(5.0));
 
-  Command c = base(CommandKind::set_endpoints, 1);
+  msg::Command c = base(msg::CommandKind::set_endpoints, 1);
   c.endpoints = {{541000.0, 4181000.0, 120.0}, {550000.0, 4190000.0, 80.0}};
   sender.send(c);
-  Command o = base(CommandKind::set_objective, 2);
-  o.objective = Objective::show;
+  msg::Command o = base(msg::CommandKind::set_objective, 2);
+  o.objective = msg::Objective::show;
   sender.send(o);
 
   const auto acks = sender.acks(2, 5.0);
   ASSERT_EQ(acks.size(), 2u);
   for (const auto& [seq, ack] : acks) {
-    EXPECT_EQ(ack.result, AckResult::accepted) << seq << ": " << ack.reason;
-    EXPECT_EQ(text_of(ack.source), "test-operator");
+    EXPECT_EQ(ack.result, msg::AckResult::accepted) << seq << ": " << ack.reason;
+    EXPECT_EQ(msg::text_of(ack.source), "test-operator");
     EXPECT_STREQ(ack.reason, "");
   }
-  EXPECT_EQ(acks.at(1).kind, static_cast<std::uint8_t>(CommandKind::set_endpoints));
+  EXPECT_EQ(acks.at(1).kind, static_cast<std::uint8_t>(msg::CommandKind::set_endpoints));
 
-  Command got{};
+  msg::Command got{};
   ASSERT_TRUE(f.queue.try_pop(got));
-  EXPECT_EQ(got.kind, CommandKind::set_endpoints);
+  EXPECT_EQ(got.kind, msg::CommandKind::set_endpoints);
   EXPECT_EQ(got.sequence, 1u);
   EXPECT_EQ(got.endpoints.end.x_m, 550000.0);
   ASSERT_TRUE(f.queue.try_pop(got));
-  EXPECT_EQ(got.kind, CommandKind::set_objective);
-  EXPECT_EQ(got.objective, Objective::show);
+  EXPECT_EQ(got.kind, msg::CommandKind::set_objective);
+  EXPECT_EQ(got.objective, msg::Objective::show);
   EXPECT_FALSE(f.queue.try_pop(got));
 }
 
@@ -148,13 +148,13 @@ TEST(CommandIntake, AcksWrittenBeforeTheSendersReaderMatchedStillArrive) {
   // only the newest (Cyclone keeps one unless the durability service says more)
   CommandMessage m;
   for (std::uint64_t seq = 41; seq <= 43; ++seq) {
-    Command o = base(CommandKind::set_objective, seq);
-    o.objective = Objective::show;
+    msg::Command o = base(msg::CommandKind::set_objective, seq);
+    o.objective = msg::Objective::show;
     ASSERT_EQ(writer->write(&m.fill(o)), 0);
   }
   int popped = 0;
   ASSERT_TRUE(wait_until([&] {
-    Command got{};
+    msg::Command got{};
     while (f.queue.try_pop(got)) ++popped;
     return popped == 3;
   }, 5.0));
@@ -167,8 +167,8 @@ TEST(CommandIntake, AcksWrittenBeforeTheSendersReaderMatchedStillArrive) {
   ASSERT_TRUE(wait_until([&] {
     (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
         [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
-          const CommandAck ack = decode_ack(a);
-          if (ack.result == AckResult::accepted) accepted.insert(ack.sequence);
+          const msg::CommandAck ack = decode_ack(a);
+          if (ack.result == msg::AckResult::accepted) accepted.insert(ack.sequence);
         }, 8);
     return accepted.size() == 3;
   }, 5.0)) << accepted.size() << " of 3 acks arrived";
@@ -183,49 +183,49 @@ TEST(CommandIntake, BadCommandsAreRejectedWithReasonsAndIntakeGoesOn) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
 
   std::map<std::uint64_t, std::string> expect;  // sequence -> part of the reason
-  Command c = base(CommandKind::set_endpoints, 10);
+  msg::Command c = base(msg::CommandKind::set_endpoints, 10);
   c.endpoints = {{nan, 4181000.0, 100.0}, {550000.0, 4190000.0, 80.0}};
   sender.send(c);
   expect[10] = "start_m.x: nan is not a finite number";
-  c = base(CommandKind::set_endpoints, 11);
+  c = base(msg::CommandKind::set_endpoints, 11);
   c.endpoints = {{541000.0, 4181000.0, 100.0}, {560000.0, 4190000.0, 80.0}};
   sender.send(c);
   expect[11] = "end_m.x: 560000 m is outside the pack's x range [540000, 551100] m";
-  c = base(CommandKind::set_segment_count, 12);
+  c = base(msg::CommandKind::set_segment_count, 12);
   c.segment_count = 100000;
   sender.send(c);
   expect[12] = "segment_count: 100000 is outside the 2..128 segments reserved";
-  c = base(CommandKind::set_weights, 13);
+  c = base(msg::CommandKind::set_weights, 13);
   c.weights = {1.0, -2.0, 0.0, 0.0};
   sender.send(c);
   expect[13] = "k2_terrain: -2 is outside [0, 1000000]";
-  c = base(CommandKind::switch_terrain, 14);
-  copy_text(c.pack_id, "alps");
+  c = base(msg::CommandKind::switch_terrain, 14);
+  msg::copy_text(c.pack_id, "alps");
   sender.send(c);
   expect[14] = "pack_id: 'alps' is not a pack on this console";
-  c = base(CommandKind::set_constraints, 15);
+  c = base(msg::CommandKind::set_constraints, 15);
   c.constraints.count = 5;
-  for (Constraint& k : c.constraints.items) k = {ConstraintKind::clearance, {}, 50.0};
+  for (msg::Constraint& k : c.constraints.items) k = {msg::ConstraintKind::clearance, {}, 50.0};
   sender.send(c);
   expect[15] = "constraints: 5 given, at most 4 reserved";
 
   // hand-made messages: values a Command cannot even hold
   CommandMessage m;
-  visvol_msgs_msg_dds__Command_ raw = m.fill(base(CommandKind::start, 16));
+  visvol_msgs_msg_dds__Command_ raw = m.fill(base(msg::CommandKind::start, 16));
   raw.kind = 77;
   sender.send(raw);
   expect[16] = "kind: 77 is not a known command (1..10)";
-  raw = m.fill(base(CommandKind::set_objective, 17));
+  raw = m.fill(base(msg::CommandKind::set_objective, 17));
   raw.objective = 9;
   sender.send(raw);
   expect[17] = "objective: 9 is not known (1 hide, 2 show)";
-  raw = m.fill(base(CommandKind::start, 18));
+  raw = m.fill(base(msg::CommandKind::start, 18));
   char bad_source[] = "op\x01rator";
   raw.source = bad_source;
   sender.send(raw);
   expect[18] = "source: holds characters outside printable ASCII";
-  std::vector<visvol_msgs_msg_dds__Constraint_> many(kMaxConstraints + 1);  // one more than fit
-  raw = m.fill(base(CommandKind::set_constraints, 19));
+  std::vector<visvol_msgs_msg_dds__Constraint_> many(msg::kMaxConstraints + 1);  // one more than fit
+  raw = m.fill(base(msg::CommandKind::set_constraints, 19));
   raw.constraints._buffer = many.data();
   raw.constraints._length = static_cast<std::uint32_t>(many.size());
   raw.constraints._maximum = static_cast<std::uint32_t>(many.size());
@@ -233,23 +233,23 @@ TEST(CommandIntake, BadCommandsAreRejectedWithReasonsAndIntakeGoesOn) {
   expect[19] = "constraints: 516 given, at most 515 fit";
 
   // and a good one after all that
-  sender.send(base(CommandKind::start, 20));
+  sender.send(base(msg::CommandKind::start, 20));
 
   const auto acks = sender.acks(expect.size() + 1, 5.0);
   ASSERT_EQ(acks.size(), expect.size() + 1);
   for (const auto& [seq, part] : expect) {
-    const CommandAck& ack = acks.at(seq);
-    EXPECT_EQ(ack.result, AckResult::rejected) << seq;
+    const msg::CommandAck& ack = acks.at(seq);
+    EXPECT_EQ(ack.result, msg::AckResult::rejected) << seq;
     EXPECT_NE(std::string(ack.reason).find(part), std::string::npos)
         << seq << ": '" << ack.reason << "' lacks '" << part << "'";
   }
-  EXPECT_EQ(text_of(acks.at(18).source), "op?rator");
+  EXPECT_EQ(msg::text_of(acks.at(18).source), "op?rator");
   EXPECT_EQ(acks.at(16).kind, 77);
-  EXPECT_EQ(acks.at(20).result, AckResult::accepted) << acks.at(20).reason;
+  EXPECT_EQ(acks.at(20).result, msg::AckResult::accepted) << acks.at(20).reason;
 
-  Command got{};
+  msg::Command got{};
   ASSERT_TRUE(f.queue.try_pop(got));
-  EXPECT_EQ(got.kind, CommandKind::start);
+  EXPECT_EQ(got.kind, msg::CommandKind::start);
   EXPECT_FALSE(f.queue.try_pop(got));  // nothing rejected reached the planner
   const IntakeStats s = f.intake->stats();
   EXPECT_EQ(s.commands.received, expect.size() + 1);
@@ -269,7 +269,7 @@ TEST(CommandIntake, FloodIsRateLimitedAndEveryCommandAcknowledged) {
 
   constexpr std::uint64_t kFlood = 400;
   const auto t0 = std::chrono::steady_clock::now();
-  for (std::uint64_t seq = 1; seq <= kFlood; ++seq) sender.send(base(CommandKind::start, seq));
+  for (std::uint64_t seq = 1; seq <= kFlood; ++seq) sender.send(base(msg::CommandKind::start, seq));
   const auto acks = sender.acks(kFlood, 20.0);
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -277,7 +277,7 @@ TEST(CommandIntake, FloodIsRateLimitedAndEveryCommandAcknowledged) {
 
   std::size_t accepted = 0, limited = 0;
   for (const auto& [seq, ack] : acks) {
-    if (ack.result == AckResult::accepted) {
+    if (ack.result == msg::AckResult::accepted) {
       ++accepted;
     } else {
       EXPECT_NE(std::string(ack.reason).find("rate limit: this source sent more than 10"),
@@ -293,11 +293,11 @@ TEST(CommandIntake, FloodIsRateLimitedAndEveryCommandAcknowledged) {
   EXPECT_EQ(f.intake->stats().commands.rate_limited, limited);
 
   // another sender is not starved by the flood
-  Command other = base(CommandKind::stop, kFlood + 1, "second-console");
+  msg::Command other = base(msg::CommandKind::stop, kFlood + 1, "second-console");
   sender.send(other);
   const auto after = sender.acks(kFlood + 1, 5.0);
   ASSERT_EQ(after.count(kFlood + 1), 1u);
-  EXPECT_EQ(after.at(kFlood + 1).result, AckResult::accepted) << after.at(kFlood + 1).reason;
+  EXPECT_EQ(after.at(kFlood + 1).result, msg::AckResult::accepted) << after.at(kFlood + 1).reason;
 }
 
 TEST(CommandIntake, FullQueueRejectsAndSays) {
@@ -308,15 +308,15 @@ TEST(CommandIntake, FullQueueRejectsAndSays) {
   ASSERT_NE(f.intake, nullptr);
   Sender sender(*f.operator_side);
   ASSERT_TRUE(sender.ready(5.0));
-  const std::uint64_t n = CommandQueue::capacity() + 3;
-  for (std::uint64_t seq = 1; seq <= n; ++seq) sender.send(base(CommandKind::start, seq));
+  const std::uint64_t n = msg::CommandQueue::capacity() + 3;
+  for (std::uint64_t seq = 1; seq <= n; ++seq) sender.send(base(msg::CommandKind::start, seq));
   const auto acks = sender.acks(n, 10.0);
   ASSERT_EQ(acks.size(), n);
   for (std::uint64_t seq = 1; seq <= n; ++seq) {
-    if (seq <= CommandQueue::capacity()) {
-      EXPECT_EQ(acks.at(seq).result, AckResult::accepted) << seq;
+    if (seq <= msg::CommandQueue::capacity()) {
+      EXPECT_EQ(acks.at(seq).result, msg::AckResult::accepted) << seq;
     } else {
-      EXPECT_EQ(acks.at(seq).result, AckResult::rejected) << seq;
+      EXPECT_EQ(acks.at(seq).result, msg::AckResult::rejected) << seq;
       EXPECT_NE(std::string(acks.at(seq).reason).find("command queue full"), std::string::npos);
     }
   }
@@ -328,25 +328,25 @@ TEST(CommandIntake, ExecutiveAcksArePublished) {
   ASSERT_NE(f.intake, nullptr);
   Sender sender(*f.operator_side);
   ASSERT_TRUE(sender.ready(5.0));
-  Command c = base(CommandKind::switch_terrain, 5);
-  copy_text(c.pack_id, "taunus");
+  msg::Command c = base(msg::CommandKind::switch_terrain, 5);
+  msg::copy_text(c.pack_id, "taunus");
   sender.send(c);
-  ASSERT_EQ(sender.acks(1, 5.0).at(5).result, AckResult::accepted);
+  ASSERT_EQ(sender.acks(1, 5.0).at(5).result, msg::AckResult::accepted);
 
   // the executive takes it, fails to load the pack, and says so
-  Command got{};
+  msg::Command got{};
   ASSERT_TRUE(wait_until([&] { return f.queue.try_pop(got); }, 5.0));
-  CommandAck done{};
-  copy_text(done.source, text_of(got.source));
+  msg::CommandAck done{};
+  msg::copy_text(done.source, msg::text_of(got.source));
   done.sequence = got.sequence;
   done.kind = static_cast<std::uint8_t>(got.kind);
-  done.result = AckResult::failed;
-  copy_text(done.reason, "taunus.pack: checksum of tile 3 wrong");
+  done.result = msg::AckResult::failed;
+  msg::copy_text(done.reason, "taunus.pack: checksum of tile 3 wrong");
   ASSERT_TRUE(f.executive_acks.try_push(done));
 
   // the same source and sequence, now with the outcome
   ASSERT_TRUE(wait_until(
-      [&] { return sender.acks(1, 0.0).at(5).result == AckResult::failed; }, 5.0));
+      [&] { return sender.acks(1, 0.0).at(5).result == msg::AckResult::failed; }, 5.0));
   EXPECT_STREQ(sender.acks(1, 0.0).at(5).reason, "taunus.pack: checksum of tile 3 wrong");
   EXPECT_EQ(f.intake->stats().executive_acks, 1u);
 }
@@ -366,10 +366,10 @@ TEST(CommandIntake, NewLimitsApplyAfterATerrainSwitch) {
   const Status s = f.intake->set_limits(broken);
   EXPECT_NE(s.message().find("pack bounds are empty"), std::string::npos) << s.message();
 
-  Command c = base(CommandKind::set_endpoints, 1);
+  msg::Command c = base(msg::CommandKind::set_endpoints, 1);
   c.endpoints = {{450000.0, 5560000.0, 500.0}, {480000.0, 5590000.0, 600.0}};
   sender.send(c);
-  EXPECT_EQ(sender.acks(1, 5.0).at(1).result, AckResult::accepted);
+  EXPECT_EQ(sender.acks(1, 5.0).at(1).result, msg::AckResult::accepted);
 }
 
 TEST(CommandIntake, HealthReportsItsCounters) {
@@ -382,8 +382,8 @@ TEST(CommandIntake, HealthReportsItsCounters) {
   ASSERT_TRUE(health.ok());
   Sender sender(*f.operator_side);
   ASSERT_TRUE(sender.ready(5.0));
-  sender.send(base(CommandKind::start, 1));
-  Command bad = base(CommandKind::set_segment_count, 2);
+  sender.send(base(msg::CommandKind::start, 1));
+  msg::Command bad = base(msg::CommandKind::set_segment_count, 2);
   bad.segment_count = 1;
   sender.send(bad);
   ASSERT_EQ(sender.acks(2, 5.0).size(), 2u);
@@ -391,8 +391,8 @@ TEST(CommandIntake, HealthReportsItsCounters) {
 
   std::uint64_t accepted = 0, rejected = 0;
   ASSERT_TRUE(wait_until([&] {
-    HealthSample& h = (*pub)->health().back();
-    h = HealthSample{};
+    msg::HealthSample& h = (*pub)->health().back();
+    h = msg::HealthSample{};
     (*pub)->health().publish();
     (void)health->take<visvol_msgs_msg_dds__LoopHealth_>(
         [&](const visvol_msgs_msg_dds__LoopHealth_& m, const dds_sample_info_t&) {
@@ -406,7 +406,7 @@ TEST(CommandIntake, HealthReportsItsCounters) {
 TEST(CommandIntake, RejectsBadConfiguration) {
   auto p = make_participant(loopback(kDomain));
   ASSERT_NE(p, nullptr);
-  CommandQueue queue;
+  msg::CommandQueue queue;
   IntakeConfig c = default_config();
   c.rate.total_per_s = -1.0;
   Result<std::unique_ptr<CommandIntake>> r = CommandIntake::start(*p, c, queue);

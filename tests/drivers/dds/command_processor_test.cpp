@@ -75,7 +75,7 @@ struct Raw {
   visvol_msgs_msg_dds__Command_ m{};
   char source[16] = "op";
   char pack[4] = "";
-  explicit Raw(CommandKind kind, std::uint64_t seq) {
+  explicit Raw(msg::CommandKind kind, std::uint64_t seq) {
     m.kind = static_cast<std::uint8_t>(kind);
     m.sequence_number = seq;
     m.source = source;
@@ -86,29 +86,29 @@ struct Raw {
 TEST(CommandProcessor, AcknowledgesEveryCommand) {
   Result<CommandProcessor> p = CommandProcessor::create(limits(), RateLimit{});
   ASSERT_TRUE(p.ok());
-  CommandQueue queue;
-  CommandAck ack{};
+  msg::CommandQueue queue;
+  msg::CommandAck ack{};
 
-  Raw good(CommandKind::start, 1);
+  Raw good(msg::CommandKind::start, 1);
   p->process(good.m, 0.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::accepted);
+  EXPECT_EQ(ack.result, msg::AckResult::accepted);
   EXPECT_EQ(ack.sequence, 1u);
-  EXPECT_EQ(text_of(ack.source), "op");
+  EXPECT_EQ(msg::text_of(ack.source), "op");
   EXPECT_STREQ(ack.reason, "");
 
-  Raw bad(CommandKind::set_segment_count, 2);
+  Raw bad(msg::CommandKind::set_segment_count, 2);
   bad.m.segment_count = 0;
   p->process(bad.m, 0.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::rejected);
+  EXPECT_EQ(ack.result, msg::AckResult::rejected);
   EXPECT_EQ(ack.sequence, 2u);
-  EXPECT_EQ(ack.kind, static_cast<std::uint8_t>(CommandKind::set_segment_count));
+  EXPECT_EQ(ack.kind, static_cast<std::uint8_t>(msg::CommandKind::set_segment_count));
   EXPECT_EQ(std::string(ack.reason).rfind("segment_count: 0 is outside", 0), 0u) << ack.reason;
 
-  Raw unknown(CommandKind::start, 3);
+  Raw unknown(msg::CommandKind::start, 3);
   unknown.m.kind = 200;
   unknown.m.source = nullptr;  // never from Cyclone, but must not crash
   p->process(unknown.m, 0.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::rejected);
+  EXPECT_EQ(ack.result, msg::AckResult::rejected);
   EXPECT_EQ(ack.kind, 200);
   EXPECT_STREQ(ack.source, "");
 
@@ -122,58 +122,58 @@ TEST(CommandProcessor, AcknowledgesEveryCommand) {
 TEST(CommandProcessor, RateLimitedBeforeDecoding) {
   Result<CommandProcessor> p = CommandProcessor::create(limits(), rate(1.0, 2.0));
   ASSERT_TRUE(p.ok());
-  CommandQueue queue;
-  CommandAck ack{};
-  Raw garbage(CommandKind::start, 1);
+  msg::CommandQueue queue;
+  msg::CommandAck ack{};
+  Raw garbage(msg::CommandKind::start, 1);
   garbage.m.kind = 99;
   p->process(garbage.m, 5.0, queue, ack);  // a token spent on garbage
   p->process(garbage.m, 5.0, queue, ack);
   EXPECT_NE(std::string(ack.reason).find("kind: 99"), std::string::npos);
-  Raw good(CommandKind::start, 2);
+  Raw good(msg::CommandKind::start, 2);
   p->process(good.m, 5.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::rejected);
+  EXPECT_EQ(ack.result, msg::AckResult::rejected);
   EXPECT_STREQ(ack.reason,
                "rate limit: this source sent more than 2 commands at once or 1 per second");
   EXPECT_EQ(p->counts().rate_limited, 1u);
   p->process(good.m, 6.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::accepted);
+  EXPECT_EQ(ack.result, msg::AckResult::accepted);
 }
 
 TEST(CommandProcessor, FullQueueIsARejection) {
   Result<CommandProcessor> p = CommandProcessor::create(limits(), rate(1e6, 1e6));
   ASSERT_TRUE(p.ok());
-  CommandQueue queue;
-  CommandAck ack{};
-  Raw good(CommandKind::stop, 1);
-  for (std::size_t i = 0; i < CommandQueue::capacity(); ++i) {
+  msg::CommandQueue queue;
+  msg::CommandAck ack{};
+  Raw good(msg::CommandKind::stop, 1);
+  for (std::size_t i = 0; i < msg::CommandQueue::capacity(); ++i) {
     p->process(good.m, 0.0, queue, ack);
-    ASSERT_EQ(ack.result, AckResult::accepted);
+    ASSERT_EQ(ack.result, msg::AckResult::accepted);
   }
   p->process(good.m, 0.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::rejected);
+  EXPECT_EQ(ack.result, msg::AckResult::rejected);
   EXPECT_STREQ(ack.reason, "command queue full: the planner is not taking commands");
   EXPECT_EQ(p->counts().queue_full, 1u);
-  Command c{};
+  msg::Command c{};
   ASSERT_TRUE(queue.try_pop(c));
   p->process(good.m, 0.0, queue, ack);
-  EXPECT_EQ(ack.result, AckResult::accepted);
+  EXPECT_EQ(ack.result, msg::AckResult::accepted);
 }
 
 TEST(CommandProcessor, SourceIsSanitizedForTheAck) {
   Result<CommandProcessor> p = CommandProcessor::create(limits(), RateLimit{});
   ASSERT_TRUE(p.ok());
-  CommandQueue queue;
-  CommandAck ack{};
-  Raw r(CommandKind::start, 1);
+  msg::CommandQueue queue;
+  msg::CommandAck ack{};
+  Raw r(msg::CommandKind::start, 1);
   char weird[] = "a\nb\x7f";
   r.m.source = weird;
   p->process(r.m, 0.0, queue, ack);
   EXPECT_STREQ(ack.source, "a?b?");
-  EXPECT_EQ(ack.result, AckResult::rejected);
+  EXPECT_EQ(ack.result, msg::AckResult::rejected);
   std::string longer(200, 'x');
   r.m.source = longer.data();
   p->process(r.m, 0.0, queue, ack);
-  EXPECT_EQ(text_of(ack.source).size(), kSourceCapacity - 1);
+  EXPECT_EQ(msg::text_of(ack.source).size(), msg::kSourceCapacity - 1);
 }
 
 TEST(CommandProcessor, InvalidConfigurationIsRefused) {

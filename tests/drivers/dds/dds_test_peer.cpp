@@ -119,13 +119,13 @@ int publish(Participant& p, std::uint64_t count, double linger_s) {
     std::printf("error %s\n", matched.message().c_str());
     return 1;
   }
-  auto s = std::make_unique<PathSample>();
+  auto s = std::make_unique<msg::PathSample>();
   for (std::uint64_t seq = 1; seq <= count; ++seq) {
-    *s = PathSample{};
+    *s = msg::PathSample{};
     s->sequence = seq;
-    s->stamp_ns = now_stamp_ns();
-    copy_text(s->pack_id, "sf_north");
-    s->objective = Objective::hide;
+    s->stamp_ns = msg::now_stamp_ns();
+    msg::copy_text(s->pack_id, "sf_north");
+    s->objective = msg::Objective::hide;
     s->converged = seq == count;
     s->vertex_count = 8;
     for (std::uint32_t i = 0; i < 8; ++i) {
@@ -157,13 +157,13 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   CommandMessage m;
-  Command c{};
-  copy_text(c.source, source);
-  c.kind = CommandKind::set_endpoints;
+  msg::Command c{};
+  msg::copy_text(c.source, source);
+  c.kind = msg::CommandKind::set_endpoints;
   c.sequence = 1;
   c.endpoints = {{nan, 0.0, 0.0}, {1.0, 1.0, 1.0}};
   (void)writer->write(&m.fill(c));
-  c.kind = CommandKind::set_segment_count;
+  c.kind = msg::CommandKind::set_segment_count;
   c.sequence = 2;
   c.segment_count = 1000000;
   (void)writer->write(&m.fill(c));
@@ -171,9 +171,9 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
   raw.sequence_number = 3;
   raw.kind = 250;
   (void)writer->write(&raw);
-  c = Command{};
-  copy_text(c.source, source);
-  c.kind = CommandKind::start;
+  c = msg::Command{};
+  msg::copy_text(c.source, source);
+  c.kind = msg::CommandKind::start;
   c.sequence = 4;
   (void)writer->write(&m.fill(c));
 
@@ -185,7 +185,7 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
         [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
           if (std::string(a.source) != source) return;
           answered.insert(a.sequence_number);
-          const char* result = to_string(static_cast<AckResult>(a.result));
+          const char* result = to_string(static_cast<msg::AckResult>(a.result));
           std::printf("ack %llu %s %s\n", static_cast<unsigned long long>(a.sequence_number),
                       result ? result : "?", a.reason);
         });

@@ -21,7 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/dds/participant.hpp"
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 
 extern char** environ;
 
@@ -50,25 +50,25 @@ inline std::unique_ptr<Participant> make_participant(const ParticipantConfig& co
 }
 
 // A straight path of `n` vertices along x with recognisable values.
-inline void fill_path(PathSample& s, std::uint64_t sequence, std::uint32_t n) {
+inline void fill_path(msg::PathSample& s, std::uint64_t sequence, std::uint32_t n) {
   s.sequence = sequence;
   s.stamp_ns = 1700000000123456789LL + static_cast<std::int64_t>(sequence);
-  copy_text(s.pack_id, "sf_north");
-  s.objective = Objective::hide;
+  msg::copy_text(s.pack_id, "sf_north");
+  s.objective = msg::Objective::hide;
   s.converged = sequence % 2 == 0;
   s.f_c = 0.25 * static_cast<double>(sequence);
   s.length_m = 10.0 * n;
   s.min_clearance_m = 12.5;
   s.vertex_count = n;
   for (std::uint32_t i = 0; i < n; ++i) {
-    s.vertices[i] = PathVertex{{544000.0 + 10.0 * i, 4189000.0, 150.0 + static_cast<double>(sequence)},
+    s.vertices[i] = msg::PathVertex{{544000.0 + 10.0 * i, 4189000.0, 150.0 + static_cast<double>(sequence)},
                                0.001 * i, 12.5 + i};
   }
 }
 
-inline std::unique_ptr<PathSample> make_path(std::uint64_t sequence, std::uint32_t n) {
-  auto s = std::make_unique<PathSample>();
-  *s = PathSample{};
+inline std::unique_ptr<msg::PathSample> make_path(std::uint64_t sequence, std::uint32_t n) {
+  auto s = std::make_unique<msg::PathSample>();
+  *s = msg::PathSample{};
   fill_path(*s, sequence, n);
   return s;
 }
@@ -112,7 +112,7 @@ class Cdr {
 };
 
 // The serialised nav_msgs/Path of a sample, by the rules above.
-inline std::vector<std::uint8_t> path_cdr(const PathSample& s, const char* frame_id) {
+inline std::vector<std::uint8_t> path_cdr(const msg::PathSample& s, const char* frame_id) {
   Cdr cdr;
   const std::int64_t sec = s.stamp_ns / 1000000000;
   const std::uint32_t nsec = static_cast<std::uint32_t>(s.stamp_ns % 1000000000);

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "dds_test_support.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
-#include "dds_test_support.hpp"
 #include "test_domains.hpp"
 
 namespace visvol::dds {
@@ -29,8 +29,8 @@ std::vector<std::string> echo(std::vector<std::string> args) {
 
 struct Console {
   std::unique_ptr<Participant> participant = make_participant(loopback(kDomain));
-  CommandQueue queue;
-  AckQueue executive_acks;
+  msg::CommandQueue queue;
+  msg::AckQueue executive_acks;
   std::unique_ptr<CommandIntake> intake;
   Console() {
     if (!participant) return;
@@ -53,10 +53,10 @@ TEST(Echo, AcceptedCommandExitsZeroAndReachesTheQueue) {
   EXPECT_NE(c.output().find("ack source=\"operator-1\" seq=7 kind=set-objective result=accepted"),
             std::string::npos)
       << c.output();
-  Command got{};
+  msg::Command got{};
   ASSERT_TRUE(console.queue.try_pop(got));
-  EXPECT_EQ(got.kind, CommandKind::set_objective);
-  EXPECT_EQ(got.objective, Objective::hide);
+  EXPECT_EQ(got.kind, msg::CommandKind::set_objective);
+  EXPECT_EQ(got.objective, msg::Objective::hide);
   EXPECT_EQ(got.sequence, 7u);
 
   Child e(echo({"command", "set-endpoints", "541000", "4181000", "120", "550000", "4190000",
@@ -64,7 +64,7 @@ TEST(Echo, AcceptedCommandExitsZeroAndReachesTheQueue) {
   ASSERT_EQ(e.wait(30.0), 0) << e.output();
   ASSERT_TRUE(console.queue.try_pop(got));
   EXPECT_EQ(got.endpoints.end.y_m, 4190000.0);
-  EXPECT_EQ(text_of(got.source).rfind("visvol-echo@", 0), 0u);
+  EXPECT_EQ(msg::text_of(got.source).rfind("visvol-echo@", 0), 0u);
 
   Child k(echo({"command", "set-constraints", "--hidden-from", "545000,4185000,10",
                 "--hidden-from", "546000,4186000,20", "--visible-to", "547000,4187000,30",
@@ -72,14 +72,14 @@ TEST(Echo, AcceptedCommandExitsZeroAndReachesTheQueue) {
   ASSERT_EQ(k.wait(30.0), 0) << k.output();
   ASSERT_TRUE(console.queue.try_pop(got));
   ASSERT_EQ(got.constraints.count, 6u);
-  EXPECT_EQ(got.constraints.items[0].kind, ConstraintKind::hidden_from);
-  EXPECT_EQ(got.constraints.items[1].kind, ConstraintKind::hidden_from);
+  EXPECT_EQ(got.constraints.items[0].kind, msg::ConstraintKind::hidden_from);
+  EXPECT_EQ(got.constraints.items[1].kind, msg::ConstraintKind::hidden_from);
   EXPECT_EQ(got.constraints.items[1].position.z_m, 20.0);
-  EXPECT_EQ(got.constraints.items[2].kind, ConstraintKind::visible_to);
+  EXPECT_EQ(got.constraints.items[2].kind, msg::ConstraintKind::visible_to);
   EXPECT_EQ(got.constraints.items[3].height_m, 50.0);
-  EXPECT_EQ(got.constraints.items[4].kind, ConstraintKind::max_agl);
+  EXPECT_EQ(got.constraints.items[4].kind, msg::ConstraintKind::max_agl);
   EXPECT_EQ(got.constraints.items[4].height_m, 300.0);
-  EXPECT_EQ(got.constraints.items[5].kind, ConstraintKind::max_altitude);
+  EXPECT_EQ(got.constraints.items[5].kind, msg::ConstraintKind::max_altitude);
   EXPECT_EQ(got.constraints.items[5].height_m, 800.0);
 }
 
@@ -99,7 +99,7 @@ TEST(Echo, RejectedCommandPrintsTheReasonAndExitsOne) {
   Child k(echo({"command", "set-constraints", "--clearance", "50", "--max-agl", "20"}));
   ASSERT_EQ(k.wait(30.0), 1) << k.output();
   EXPECT_NE(k.output().find("max-agl 20 m is not above the clearance 50 m"), std::string::npos) << k.output();
-  Command got{};
+  msg::Command got{};
   EXPECT_FALSE(console.queue.try_pop(got));
 }
 
@@ -108,14 +108,14 @@ TEST(Echo, WaitAppliedWaitsForTheExecutive) {
   ASSERT_NE(console.intake, nullptr);
   Child c(echo({"command", "--wait-applied", "--timeout", "20", "--sequence", "3", "start"}));
   // the executive takes the command and reports it applied
-  Command got{};
+  msg::Command got{};
   ASSERT_TRUE(test::wait_until([&] { return console.queue.try_pop(got); }, 20.0)) << c.output();
   ASSERT_TRUE(c.wait_for_output("result=accepted", 20.0)) << c.output();
-  CommandAck done{};
-  copy_text(done.source, text_of(got.source));
+  msg::CommandAck done{};
+  msg::copy_text(done.source, msg::text_of(got.source));
   done.sequence = got.sequence;
   done.kind = static_cast<std::uint8_t>(got.kind);
-  done.result = AckResult::applied;
+  done.result = msg::AckResult::applied;
   ASSERT_TRUE(console.executive_acks.try_push(done));
   ASSERT_EQ(c.wait(30.0), 0) << c.output();
   EXPECT_NE(c.output().find("seq=3 kind=start result=applied"), std::string::npos) << c.output();
@@ -180,8 +180,8 @@ TEST(Echo, PrintsPathUpdatesAndHealth) {
   ASSERT_TRUE(h.wait_for_output("watching", 20.0)) << h.output();
   // health is volatile: publish while it listens
   ASSERT_TRUE(test::wait_until([&] {
-    HealthSample& s = (*pub)->health().back();
-    s = HealthSample{};
+    msg::HealthSample& s = (*pub)->health().back();
+    s = msg::HealthSample{};
     s.sequence = 5;
     s.period_us = 1000.0;
     (*pub)->health().publish();

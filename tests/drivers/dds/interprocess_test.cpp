@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "dds_test_support.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/path_publisher.hpp"
-#include "dds_test_support.hpp"
 #include "test_domains.hpp"
 
 namespace visvol::dds {
@@ -114,7 +114,7 @@ TEST(Interprocess, OfflinePublisherLingersUntilDelivered) {
 TEST(Interprocess, CommandsFromAnotherProcessAreValidatedAndAnswered) {
   auto p = make_participant(loopback(kDomain));
   ASSERT_NE(p, nullptr);
-  CommandQueue queue;
+  msg::CommandQueue queue;
   IntakeConfig config;
   config.limits.min = {0.0, 0.0, 0.0};
   config.limits.max = {1000.0, 1000.0, 1000.0};
@@ -134,10 +134,10 @@ TEST(Interprocess, CommandsFromAnotherProcessAreValidatedAndAnswered) {
       << out;
   EXPECT_NE(out.find("ack 4 accepted"), std::string::npos) << out;
 
-  Command c{};
+  msg::Command c{};
   ASSERT_TRUE(queue.try_pop(c));
-  EXPECT_EQ(c.kind, CommandKind::start);
-  EXPECT_EQ(text_of(c.source), "peer");
+  EXPECT_EQ(c.kind, msg::CommandKind::start);
+  EXPECT_EQ(msg::text_of(c.source), "peer");
   EXPECT_FALSE(queue.try_pop(c));
   // and this process carries on: the same intake answers a second sender (a
   // source of its own, so the first one's stored acks cannot pass for its own)

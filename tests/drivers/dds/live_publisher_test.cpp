@@ -8,9 +8,9 @@
 #include <thread>
 #include <vector>
 
+#include "dds_test_support.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/topics.hpp"
-#include "dds_test_support.hpp"
 #include "test_domains.hpp"
 
 namespace visvol::dds {
@@ -24,13 +24,13 @@ using test::wait_until;
 constexpr std::uint32_t kDomain = test::kDomainLivePublisher;
 
 // Takes every PathUpdate waiting (after waiting up to timeout_s for one).
-std::vector<PathSample> take_updates(const Reader& reader, double timeout_s) {
-  std::vector<PathSample> got;
+std::vector<msg::PathSample> take_updates(const Reader& reader, double timeout_s) {
+  std::vector<msg::PathSample> got;
   const Result<bool> ready = reader.wait(timeout_s);
   if (!ready.ok() || !*ready) return got;
   Result<int> n = reader.take<visvol_msgs_msg_dds__PathUpdate_>(
       [&](const visvol_msgs_msg_dds__PathUpdate_& msg, const dds_sample_info_t&) {
-        auto s = std::make_unique<PathSample>();
+        auto s = std::make_unique<msg::PathSample>();
         EXPECT_TRUE(decode_path_update(msg, *s).ok());
         got.push_back(*s);
       });
@@ -53,10 +53,10 @@ void expect_producer_never_waits(LivePublisher& pub) {
   const std::uint64_t before = pub.stats().paths;
   const long switches = voluntary_switches();
   for (std::uint64_t seq = 1; seq <= 100000; ++seq) {
-    PathSample& s = pub.path().back();
+    msg::PathSample& s = pub.path().back();
     fill_path(s, seq, 64);
     pub.path().publish();
-    HealthSample& h = pub.health().back();
+    msg::HealthSample& h = pub.health().back();
     h.sequence = seq;
     pub.health().publish();
   }
@@ -177,15 +177,15 @@ TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
   const auto collect = [&] { w.collect(); };
 
   // a path stamped 10 ms before its hand-off is kept back ...
-  PathSample& stale = (*pub)->path().back();
+  msg::PathSample& stale = (*pub)->path().back();
   fill_path(stale, 1, 4);
-  stale.stamp_ns = now_stamp_ns() - 10000000;
+  stale.stamp_ns = msg::now_stamp_ns() - 10000000;
   (*pub)->path().publish();
   ASSERT_TRUE(wait_until([&] { return (*pub)->stats().paths_held == 1; }, 5.0));
   // ... and a newer one replaces it
-  PathSample& fresh = (*pub)->path().back();
+  msg::PathSample& fresh = (*pub)->path().back();
   fill_path(fresh, 2, 4);
-  fresh.stamp_ns = now_stamp_ns();
+  fresh.stamp_ns = msg::now_stamp_ns();
   (*pub)->path().publish();
   ASSERT_TRUE(wait_until([&] {
     collect();
@@ -195,9 +195,9 @@ TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
 
   // with no newer one, the kept path goes out when the wait is over
   std::this_thread::sleep_for(std::chrono::milliseconds(30));  // past the path interval
-  PathSample& alone = (*pub)->path().back();
+  msg::PathSample& alone = (*pub)->path().back();
   fill_path(alone, 3, 4);
-  alone.stamp_ns = now_stamp_ns() - 10000000;
+  alone.stamp_ns = msg::now_stamp_ns() - 10000000;
   (*pub)->path().publish();
   ASSERT_TRUE(wait_until([&] {
     collect();
@@ -219,9 +219,9 @@ TEST(LivePublisher, AStalePathFromASlowProducerGoesOutAtOnce) {
   const auto collect = [&] { w.collect(); };
   // paths 1 and 2, 60 ms apart: a producer period of 60 ms, over the 10 ms wait
   for (std::uint64_t seq : {1u, 2u}) {
-    PathSample& s = (*pub)->path().back();
+    msg::PathSample& s = (*pub)->path().back();
     fill_path(s, seq, 4);
-    s.stamp_ns = now_stamp_ns();
+    s.stamp_ns = msg::now_stamp_ns();
     (*pub)->path().publish();
     ASSERT_TRUE(wait_until([&] {
       collect();
@@ -233,9 +233,9 @@ TEST(LivePublisher, AStalePathFromASlowProducerGoesOutAtOnce) {
   // (path 1 may have been held: a late first poll finds it stale with no
   // producer period known yet)
   const std::uint64_t held_before = (*pub)->stats().paths_held;
-  PathSample& late = (*pub)->path().back();
+  msg::PathSample& late = (*pub)->path().back();
   fill_path(late, 3, 4);
-  late.stamp_ns = now_stamp_ns() - 5000000;
+  late.stamp_ns = msg::now_stamp_ns() - 5000000;
   (*pub)->path().publish();
   ASSERT_TRUE(wait_until([&] {
     collect();
@@ -259,7 +259,7 @@ TEST(LivePublisher, ThumbnailAtMostOncePerIntervalAndTheLastOnStop) {
   ASSERT_TRUE(reader->wait_for_writers(1, 5.0).ok());
   // 10 renders in 0.5 s: at most 2 pass the rate (t = 0, 0.5 s), the last on stop
   for (std::uint32_t i = 1; i <= 10; ++i) {
-    ThumbnailSample& t = (*pub)->thumbnail().back();
+    msg::ThumbnailSample& t = (*pub)->thumbnail().back();
     t.stamp_ns = i;
     const std::uint8_t png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     std::memcpy(t.png, png, 8);
@@ -297,14 +297,14 @@ TEST(LivePublisher, HealthIsBestEffortAndCarriesLayerCounters) {
   // a reliable reader asks for more than a best-effort writer offers
   EXPECT_FALSE(reliable->wait_for_writers(1, 0.3).ok());
 
-  HealthSample& h = (*pub)->health().back();
-  h = HealthSample{};
+  msg::HealthSample& h = (*pub)->health().back();
+  h = msg::HealthSample{};
   h.sequence = 9;
   h.period_us = 1000.0;
   h.wakeup_latency = {2.0, 8.5, 30.0, 55.0, 1000};
   h.overruns = 3;
   h.safe_state = true;
-  copy_text(h.safe_state_reason, "device fault");
+  msg::copy_text(h.safe_state_reason, "device fault");
   (*pub)->health().publish();
 
   ASSERT_TRUE(*best_effort->wait(5.0));
@@ -330,15 +330,15 @@ TEST(LivePublisher, BadSampleIsCountedAndTheThreadGoesOn) {
   ASSERT_TRUE(reader.ok());
   Result<std::unique_ptr<LivePublisher>> pub = LivePublisher::start(*p, PublisherConfig{});
   ASSERT_TRUE(pub.ok());
-  PathSample& bad = (*pub)->path().back();
+  msg::PathSample& bad = (*pub)->path().back();
   fill_path(bad, 1, 3);
-  bad.vertex_count = kMaxPathVertices + 1;
+  bad.vertex_count = msg::kMaxPathVertices + 1;
   (*pub)->path().publish();
   ASSERT_TRUE(wait_until([&] { return (*pub)->stats().errors == 1; }, 5.0));
   EXPECT_NE((*pub)->stats().last_error.find("vertex_count"), std::string::npos);
   fill_path((*pub)->path().back(), 2, 3);
   (*pub)->path().publish();
-  std::vector<PathSample> got = take_updates(*reader, 5.0);
+  std::vector<msg::PathSample> got = take_updates(*reader, 5.0);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].sequence, 2u);
 }

@@ -9,13 +9,13 @@
 namespace visvol::dds {
 namespace {
 
-std::unique_ptr<PathSample> path(std::uint32_t n) {
-  auto s = std::make_unique<PathSample>();
-  *s = PathSample{};
+std::unique_ptr<msg::PathSample> path(std::uint32_t n) {
+  auto s = std::make_unique<msg::PathSample>();
+  *s = msg::PathSample{};
   s->sequence = 12;
   s->stamp_ns = 1700000000500000000LL;
-  copy_text(s->pack_id, "sf_north");
-  s->objective = Objective::show;
+  msg::copy_text(s->pack_id, "sf_north");
+  s->objective = msg::Objective::show;
   s->converged = true;
   s->inside_envelope = true;
   s->f_c = 3.5;
@@ -39,7 +39,7 @@ TEST(RosTime, SplitsIntoSecondsAndNanoseconds) {
   EXPECT_EQ(from_ros_time(t), -1);
   t = to_ros_time(INT64_MAX);  // past 2038: clamped
   EXPECT_EQ(t.sec, INT32_MAX);
-  EXPECT_GT(now_stamp_ns(), 1600000000LL * 1000000000LL);
+  EXPECT_GT(msg::now_stamp_ns(), 1600000000LL * 1000000000LL);
 }
 
 TEST(PathMessages, FillsRosPathAndUpdateWithOneHeader) {
@@ -79,11 +79,11 @@ TEST(PathMessages, FillsRosPathAndUpdateWithOneHeader) {
 TEST(PathMessages, RefusesMoreVerticesThanReserved) {
   auto m = std::make_unique<PathMessages>("visvol_world");
   auto s = path(2);
-  s->vertex_count = kMaxPathVertices + 1;
+  s->vertex_count = msg::kMaxPathVertices + 1;
   const Status st = m->fill(*s);
   EXPECT_EQ(st.code(), Errc::invalid_argument);
   EXPECT_NE(st.message().find("vertex_count 513"), std::string::npos) << st.message();
-  s->vertex_count = kMaxPathVertices;  // the full capacity is fine
+  s->vertex_count = msg::kMaxPathVertices;  // the full capacity is fine
   EXPECT_TRUE(m->fill(*s).ok());
 }
 
@@ -92,21 +92,21 @@ TEST(PathMessages, UnterminatedPackIdIsCutNotOverrun) {
   auto s = path(1);
   std::memset(s->pack_id, 'x', sizeof s->pack_id);  // no NUL at all
   ASSERT_TRUE(m->fill(*s).ok());
-  EXPECT_EQ(std::strlen(m->update().pack_id), kPackIdCapacity - 1);
+  EXPECT_EQ(std::strlen(m->update().pack_id), msg::kPackIdCapacity - 1);
 }
 
 TEST(DecodePathUpdate, RoundTripAndInconsistentLengths) {
   auto m = std::make_unique<PathMessages>("visvol_world");
   const auto s = path(4);
   ASSERT_TRUE(m->fill(*s).ok());
-  auto back = std::make_unique<PathSample>();
+  auto back = std::make_unique<msg::PathSample>();
   ASSERT_TRUE(decode_path_update(m->update(), *back).ok());
   EXPECT_EQ(back->sequence, s->sequence);
   EXPECT_EQ(back->stamp_ns, s->stamp_ns);
   EXPECT_EQ(back->objective, s->objective);
   EXPECT_TRUE(back->inside_envelope);
   EXPECT_EQ(back->vertex_count, 4u);
-  EXPECT_EQ(std::memcmp(back->vertices, s->vertices, 4 * sizeof(PathVertex)), 0);
+  EXPECT_EQ(std::memcmp(back->vertices, s->vertices, 4 * sizeof(msg::PathVertex)), 0);
 
   visvol_msgs_msg_dds__PathUpdate_ broken = m->update();
   broken.visibility._length = 3;
@@ -115,11 +115,11 @@ TEST(DecodePathUpdate, RoundTripAndInconsistentLengths) {
 }
 
 TEST(ThumbnailMessage, ChecksTheBytesArePng) {
-  auto t = std::make_unique<ThumbnailSample>();
-  *t = ThumbnailSample{};
+  auto t = std::make_unique<msg::ThumbnailSample>();
+  *t = msg::ThumbnailSample{};
   ThumbnailMessage m("visvol_world");
   EXPECT_NE(m.fill(*t).message().find("png_size_bytes 0"), std::string::npos);
-  t->png_size_bytes = kMaxThumbnailBytes + 1;
+  t->png_size_bytes = msg::kMaxThumbnailBytes + 1;
   EXPECT_FALSE(m.fill(*t).ok());
   t->png_size_bytes = 16;
   EXPECT_NE(m.fill(*t).message().find("PNG signature"), std::string::npos);
@@ -132,20 +132,20 @@ TEST(ThumbnailMessage, ChecksTheBytesArePng) {
 }
 
 TEST(TerrainMessage, NeedsAPackAndACrs) {
-  auto info = std::make_unique<TerrainInfo>();
-  *info = TerrainInfo{};
+  auto info = std::make_unique<msg::TerrainInfo>();
+  *info = msg::TerrainInfo{};
   TerrainMessage m("visvol_world");
   EXPECT_NE(m.fill(*info).message().find("empty pack_id"), std::string::npos);
-  copy_text(info->pack_id, "sf_north");
+  msg::copy_text(info->pack_id, "sf_north");
   EXPECT_NE(m.fill(*info).message().find("neither crs nor crs_wkt"), std::string::npos);
-  copy_text(info->crs_wkt, "PROJCRS[\"WGS 84 / UTM zone 10N\"]");
+  msg::copy_text(info->crs_wkt, "PROJCRS[\"WGS 84 / UTM zone 10N\"]");
   ASSERT_TRUE(m.fill(*info).ok());
   EXPECT_STREQ(m.message().crs, "");
   EXPECT_STREQ(m.message().crs_wkt, "PROJCRS[\"WGS 84 / UTM zone 10N\"]");
 }
 
 TEST(HealthMessage, AddsTheLayerCounters) {
-  HealthSample h{};
+  msg::HealthSample h{};
   h.sequence = 3;
   h.compute_time = {10.0, 20.0, 40.0, 80.0, 100};
   h.misses = 2;
@@ -164,10 +164,10 @@ TEST(HealthMessage, AddsTheLayerCounters) {
 }
 
 TEST(DeviceStatusMessage, CopiesEveryField) {
-  DeviceStatusSample d{};
+  msg::DeviceStatusSample d{};
   d.sequence = 8;
-  copy_text(d.device, "phantom-1");
-  d.state = DeviceState::fault;
+  msg::copy_text(d.device, "phantom-1");
+  d.state = msg::DeviceState::fault;
   d.fault_bits = 0x21;
   d.motor_temperature_c = 61.5;
   d.can_errors = 3;
@@ -182,17 +182,17 @@ TEST(DeviceStatusMessage, CopiesEveryField) {
 }
 
 TEST(Samples, NamesOfEnumerations) {
-  EXPECT_STREQ(to_string(Objective::hide), "hide");
-  EXPECT_STREQ(to_string(RopeModel::articulated), "articulated");
-  EXPECT_STREQ(to_string(CommandKind::set_segment_count), "set-segments");
-  EXPECT_STREQ(to_string(AckResult::failed), "failed");
-  EXPECT_STREQ(to_string(DeviceState::idle), "idle");
-  EXPECT_EQ(to_string(static_cast<CommandKind>(0)), nullptr);
+  EXPECT_STREQ(to_string(msg::Objective::hide), "hide");
+  EXPECT_STREQ(to_string(msg::RopeModel::articulated), "articulated");
+  EXPECT_STREQ(to_string(msg::CommandKind::set_segment_count), "set-segments");
+  EXPECT_STREQ(to_string(msg::AckResult::failed), "failed");
+  EXPECT_STREQ(to_string(msg::DeviceState::idle), "idle");
+  EXPECT_EQ(to_string(static_cast<msg::CommandKind>(0)), nullptr);
   char small[4];
-  EXPECT_FALSE(copy_text(small, "abcdef"));
+  EXPECT_FALSE(msg::copy_text(small, "abcdef"));
   EXPECT_STREQ(small, "abc");
-  EXPECT_TRUE(copy_text(small, "ab"));
-  EXPECT_EQ(text_of(small), "ab");
+  EXPECT_TRUE(msg::copy_text(small, "ab"));
+  EXPECT_EQ(msg::text_of(small), "ab");
 }
 
 }  // namespace

@@ -5,9 +5,9 @@
 #include <cstring>
 #include <vector>
 
+#include "dds_test_support.hpp"
 #include "drivers/dds/path_publisher.hpp"
 #include "drivers/dds/topics.hpp"
-#include "dds_test_support.hpp"
 #include "test_domains.hpp"
 
 namespace visvol::dds {
@@ -23,13 +23,13 @@ constexpr std::uint32_t kDomain = test::kDomainPathPublisher;
 // Path publisher -----------------------------------------------------------------
 
 // Takes every PathUpdate waiting (after waiting up to timeout_s for one).
-std::vector<PathSample> take_updates(const Reader& reader, double timeout_s) {
-  std::vector<PathSample> got;
+std::vector<msg::PathSample> take_updates(const Reader& reader, double timeout_s) {
+  std::vector<msg::PathSample> got;
   const Result<bool> ready = reader.wait(timeout_s);
   if (!ready.ok() || !*ready) return got;
   Result<int> n = reader.take<visvol_msgs_msg_dds__PathUpdate_>(
       [&](const visvol_msgs_msg_dds__PathUpdate_& msg, const dds_sample_info_t&) {
-        auto s = std::make_unique<PathSample>();
+        auto s = std::make_unique<msg::PathSample>();
         EXPECT_TRUE(decode_path_update(msg, *s).ok());
         got.push_back(*s);
       });
@@ -50,13 +50,13 @@ TEST(PathPublisher, PathAndUpdateArriveWithTheSameHeader) {
   const auto sample = make_path(7, 5);
   ASSERT_TRUE((*pub)->publish(*sample).ok());
 
-  std::vector<PathSample> updates = take_updates(*update_reader, 5.0);
+  std::vector<msg::PathSample> updates = take_updates(*update_reader, 5.0);
   ASSERT_EQ(updates.size(), 1u);
-  const PathSample& u = updates[0];
+  const msg::PathSample& u = updates[0];
   EXPECT_EQ(u.sequence, 7u);
   EXPECT_EQ(u.stamp_ns, sample->stamp_ns);
-  EXPECT_EQ(text_of(u.pack_id), "sf_north");
-  EXPECT_EQ(u.objective, Objective::hide);
+  EXPECT_EQ(msg::text_of(u.pack_id), "sf_north");
+  EXPECT_EQ(u.objective, msg::Objective::hide);
   EXPECT_EQ(u.f_c, sample->f_c);
   EXPECT_EQ(u.vertex_count, 5u);
   for (std::uint32_t i = 0; i < 5; ++i) {
@@ -95,7 +95,7 @@ TEST(PathPublisher, LateJoinerGetsOnlyTheLatestPath) {
   // joins after the fact
   Result<Reader> late = Reader::create(*p, Topic::path_update);
   ASSERT_TRUE(late.ok());
-  std::vector<PathSample> got = take_updates(*late, 5.0);
+  std::vector<msg::PathSample> got = take_updates(*late, 5.0);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].sequence, 3u);
 }
@@ -115,7 +115,7 @@ TEST(PathPublisher, VolatileReaderAsRvizUsesMatchesAndGetsNewPathsOnly) {
   ASSERT_TRUE(rviz->wait_for_writers(1, 5.0).ok());
   EXPECT_TRUE(take_updates(*rviz, 0.2).empty());  // no history for a volatile reader
   ASSERT_TRUE((*pub)->publish(*make_path(2, 3)).ok());
-  std::vector<PathSample> got = take_updates(*rviz, 5.0);
+  std::vector<msg::PathSample> got = take_updates(*rviz, 5.0);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].sequence, 2u);
 }
@@ -126,8 +126,8 @@ TEST(PathPublisher, ThumbnailAndTerrainArrive) {
   Result<std::unique_ptr<PathPublisher>> pub = PathPublisher::create(*p);
   ASSERT_TRUE(pub.ok());
 
-  auto thumb = std::make_unique<ThumbnailSample>();
-  *thumb = ThumbnailSample{};
+  auto thumb = std::make_unique<msg::ThumbnailSample>();
+  *thumb = msg::ThumbnailSample{};
   const std::uint8_t png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   thumb->png_size_bytes = 100000;
   std::memcpy(thumb->png, png, sizeof png);
@@ -140,10 +140,10 @@ TEST(PathPublisher, ThumbnailAndTerrainArrive) {
   EXPECT_FALSE((*pub)->publish(*thumb).ok());  // not a PNG: refused, not sent
   thumb->png[0] = 0x89;
 
-  auto terrain = std::make_unique<TerrainInfo>();
-  *terrain = TerrainInfo{};
-  copy_text(terrain->pack_id, "sf_north");
-  copy_text(terrain->crs, "EPSG:32610");
+  auto terrain = std::make_unique<msg::TerrainInfo>();
+  *terrain = msg::TerrainInfo{};
+  msg::copy_text(terrain->pack_id, "sf_north");
+  msg::copy_text(terrain->crs, "EPSG:32610");
   terrain->min = {540000.0, 4180000.0, -10.0};
   terrain->max = {551100.0, 4194000.0, 600.0};
   terrain->post_spacing_m = 30.0;
@@ -210,8 +210,8 @@ TEST(WireFormat, SmallPathIsPlainCdrByHand) {
   ASSERT_TRUE(reader.ok());
   Result<std::unique_ptr<PathPublisher>> pub = PathPublisher::create(*p, "w");
   ASSERT_TRUE(pub.ok());
-  auto s = std::make_unique<PathSample>();
-  *s = PathSample{};
+  auto s = std::make_unique<msg::PathSample>();
+  *s = msg::PathSample{};
   s->stamp_ns = 1000000002;  // sec 1, nanosec 2
   s->vertex_count = 1;
   s->vertices[0].position = {1.5, -2.0, 3.25};

@@ -12,9 +12,9 @@
 #include <memory>
 #include <thread>
 
-#include "drivers/dds/samples.hpp"
 #include "drivers/render/renderer.hpp"
 #include "drivers/render/thumbnail.hpp"
+#include "msg/samples.hpp"
 #include "render_test_util.hpp"
 #include "rt/base/alloc_counter.hpp"
 
@@ -64,9 +64,9 @@ TEST(RendererMemory, FlatOverThreeHundredFramesOnARendererThread) {
       m.status = r.status();
       return;
     }
-    auto thumbnail = std::make_unique<dds::ThumbnailSample>();
-    auto sample = std::make_unique<dds::PathSample>();
-    auto scratch = std::make_unique<PathPoint[]>(dds::kMaxPathVertices);
+    auto thumbnail = std::make_unique<msg::ThumbnailSample>();
+    auto sample = std::make_unique<msg::PathSample>();
+    auto scratch = std::make_unique<PathPoint[]>(msg::kMaxPathVertices);
     const Marker markers[2] = {{MarkerKind::hidden_from, g.origin_x + 100, g.origin_y - 500, 20},
                                {MarkerKind::visible_to, g.origin_x + 500, g.origin_y - 540, 20}};
     const View views[4] = {View::top, View::oblique, View::volume, View::slice};

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 #include "render_test_util.hpp"
 #include "rt/base/alloc_counter.hpp"
 
@@ -115,7 +115,7 @@ TEST(PngEncoder, AllocatesNothingPerImageAndFitsAThumbnailSample) {
   const std::vector<std::uint8_t> px = test_card(w, h, w * 4);
   Result<std::unique_ptr<PngEncoder>> enc = PngEncoder::create(w, h, 6);
   ASSERT_TRUE(enc.ok());
-  auto sample = std::make_unique<dds::ThumbnailSample>();
+  auto sample = std::make_unique<msg::ThumbnailSample>();
   // libpng and zlib allocate from the encoder's arena (its high-water mark
   // holds zlib's deflate state, about 260 KiB), and operator new is never reached
   const std::uint64_t before = visvol::testing::allocation_count();

@@ -12,10 +12,10 @@
 #include <fstream>
 #include <thread>
 
-#include "drivers/dds/samples.hpp"
 #include "drivers/render/png_encoder.hpp"
 #include "drivers/render/thumbnail.hpp"
 #include "fields/sampler.hpp"
+#include "msg/samples.hpp"
 #include "render_test_util.hpp"
 
 namespace visvol::render {
@@ -368,7 +368,7 @@ TEST_F(RendererTest, CreateChecksItsConfiguration) {
 TEST_F(RendererTest, PngOfTheFrameDecodesToItsPixelsAndFitsAThumbnailSample) {
   const std::vector<PathPoint> path = loop_path(100.0);
   ASSERT_TRUE(renderer_->render(frame_of(View::oblique, 256, 192, &path)).ok());
-  auto sample = std::make_unique<dds::ThumbnailSample>();
+  auto sample = std::make_unique<msg::ThumbnailSample>();
   Result<std::size_t> n = renderer_->encode_png(sample->png, sizeof sample->png);
   ASSERT_TRUE(n.ok()) << n.status().message();
   const testing::Decoded d = testing::decode_png(sample->png, *n);
@@ -391,14 +391,14 @@ TEST_F(RendererTest, PngOfTheFrameDecodesToItsPixelsAndFitsAThumbnailSample) {
 
 TEST_F(RendererTest, ThumbnailFromAPathSampleAsTheConsoleHandsItOver) {
   const std::vector<PathPoint> path = loop_path(100.0, 40);
-  auto sample = std::make_unique<dds::PathSample>();
+  auto sample = std::make_unique<msg::PathSample>();
   sample->stamp_ns = 1234567;
   sample->vertex_count = static_cast<std::uint32_t>(path.size());
   for (std::size_t i = 0; i < path.size(); ++i) {
     sample->vertices[i] = {{path[i].x_m, path[i].y_m, path[i].z_m}, path[i].fp, 80.0};
   }
-  auto thumbnail = std::make_unique<dds::ThumbnailSample>();
-  auto scratch = std::make_unique<PathPoint[]>(dds::kMaxPathVertices);
+  auto thumbnail = std::make_unique<msg::ThumbnailSample>();
+  auto scratch = std::make_unique<PathPoint[]>(msg::kMaxPathVertices);
   ASSERT_TRUE(render_thumbnail(*renderer_, *sample, frame_of(View::top, 240, 180), scratch.get(), *thumbnail).ok());
   EXPECT_EQ(thumbnail->stamp_ns, 1234567);
   const testing::Decoded d = testing::decode_png(thumbnail->png, thumbnail->png_size_bytes);

@@ -12,9 +12,10 @@
 #include <thread>
 
 #include "../../fields/terrains.hpp"
+#include "drivers/haptic/can_device.hpp"
+#include "drivers/hapticsim/simulated_device.hpp"
 #include "rt/base/alloc_counter.hpp"
 #include "rt/exec/periodic_loop.hpp"
-#include "rt/exec/simulated_device.hpp"
 #include "storage/pack_build.hpp"
 
 namespace visvol::rt {
@@ -69,13 +70,13 @@ class ExecutiveTest : public ::testing::Test {
     std::strcpy(config_.pack_id, "fractal");
   }
 
-  std::unique_ptr<Executive> make(can::CanBus* bus = nullptr, DeviceSimulation* sim = nullptr) {
+  std::unique_ptr<Executive> make(HapticDevice* device = nullptr, DeviceSimulation* sim = nullptr) {
     ExecutiveOutputs out;
     out.path = &paths_;
     out.limited_path = &limited_;
     out.device = &device_;
     out.acks = &acks_;
-    auto e = Executive::create(config_, *field_, bus, sim, &commands_, out);
+    auto e = Executive::create(config_, *field_, device, sim, &commands_, out);
     EXPECT_TRUE(e.ok()) << e.status().message();
     if (e.ok()) (*e)->warm_up();
     return e.ok() ? std::move(*e) : nullptr;
@@ -89,22 +90,22 @@ class ExecutiveTest : public ::testing::Test {
     }
   }
 
-  dds::Command command(dds::CommandKind kind, std::uint64_t sequence) {
-    dds::Command c{};
+  msg::Command command(msg::CommandKind kind, std::uint64_t sequence) {
+    msg::Command c{};
     c.kind = kind;
     c.sequence = sequence;
-    dds::copy_text(c.source, "test");
+    msg::copy_text(c.source, "test");
     return c;
   }
-  dds::CommandAck next_ack() {
-    dds::CommandAck a{};
+  msg::CommandAck next_ack() {
+    msg::CommandAck a{};
     EXPECT_TRUE(acks_.try_pop(a));
     return a;
   }
   // The reason of the next ack, which must say the command failed.
   std::string next_failure() {
-    const dds::CommandAck a = next_ack();
-    EXPECT_EQ(a.result, dds::AckResult::failed) << a.sequence << ": " << a.reason;
+    const msg::CommandAck a = next_ack();
+    EXPECT_EQ(a.result, msg::AckResult::failed) << a.sequence << ": " << a.reason;
     return a.reason;
   }
 
@@ -128,7 +129,7 @@ class ExecutiveTest : public ::testing::Test {
     }
   }
 
-  static void add(dds::Command& c, dds::ConstraintKind kind, const Vec3& p, double height_m = 0) {
+  static void add(msg::Command& c, msg::ConstraintKind kind, const Vec3& p, double height_m = 0) {
     c.constraints.items[c.constraints.count++] = {kind, {p.x(), p.y(), p.z()}, height_m};
   }
 
@@ -146,11 +147,11 @@ class ExecutiveTest : public ::testing::Test {
   static std::string* path_;
   std::unique_ptr<storage::ResidentPack> field_;
   ExecutiveConfig config_;
-  dds::CommandQueue commands_;
-  dds::AckQueue acks_;
-  LatestValue<dds::PathSample> paths_;
+  msg::CommandQueue commands_;
+  msg::AckQueue acks_;
+  LatestValue<msg::PathSample> paths_;
   LatestValue<LimitedPath> limited_;  // the flyable-path fitter's hand-off
-  LatestValue<dds::DeviceStatusSample> device_;
+  LatestValue<msg::DeviceStatusSample> device_;
   std::int64_t now_ns_ = 10'000 * kMs;
   std::uint64_t tick_ = 0;
 };
@@ -183,11 +184,11 @@ TEST_F(ExecutiveTest, TheRopeSettlesAndPathsAreHandedOff) {
   EXPECT_EQ(c.ticks, 15000u);
   EXPECT_EQ(c.paths, 15000u / 20);
   EXPECT_LT(c.fc, fc0) << "hiding should lower F_c";
-  const dds::PathSample* p = paths_.take();
+  const msg::PathSample* p = paths_.take();
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->vertex_count, 33u);
   EXPECT_STREQ(p->pack_id, "fractal");
-  EXPECT_EQ(p->objective, dds::Objective::hide);
+  EXPECT_EQ(p->objective, msg::Objective::hide);
   EXPECT_NEAR(p->vertices[0].position.x_m, config_.start_m.x(), 1e-6);
   EXPECT_NEAR(p->vertices[32].position.y_m, config_.end_m.y(), 1e-6);
   EXPECT_NEAR(p->f_c, c.fc, 1e-12);
@@ -204,45 +205,45 @@ TEST_F(ExecutiveTest, TheRopeSettlesAndPathsAreHandedOff) {
 TEST_F(ExecutiveTest, CommandsAreAppliedOrFailWithAReason) {
   auto e = make();
   ASSERT_TRUE(e);
-  dds::Command show = command(dds::CommandKind::set_objective, 1);
-  show.objective = dds::Objective::show;
-  dds::Command more = command(dds::CommandKind::set_segment_count, 2);
+  msg::Command show = command(msg::CommandKind::set_objective, 1);
+  show.objective = msg::Objective::show;
+  msg::Command more = command(msg::CommandKind::set_segment_count, 2);
   more.segment_count = 48;
-  dds::Command too_many = command(dds::CommandKind::set_segment_count, 3);
+  msg::Command too_many = command(msg::CommandKind::set_segment_count, 3);
   too_many.segment_count = 65;
-  dds::Command hull = command(dds::CommandKind::set_constraints, 4);
+  msg::Command hull = command(msg::CommandKind::set_constraints, 4);
   hull.constraints.count = 1;
-  hull.constraints.items[0].kind = dds::ConstraintKind::hidden_from;
-  dds::Command clearance = command(dds::CommandKind::set_constraints, 5);
+  hull.constraints.items[0].kind = msg::ConstraintKind::hidden_from;
+  msg::Command clearance = command(msg::CommandKind::set_constraints, 5);
   clearance.constraints.count = 1;
-  clearance.constraints.items[0].kind = dds::ConstraintKind::clearance;
+  clearance.constraints.items[0].kind = msg::ConstraintKind::clearance;
   clearance.constraints.items[0].height_m = 55;
-  dds::Command spring = command(dds::CommandKind::set_model, 6);
-  spring.model = dds::RopeModel::spring_mass;
-  dds::Command terrain = command(dds::CommandKind::switch_terrain, 7);
-  dds::Command stop = command(dds::CommandKind::stop, 8);
-  for (const dds::Command& c : {show, more, too_many, hull, clearance, spring, terrain, stop}) {
+  msg::Command spring = command(msg::CommandKind::set_model, 6);
+  spring.model = msg::RopeModel::spring_mass;
+  msg::Command terrain = command(msg::CommandKind::switch_terrain, 7);
+  msg::Command stop = command(msg::CommandKind::stop, 8);
+  for (const msg::Command& c : {show, more, too_many, hull, clearance, spring, terrain, stop}) {
     ASSERT_TRUE(commands_.try_push(c));
   }
   run(*e, 2);  // eight per tick at most
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
-  dds::CommandAck a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
+  msg::CommandAck a = next_ack();
+  EXPECT_EQ(a.result, msg::AckResult::applied);
   a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_EQ(a.sequence, 3u);
   EXPECT_NE(std::string(a.reason).find("reserved"), std::string::npos) << a.reason;
   a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("not supported"), std::string::npos) << a.reason;
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 55.0);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_STREQ(a.source, "test");
-  EXPECT_EQ(a.kind, static_cast<std::uint8_t>(dds::CommandKind::switch_terrain));
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(a.kind, static_cast<std::uint8_t>(msg::CommandKind::switch_terrain));
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_EQ(e->rope().segments(), 48);
   EXPECT_EQ(e->rope().model(), RopeModel::spring);
   EXPECT_GT(e->forces().gains().k1_visibility, 0.0);  // show
@@ -253,9 +254,9 @@ TEST_F(ExecutiveTest, CommandsAreAppliedOrFailWithAReason) {
   const Vec3 mid = e->rope().vertices()[24];
   run(*e, 100);
   EXPECT_EQ(e->rope().vertices()[24], mid);
-  ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::start, 9)));
+  ASSERT_TRUE(commands_.try_push(command(msg::CommandKind::start, 9)));
   run(*e, 1);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_TRUE(e->counters().running);
   EXPECT_EQ(e->counters().runs, 2u);
 }
@@ -267,16 +268,16 @@ TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
   auto e = make();
   ASSERT_TRUE(e);
   auto full_set = [&](std::uint64_t sequence, double clearance_m) {
-    dds::Command c = command(dds::CommandKind::set_constraints, sequence);
-    while (c.constraints.count < dds::kMaxConstraints) add(c, dds::ConstraintKind::clearance, Vec3::Zero(), clearance_m);
+    msg::Command c = command(msg::CommandKind::set_constraints, sequence);
+    while (c.constraints.count < msg::kMaxConstraints) add(c, msg::ConstraintKind::clearance, Vec3::Zero(), clearance_m);
     return c;
   };
-  dds::Command show = command(dds::CommandKind::set_objective, 1);
-  show.objective = dds::Objective::show;
-  dds::Command hide = command(dds::CommandKind::set_objective, 3);
-  hide.objective = dds::Objective::hide;
-  dds::Command stop = command(dds::CommandKind::stop, 5);
-  for (const dds::Command& c : {show, full_set(2, 40), hide, full_set(4, 45), stop}) ASSERT_TRUE(commands_.try_push(c));
+  msg::Command show = command(msg::CommandKind::set_objective, 1);
+  show.objective = msg::Objective::show;
+  msg::Command hide = command(msg::CommandKind::set_objective, 3);
+  hide.objective = msg::Objective::hide;
+  msg::Command stop = command(msg::CommandKind::stop, 5);
+  for (const msg::Command& c : {show, full_set(2, 40), hide, full_set(4, 45), stop}) ASSERT_TRUE(commands_.try_push(c));
   const std::uint64_t allocations = testing::thread_allocation_count();
   // tick by tick: what was applied, the clearance then in force
   const struct {
@@ -290,23 +291,23 @@ TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
   }
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
   for (std::uint64_t sequence = 1; sequence <= 5; ++sequence) {
-    const dds::CommandAck a = next_ack();
+    const msg::CommandAck a = next_ack();
     EXPECT_EQ(a.sequence, sequence);
-    EXPECT_EQ(a.result, dds::AckResult::applied) << a.reason;
+    EXPECT_EQ(a.result, msg::AckResult::applied) << a.reason;
   }
-  dds::CommandAck extra{};
+  msg::CommandAck extra{};
   EXPECT_FALSE(acks_.try_pop(extra)) << "a command acknowledged twice: " << extra.sequence;
   EXPECT_FALSE(e->counters().running);
   // two partial sets within one full set's items go in one tick
-  dds::Command part_a = command(dds::CommandKind::set_constraints, 6), part_b = command(dds::CommandKind::set_constraints, 7);
-  while (part_a.constraints.count < 200) add(part_a, dds::ConstraintKind::clearance, Vec3::Zero(), 33);
-  while (part_b.constraints.count < 300) add(part_b, dds::ConstraintKind::clearance, Vec3::Zero(), 35);
+  msg::Command part_a = command(msg::CommandKind::set_constraints, 6), part_b = command(msg::CommandKind::set_constraints, 7);
+  while (part_a.constraints.count < 200) add(part_a, msg::ConstraintKind::clearance, Vec3::Zero(), 33);
+  while (part_b.constraints.count < 300) add(part_b, msg::ConstraintKind::clearance, Vec3::Zero(), 35);
   ASSERT_TRUE(commands_.try_push(part_a) && commands_.try_push(part_b));
   run(*e, 1);
   EXPECT_EQ(e->counters().commands_applied, 7u);
   EXPECT_DOUBLE_EQ(e->forces().gains().clearance_m, 35.0);
   // eight small commands fill a tick: a full set behind them waits
-  for (std::uint64_t k = 0; k < 8; ++k) ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::stop, 20 + k)));
+  for (std::uint64_t k = 0; k < 8; ++k) ASSERT_TRUE(commands_.try_push(command(msg::CommandKind::stop, 20 + k)));
   ASSERT_TRUE(commands_.try_push(full_set(28, 50)));
   run(*e, 1);
   EXPECT_EQ(e->counters().commands_applied, 15u);
@@ -317,7 +318,7 @@ TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
   while (acks_.try_pop(extra)) {
   }
   // ten small commands: eight in a tick, the other two in the next
-  for (std::uint64_t k = 0; k < 10; ++k) ASSERT_TRUE(commands_.try_push(command(dds::CommandKind::start, 30 + k)));
+  for (std::uint64_t k = 0; k < 10; ++k) ASSERT_TRUE(commands_.try_push(command(msg::CommandKind::start, 30 + k)));
   run(*e, 1);
   EXPECT_EQ(e->counters().commands_applied, 16u + kMaxCommandsPerTick);
   run(*e, 1);
@@ -331,9 +332,9 @@ TEST_F(ExecutiveTest, RopeRebuildsOfALongRopeAreSpreadOverTicks) {
   config_.max_segments = 512;
   auto e = make();
   ASSERT_TRUE(e);
-  dds::Command fewer = command(dds::CommandKind::set_segment_count, 3);
+  msg::Command fewer = command(msg::CommandKind::set_segment_count, 3);
   fewer.segment_count = 500;
-  for (const dds::Command& c : {command(dds::CommandKind::start, 1), command(dds::CommandKind::start, 2), fewer}) {
+  for (const msg::Command& c : {command(msg::CommandKind::start, 1), command(msg::CommandKind::start, 2), fewer}) {
     ASSERT_TRUE(commands_.try_push(c));
   }
   const std::uint64_t allocations = testing::thread_allocation_count();
@@ -351,7 +352,7 @@ TEST_F(ExecutiveTest, EndpointsTooCloseOrNotFiniteAreRefusedAndChangeNothing) {
   auto e = make();
   ASSERT_TRUE(e);
   auto endpoints = [&](std::uint64_t sequence, const Vec3& a, const Vec3& b) {
-    dds::Command c = command(dds::CommandKind::set_endpoints, sequence);
+    msg::Command c = command(msg::CommandKind::set_endpoints, sequence);
     c.endpoints.start = {a.x(), a.y(), a.z()};
     c.endpoints.end = {b.x(), b.y(), b.z()};
     return c;
@@ -360,24 +361,24 @@ TEST_F(ExecutiveTest, EndpointsTooCloseOrNotFiniteAreRefusedAndChangeNothing) {
   ASSERT_TRUE(commands_.try_push(endpoints(1, a, a + Vec3(1, 0, 0))));  // 32 segments in 1 m
   ASSERT_TRUE(commands_.try_push(endpoints(2, a, Vec3(std::nan(""), a.y(), a.z()))));
   ASSERT_TRUE(commands_.try_push(endpoints(3, a, a + Vec3(1e300, 0, 0))));
-  dds::Command stiff = command(dds::CommandKind::set_stiffness, 4);
+  msg::Command stiff = command(msg::CommandKind::set_stiffness, 4);
   stiff.stiffness.stretch_n_per_m = -5;  // refused by the rope
   stiff.stiffness.bend_n_m_per_rad = 1;
   ASSERT_TRUE(commands_.try_push(stiff));
-  dds::Command more = command(dds::CommandKind::set_segment_count, 5);
+  msg::Command more = command(msg::CommandKind::set_segment_count, 5);
   more.segment_count = 40;
   ASSERT_TRUE(commands_.try_push(more));
   run(*e, 1);
-  dds::CommandAck ack = next_ack();
-  EXPECT_EQ(ack.result, dds::AckResult::failed);
+  msg::CommandAck ack = next_ack();
+  EXPECT_EQ(ack.result, msg::AckResult::failed);
   EXPECT_NE(std::string(ack.reason).find("too close"), std::string::npos) << ack.reason;
   for (int k = 0; k < 2; ++k) {
     ack = next_ack();
-    EXPECT_EQ(ack.result, dds::AckResult::failed);
+    EXPECT_EQ(ack.result, msg::AckResult::failed);
     EXPECT_NE(std::string(ack.reason).find("outside the pack or not finite"), std::string::npos) << ack.reason;
   }
-  EXPECT_EQ(next_ack().result, dds::AckResult::failed);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied) << "a refused stiffness must not spoil later rope changes";
+  EXPECT_EQ(next_ack().result, msg::AckResult::failed);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied) << "a refused stiffness must not spoil later rope changes";
   EXPECT_EQ(e->rope().segments(), 40);
   EXPECT_EQ(e->rope().ends().start_m, config_.start_m);
   EXPECT_EQ(e->rope().ends().end_m, config_.end_m);
@@ -395,7 +396,7 @@ TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
   const int counts[] = {0, 1, 2, 3, 40, 64, 65, 5000};
   int applied = 0, failed = 0, counted = 0;
   for (std::uint64_t seq = 1; seq <= 32; ++seq) {
-    dds::Command c = command(dds::CommandKind::set_endpoints, seq);
+    msg::Command c = command(msg::CommandKind::set_endpoints, seq);
     const Vec3 a = point_at(*field_, 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 40 + 300 * u(rng));
     const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, 0.1 * (u(rng) - 0.5)).normalized();
     Vec3 b = point_at(*field_, 0.05 + 0.9 * u(rng), 0.05 + 0.9 * u(rng), 40 + 300 * u(rng));
@@ -406,7 +407,7 @@ TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
       case 3: b.y() = std::nan(""); break;
       case 4:
       case 5:  // every count once over the run
-        c.kind = dds::CommandKind::set_segment_count;
+        c.kind = msg::CommandKind::set_segment_count;
         c.segment_count = static_cast<std::uint32_t>(counts[counted++ % 8]);
         break;
       default: break;  // two points on the pack
@@ -415,19 +416,19 @@ TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
     c.endpoints.end = {b.x(), b.y(), b.z()};
     ASSERT_TRUE(commands_.try_push(c));
     run(*e, 200);
-    const dds::CommandAck ack = next_ack();
+    const msg::CommandAck ack = next_ack();
     EXPECT_EQ(ack.sequence, seq);
-    ASSERT_TRUE(ack.result == dds::AckResult::applied || ack.result == dds::AckResult::failed) << seq;
-    if (ack.result == dds::AckResult::failed) {
+    ASSERT_TRUE(ack.result == msg::AckResult::applied || ack.result == msg::AckResult::failed) << seq;
+    if (ack.result == msg::AckResult::failed) {
       EXPECT_STRNE(ack.reason, "") << seq;
     }
-    (ack.result == dds::AckResult::applied ? applied : failed) += 1;
+    (ack.result == msg::AckResult::applied ? applied : failed) += 1;
     for (int i = 0; i <= e->rope().segments(); ++i) {
       ASSERT_TRUE(e->rope().vertices()[i].allFinite()) << "after command " << seq << ": " << ack.reason;
     }
-    if (const dds::PathSample* latest = paths_.take()) {
+    if (const msg::PathSample* latest = paths_.take()) {
       for (std::uint32_t i = 0; i < latest->vertex_count; ++i) {
-        const dds::WorldPoint& p = latest->vertices[i].position;
+        const msg::WorldPoint& p = latest->vertices[i].position;
         ASSERT_TRUE(std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m)) << seq;
       }
     }
@@ -442,23 +443,23 @@ TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
 TEST_F(ExecutiveTest, ARopeWhoseStateStopsBeingFiniteIsLaidAgain) {
   auto e = make();
   ASSERT_TRUE(e);
-  dds::Command spring = command(dds::CommandKind::set_model, 1);
-  spring.model = dds::RopeModel::spring_mass;  // explicit springs: a stiff one diverges
+  msg::Command spring = command(msg::CommandKind::set_model, 1);
+  spring.model = msg::RopeModel::spring_mass;  // explicit springs: a stiff one diverges
   ASSERT_TRUE(commands_.try_push(spring));
-  dds::Command stiff = command(dds::CommandKind::set_stiffness, 2);
+  msg::Command stiff = command(msg::CommandKind::set_stiffness, 2);
   stiff.stiffness.stretch_n_per_m = 1e15;
   stiff.stiffness.bend_n_m_per_rad = 1e15;
   ASSERT_TRUE(commands_.try_push(stiff));
   // refusals and resets alike allocate nothing on the loop thread
   const std::uint64_t allocations = visvol::testing::thread_allocation_count();
-  dds::Command close = command(dds::CommandKind::set_endpoints, 3);
+  msg::Command close = command(msg::CommandKind::set_endpoints, 3);
   close.endpoints.start = {config_.start_m.x(), config_.start_m.y(), config_.start_m.z()};
   close.endpoints.end = {config_.start_m.x() + 1, config_.start_m.y(), config_.start_m.z()};
   ASSERT_TRUE(commands_.try_push(close));
   for (int k = 0; k < 500; ++k) {
     run(*e, 20);
     for (int i = 0; i <= e->rope().segments(); ++i) ASSERT_TRUE(e->rope().vertices()[i].allFinite()) << k;
-    if (const dds::PathSample* p = paths_.take()) {
+    if (const msg::PathSample* p = paths_.take()) {
       for (std::uint32_t i = 0; i < p->vertex_count; ++i) {
         ASSERT_TRUE(std::isfinite(p->vertices[i].position.z_m + p->vertices[i].visibility)) << k;
       }
@@ -477,13 +478,25 @@ const char* kPullScript =
     "1.0 pull 60 0 0 1.0\n"
     "4.0 release\n";
 
-std::unique_ptr<SimulatedDevice> simulated(const char* script, std::int64_t start_ns) {
+// The simulated device on its in-process bus, and the console's CAN driver
+// talking to it (as the console wires them).
+struct SimRig {
+  std::unique_ptr<hapticsim::SimulatedDevice> sim;
+  std::optional<haptic::CanDevice> device;
+};
+
+std::unique_ptr<SimRig> simulated(const char* script, std::int64_t start_ns) {
   hapticsim::SimConfig sc;
   auto s = hapticsim::parse_script(script, "test script", sc.workspace_half_mm);
   EXPECT_TRUE(s.ok()) << s.status().message();
-  auto sim = SimulatedDevice::create(sc, *s, start_ns);
+  auto rig = std::make_unique<SimRig>();
+  auto sim = hapticsim::SimulatedDevice::create(sc, *s, start_ns);
   EXPECT_TRUE(sim.ok()) << sim.status().message();
-  return std::move(*sim);
+  rig->sim = std::move(*sim);
+  auto device = haptic::CanDevice::create(haptic::DriverConfig{}, rig->sim->console_bus());
+  EXPECT_TRUE(device.ok()) << device.status().message();
+  rig->device.emplace(std::move(*device));
+  return rig;
 }
 
 // The distance from p to the nearest point of the rope.
@@ -505,11 +518,11 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   ASSERT_TRUE(e);
   auto hulls = make_hulls(*e, 2);
   const Vec3 p = point_at(*field_, 0.5, 0.5, 60), q = point_at(*field_, 0.3, 0.6, 80);
-  dds::Command set = command(dds::CommandKind::set_constraints, 1);
+  msg::Command set = command(msg::CommandKind::set_constraints, 1);
   set.constraints.count = 2;
-  set.constraints.items[0].kind = dds::ConstraintKind::hidden_from;
+  set.constraints.items[0].kind = msg::ConstraintKind::hidden_from;
   set.constraints.items[0].position = {p.x(), p.y(), p.z()};
-  set.constraints.items[1].kind = dds::ConstraintKind::visible_to;
+  set.constraints.items[1].kind = msg::ConstraintKind::visible_to;
   set.constraints.items[1].position = {q.x(), q.y(), q.z()};
   ASSERT_TRUE(commands_.try_push(set));
   // the ticks that take the command and put the hulls in force allocate nothing
@@ -517,7 +530,7 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   run(*e, 1);
   wait_for_sets(*e, 1);
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   ASSERT_EQ(e->counters().hull_sets, 1u);
   const PointHull* in_force = e->forces().hidden_from();
   ASSERT_NE(in_force, nullptr);
@@ -529,18 +542,18 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
     EXPECT_EQ(in_force->height_m, direct->height_m);
   }
 
-  dds::Command under = command(dds::CommandKind::set_constraints, 2);
+  msg::Command under = command(msg::CommandKind::set_constraints, 2);
   under.constraints.count = 1;
-  under.constraints.items[0].kind = dds::ConstraintKind::hidden_from;
+  under.constraints.items[0].kind = msg::ConstraintKind::hidden_from;
   under.constraints.items[0].position = {p.x(), p.y(), p.z() - 500};
-  dds::Command clear = command(dds::CommandKind::set_constraints, 3);
+  msg::Command clear = command(msg::CommandKind::set_constraints, 3);
   ASSERT_TRUE(commands_.try_push(under));
   ASSERT_TRUE(commands_.try_push(clear));
   run(*e, 1);
-  const dds::CommandAck a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::failed);
+  const msg::CommandAck a = next_ack();
+  EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("below the terrain"), std::string::npos) << a.reason;
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   wait_for_sets(*e, 2);
   EXPECT_EQ(e->counters().hull_sets, 2u);
   EXPECT_EQ(e->forces().hidden_from(), nullptr);
@@ -557,21 +570,21 @@ TEST_F(ExecutiveTest, ManyObserversOfEachKindComeIntoForceFolded) {
   ASSERT_TRUE(e);
   auto hulls = make_hulls(*e, 15);
   ASSERT_TRUE(hulls);
-  dds::Command set = command(dds::CommandKind::set_constraints, 1);
+  msg::Command set = command(msg::CommandKind::set_constraints, 1);
   std::vector<Vec3> hidden;
   for (int k = 0; k < 12; ++k) {
     hidden.push_back(point_at(*field_, 0.1 + 0.07 * k, 0.85 - 0.06 * k, 20.0 + 5.0 * k));
   }
   const Vec3 visible[3] = {point_at(*field_, 0.3, 0.6, 80), point_at(*field_, 0.7, 0.7, 30),
                            point_at(*field_, 0.4, 0.1, 50)};
-  for (const Vec3& p : hidden) add(set, dds::ConstraintKind::hidden_from, p);
-  for (const Vec3& p : visible) add(set, dds::ConstraintKind::visible_to, p);
-  add(set, dds::ConstraintKind::clearance, Vec3::Zero(), 25);
+  for (const Vec3& p : hidden) add(set, msg::ConstraintKind::hidden_from, p);
+  for (const Vec3& p : visible) add(set, msg::ConstraintKind::visible_to, p);
+  add(set, msg::ConstraintKind::clearance, Vec3::Zero(), 25);
   ASSERT_TRUE(commands_.try_push(set));
   const std::uint64_t allocations = testing::thread_allocation_count();
   wait_for_sets(*e, 1);
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   ASSERT_EQ(e->counters().hull_sets, 1u);
   ASSERT_EQ(e->forces().hidden_from_count(), 1);
   ASSERT_EQ(e->forces().visible_to_count(), 1);
@@ -583,7 +596,7 @@ TEST_F(ExecutiveTest, ManyObserversOfEachKindComeIntoForceFolded) {
   run(*e, 2 * config_.path_every_ticks);
   EXPECT_EQ(testing::thread_allocation_count(), before_hand_off);
   const LimitedPath* lp = limited_.take();
-  const dds::PathSample* sent = paths_.take();
+  const msg::PathSample* sent = paths_.take();
   ASSERT_TRUE(lp != nullptr && sent != nullptr);
   EXPECT_EQ(lp->path.sequence, sent->sequence);  // the same path, not one before or after
   EXPECT_EQ(lp->path.vertex_count, sent->vertex_count);
@@ -665,25 +678,25 @@ TEST_F(ExecutiveTest, BadConstraintsFailWithAReasonAndChangeNothing) {
   auto hulls = make_hulls(*e, 2);
   ASSERT_TRUE(hulls);
   const Vec3 p = point_at(*field_, 0.5, 0.5, 60);
-  dds::Command three = command(dds::CommandKind::set_constraints, 1);
-  for (int k = 0; k < 3; ++k) add(three, dds::ConstraintKind::visible_to, p);
-  add(three, dds::ConstraintKind::clearance, Vec3::Zero(), 45);
-  dds::Command too_many = command(dds::CommandKind::set_constraints, 2);  // one more than a kind holds
-  for (int k = 0; k <= kMaxObserversPerKind; ++k) add(too_many, dds::ConstraintKind::hidden_from, p);
-  dds::Command low = command(dds::CommandKind::set_constraints, 3);  // under the clearance in force (30 m)
-  add(low, dds::ConstraintKind::max_agl, Vec3::Zero(), 20);
-  dds::Command both = command(dds::CommandKind::set_constraints, 4);  // under the clearance it sets
-  add(both, dds::ConstraintKind::max_agl, Vec3::Zero(), 100);
-  add(both, dds::ConstraintKind::clearance, Vec3::Zero(), 120);
-  dds::Command over_ends = command(dds::CommandKind::set_constraints, 5);  // the ends are 150 m up
-  add(over_ends, dds::ConstraintKind::max_agl, Vec3::Zero(), 100);
-  dds::Command datum = command(dds::CommandKind::set_constraints, 6);
-  add(datum, dds::ConstraintKind::max_altitude, Vec3::Zero(), config_.start_m.z() - 10);
-  dds::Command nan = command(dds::CommandKind::set_constraints, 7);
-  add(nan, dds::ConstraintKind::max_agl, Vec3::Zero(), std::nan(""));
-  dds::Command outside = command(dds::CommandKind::set_constraints, 8);
-  add(outside, dds::ConstraintKind::hidden_from, p + Vec3(1e6, 0, 0));
-  for (const dds::Command& c : {three, too_many, low, both, over_ends, datum, nan, outside}) {
+  msg::Command three = command(msg::CommandKind::set_constraints, 1);
+  for (int k = 0; k < 3; ++k) add(three, msg::ConstraintKind::visible_to, p);
+  add(three, msg::ConstraintKind::clearance, Vec3::Zero(), 45);
+  msg::Command too_many = command(msg::CommandKind::set_constraints, 2);  // one more than a kind holds
+  for (int k = 0; k <= kMaxObserversPerKind; ++k) add(too_many, msg::ConstraintKind::hidden_from, p);
+  msg::Command low = command(msg::CommandKind::set_constraints, 3);  // under the clearance in force (30 m)
+  add(low, msg::ConstraintKind::max_agl, Vec3::Zero(), 20);
+  msg::Command both = command(msg::CommandKind::set_constraints, 4);  // under the clearance it sets
+  add(both, msg::ConstraintKind::max_agl, Vec3::Zero(), 100);
+  add(both, msg::ConstraintKind::clearance, Vec3::Zero(), 120);
+  msg::Command over_ends = command(msg::CommandKind::set_constraints, 5);  // the ends are 150 m up
+  add(over_ends, msg::ConstraintKind::max_agl, Vec3::Zero(), 100);
+  msg::Command datum = command(msg::CommandKind::set_constraints, 6);
+  add(datum, msg::ConstraintKind::max_altitude, Vec3::Zero(), config_.start_m.z() - 10);
+  msg::Command nan = command(msg::CommandKind::set_constraints, 7);
+  add(nan, msg::ConstraintKind::max_agl, Vec3::Zero(), std::nan(""));
+  msg::Command outside = command(msg::CommandKind::set_constraints, 8);
+  add(outside, msg::ConstraintKind::hidden_from, p + Vec3(1e6, 0, 0));
+  for (const msg::Command& c : {three, too_many, low, both, over_ends, datum, nan, outside}) {
     ASSERT_TRUE(commands_.try_push(c));
   }
   const std::uint64_t allocations = testing::thread_allocation_count();
@@ -704,16 +717,16 @@ TEST_F(ExecutiveTest, BadConstraintsFailWithAReasonAndChangeNothing) {
   EXPECT_FALSE(e->hulls_pending());
 
   // a ceiling in force: endpoints above it are refused
-  dds::Command ceiling = command(dds::CommandKind::set_constraints, 9);
-  add(ceiling, dds::ConstraintKind::max_agl, Vec3::Zero(), 160);
-  add(ceiling, dds::ConstraintKind::max_altitude, Vec3::Zero(), 5000);
-  dds::Command high = command(dds::CommandKind::set_endpoints, 10);
+  msg::Command ceiling = command(msg::CommandKind::set_constraints, 9);
+  add(ceiling, msg::ConstraintKind::max_agl, Vec3::Zero(), 160);
+  add(ceiling, msg::ConstraintKind::max_altitude, Vec3::Zero(), 5000);
+  msg::Command high = command(msg::CommandKind::set_endpoints, 10);
   const Vec3 a = point_at(*field_, 0.2, 0.2, 100), b = point_at(*field_, 0.7, 0.6, 170);
   high.endpoints = {{a.x(), a.y(), a.z()}, {b.x(), b.y(), b.z()}};
   ASSERT_TRUE(commands_.try_push(ceiling));
   ASSERT_TRUE(commands_.try_push(high));
   run(*e, 1);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_DOUBLE_EQ(e->forces().gains().max_agl_m, 160.0);
   EXPECT_DOUBLE_EQ(e->forces().gains().max_altitude_m, 5000.0);
   EXPECT_NE(next_failure().find("above the ceiling"), std::string::npos);
@@ -746,11 +759,11 @@ TEST_F(ExecutiveTest, ACeilingKeepsTheRopeUnderMaxAgl) {
 
   auto held = make();
   ASSERT_TRUE(held);
-  dds::Command ceiling = command(dds::CommandKind::set_constraints, 1);
-  add(ceiling, dds::ConstraintKind::max_agl, Vec3::Zero(), kMaxAglM);
+  msg::Command ceiling = command(msg::CommandKind::set_constraints, 1);
+  add(ceiling, msg::ConstraintKind::max_agl, Vec3::Zero(), kMaxAglM);
   ASSERT_TRUE(commands_.try_push(ceiling));
   run(*held, 8000);
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_DOUBLE_EQ(held->forces().gains().max_agl_m, kMaxAglM);
   EXPECT_LE(highest_agl(*held), kMaxAglM);
   EXPECT_GT(held->counters().fc, 0.0);
@@ -761,24 +774,24 @@ TEST_F(ExecutiveTest, ACeilingKeepsTheRopeUnderMaxAgl) {
 TEST_F(ExecutiveTest, ASwitchTerrainCommandIsHandedToTheConsole) {
   auto e = make();
   ASSERT_TRUE(e);
-  char id[dds::kPackIdCapacity];
+  char id[msg::kPackIdCapacity];
   EXPECT_FALSE(e->terrain_switch(id));
-  dds::Command same = command(dds::CommandKind::switch_terrain, 1);
-  dds::copy_text(same.pack_id, "fractal");
-  dds::Command other = command(dds::CommandKind::switch_terrain, 2);
-  dds::copy_text(other.pack_id, "taunus");
-  dds::Command again = command(dds::CommandKind::switch_terrain, 3);
-  dds::copy_text(again.pack_id, "sf_north");
-  for (const dds::Command& c : {same, other, again}) ASSERT_TRUE(commands_.try_push(c));
+  msg::Command same = command(msg::CommandKind::switch_terrain, 1);
+  msg::copy_text(same.pack_id, "fractal");
+  msg::Command other = command(msg::CommandKind::switch_terrain, 2);
+  msg::copy_text(other.pack_id, "taunus");
+  msg::Command again = command(msg::CommandKind::switch_terrain, 3);
+  msg::copy_text(again.pack_id, "sf_north");
+  for (const msg::Command& c : {same, other, again}) ASSERT_TRUE(commands_.try_push(c));
   const std::uint64_t allocations = testing::thread_allocation_count();
   run(*e, 1);
   EXPECT_EQ(testing::thread_allocation_count(), allocations);
-  dds::CommandAck a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::failed);
+  msg::CommandAck a = next_ack();
+  EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("already"), std::string::npos) << a.reason;
-  EXPECT_EQ(next_ack().result, dds::AckResult::applied);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   a = next_ack();
-  EXPECT_EQ(a.result, dds::AckResult::failed);
+  EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("under way"), std::string::npos) << a.reason;
   ASSERT_TRUE(e->terrain_switch(id));
   EXPECT_STREQ(id, "taunus");
@@ -787,27 +800,27 @@ TEST_F(ExecutiveTest, ASwitchTerrainCommandIsHandedToTheConsole) {
 
 TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
   auto still_sim = simulated("", now_ns_);
-  auto still = make(&still_sim->console_bus(), still_sim.get());
+  auto still = make(&*still_sim->device, still_sim->sim.get());
   ASSERT_TRUE(still);
   const std::int64_t t0 = now_ns_;
   run(*still, 1500);
 
   now_ns_ = t0;
   auto pull_sim = simulated(kPullScript, now_ns_);
-  auto pulled = make(&pull_sim->console_bus(), pull_sim.get());
+  auto pulled = make(&*pull_sim->device, pull_sim->sim.get());
   ASSERT_TRUE(pulled);
   run(*pulled, 1500);  // half way through the pull
   EXPECT_EQ(pulled->counters().grasps, 1u);
-  EXPECT_EQ(pulled->counters().device_state, haptic::DeviceState::operational);
+  EXPECT_EQ(pulled->counters().device_state, HapticState::operational);
   // the grasped point follows the proxy (hundreds of metres away when the
   // hand grasped): the rope is much nearer to it than the rope nobody touched
   const Vec3 proxy = pulled->proxy_m();
   EXPECT_LT(distance_to(pulled->rope(), proxy), 0.5 * distance_to(still->rope(), proxy));
   run(*pulled, 2000);
   // the hand felt the rope, within the clamp
-  EXPECT_GT(pull_sim->device().counters().max_force_n, 0.1);
-  EXPECT_LE(pull_sim->device().counters().max_force_n, 1.4 + 1e-9);
-  const dds::DeviceStatusSample* d = device_.take();
+  EXPECT_GT(pull_sim->sim->device().counters().max_force_n, 0.1);
+  EXPECT_LE(pull_sim->sim->device().counters().max_force_n, 1.4 + 1e-9);
+  const msg::DeviceStatusSample* d = device_.take();
   ASSERT_NE(d, nullptr);
   EXPECT_STREQ(d->device, "haptic");
   EXPECT_GT(d->can_rx_frames, 3000u);
@@ -815,12 +828,12 @@ TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
 
 TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
   auto sim = simulated("0.5 move 0 0 0 0.2\n1.0 pull 60 0 0 1.0\n", now_ns_);
-  auto e = make(&sim->console_bus(), sim.get());
+  auto e = make(&*sim->device, sim->sim.get());
   ASSERT_TRUE(e);
   run(*e, 1800);  // pulling: force on the hand
   ASSERT_TRUE(e->servo());
-  ASSERT_GT(sim->device().motor_force_n()[0] * sim->device().motor_force_n()[0] +
-                sim->device().motor_force_n()[2] * sim->device().motor_force_n()[2],
+  ASSERT_GT(sim->sim->device().motor_force_n()[0] * sim->sim->device().motor_force_n()[0] +
+                sim->sim->device().motor_force_n()[2] * sim->sim->device().motor_force_n()[2],
             1e-4);
   e->safe_state();
   run(*e, 1);
@@ -828,7 +841,7 @@ TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
   EXPECT_EQ(e->counters().servo_reason, servo::SafeReason::forced);
   run(*e, 500);  // still holding the button: no force comes back
   EXPECT_EQ(e->counters().grasps, 1u);
-  const auto& f = sim->device().motor_force_n();
+  const auto& f = sim->sim->device().motor_force_n();
   EXPECT_EQ(f[0], 0.0);
   EXPECT_EQ(f[1], 0.0);
   EXPECT_EQ(f[2], 0.0);
@@ -837,11 +850,11 @@ TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
 
 TEST_F(ExecutiveTest, TicksAllocateNothing) {
   auto sim = simulated(kPullScript, now_ns_);
-  auto e = make(&sim->console_bus(), sim.get());
+  auto e = make(&*sim->device, sim->sim.get());
   ASSERT_TRUE(e);
   run(*e, 500);  // warm
-  dds::Command show = command(dds::CommandKind::set_objective, 1);
-  show.objective = dds::Objective::show;
+  msg::Command show = command(msg::CommandKind::set_objective, 1);
+  show.objective = msg::Objective::show;
   ASSERT_TRUE(commands_.try_push(show));
   const std::uint64_t before = visvol::testing::thread_allocation_count();
   run(*e, 5000);  // grasp, pull, release, commands, hand-offs
@@ -908,14 +921,14 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
   c.end_m = point_at(**field, 0.2, 0.15, 150);
   c.segments = 64;
   c.max_segments = 64;
-  dds::CommandQueue commands;
-  dds::AckQueue acks;
-  LatestValue<dds::PathSample> paths;
+  msg::CommandQueue commands;
+  msg::AckQueue acks;
+  LatestValue<msg::PathSample> paths;
   ExecutiveOutputs out;
   out.path = &paths;
   out.acks = &acks;
   auto sim = simulated(kPullScript, monotonic_ns());
-  auto e = Executive::create(c, **field, &sim->console_bus(), sim.get(), &commands, out);
+  auto e = Executive::create(c, **field, &*sim->device, sim->sim.get(), &commands, out);
   ASSERT_TRUE(e.ok()) << e.status().message();
 
   (*field)->set_reader_active(true);
@@ -930,8 +943,8 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
   // move the rope's ends across the pack, diagonal by diagonal
   for (int step = 1; step <= 12; ++step) {
     const double f = 0.05 + 0.7 * step / 12.0;
-    dds::Command m{};
-    m.kind = dds::CommandKind::set_endpoints;
+    msg::Command m{};
+    m.kind = msg::CommandKind::set_endpoints;
     m.sequence = static_cast<std::uint64_t>(step);
     const Vec3 a = point_at(**field, f, f, 150), b = point_at(**field, f + 0.15, f + 0.1, 150);
     m.endpoints.start = {a.x(), a.y(), a.z()};

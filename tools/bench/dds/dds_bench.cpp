@@ -44,6 +44,7 @@ namespace {
 
 using namespace visvol;
 using namespace visvol::dds;
+using namespace visvol::msg;
 using Clock = std::chrono::steady_clock;
 
 constexpr std::uint64_t kEndOfRun = ~std::uint64_t{0};

@@ -34,7 +34,8 @@
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
-#include "rt/exec/simulated_device.hpp"
+#include "drivers/haptic/can_device.hpp"
+#include "drivers/hapticsim/simulated_device.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/resident_pack.hpp"
 
@@ -244,7 +245,7 @@ int run(const Options& o, Figures& fig) {
     script += line;
   }
   auto parsed = hapticsim::parse_script(script, "rtbench script", sc.workspace_half_mm);
-  auto sim = rt::SimulatedDevice::create(sc, std::move(*parsed), rt::monotonic_ns());
+  auto sim = hapticsim::SimulatedDevice::create(sc, std::move(*parsed), rt::monotonic_ns());
   if (!sim.ok()) {
     std::fprintf(stderr, "visvol-rtbench: %s\n", sim.status().message().c_str());
     return 1;
@@ -254,15 +255,20 @@ int run(const Options& o, Figures& fig) {
   ec.end_m = at(0.35, 0.3);
   ec.segments = o.segments;
   ec.max_segments = std::max(o.segments, 256);
-  dds::CommandQueue commands;
-  dds::AckQueue acks;
+  msg::CommandQueue commands;
+  msg::AckQueue acks;
   rt::ExecutiveOutputs out;
   if (publisher) {
     out.path = &publisher->path();
     out.device = &publisher->device_status();
   }
   out.acks = &acks;
-  auto e = rt::Executive::create(ec, f, &(*sim)->console_bus(), sim->get(), &commands, out);
+  auto device = haptic::CanDevice::create(haptic::DriverConfig{}, (*sim)->console_bus());
+  if (!device.ok()) {
+    std::fprintf(stderr, "visvol-rtbench: %s\n", device.status().message().c_str());
+    return 1;
+  }
+  auto e = rt::Executive::create(ec, f, &*device, sim->get(), &commands, out);
   if (!e.ok()) {
     std::fprintf(stderr, "visvol-rtbench: %s\n", e.status().message().c_str());
     return 1;
@@ -290,14 +296,14 @@ int run(const Options& o, Figures& fig) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (t >= o.seconds) break;
     const double phase = std::fmod(t / 10.0, 2.0), u = 0.05 + 0.55 * (phase < 1 ? phase : 2 - phase);
-    dds::Command m{};
-    m.kind = dds::CommandKind::set_endpoints;
+    msg::Command m{};
+    m.kind = msg::CommandKind::set_endpoints;
     m.sequence = ++seq;
     const rt::Vec3 a = at(u, u + 0.05), b = at(u + 0.3, u + 0.25);
     m.endpoints.start = {a.x(), a.y(), a.z()};
     m.endpoints.end = {b.x(), b.y(), b.z()};
     (void)commands.try_push(m);
-    dds::CommandAck ack;
+    msg::CommandAck ack;
     while (acks.try_pop(ack)) {
     }
     rss_peak = std::max(rss_peak, rt::resident_bytes());

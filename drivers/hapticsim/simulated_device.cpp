@@ -1,12 +1,16 @@
-#include "rt/exec/simulated_device.hpp"
+#include "drivers/hapticsim/simulated_device.hpp"
 
-namespace visvol::rt {
+#include <utility>
 
-SimulatedDevice::SimulatedDevice(hapticsim::Script script, std::int64_t start_ns)
+#include "drivers/haptic/device_driver.hpp"
+
+namespace visvol::hapticsim {
+
+SimulatedDevice::SimulatedDevice(Script script, std::int64_t start_ns)
     : bus_(2, 4096), script_(std::move(script)), start_ns_(start_ns) {}
 
-Result<std::unique_ptr<SimulatedDevice>> SimulatedDevice::create(const hapticsim::SimConfig& config,
-                                                                 hapticsim::Script script, std::int64_t start_ns) {
+Result<std::unique_ptr<SimulatedDevice>> SimulatedDevice::create(const SimConfig& config,
+                                                                 Script script, std::int64_t start_ns) {
   std::unique_ptr<SimulatedDevice> s(new SimulatedDevice(std::move(script), start_ns));
   const std::uint8_t node = config.node_id;
   s->bus_.set_time_ns(start_ns);
@@ -14,7 +18,7 @@ Result<std::unique_ptr<SimulatedDevice>> SimulatedDevice::create(const hapticsim
   s->bus_.endpoint(1).set_filters({{haptic::frame_id(haptic::MessageKind::command, node), 0x7FF},
                                    {haptic::kNmtId, 0x7FF}},
                                   false);
-  Result<hapticsim::SimDevice> device = hapticsim::SimDevice::create(config, s->bus_.endpoint(1), start_ns);
+  Result<SimDevice> device = SimDevice::create(config, s->bus_.endpoint(1), start_ns);
   if (!device.ok()) return device.status().with_context("simulated device");
   s->device_.emplace(std::move(*device));
   s->player_.emplace(s->script_);
@@ -27,4 +31,4 @@ void SimulatedDevice::step(std::int64_t now_ns) {
   device_->step(now_ns);
 }
 
-}  // namespace visvol::rt
+}  // namespace visvol::hapticsim

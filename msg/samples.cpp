@@ -1,6 +1,8 @@
-#include "drivers/dds/samples.hpp"
+#include "msg/samples.hpp"
 
-namespace visvol::dds {
+#include <time.h>
+
+namespace visvol::msg {
 
 const char* to_string(Objective value) {
   switch (value) {
@@ -61,4 +63,11 @@ const char* to_string(DeviceState value) {
   return nullptr;
 }
 
-}  // namespace visvol::dds
+std::int64_t now_stamp_ns() {
+  constexpr std::int64_t kNsPerS = 1000000000;
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
+}
+
+}  // namespace visvol::msg

@@ -1,11 +1,15 @@
-// Plain samples of the DDS layer: what the executive, the renderer and the
-// console fill and hand off, and what command intake hands back.
+// The messages between visvol's parts: plain samples that the executive, the
+// renderer and the console fill and hand off, the commands that command
+// intake hands back, the queues that carry them to and from the real-time
+// thread, and their time stamps. No transport: drivers/dds converts them to
+// and from the wire.
 //
 // Every struct here is trivially copyable with a fixed capacity, so it travels
 // through LatestValue / SpscQueue (rt/base/handoff.hpp) with one memcpy and no
 // allocation. Filling one is real-time safe. Conversion to and from the DDS
-// message types happens on the DDS layer's own threads (path_codec.hpp,
-// command_codec.hpp), never on the real-time thread.
+// message types happens on the DDS layer's own threads
+// (drivers/dds/message_codec.hpp, command_codec.hpp), never on the real-time
+// thread.
 //
 // Units are in the names. Positions are world metres: the terrain pack's
 // projected CRS, published on the terrain topic (see TerrainInfo). Stamps are
@@ -22,7 +26,9 @@
 #include <string_view>
 #include <type_traits>
 
-namespace visvol::dds {
+#include "rt/base/handoff.hpp"
+
+namespace visvol::msg {
 
 // Capacities reserved at start-up. A sample never holds more; a command asking
 // for more is rejected with a reason.
@@ -232,7 +238,7 @@ struct Command {
 };
 
 // An acknowledgement. Command intake sends accepted/rejected itself; the
-// executive may push applied/failed ones (AckQueue in command_intake.hpp)
+// executive may push applied/failed ones (AckQueue, below)
 // once it has acted on a command.
 struct CommandAck {
   char source[kSourceCapacity];
@@ -242,6 +248,15 @@ struct CommandAck {
   char reason[kReasonCapacity];
 };
 
+// Accepted commands, to the real-time thread (its consumer), and
+// acknowledgements from it (applied or failed) back to command intake.
+inline constexpr std::size_t kCommandQueueCapacity = 64;
+using CommandQueue = SpscQueue<Command, kCommandQueueCapacity>;
+using AckQueue = SpscQueue<CommandAck, kCommandQueueCapacity>;
+
+// The system clock now, in Unix-epoch nanoseconds. Real-time safe (vDSO).
+std::int64_t now_stamp_ns();
+
 static_assert(std::is_trivially_copyable_v<PathSample>);
 static_assert(std::is_trivially_copyable_v<HealthSample>);
 static_assert(std::is_trivially_copyable_v<DeviceStatusSample>);
@@ -250,4 +265,4 @@ static_assert(std::is_trivially_copyable_v<TerrainInfo>);
 static_assert(std::is_trivially_copyable_v<Command>);
 static_assert(std::is_trivially_copyable_v<CommandAck>);
 
-}  // namespace visvol::dds
+}  // namespace visvol::msg

@@ -26,8 +26,8 @@ Result<RangeShape> parse_range_shape(const std::string& text) {
 
 Status validate(const FieldParams& p, const Heightfield& hf) {
   std::ostringstream msg;
-  if (p.nz < 2 || p.nz > kMaxLevels) {
-    msg << "levels: " << p.nz << " is outside 2.." << kMaxLevels;
+  if (p.nz < 2 || p.nz > kMaxHeightLevels) {
+    msg << "levels: " << p.nz << " is outside 2.." << kMaxHeightLevels;
     return invalid_argument(msg.str());
   }
   if (!std::isfinite(p.ceiling_m) || p.ceiling_m < 0 || p.ceiling_m > 1.0e5) {

@@ -32,7 +32,7 @@ namespace visvol::fields {
 // floats on AVX-512; two on AVX2).
 inline constexpr int kLanes = 16;
 // Hull levels are stored as bytes; level nz means "never visible".
-inline constexpr int kMaxLevels = 255;
+inline constexpr int kMaxHeightLevels = 255;
 // Horizon slope before any crossing (rings 0 and 1 see everything).
 inline constexpr float kNoHorizon = -1.0e30f;
 

@@ -230,9 +230,9 @@ Status build_pack(const Heightfield& hf, const PackBuildParams& params,
                   const fields::ProgressFn& progress, PackBuildReport* report) {
   const auto t0 = Clock::now();
   VISVOL_RETURN_IF_ERROR(fields::validate(params.tff));
-  if (params.lod_levels < 1 || params.lod_levels > kMaxLevels) {
+  if (params.lod_levels < 1 || params.lod_levels > kMaxLodLevels) {
     return invalid_argument("levels of detail: " + std::to_string(params.lod_levels) + " is outside 1.." +
-                            std::to_string(kMaxLevels));
+                            std::to_string(kMaxLodLevels));
   }
   if (!source_json.empty() && !nlohmann::json::accept(source_json)) {
     return invalid_argument("pack source description is not valid JSON");

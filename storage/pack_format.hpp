@@ -37,7 +37,7 @@ inline constexpr std::uint32_t kPackVersion = 1;
 inline constexpr std::uint32_t kPageBytes = 4096;
 inline constexpr int kTile2dPosts = 64;   // height and area tiles
 inline constexpr int kBrickPosts = 16;    // visibility and tff tiles (columns a side)
-inline constexpr int kMaxLevels = 16;     // levels of detail
+inline constexpr int kMaxLodLevels = 16;     // levels of detail
 inline constexpr int kMaxVoxelLevels = 255;
 inline constexpr int kMaxBandLevels = 64;
 
@@ -53,7 +53,7 @@ struct PackHeader {
   std::uint32_t header_bytes;          // sizeof(PackHeader)
   std::uint64_t file_bytes;            // size of the whole file
   std::uint32_t page_bytes;            // kPageBytes
-  std::uint32_t level_count;           // levels of detail, 1..kMaxLevels
+  std::uint32_t level_count;           // levels of detail, 1..kMaxLodLevels
   std::uint64_t level_table_offset;
   std::uint32_t level_entry_bytes;     // sizeof(LevelEntry)
   std::uint32_t tile_entry_bytes;      // sizeof(TileEntry)

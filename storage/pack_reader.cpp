@@ -174,8 +174,8 @@ Status Pack::validate_structure() {
       h.brick_posts != static_cast<std::uint32_t>(kBrickPosts)) {
     return bad("header sizes (header, page, entry, tile) do not match this format");
   }
-  if (h.level_count < 1 || h.level_count > static_cast<std::uint32_t>(kMaxLevels)) {
-    return bad("level_count " + std::to_string(h.level_count) + " is outside 1.." + std::to_string(kMaxLevels));
+  if (h.level_count < 1 || h.level_count > static_cast<std::uint32_t>(kMaxLodLevels)) {
+    return bad("level_count " + std::to_string(h.level_count) + " is outside 1.." + std::to_string(kMaxLodLevels));
   }
   if (h.visibility_encoding > 1) return bad("visibility_encoding " + std::to_string(h.visibility_encoding) + " is unknown");
   if (h.band_levels < 2 || h.band_levels > static_cast<std::uint32_t>(kMaxBandLevels) ||

@@ -25,8 +25,8 @@ const char* to_string(Layer layer) {
 
 Status validate(const PackLayout& layout) {
   std::ostringstream msg;
-  if (layout.levels.empty() || layout.levels.size() > static_cast<std::size_t>(kMaxLevels)) {
-    msg << "pack: " << layout.levels.size() << " levels of detail, 1.." << kMaxLevels << " allowed";
+  if (layout.levels.empty() || layout.levels.size() > static_cast<std::size_t>(kMaxLodLevels)) {
+    msg << "pack: " << layout.levels.size() << " levels of detail, 1.." << kMaxLodLevels << " allowed";
     return invalid_argument(msg.str());
   }
   if (layout.band_levels < 2 || layout.band_levels > kMaxBandLevels ||

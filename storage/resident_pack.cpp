@@ -82,7 +82,7 @@ fields::TffSample ResidentLevel::tff(int i, int j, int b) const {
 // ---- the real-time sampler -----------------------------------------------------
 
 ResidentSampler::ResidentSampler(const ResidentLevel& level) : level_(&level) {
-  for (const ResidentLevel* l = &level; l != nullptr && count_ < kMaxLevels; l = l->coarser()) {
+  for (const ResidentLevel* l = &level; l != nullptr && count_ < kMaxLodLevels; l = l->coarser()) {
     chain_[count_] = l;
     samplers_[count_] = fields::FieldSampler<PackLevelRef>(PackLevelRef(l->pack_level()));
     ++count_;

@@ -147,8 +147,8 @@ class ResidentSampler {
   // point's cell on it (and on the level given, where `finest` is set).
   int pick(double x, double y, Sampler::Cell& cell, Sampler::Cell* finest = nullptr) const;
   const ResidentLevel* level_;
-  const ResidentLevel* chain_[kMaxLevels] = {};
-  Sampler samplers_[kMaxLevels];
+  const ResidentLevel* chain_[kMaxLodLevels] = {};
+  Sampler samplers_[kMaxLodLevels];
   int count_ = 0;
 };
 

@@ -202,13 +202,13 @@ RopeParams Executive::params_for(RopeModel model, int segments, double segment_m
   RopeParams p = scaled_rope_params(model, segments, segment_m, stiffness_, forces_->reference_acceleration());
   p.max_segments = config_.max_segments;
   if (stretch_override_) {
-    p.stretch_stiffness_npm = *stretch_override_;
-    p.stretch_damping_nspm = 0.6 * std::sqrt(p.stretch_stiffness_npm * p.mass_kg);
+    p.stretch_stiffness_n_per_m = *stretch_override_;
+    p.stretch_damping_n_s_per_m = 0.6 * std::sqrt(p.stretch_stiffness_n_per_m * p.mass_kg);
   }
   if (bend_override_) {
-    p.bend_stiffness_nm = *bend_override_;
-    p.twist_stiffness_nm = 0.1 * p.bend_stiffness_nm;
-    p.bend_spring_npm = *bend_override_ / (segment_m * segment_m);  // the spring model's i..i+2 springs
+    p.bend_stiffness_n_m_per_rad = *bend_override_;
+    p.twist_stiffness_n_m_per_rad = 0.1 * p.bend_stiffness_n_m_per_rad;
+    p.bend_spring_n_per_m = *bend_override_ / (segment_m * segment_m);  // the spring model's i..i+2 springs
   }
   return p;
 }

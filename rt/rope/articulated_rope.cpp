@@ -280,13 +280,13 @@ void ArticulatedRope::add_joint_springs() {
     const Vec3 theta = log_map(q_[k].conjugate() * q_[k + 1]);
     const Vec3 twist = theta.z() * Vec3::UnitZ();
     const Vec3 swing = theta - twist;
-    const Vec3 spring = q_[k] * (-(p_.bend_stiffness_nm * swing + p_.twist_stiffness_nm * twist));
+    const Vec3 spring = q_[k] * (-(p_.bend_stiffness_n_m_per_rad * swing + p_.twist_stiffness_n_m_per_rad * twist));
     // Damping of the relative spin, split like the springs: the axial inertia
     // is far smaller than the bending one and needs its own, smaller, damping.
     const Vec3 rel = w_[k + 1] - w_[k];
     const Vec3 ax = axis(i);
     const Vec3 rel_twist = rel.dot(ax) * ax;
-    const Vec3 damping = -p_.joint_damping_nms * (rel - rel_twist) - p_.twist_damping_nms * rel_twist;
+    const Vec3 damping = -p_.joint_damping_n_m_s_per_rad * (rel - rel_twist) - p_.twist_damping_n_m_s_per_rad * rel_twist;
     torque_[k + 1] += spring + damping;
     torque_[k] -= spring + damping;
   }

@@ -169,15 +169,15 @@ RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, d
   const double r = p.capsule_radius_m;
   const double i_perp = p.mass_kg * (3 * r * r + l * l) / 12.0;
   const double i_axial = p.mass_kg * r * r / 2.0;
-  p.bend_stiffness_nm = stiffness * 0.3 * p.mass_kg * accel_ref * l;
-  p.twist_stiffness_nm = 0.1 * p.bend_stiffness_nm;
-  p.joint_damping_nms = 0.6 * std::sqrt(p.bend_stiffness_nm * i_perp);
-  p.twist_damping_nms = 0.6 * std::sqrt(p.twist_stiffness_nm * i_axial);
+  p.bend_stiffness_n_m_per_rad = stiffness * 0.3 * p.mass_kg * accel_ref * l;
+  p.twist_stiffness_n_m_per_rad = 0.1 * p.bend_stiffness_n_m_per_rad;
+  p.joint_damping_n_m_s_per_rad = 0.6 * std::sqrt(p.bend_stiffness_n_m_per_rad * i_perp);
+  p.twist_damping_n_m_s_per_rad = 0.6 * std::sqrt(p.twist_stiffness_n_m_per_rad * i_axial);
   // Tension accumulates along the chain: a pull on the whole rope loads the
   // end springs about segments / 2 times more than one segment's force.
-  p.stretch_stiffness_npm = stiffness * 2.0 * p.mass_kg * accel_ref / l * std::max(1.0, segments / 8.0);
-  p.stretch_damping_nspm = 0.6 * std::sqrt(p.stretch_stiffness_npm * p.mass_kg);
-  p.bend_spring_npm = 0.2 * p.stretch_stiffness_npm;
+  p.stretch_stiffness_n_per_m = stiffness * 2.0 * p.mass_kg * accel_ref / l * std::max(1.0, segments / 8.0);
+  p.stretch_damping_n_s_per_m = 0.6 * std::sqrt(p.stretch_stiffness_n_per_m * p.mass_kg);
+  p.bend_spring_n_per_m = 0.2 * p.stretch_stiffness_n_per_m;
   p.verlet_damping = 0.0;
   return p;
 }
@@ -185,11 +185,11 @@ RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, d
 double stable_step_s(const RopeParams& p, double accel_ref, double clearance_margin_m) {
   double omega2 = 0;  // 1/s^2
   if (p.model == RopeModel::spring) {
-    omega2 = 4.0 * p.stretch_stiffness_npm / p.mass_kg;  // a chain's highest mode: twice one spring's frequency
+    omega2 = 4.0 * p.stretch_stiffness_n_per_m / p.mass_kg;  // a chain's highest mode: twice one spring's frequency
   } else {
     const double r = p.capsule_radius_m, l = 4.0 * r;  // scaled_rope_params: r = l / 4
     const double i_perp = p.mass_kg * (3 * r * r + l * l) / 12.0;
-    omega2 = 4.0 * p.bend_stiffness_nm / i_perp;
+    omega2 = 4.0 * p.bend_stiffness_n_m_per_rad / i_perp;
   }
   // the clearance push: kSaturation reference accelerations per half margin
   omega2 = std::max(omega2, 2.0 * 3.0 * accel_ref / std::max(clearance_margin_m, 1e-3));

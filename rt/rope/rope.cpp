@@ -44,14 +44,14 @@ Status validate(const RopeParams& p) {
   }
   if (!positive(p.mass_kg, "mass") || !non_negative(p.linear_damping_per_s, "linear damping") ||
       !non_negative(p.angular_damping_per_s, "angular damping") ||
-      !non_negative(p.bend_stiffness_nm, "bend stiffness") ||
-      !non_negative(p.twist_stiffness_nm, "twist stiffness") ||
-      !non_negative(p.joint_damping_nms, "joint damping") ||
-      !non_negative(p.twist_damping_nms, "twist damping") ||
+      !non_negative(p.bend_stiffness_n_m_per_rad, "bend stiffness") ||
+      !non_negative(p.twist_stiffness_n_m_per_rad, "twist stiffness") ||
+      !non_negative(p.joint_damping_n_m_s_per_rad, "joint damping") ||
+      !non_negative(p.twist_damping_n_m_s_per_rad, "twist damping") ||
       !positive(p.capsule_radius_m, "capsule radius") ||
-      !non_negative(p.stretch_stiffness_npm, "stretch stiffness") ||
-      !non_negative(p.stretch_damping_nspm, "stretch damping") ||
-      !non_negative(p.bend_spring_npm, "bending spring") ||
+      !non_negative(p.stretch_stiffness_n_per_m, "stretch stiffness") ||
+      !non_negative(p.stretch_damping_n_s_per_m, "stretch damping") ||
+      !non_negative(p.bend_spring_n_per_m, "bending spring") ||
       !positive(p.rest_length_factor, "rest length factor")) {
     return invalid_argument(msg.str());
   }
@@ -71,10 +71,10 @@ bool params_valid(const RopeParams& p) {
   auto non_negative = [](double v) { return std::isfinite(v) && v >= 0; };
   return p.max_segments >= 2 && p.max_segments <= 100000 && positive(p.mass_kg) &&
          non_negative(p.linear_damping_per_s) && non_negative(p.angular_damping_per_s) &&
-         non_negative(p.bend_stiffness_nm) && non_negative(p.twist_stiffness_nm) &&
-         non_negative(p.joint_damping_nms) && non_negative(p.twist_damping_nms) &&
-         positive(p.capsule_radius_m) && non_negative(p.stretch_stiffness_npm) &&
-         non_negative(p.stretch_damping_nspm) && non_negative(p.bend_spring_npm) &&
+         non_negative(p.bend_stiffness_n_m_per_rad) && non_negative(p.twist_stiffness_n_m_per_rad) &&
+         non_negative(p.joint_damping_n_m_s_per_rad) && non_negative(p.twist_damping_n_m_s_per_rad) &&
+         positive(p.capsule_radius_m) && non_negative(p.stretch_stiffness_n_per_m) &&
+         non_negative(p.stretch_damping_n_s_per_m) && non_negative(p.bend_spring_n_per_m) &&
          positive(p.rest_length_factor) && p.verlet_damping >= 0 && p.verlet_damping <= 1 &&
          p.projection_iterations >= 0 && p.projection_iterations <= 10;
 }

@@ -69,11 +69,11 @@ void SpringMassRope::step(double dt, const RopeEnvironment& env) {
   };
   for (int i = 0; i < n_; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
-    spring(k, k + 1, p_.stretch_stiffness_npm, p_.stretch_damping_nspm, rest_m_);
+    spring(k, k + 1, p_.stretch_stiffness_n_per_m, p_.stretch_damping_n_s_per_m, rest_m_);
   }
   for (int i = 0; i + 1 < n_; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
-    spring(k, k + 2, p_.bend_spring_npm, 0.0, bend_rest_m_);
+    spring(k, k + 2, p_.bend_spring_n_per_m, 0.0, bend_rest_m_);
   }
   if (grasp_active_) {
     const std::size_t g = static_cast<std::size_t>(grasp_segment_);

@@ -12,12 +12,12 @@
 #include "app/flyable_path.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
-#include "drivers/haptic/can_device.hpp"
-#include "drivers/hapticsim/simulated_device.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/message_codec.hpp"
 #include "drivers/dds/participant.hpp"
+#include "drivers/haptic/can_device.hpp"
+#include "drivers/hapticsim/simulated_device.hpp"
 #include "rt/base/atomic_file.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/exec/memory_budget.hpp"
@@ -150,8 +150,8 @@ struct Console::Impl {
   std::string pack_id;
   fields::Bounds2D bounds;  // the pack's planning bounds: the ends and the flyable path stay inside
   std::vector<std::pair<std::string, std::string>> terrains;  // id, path: where switch-terrain may go
-  std::string switch_to;    // the pack id a switch-terrain command asked for, once seen
-  double session_s = 0;     // how long the session ran
+  std::string switch_to;  // the pack id a switch-terrain command asked for, once seen
+  double session_s = 0;   // how long the session ran
   rt::MemoryBudget budget{0};
   rt::RealtimeReport realtime;
   std::unique_ptr<storage::ResidentPack> field;
@@ -164,7 +164,7 @@ struct Console::Impl {
   std::unique_ptr<dds::LivePublisher> publisher;
   std::unique_ptr<hapticsim::SimulatedDevice> sim;
   std::unique_ptr<can::SocketCanBus> socket_bus;
-  std::optional<haptic::CanDevice> device;      // on sim's or socket_bus's bus (after them: destroyed first)
+  std::optional<haptic::CanDevice> device;  // on sim's or socket_bus's bus (after them: destroyed first)
   std::unique_ptr<ThumbnailThread> thumbs;
   std::unique_ptr<rt::ConstraintHulls> hulls;  // with DDS or observers given: hidden-from / visible-to
   int observers = 0;                           // hulls reserved for (observers_reserved())
@@ -174,7 +174,7 @@ struct Console::Impl {
   // for the final path when nothing is sent.
   std::unique_ptr<FlyablePath> flyable;
   std::unique_ptr<PathFitter> fitter;
-  std::vector<rt::Vec3> final_path;            // the flyable path at the end (write_outputs)
+  std::vector<rt::Vec3> final_path;  // the flyable path at the end (write_outputs)
   bool final_flyable = false;
   std::unique_ptr<rt::Executive> exec;
   std::unique_ptr<rt::PeriodicLoop> loop;
@@ -547,8 +547,8 @@ Status Console::Impl::start_fitter() {
     fitter = std::move(*f);
     return {};
   }
-  auto t = FlyablePath::start(std::move(*f), publisher ? &publisher->path() : nullptr,
-                              thumbs ? &thumbs->paths() : nullptr);
+  auto t =
+      FlyablePath::start(std::move(*f), publisher ? &publisher->path() : nullptr, thumbs ? &thumbs->paths() : nullptr);
   if (!t.ok()) return t.status();
   flyable = std::move(*t);
   return {};
@@ -736,9 +736,9 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   std::string verdict;
   const nlohmann::json check = check_path(verdict);
   auto timing = [](const rt::DurationHistogram& h) {
-    return nlohmann::json{{"p50_us", h.percentile_us(0.5)}, {"p99_us", h.percentile_us(0.99)},
-                          {"p999_us", h.percentile_us(0.999)}, {"max_us", h.max_us()}, {"mean_us", h.mean_us()},
-                          {"count", h.count()}};
+    return nlohmann::json{
+        {"p50_us", h.percentile_us(0.5)}, {"p99_us", h.percentile_us(0.99)}, {"p999_us", h.percentile_us(0.999)},
+        {"max_us", h.max_us()},           {"mean_us", h.mean_us()},          {"count", h.count()}};
   };
   nlohmann::json budget_items = nlohmann::json::array();
   for (const rt::MemoryBudget::Item& i : budget.items()) {
@@ -780,10 +780,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
         {"flyable", flyable_json(fp, final_flyable, flyable ? flyable->stats() : FlyableStats{})}}},
       {"vehicle", rt::vehicle_json(vehicle)},
       {"device",
-       {{"kind", o.device},
-        {"state", device_text(c)},
-        {"grasps", c.grasps},
-        {"send_failures", c.send_failures}}},
+       {{"kind", o.device}, {"state", device_text(c)}, {"grasps", c.grasps}, {"send_failures", c.send_failures}}},
       {"commands", {{"applied", c.commands_applied}, {"failed", c.commands_failed}}},
       {"constraints", constraints_json(*exec, hulls.get(), c)},
       {"check", check},
@@ -807,27 +804,32 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   if (publisher) {
     const dds::PublisherStats ps = publisher->stats();
-    j["dds"] = {{"domain", o.domain}, {"paths", ps.paths},           {"health", ps.health},
-                {"thumbnails", ps.thumbnails}, {"errors", ps.errors}};
+    j["dds"] = {{"domain", o.domain},
+                {"paths", ps.paths},
+                {"health", ps.health},
+                {"thumbnails", ps.thumbnails},
+                {"errors", ps.errors}};
   }
   if (thumbs) {
     const ThumbnailStats t = thumbs->stats();
-    j["thumbnails"] = {{"view", o.thumbnail_view}, {"size", o.thumbnail_size}, {"rendered", t.rendered},
-                       {"failed", t.failed}, {"last_render_ms", t.last_render_ms},
-                       {"gl_renderer", thumbs->scene().gl_renderer}};
+    j["thumbnails"] = {
+        {"view", o.thumbnail_view}, {"size", o.thumbnail_size},           {"rendered", t.rendered},
+        {"failed", t.failed},       {"last_render_ms", t.last_render_ms}, {"gl_renderer", thumbs->scene().gl_renderer}};
   }
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/summary.json", j.dump(2) + "\n"));
-  std::printf("visvol-console: %.1f s, %llu ticks; wake-up p50 %.0f us p99 %.0f us max %.0f us; compute p50 %.0f us "
-              "p99 %.0f us; overruns %llu; major faults %lld\n",
-              wall_s, static_cast<unsigned long long>(run.totals.ticks), run.wake_latency.percentile_us(0.5),
-              run.wake_latency.percentile_us(0.99), run.wake_latency.max_us(), run.compute.percentile_us(0.5),
-              run.compute.percentile_us(0.99), static_cast<unsigned long long>(run.totals.overruns),
-              static_cast<long long>(run.totals.faults_after_settle.major));
-  std::printf("path: %s, rope F_c %.4f -> %.4f, %s; flyable (%s): F_c %.4f, %.0f m, %u vertices, lowest clearance "
-              "%.1f m, %s; device %s, %llu grasp(s)\n",
-              o.objective.c_str(), fc_start, c.fc, c.converged ? "at rest" : "moving", vehicle.name.c_str(), fp.f_c,
-              fp.length_m, fp.vertex_count, lowest, final_flyable ? "inside the envelope" : "NOT inside the envelope",
-              device_text(c), static_cast<unsigned long long>(c.grasps));
+  std::printf(
+      "visvol-console: %.1f s, %llu ticks; wake-up p50 %.0f us p99 %.0f us max %.0f us; compute p50 %.0f us "
+      "p99 %.0f us; overruns %llu; major faults %lld\n",
+      wall_s, static_cast<unsigned long long>(run.totals.ticks), run.wake_latency.percentile_us(0.5),
+      run.wake_latency.percentile_us(0.99), run.wake_latency.max_us(), run.compute.percentile_us(0.5),
+      run.compute.percentile_us(0.99), static_cast<unsigned long long>(run.totals.overruns),
+      static_cast<long long>(run.totals.faults_after_settle.major));
+  std::printf(
+      "path: %s, rope F_c %.4f -> %.4f, %s; flyable (%s): F_c %.4f, %.0f m, %u vertices, lowest clearance "
+      "%.1f m, %s; device %s, %llu grasp(s)\n",
+      o.objective.c_str(), fc_start, c.fc, c.converged ? "at rest" : "moving", vehicle.name.c_str(), fp.f_c,
+      fp.length_m, fp.vertex_count, lowest, final_flyable ? "inside the envelope" : "NOT inside the envelope",
+      device_text(c), static_cast<unsigned long long>(c.grasps));
   std::printf("memory: peak RSS %.1f MiB of a %.0f MiB budget; tiles %.1f of %.1f MiB (pack %.1f MiB)\n",
               static_cast<double>(rss_peak) / kMiB, o.budget_mib, static_cast<double>(ts.resident_bytes) / kMiB,
               static_cast<double>(ts.budget_bytes) / kMiB, static_cast<double>(ts.pack_bytes) / kMiB);
@@ -844,8 +846,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
                 static_cast<unsigned long long>(t.rendered), o.thumbnail_view.c_str(), o.thumbnail_size.c_str(),
                 t.last_render_ms, static_cast<unsigned long long>(t.failed));
   }
-  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json%s\n", out.c_str(), out.c_str(),
-              out.c_str(), thumbs ? (", " + out + "/thumbnail.png").c_str() : "");
+  std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json%s\n", out.c_str(), out.c_str(), out.c_str(),
+              thumbs ? (", " + out + "/thumbnail.png").c_str() : "");
   return {};
 }
 

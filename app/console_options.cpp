@@ -24,7 +24,9 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)")
       ->check(CLI::Validator([](std::string& path) { return regular_file_problem(path); }, "FILE"))
       ->trigger_on_parse();
-  app.add_option("--pack", o.pack, "Field pack to plan in (visvol build ... -o PACK)")->required()->check(CLI::ExistingFile);
+  app.add_option("--pack", o.pack, "Field pack to plan in (visvol build ... -o PACK)")
+      ->required()
+      ->check(CLI::ExistingFile);
   app.add_option("--terrain", o.terrains,
                  "Another preloaded pack that a switch-terrain command (by pack id: the file name without its "
                  "extension) may move the console to; repeatable")
@@ -37,10 +39,15 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
       ->expected(3);
   app.add_option("--to", o.to, "Rope end X Y Z (default: a tenth in from the planning bounds' east edge, 150 m up)")
       ->expected(3);
-  app.add_option("--objective", o.objective, "hide or show")->check(CLI::IsMember({"hide", "show"}))->capture_default_str();
-  app.add_option("--model", o.model, "articulated or spring")->check(CLI::IsMember({"articulated", "spring"}))->capture_default_str();
+  app.add_option("--objective", o.objective, "hide or show")
+      ->check(CLI::IsMember({"hide", "show"}))
+      ->capture_default_str();
+  app.add_option("--model", o.model, "articulated or spring")
+      ->check(CLI::IsMember({"articulated", "spring"}))
+      ->capture_default_str();
   app.add_option("--segments", o.segments, "Rope segments at start")->capture_default_str();
-  app.add_option("--max-segments", o.max_segments, "Rope segments reserved (set-segments may go up to this)")->capture_default_str();
+  app.add_option("--max-segments", o.max_segments, "Rope segments reserved (set-segments may go up to this)")
+      ->capture_default_str();
   cli::add_envelope_options(app, o.envelope);
   app.add_option("--hidden-from", o.hidden_from,
                  "Stay hidden from an observer standing at X Y Z (pack CRS, m; at or above the terrain); repeatable, "
@@ -59,26 +66,30 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--k1", o.k1, "Visibility gain (sign from the objective)")->capture_default_str();
   app.add_option("--k2", o.k2, "Terrain force field gain")->capture_default_str();
   app.add_option("--k3", o.k3, "Operator pull gain")->capture_default_str();
-  app.add_option("--budget-mib", o.budget_mib, "Memory budget of the whole process, MiB; tiles get what is left")->capture_default_str();
+  app.add_option("--budget-mib", o.budget_mib, "Memory budget of the whole process, MiB; tiles get what is left")
+      ->capture_default_str();
   app.add_option("--period-us", o.period_us, "Loop period, us")->capture_default_str();
   app.add_option("--priority", o.priority, "SCHED_FIFO priority of the loop (0: none)")->capture_default_str();
   app.add_option("--cpu", o.cpu, "Pin the loop to this CPU (-1: no pinning)")->capture_default_str();
   app.add_flag("!--no-lock", o.lock_memory, "Do not lock memory (mlockall)");
-  app.add_option("--overrun-limit", o.overrun_limit, "Overruns in a row before the haptic safe state")->capture_default_str();
+  app.add_option("--overrun-limit", o.overrun_limit, "Overruns in a row before the haptic safe state")
+      ->capture_default_str();
   app.add_option("--level", o.level, "Level of detail the rope runs on (0: finest)")->capture_default_str();
   app.add_option("--device", o.device, "Haptic device: sim (simulated, in-process bus), socketcan, none")
       ->check(CLI::IsMember({"sim", "socketcan", "none"}))
       ->capture_default_str();
   app.add_option("--can-interface", o.can_interface, "CAN interface for --device socketcan (e.g. can0, vcan0)");
   app.add_option("--node", o.node, "Device node id, 1..127")->capture_default_str();
-  app.add_option("--script", o.script, "Simulated operator: builtin (grab and pull), none, or a visvol-hapticsim script")
+  app.add_option("--script", o.script,
+                 "Simulated operator: builtin (grab and pull), none, or a visvol-hapticsim script")
       ->check(CLI::Validator(
           [](std::string& v) { return v == "builtin" || v == "none" ? std::string() : regular_file_problem(v); },
           "builtin|none|FILE"))
       ->capture_default_str();
   app.add_flag("!--no-dds", o.dds, "Do not publish or take commands over DDS");
   app.add_option("--domain", o.domain, "DDS domain id")->check(CLI::Range(0u, 232u))->capture_default_str();
-  app.add_option("--dds-config", o.dds_config, "Cyclone DDS XML configuration (default: loopback only)")->check(CLI::ExistingFile);
+  app.add_option("--dds-config", o.dds_config, "Cyclone DDS XML configuration (default: loopback only)")
+      ->check(CLI::ExistingFile);
   app.add_option("--namespace", o.dds_namespace, "DDS topic namespace");
   app.add_option("--tile-margin", o.tile_margin_m, "Tiles kept resident around the rope, m")->capture_default_str();
   app.add_option("--thumbnail-view", o.thumbnail_view,
@@ -92,8 +103,8 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
 Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text) {
   int w = 0, h = 0;
   char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 32 ||
-      h < 32 || w > 4096 || h > 4096) {
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 32 || h < 32 ||
+      w > 4096 || h > 4096) {
     return invalid_argument("--thumbnail-size: '" + text + "' is not WxH with sides 32..4096 pixels");
   }
   return std::pair{w, h};

@@ -39,7 +39,7 @@ struct ConsoleOptions {
   // observers' eyes above them.
   std::vector<std::vector<double>> hidden_from, visible_to;
   double eye_height_m = 2.0;
-  int max_observers = -1;             // observers a set may name; -1: as the budget allows (see add_console_options)
+  int max_observers = -1;  // observers a set may name; -1: as the budget allows (see add_console_options)
   double k1 = 1, k2 = 1, k3 = 1;
   // Real time.
   double budget_mib = 256;
@@ -50,14 +50,14 @@ struct ConsoleOptions {
   int overrun_limit = 5;
   int level = 0;
   // Haptic device.
-  std::string device = "sim";         // sim | socketcan | none
-  std::string can_interface;          // socketcan
+  std::string device = "sim";  // sim | socketcan | none
+  std::string can_interface;   // socketcan
   int node = 1;
-  std::string script = "builtin";     // sim: builtin | none | FILE
+  std::string script = "builtin";  // sim: builtin | none | FILE
   // DDS.
   bool dds = true;
   std::uint32_t domain = 0;
-  std::string dds_config;             // empty: the built-in loopback configuration
+  std::string dds_config;  // empty: the built-in loopback configuration
   std::string dds_namespace;
   // Tiles.
   double tile_margin_m = 1000;
@@ -67,8 +67,8 @@ struct ConsoleOptions {
   double thumbnail_max_hz = 1.0;
   // Set by the console itself for a session after a terrain switch (not options).
   int session = 1;
-  std::string switched_from;          // the previous session's pack id
-  std::string switch_failed;          // "PACKID: why" when a switch to it failed and this session came back
+  std::string switched_from;  // the previous session's pack id
+  std::string switch_failed;  // "PACKID: why" when a switch to it failed and this session came back
 };
 
 // "WxH" in pixels, each side 32..4096; invalid_argument naming the option.

@@ -1,11 +1,11 @@
 #include "app/flyable_path.hpp"
 
+#include <pthread.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <exception>
-#include <pthread.h>
 
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
@@ -45,7 +45,7 @@ void PathFitter::set_observers(const rt::HullRequest& r) {
   above_.clear();
   std::optional<rt::PointHullMaker> make;  // the terrain padded once for the set
   if (observers_allowed_ && r.hidden_count + r.visible_count > 0) make.emplace(*finest_);
-  auto add = [&](const double (&p)[3], bool hidden) {
+  auto add = [&](const double(&p)[3], bool hidden) {
     if (!make) return void(++hull_failures_);
     // on its post, as the executive's hull builder puts it (a point accepted
     // on the bilinear terrain may be under the nearest post)
@@ -112,7 +112,8 @@ void PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& ou
   out.min_clearance_m = lowest;
   out.f_c = n >= 2 ? rt::path_fc(path.data(), n, *field_, fc_samples_) : 0.0;
   double length = 0;
-  for (int k = 1; k < n; ++k) length += (path[static_cast<std::size_t>(k)] - path[static_cast<std::size_t>(k - 1)]).norm();
+  for (int k = 1; k < n; ++k)
+    length += (path[static_cast<std::size_t>(k)] - path[static_cast<std::size_t>(k - 1)]).norm();
   out.length_m = length;
 }
 

@@ -87,10 +87,10 @@ class PathFitter {
 };
 
 struct FlyableStats {
-  std::uint64_t fitted = 0;      // flyable paths sent
-  std::uint64_t unflyable = 0;   // of them, outside the envelope somewhere (the nearest the fit found)
-  std::uint64_t failed = 0;      // fits that failed (memory), nothing sent
-  int hull_failures = 0;         // observers left out of the fit (their hull could not be built)
+  std::uint64_t fitted = 0;     // flyable paths sent
+  std::uint64_t unflyable = 0;  // of them, outside the envelope somewhere (the nearest the fit found)
+  std::uint64_t failed = 0;     // fits that failed (memory), nothing sent
+  int hull_failures = 0;        // observers left out of the fit (their hull could not be built)
 };
 
 class FlyablePath {
@@ -98,8 +98,7 @@ class FlyablePath {
   // Starts the thread; `to_publisher` and `to_renderer` may be null.
   static Result<std::unique_ptr<FlyablePath>> start(std::unique_ptr<PathFitter> fitter,
                                                     LatestValue<msg::PathSample>* to_publisher,
-                                                    LatestValue<msg::PathSample>* to_renderer,
-                                                    double poll_s = 0.02);
+                                                    LatestValue<msg::PathSample>* to_renderer, double poll_s = 0.02);
   ~FlyablePath();
   FlyablePath(const FlyablePath&) = delete;
   FlyablePath& operator=(const FlyablePath&) = delete;

@@ -1,9 +1,9 @@
 #include "app/mission_options.hpp"
 
+#include <toml++/toml.h>
 #include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cstring>
-#include <toml++/toml.h>
 
 #include "rt/base/input_file.hpp"
 
@@ -110,9 +110,8 @@ void add_constraint_options(CLI::App& c, ConstraintOptions& o) {
 }
 
 Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& o) {
-  Result<rt::VehicleEnvelope> v = o.vehicle == "fixed-wing" || o.vehicle == "multirotor"
-                                      ? rt::vehicle_preset(o.vehicle)
-                                      : read_vehicle_file(o.vehicle);
+  Result<rt::VehicleEnvelope> v = o.vehicle == "fixed-wing" || o.vehicle == "multirotor" ? rt::vehicle_preset(o.vehicle)
+                                                                                         : read_vehicle_file(o.vehicle);
   if (!v.ok()) return invalid_argument("--vehicle " + v.status().message());
   const struct {
     const std::optional<double>& value;

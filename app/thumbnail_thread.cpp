@@ -113,9 +113,7 @@ void ThumbnailThread::draw(const msg::PathSample& path, std::int64_t now_ns) {
   rendered_.fetch_add(1);
 }
 
-ThumbnailStats ThumbnailThread::stats() const {
-  return {rendered_.load(), failed_.load(), last_render_ms_.load()};
-}
+ThumbnailStats ThumbnailThread::stats() const { return {rendered_.load(), failed_.load(), last_render_ms_.load()}; }
 
 Status ThumbnailThread::write_last(const std::string& path) const {
   if (thread_.joinable()) return Status(Errc::unsupported, "thumbnail: stop the renderer thread first");

@@ -9,8 +9,8 @@ DenseLevel::DenseLevel(Heightfield terrain, DenseVolume field, const TffParams& 
   terrain_force_rows(terrain_, tff_params_, 0, terrain_.ny, tff_.data(), nullptr);
 }
 
-Result<std::vector<DenseLevel>> build_dense_levels(const Heightfield& hf, const FieldParams& params,
-                                                   int levels, const TffParams& tff) {
+Result<std::vector<DenseLevel>> build_dense_levels(const Heightfield& hf, const FieldParams& params, int levels,
+                                                   const TffParams& tff) {
   VISVOL_RETURN_IF_ERROR(validate(tff));
   Result<std::vector<LodLevel>> pyramid = build_pyramid_dense(hf, params, levels);
   if (!pyramid.ok()) return pyramid.status();

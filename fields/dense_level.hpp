@@ -19,7 +19,8 @@ class DenseLevel {
   float voxel(int i, int j, int k) const { return field_.at(i, j, k); }
   TffSample tff(int i, int j, int b) const {
     return tff_[(static_cast<std::size_t>(j) * static_cast<std::size_t>(tff_params_.band_levels) +
-                 static_cast<std::size_t>(b)) * static_cast<std::size_t>(terrain_.nx) +
+                 static_cast<std::size_t>(b)) *
+                    static_cast<std::size_t>(terrain_.nx) +
                 static_cast<std::size_t>(i)];
   }
   const TffParams& tff_params() const { return tff_params_; }
@@ -34,7 +35,7 @@ class DenseLevel {
 };
 
 // Every level of detail of a heightfield, finest first.
-Result<std::vector<DenseLevel>> build_dense_levels(const Heightfield& hf, const FieldParams& params,
-                                                   int levels, const TffParams& tff);
+Result<std::vector<DenseLevel>> build_dense_levels(const Heightfield& hf, const FieldParams& params, int levels,
+                                                   const TffParams& tff);
 
 }  // namespace visvol::fields

@@ -23,8 +23,8 @@ double terrain_on_line(const Heightfield& hf, bool vertical_line, int across, do
 
 // Tests the crossings with grid lines of one direction (x = integer when
 // `vertical_line`, else y = integer).
-bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double aj, double az,
-                    double bi, double bj, double bz, double d_total_m, double coeff) {
+bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double aj, double az, double bi, double bj,
+                    double bz, double d_total_m, double coeff) {
   const double a_main = vertical_line ? ai : aj;
   const double b_main = vertical_line ? bi : bj;
   const double a_other = vertical_line ? aj : ai;
@@ -36,8 +36,7 @@ bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double
     const double f = (line - a_main) / (b_main - a_main);  // 0 < f < 1
     const double along = a_other + f * (b_other - a_other);
     const double d = f * d_total_m;
-    const double ground = terrain_on_line(hf, vertical_line, line, along) -
-                          coeff * d * d / (2.0 * kEarthRadiusM);
+    const double ground = terrain_on_line(hf, vertical_line, line, along) - coeff * d * d / (2.0 * kEarthRadiusM);
     const double z = az + f * (bz - az);
     if (!(z > ground)) return false;
   }
@@ -46,8 +45,8 @@ bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double
 
 }  // namespace
 
-bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double bi, double bj,
-                double bz_m, double curvature_coeff) {
+bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double bi, double bj, double bz_m,
+                double curvature_coeff) {
   const double d_total = std::hypot(bi - ai, bj - aj) * hf.spacing_m;
   // The target, seen from a, is lowered by the curvature drop too.
   const double bz = bz_m - curvature_coeff * d_total * d_total / (2.0 * kEarthRadiusM);
@@ -55,8 +54,8 @@ bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double
          clear_of_lines(hf, false, ai, aj, az_m, bi, bj, bz, d_total, curvature_coeff);
 }
 
-double exact_visibility(const Heightfield& hf, const std::vector<float>& area,
-                        const FieldParams& params, int i, int j, double z_m) {
+double exact_visibility(const Heightfield& hf, const std::vector<float>& area, const FieldParams& params, int i, int j,
+                        double z_m) {
   if (z_m < hf.at(i, j)) return 0.0;
   double sum_a = 0;
   for (float a : area) sum_a += a;
@@ -74,8 +73,8 @@ double exact_visibility(const Heightfield& hf, const std::vector<float>& area,
   double seen = 0;
   for (int pj = pj_lo; pj <= pj_hi; ++pj) {
     for (int pi = pi_lo; pi <= pi_hi; ++pi) {
-      const std::size_t n = static_cast<std::size_t>(pj) * static_cast<std::size_t>(hf.nx) +
-                            static_cast<std::size_t>(pi);
+      const std::size_t n =
+          static_cast<std::size_t>(pj) * static_cast<std::size_t>(hf.nx) + static_cast<std::size_t>(pi);
       const double w = params.weights.empty() ? 1.0 : params.weights[n];
       if (w == 0) continue;
       const double ground = hf.at(pi, pj);

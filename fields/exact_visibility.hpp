@@ -18,13 +18,13 @@
 namespace visvol::fields {
 
 // a and b in grid coordinates (posts) and metres of height.
-bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double bi, double bj,
-                double bz_m, double curvature_coeff);
+bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double bi, double bj, double bz_m,
+                double curvature_coeff);
 
 // F_p at the point above post (i, j) at height z_m, by the paper's definition
 // with R3 visibility, the range of `params`, and the area factor `area`.
 // 0 below the terrain.
-double exact_visibility(const Heightfield& hf, const std::vector<float>& area,
-                        const FieldParams& params, int i, int j, double z_m);
+double exact_visibility(const Heightfield& hf, const std::vector<float>& area, const FieldParams& params, int i, int j,
+                        double z_m);
 
 }  // namespace visvol::fields

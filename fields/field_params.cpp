@@ -38,8 +38,7 @@ Status validate(const FieldParams& p, const Heightfield& hf) {
     msg << "eye height: " << p.eye_height_m << " m is outside 0..10000 m";
     return invalid_argument(msg.str());
   }
-  if (p.range_shape != RangeShape::none &&
-      (p.range_posts < 1 || p.range_posts > kMaxPostsPerSide)) {
+  if (p.range_shape != RangeShape::none && (p.range_posts < 1 || p.range_posts > kMaxPostsPerSide)) {
     msg << "range: " << p.range_posts << " posts is outside 1.." << kMaxPostsPerSide;
     return invalid_argument(msg.str());
   }
@@ -57,28 +56,25 @@ Status validate(const FieldParams& p, const Heightfield& hf) {
   }
   // Bounded so that the limit in bytes fits a size_t (1e308 MiB once became 0 bytes).
   if (!std::isfinite(p.max_memory_mib) || p.max_memory_mib <= 0 || p.max_memory_mib > kMaxMemoryMib) {
-    msg << "memory limit: " << p.max_memory_mib << " MiB is outside 0.."
-        << static_cast<long long>(kMaxMemoryMib) << " MiB (16 TiB), 0 excluded";
+    msg << "memory limit: " << p.max_memory_mib << " MiB is outside 0.." << static_cast<long long>(kMaxMemoryMib)
+        << " MiB (16 TiB), 0 excluded";
     return invalid_argument(msg.str());
   }
-  if (p.vertical && !(std::isfinite(p.vertical->z0_m) && std::isfinite(p.vertical->dz_m) &&
-                     p.vertical->dz_m > 0)) {
-    msg << "vertical grid: level 0 at " << p.vertical->z0_m << " m, spacing "
-        << p.vertical->dz_m << " m must be finite with a positive spacing";
+  if (p.vertical && !(std::isfinite(p.vertical->z0_m) && std::isfinite(p.vertical->dz_m) && p.vertical->dz_m > 0)) {
+    msg << "vertical grid: level 0 at " << p.vertical->z0_m << " m, spacing " << p.vertical->dz_m
+        << " m must be finite with a positive spacing";
     return invalid_argument(msg.str());
   }
   if (!p.weights.empty()) {
     if (p.weights.size() != hf.size()) {
-      msg << "weights: " << p.weights.size() << " values for " << hf.nx << " x " << hf.ny
-          << " posts";
+      msg << "weights: " << p.weights.size() << " values for " << hf.nx << " x " << hf.ny << " posts";
       return invalid_argument(msg.str());
     }
     for (std::size_t n = 0; n < p.weights.size(); ++n) {
       const float w = p.weights[n];
       if (!(w >= 0.0f && w <= 1.0f)) {
-        msg << "weights: post (" << n % static_cast<std::size_t>(hf.nx) << ", "
-            << n / static_cast<std::size_t>(hf.nx) << ") has weight " << w
-            << "; weights must be in [0, 1]";
+        msg << "weights: post (" << n % static_cast<std::size_t>(hf.nx) << ", " << n / static_cast<std::size_t>(hf.nx)
+            << ") has weight " << w << "; weights must be in [0, 1]";
         return invalid_argument(msg.str());
       }
     }

@@ -37,11 +37,11 @@ struct VerticalGrid {
 inline constexpr double kMaxMemoryMib = 16.0 * 1024 * 1024;
 
 struct FieldParams {
-  int nz = 128;                   // voxel levels
-  double ceiling_m = 300.0;       // height of the top level above the highest post
-  double eye_height_m = 2.0;      // observer eye above its post
+  int nz = 128;               // voxel levels
+  double ceiling_m = 300.0;   // height of the top level above the highest post
+  double eye_height_m = 2.0;  // observer eye above its post
   RangeShape range_shape = RangeShape::cube;
-  int range_posts = 64;           // cube half-side, or sphere radius in posts
+  int range_posts = 64;  // cube half-side, or sphere radius in posts
   // Earth curvature and refraction: a point d metres from the observer appears
   // lowered by coeff * d^2 / (2 R). 0 is off; 0.85714 is the usual value
   // (refraction coefficient 1/7), as in GDAL and GRASS.
@@ -51,7 +51,7 @@ struct FieldParams {
   // Rings evaluated exactly (every grid-line crossing) before the hull
   // recursion takes over; more is more accurate near sharp features and slower.
   int exact_rings = 16;
-  int threads = 0;                // 0: all cores
+  int threads = 0;  // 0: all cores
   // Refuse builds whose working memory would exceed this.
   double max_memory_mib = 8192.0;
   // Fixed vertical grid; unset, levels run from the lowest post to the highest

@@ -9,13 +9,12 @@ namespace visvol::fields {
 Status validate(const Heightfield& hf, const std::string& name) {
   std::ostringstream msg;
   if (hf.nx < 2 || hf.ny < 2) {
-    msg << name << ": grid is " << hf.nx << " x " << hf.ny
-        << " posts; at least 2 x 2 are needed";
+    msg << name << ": grid is " << hf.nx << " x " << hf.ny << " posts; at least 2 x 2 are needed";
     return invalid_argument(msg.str());
   }
   if (hf.nx > kMaxPostsPerSide || hf.ny > kMaxPostsPerSide) {
-    msg << name << ": grid is " << hf.nx << " x " << hf.ny << " posts; at most "
-        << kMaxPostsPerSide << " a side are supported (crop or resample it)";
+    msg << name << ": grid is " << hf.nx << " x " << hf.ny << " posts; at most " << kMaxPostsPerSide
+        << " a side are supported (crop or resample it)";
     return invalid_argument(msg.str());
   }
   if (!(std::isfinite(hf.spacing_m) && hf.spacing_m > 0)) {
@@ -27,8 +26,7 @@ Status validate(const Heightfield& hf, const std::string& name) {
     return invalid_argument(msg.str());
   }
   if (hf.height_m.size() != hf.size()) {
-    msg << name << ": " << hf.height_m.size() << " heights for " << hf.nx << " x " << hf.ny
-        << " posts";
+    msg << name << ": " << hf.height_m.size() << " heights for " << hf.nx << " x " << hf.ny << " posts";
     return invalid_argument(msg.str());
   }
   for (int j = 0; j < hf.ny; ++j) {
@@ -58,12 +56,10 @@ std::vector<float> area_factor(const Heightfield& hf) {
     for (int i = 0; i < hf.nx; ++i) {
       const int i0 = std::max(i - 1, 0);
       const int i1 = std::min(i + 1, hf.nx - 1);
-      const double tx = (static_cast<double>(hf.at(i1, j)) - hf.at(i0, j)) /
-                        ((i1 - i0) * hf.spacing_m);
-      const double ty = (static_cast<double>(hf.at(i, j1)) - hf.at(i, j0)) /
-                        ((j1 - j0) * hf.spacing_m);
-      a[static_cast<std::size_t>(j) * static_cast<std::size_t>(hf.nx) +
-        static_cast<std::size_t>(i)] = static_cast<float>(std::sqrt(1.0 + tx * tx + ty * ty));
+      const double tx = (static_cast<double>(hf.at(i1, j)) - hf.at(i0, j)) / ((i1 - i0) * hf.spacing_m);
+      const double ty = (static_cast<double>(hf.at(i, j1)) - hf.at(i, j0)) / ((j1 - j0) * hf.spacing_m);
+      a[static_cast<std::size_t>(j) * static_cast<std::size_t>(hf.nx) + static_cast<std::size_t>(i)] =
+          static_cast<float>(std::sqrt(1.0 + tx * tx + ty * ty));
     }
   }
   return a;
@@ -81,8 +77,8 @@ Heightfield downsample2(const Heightfield& hf) {
   c.height_m.resize(c.size());
   for (int j = 0; j < c.ny; ++j) {
     for (int i = 0; i < c.nx; ++i) {
-      const double s = static_cast<double>(hf.at(2 * i, 2 * j)) + hf.at(2 * i + 1, 2 * j) +
-                       hf.at(2 * i, 2 * j + 1) + hf.at(2 * i + 1, 2 * j + 1);
+      const double s = static_cast<double>(hf.at(2 * i, 2 * j)) + hf.at(2 * i + 1, 2 * j) + hf.at(2 * i, 2 * j + 1) +
+                       hf.at(2 * i + 1, 2 * j + 1);
       c.at(i, j) = static_cast<float>(s * 0.25);
     }
   }

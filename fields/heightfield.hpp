@@ -20,22 +20,20 @@ namespace visvol::fields {
 inline constexpr int kMaxPostsPerSide = 1 << 15;
 
 struct Heightfield {
-  int nx = 0;               // posts west to east
-  int ny = 0;               // posts north to south
-  double spacing_m = 0;     // distance between neighbouring posts
-  double origin_x = 0;      // world x of post (0, 0), the north-west post
-  double origin_y = 0;      // world y of post (0, 0)
-  std::string crs_wkt;      // horizontal CRS, empty for a local metric frame
+  int nx = 0;                   // posts west to east
+  int ny = 0;                   // posts north to south
+  double spacing_m = 0;         // distance between neighbouring posts
+  double origin_x = 0;          // world x of post (0, 0), the north-west post
+  double origin_y = 0;          // world y of post (0, 0)
+  std::string crs_wkt;          // horizontal CRS, empty for a local metric frame
   std::vector<float> height_m;  // ny rows of nx posts, row-major
 
   std::size_t size() const { return static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny); }
   float at(int i, int j) const {
-    return height_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-                    static_cast<std::size_t>(i)];
+    return height_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)];
   }
   float& at(int i, int j) {
-    return height_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-                    static_cast<std::size_t>(i)];
+    return height_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)];
   }
   // World coordinates of post (i, j).
   double x_of(double i) const { return origin_x + i * spacing_m; }

@@ -15,9 +15,7 @@ constexpr float kPaddingDepthM = 1.0e6f;
 // Span of a sphere range outside the sphere: puts both bounds beyond the grid.
 constexpr float kOutsideSpan = -1.0e30f;
 
-double curvature_drop_m(double coeff, double d_m) {
-  return coeff * d_m * d_m / (2.0 * kEarthRadiusM);
-}
+double curvature_drop_m(double coeff, double d_m) { return coeff * d_m * d_m / (2.0 * kEarthRadiusM); }
 
 // Vertical half extent of a sphere of radius range_m at horizontal distance d_m:
 // kOutsideSpan outside (so every level test fails), unused by other shapes.
@@ -35,8 +33,8 @@ int ring_index(int dx, int dy, int m) {
   return 2 * m + 1 + 2 * (dy + m - 1) + (dx == -m ? 0 : 1);
 }
 
-void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape,
-                         double range_m, int stride, std::vector<HullEntry>& out, const OffsetBox& box) {
+void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape, double range_m, int stride,
+                         std::vector<HullEntry>& out, const OffsetBox& box) {
   const std::size_t first = out.size();
   out.resize(first + static_cast<std::size_t>(ring_size(m)));
   // the ring's cells only: the top and bottom rows, then the two sides
@@ -121,8 +119,8 @@ void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeS
   }
 }
 
-HullTable::HullTable(int radius, int exact_rings, double spacing_m, double curvature_coeff,
-                     RangeShape shape, double range_m, int stride)
+HullTable::HullTable(int radius, int exact_rings, double spacing_m, double curvature_coeff, RangeShape shape,
+                     double range_m, int stride)
     : radius_(radius), exact_rings_(std::min(exact_rings, radius)) {
   const std::size_t side = 2 * static_cast<std::size_t>(radius) + 1;
   entries_.reserve(side * side);
@@ -133,8 +131,7 @@ HullTable::HullTable(int radius, int exact_rings, double spacing_m, double curva
     if (m > exact_rings_) continue;
     for (std::size_t n = ring_start_[static_cast<std::size_t>(m)]; n < entries_.size(); ++n) {
       crossing_start_.push_back(crossings_.size());
-      append_crossings(entries_[n].dx, entries_[n].dy, spacing_m, curvature_coeff, stride,
-                       crossings_);
+      append_crossings(entries_[n].dx, entries_[n].dy, spacing_m, curvature_coeff, stride, crossings_);
     }
   }
   crossing_start_.push_back(crossings_.size());
@@ -203,8 +200,7 @@ PaddedTerrain pad_terrain(const Heightfield& hf, const VolumeGeometry& g, int ra
       const double h = hf.at(i, j);
       t.height_m[t.index(i, j)] = hf.at(i, j);
       const double level = std::ceil((h - g.z0_m) / g.dz_m);
-      t.ground_level[t.index(i, j)] =
-          static_cast<std::int32_t>(std::clamp(level, 0.0, static_cast<double>(g.nz)));
+      t.ground_level[t.index(i, j)] = static_cast<std::int32_t>(std::clamp(level, 0.0, static_cast<double>(g.nz)));
     }
   }
   return t;
@@ -216,8 +212,7 @@ std::size_t padded_terrain_bytes(int nx, int ny, int radius) {
          (sizeof(float) + sizeof(std::int32_t));
 }
 
-LevelRowLayout::LevelRowLayout(int nx_, int ny_, int radius_)
-    : nx(nx_), ny(ny_), radius(radius_) {
+LevelRowLayout::LevelRowLayout(int nx_, int ny_, int radius_) : nx(nx_), ny(ny_), radius(radius_) {
   chunks = (nx + kLanes - 1) / kLanes;
   rows = std::min(2 * radius + 1, ny);
   slots = std::min(2 * radius + 1, nx + kLanes - 1);
@@ -241,9 +236,7 @@ VISVOL_INLINE void max_into(VecF& a, const VecF& b) { a = a > b ? a : b; }
 VISVOL_INLINE void max_into(VecI& a, const VecI& b) { a = a > b ? a : b; }
 
 // floor(q) for q >= -4 (truncation of a positive number is its floor).
-VISVOL_INLINE void floor_into(VecI& out, const VecF& q) {
-  out = __builtin_convertvector(q + 4.0f, VecI) - 4;
-}
+VISVOL_INLINE void floor_into(VecI& out, const VecF& q) { out = __builtin_convertvector(q + 4.0f, VecI) - 4; }
 // (z - z0) / dz clamped to [-2, hi].
 VISVOL_INLINE void level_coordinate(VecF& q, const VecF& z_m, const LevelMap& lv, float hi) {
   q = (z_m - lv.z0_m) * lv.inv_dz;
@@ -285,10 +278,9 @@ VISVOL_INLINE void store_levels(const VecI& k, int nz, std::uint8_t* dst) {
 #endif
 
 VISVOL_KERNEL_CLONES
-void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
-                       const LevelRowLayout& layout, const LevelMap& levels, RangeShape shape,
-                       const ObserverChunk& chunk, float* ring_a, float* ring_b,
-                       std::uint8_t* out) {
+void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                       const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                       float* ring_b, std::uint8_t* out) {
   const int px0 = chunk.px0;
   const int py = chunk.py;
   const int ci = px0 / kLanes;
@@ -390,9 +382,9 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
   }
 }
 
-void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
-                      double spacing_m, double curvature_coeff, int pi, int pj,
-                      double eye_z_m, std::vector<float>& horizon, bool grid_only) {
+void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings, double spacing_m,
+                      double curvature_coeff, int pi, int pj, double eye_z_m, std::vector<float>& horizon,
+                      bool grid_only) {
   const int side = 2 * radius + 1;
   horizon.assign(static_cast<std::size_t>(side) * static_cast<std::size_t>(side), kNoHorizon);
   const float* t0 = terrain.height_m.data() + terrain.index(pi, pj);
@@ -403,8 +395,8 @@ void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
     for (int dx = -1; dx <= 1; ++dx) {
       if (dx == 0 && dy == 0) continue;
       const double d = std::hypot(double(dx), double(dy)) * spacing_m;
-      prev[static_cast<std::size_t>(ring_index(dx, dy, 1))] = static_cast<float>(
-          (t0[dy * terrain.stride + dx] - curvature_drop_m(curvature_coeff, d) - eye) / d);
+      prev[static_cast<std::size_t>(ring_index(dx, dy, 1))] =
+          static_cast<float>((t0[dy * terrain.stride + dx] - curvature_drop_m(curvature_coeff, d) - eye) / d);
     }
   }
   std::vector<float> cur;
@@ -424,8 +416,7 @@ void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
   }
   for (int m = 2; m <= last_ring; ++m) {
     ring.clear();
-    append_ring_entries(m, spacing_m, curvature_coeff, RangeShape::none, 0.0, terrain.stride,
-                        ring, box);
+    append_ring_entries(m, spacing_m, curvature_coeff, RangeShape::none, 0.0, terrain.stride, ring, box);
     cur.assign(ring.size(), kNoHorizon);
     for (std::size_t n = 0; n < ring.size(); ++n) {
       const HullEntry& e = ring[n];

@@ -38,19 +38,19 @@ inline constexpr float kNoHorizon = -1.0e30f;
 
 // One target cell of a ring, relative to the observer.
 struct HullEntry {
-  std::uint16_t a = 0, b = 0;    // stencil cells, as indices into the previous ring (kMaxHullRing)
-  std::int16_t dx = 0, dy = 0;   // offset from the observer, posts
-  float t = 0;                   // weight of b (and of post tb) at the ring m-1 crossing
-  std::int32_t ta = 0, tb = 0;   // terrain offsets of the ring m-1 crossing's posts
-  float inv_d1 = 0;              // 1 / distance to the ring m-1 crossing, 1/m
-  float drop1_m = 0;             // curvature drop at the ring m-1 crossing
-  std::int32_t tc = 0, td = 0;   // terrain offsets of the other crossing's posts
-  float t2 = 0;                  // weight of td
-  float inv_d2 = 0;              // 1 / distance to the other crossing, 1/m
+  std::uint16_t a = 0, b = 0;   // stencil cells, as indices into the previous ring (kMaxHullRing)
+  std::int16_t dx = 0, dy = 0;  // offset from the observer, posts
+  float t = 0;                  // weight of b (and of post tb) at the ring m-1 crossing
+  std::int32_t ta = 0, tb = 0;  // terrain offsets of the ring m-1 crossing's posts
+  float inv_d1 = 0;             // 1 / distance to the ring m-1 crossing, 1/m
+  float drop1_m = 0;            // curvature drop at the ring m-1 crossing
+  std::int32_t tc = 0, td = 0;  // terrain offsets of the other crossing's posts
+  float t2 = 0;                 // weight of td
+  float inv_d2 = 0;             // 1 / distance to the other crossing, 1/m
   float drop2_m = 0;
-  float d_m = 0;                 // distance to the target, m
-  float drop_m = 0;              // curvature drop at the target
-  float span_m = 0;              // sphere range: half height of the range here (<0: outside)
+  float d_m = 0;     // distance to the target, m
+  float drop_m = 0;  // curvature drop at the target
+  float span_m = 0;  // sphere range: half height of the range here (<0: outside)
 };
 
 // One grid-line crossing of a sight line: terrain interpolated between two
@@ -64,8 +64,7 @@ struct Crossing {
 
 // Appends every crossing of the open sight line from the observer to offset
 // (dx, dy): R3's exact set.
-void append_crossings(int dx, int dy, double spacing_m, double curvature_coeff, int stride,
-                      std::vector<Crossing>& out);
+void append_crossings(int dx, int dy, double spacing_m, double curvature_coeff, int stride, std::vector<Crossing>& out);
 
 // The farthest ring a horizon reaches: a ring's indices (8 m of them) fit the
 // 16-bit stencil indices of HullEntry.
@@ -86,8 +85,8 @@ struct OffsetBox {
 // Appends the entries of ring m (m >= 2) in ring_index order. Terrain offsets
 // are flat indices for a terrain stored with row stride `stride`. Only the
 // entries inside `box` are filled; the others keep HullEntry{} (d_m 0).
-void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape,
-                         double range_m, int stride, std::vector<HullEntry>& out, const OffsetBox& box = {});
+void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeShape shape, double range_m, int stride,
+                         std::vector<HullEntry>& out, const OffsetBox& box = {});
 
 // All rings 2..radius, stored for reuse by every observer. Rings up to
 // exact_rings are evaluated exactly (every crossing; that is where neighbouring
@@ -95,8 +94,8 @@ void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeS
 // stencil.
 class HullTable {
  public:
-  HullTable(int radius, int exact_rings, double spacing_m, double curvature_coeff,
-            RangeShape shape, double range_m, int stride);
+  HullTable(int radius, int exact_rings, double spacing_m, double curvature_coeff, RangeShape shape, double range_m,
+            int stride);
   int radius() const { return radius_; }
   int exact_rings() const { return exact_rings_; }
   // Crossings of entry n of ring m (m <= exact_rings).
@@ -104,17 +103,14 @@ class HullTable {
     return crossings_.data() + crossing_start_[ring_start_[static_cast<std::size_t>(m)] + static_cast<std::size_t>(n)];
   }
   const Crossing* crossings_end(int m, int n) const {
-    return crossings_.data() + crossing_start_[ring_start_[static_cast<std::size_t>(m)] + static_cast<std::size_t>(n) + 1];
+    return crossings_.data() +
+           crossing_start_[ring_start_[static_cast<std::size_t>(m)] + static_cast<std::size_t>(n) + 1];
   }
-  const HullEntry* ring(int m) const {
-    return entries_.data() + ring_start_[static_cast<std::size_t>(m)];
-  }
+  const HullEntry* ring(int m) const { return entries_.data() + ring_start_[static_cast<std::size_t>(m)]; }
   // Rings 0 and 1 (only offsets, distances and spans are meaningful).
   const std::array<HullEntry, 9>& inner() const { return inner_; }
   std::size_t entry_count() const { return entries_.size(); }
-  std::size_t bytes() const {
-    return entries_.size() * sizeof(HullEntry) + crossings_.size() * sizeof(Crossing);
-  }
+  std::size_t bytes() const { return entries_.size() * sizeof(HullEntry) + crossings_.size() * sizeof(Crossing); }
   // Rough size before building, for memory plans.
   static std::size_t estimate_bytes(int radius, int exact_rings);
 
@@ -137,8 +133,7 @@ struct PaddedTerrain {
   std::vector<std::int32_t> ground_level;
 
   std::size_t index(int i, int j) const {
-    return static_cast<std::size_t>(j + pad) * static_cast<std::size_t>(stride) +
-           static_cast<std::size_t>(i + pad);
+    return static_cast<std::size_t>(j + pad) * static_cast<std::size_t>(stride) + static_cast<std::size_t>(i + pad);
   }
 };
 PaddedTerrain pad_terrain(const Heightfield& hf, const VolumeGeometry& g, int radius);
@@ -162,16 +157,17 @@ struct LevelRowLayout {
   }
   int last_dx(int px0) const { return radius < nx - 1 - px0 ? radius : nx - 1 - px0; }
   std::size_t bytes_per_observer_row() const {
-    return static_cast<std::size_t>(rows) * static_cast<std::size_t>(chunks) *
-           static_cast<std::size_t>(slots) * kLanes;
+    return static_cast<std::size_t>(rows) * static_cast<std::size_t>(chunks) * static_cast<std::size_t>(slots) * kLanes;
   }
   // Offset of (target row y, chunk, slot) within one observer row's block.
   // Chunk-major, so that one chunk's levels are one contiguous block while the
   // kernel writes them.
   std::size_t offset(int py, int y, int chunk, int slot) const {
     return ((static_cast<std::size_t>(chunk) * static_cast<std::size_t>(rows) +
-             static_cast<std::size_t>(y - first_row(py))) * static_cast<std::size_t>(slots) +
-            static_cast<std::size_t>(slot)) * kLanes;
+             static_cast<std::size_t>(y - first_row(py))) *
+                static_cast<std::size_t>(slots) +
+            static_cast<std::size_t>(slot)) *
+           kLanes;
   }
 };
 
@@ -185,7 +181,7 @@ struct LevelMap {
 // One chunk of kLanes observers on row py starting at column px0.
 struct ObserverChunk {
   int px0 = 0, py = 0;
-  float eye_m[kLanes] = {};           // eye heights (lanes past the grid: any value)
+  float eye_m[kLanes] = {};               // eye heights (lanes past the grid: any value)
   std::int32_t floor_level[kLanes] = {};  // lowest level each observer's range admits
 };
 
@@ -193,10 +189,9 @@ struct ObserverChunk {
 // level from which each observer is visible (clamped to 0..nz), written to
 // `out` (one observer row's block of `layout`). Scratch: two ring buffers of
 // 8 * radius * kLanes floats. Cost: O(entries * kLanes); no allocation.
-void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
-                       const LevelRowLayout& layout, const LevelMap& levels, RangeShape shape,
-                       const ObserverChunk& chunk, float* ring_a, float* ring_b,
-                       std::uint8_t* out);
+void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                       const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                       float* ring_b, std::uint8_t* out);
 
 // The horizon slope H of every target around one observer (scalar; for
 // viewsheds, point hulls and tests), by the same rules as the kernel.
@@ -208,8 +203,8 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain,
 // those values are the same, at the cost of the grid's posts rather than the
 // (2r+1)^2 square's. The terrain then needs a padding of one post only
 // (pad_terrain(hf, g, 2) gives kLanes + 4), not the radius.
-void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings,
-                      double spacing_m, double curvature_coeff, int pi, int pj,
-                      double eye_z_m, std::vector<float>& horizon, bool grid_only = false);
+void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings, double spacing_m,
+                      double curvature_coeff, int pi, int pj, double eye_z_m, std::vector<float>& horizon,
+                      bool grid_only = false);
 
 }  // namespace visvol::fields

@@ -16,8 +16,7 @@ std::vector<float> downsample_weights(const std::vector<float>& w, int nx, int n
   for (int j = 0; j < cy; ++j) {
     for (int i = 0; i < cx; ++i) {
       out[static_cast<std::size_t>(j) * static_cast<std::size_t>(cx) + static_cast<std::size_t>(i)] =
-          0.25f * (at(2 * i, 2 * j) + at(2 * i + 1, 2 * j) + at(2 * i, 2 * j + 1) +
-                   at(2 * i + 1, 2 * j + 1));
+          0.25f * (at(2 * i, 2 * j) + at(2 * i + 1, 2 * j) + at(2 * i, 2 * j + 1) + at(2 * i + 1, 2 * j + 1));
     }
   }
   return out;
@@ -25,13 +24,11 @@ std::vector<float> downsample_weights(const std::vector<float>& w, int nx, int n
 
 }  // namespace
 
-Result<std::vector<LodInput>> lod_inputs(const Heightfield& hf, const FieldParams& params,
-                                         int levels) {
+Result<std::vector<LodInput>> lod_inputs(const Heightfield& hf, const FieldParams& params, int levels) {
   VISVOL_RETURN_IF_ERROR(validate(hf, "heightfield"));
   VISVOL_RETURN_IF_ERROR(validate(params, hf));
   if (levels < 1 || levels > 16) {
-    return invalid_argument("levels of detail: " + std::to_string(levels) +
-                            " is outside 1..16");
+    return invalid_argument("levels of detail: " + std::to_string(levels) + " is outside 1..16");
   }
   std::vector<LodInput> out;
   out.reserve(static_cast<std::size_t>(levels));
@@ -43,10 +40,9 @@ Result<std::vector<LodInput>> lod_inputs(const Heightfield& hf, const FieldParam
     const LodInput& fine = out.back();
     if (fine.terrain.nx / 2 < kMinLevelPosts || fine.terrain.ny / 2 < kMinLevelPosts) {
       std::ostringstream msg;
-      msg << "levels of detail: level " << level << " of a " << hf.nx << " x " << hf.ny
-          << " grid would have " << fine.terrain.nx / 2 << " x " << fine.terrain.ny / 2
-          << " posts, fewer than " << kMinLevelPosts << " a side; use at most " << level
-          << " levels";
+      msg << "levels of detail: level " << level << " of a " << hf.nx << " x " << hf.ny << " grid would have "
+          << fine.terrain.nx / 2 << " x " << fine.terrain.ny / 2 << " posts, fewer than " << kMinLevelPosts
+          << " a side; use at most " << level << " levels";
       return invalid_argument(msg.str());
     }
     LodInput coarse{downsample2(fine.terrain), fine.params};
@@ -56,10 +52,8 @@ Result<std::vector<LodInput>> lod_inputs(const Heightfield& hf, const FieldParam
   return out;
 }
 
-Result<std::vector<LodLevel>> build_pyramid_dense(const Heightfield& hf,
-                                                  const FieldParams& params, int levels,
-                                                  const ProgressFn& progress,
-                                                  std::vector<BuildStats>* stats) {
+Result<std::vector<LodLevel>> build_pyramid_dense(const Heightfield& hf, const FieldParams& params, int levels,
+                                                  const ProgressFn& progress, std::vector<BuildStats>* stats) {
   Result<std::vector<LodInput>> inputs = lod_inputs(hf, params, levels);
   if (!inputs.ok()) return inputs.status();
   // Work per level shrinks about 4x per level; weight progress accordingly.

@@ -27,8 +27,7 @@ struct LodInput {
 
 // Terrain and parameters of `levels` levels of detail (levels >= 1). Refuses
 // when a level would be smaller than kMinLevelPosts a side.
-Result<std::vector<LodInput>> lod_inputs(const Heightfield& hf, const FieldParams& params,
-                                         int levels);
+Result<std::vector<LodInput>> lod_inputs(const Heightfield& hf, const FieldParams& params, int levels);
 
 struct LodLevel {
   Heightfield terrain;
@@ -36,8 +35,7 @@ struct LodLevel {
 };
 
 // Builds every level in memory; `progress` sees the fraction of all work.
-Result<std::vector<LodLevel>> build_pyramid_dense(const Heightfield& hf,
-                                                  const FieldParams& params, int levels,
+Result<std::vector<LodLevel>> build_pyramid_dense(const Heightfield& hf, const FieldParams& params, int levels,
                                                   const ProgressFn& progress = {},
                                                   std::vector<BuildStats>* stats = nullptr);
 

@@ -112,8 +112,7 @@ struct ColumnOf<Level, std::void_t<decltype(std::declval<const Level&>().column(
 // A level held in memory.
 class DenseLevelView {
  public:
-  DenseLevelView(const Heightfield& terrain, const DenseVolume& field)
-      : terrain_(&terrain), field_(&field) {}
+  DenseLevelView(const Heightfield& terrain, const DenseVolume& field) : terrain_(&terrain), field_(&field) {}
   const VolumeGeometry& geometry() const { return field_->geometry; }
   float post(int i, int j) const { return terrain_->at(i, j); }
   float voxel(int i, int j, int k) const { return field_->at(i, j, k); }
@@ -151,8 +150,8 @@ class FieldSampler {
   // Terrain height under (x, y), m; clamped to the grid's edge outside it.
   double height(double x, double y) const { return height(cell(x, y)); }
   double height(const Cell& c) const {
-    return lerp(lerp(post(c.i, c.j), post(c.i + 1, c.j), c.fi),
-                lerp(post(c.i, c.j + 1), post(c.i + 1, c.j + 1), c.fi), c.fj);
+    return lerp(lerp(post(c.i, c.j), post(c.i + 1, c.j), c.fi), lerp(post(c.i, c.j + 1), post(c.i + 1, c.j + 1), c.fi),
+                c.fj);
   }
 
   // F_p at (x, y, z): 0 below the lowest level, the top level's value above it.
@@ -234,8 +233,8 @@ class FieldSampler {
   // ring of their neighbours that a gradient differences against. The four
   // corners of the block are never read and stay unset.
   struct Block {
-    float post[4][4];        // terrain height, m (centre only until read_ring)
-    int first_above[4][4];   // first level above the terrain; nz outside the grid
+    float post[4][4];       // terrain height, m (centre only until read_ring)
+    int first_above[4][4];  // first level above the terrain; nz outside the grid
     Column col[4][4];
   };
 
@@ -340,8 +339,8 @@ class FieldSampler {
         if (w == 0) continue;
         const float post_m = block.post[1 + dj][1 + di];
         const Column& col = block.col[1 + dj][1 + di];
-        const double b = clamp_index((z - post_m + p.band_offset_m) / step, 0.0,
-                                    static_cast<double>(p.band_levels - 1));
+        const double b =
+            clamp_index((z - post_m + p.band_offset_m) / step, 0.0, static_cast<double>(p.band_levels - 1));
         const int b0 = std::min(static_cast<int>(b), p.band_levels - 2);
         const double fb = b - b0;
         const TffSample lo = col.tff(b0), hi = col.tff(b0 + 1);
@@ -359,9 +358,7 @@ class FieldSampler {
     const VolumeGeometry& g = level_.geometry();
     return i >= 0 && j >= 0 && k >= 0 && i < g.nx && j < g.ny && k < g.nz;
   }
-  bool above(int i, int j, int k) const {
-    return level_.geometry().z_of(k) > static_cast<double>(level_.post(i, j));
-  }
+  bool above(int i, int j, int k) const { return level_.geometry().z_of(k) > static_cast<double>(level_.post(i, j)); }
   Column column(int i, int j) const { return detail::ColumnOf<Level>::get(level_, i, j); }
   double post(int i, int j) const { return level_.post(i, j); }
   double voxel(int i, int j, int k) const { return level_.voxel(i, j, k); }

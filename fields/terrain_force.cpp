@@ -120,8 +120,7 @@ Status validate(const TffParams& p) {
   return Status::ok_status();
 }
 
-NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m,
-                                          double search_m) {
+NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m, double search_m) {
   // World to local: u = x - origin_x, v = origin_y - y.
   const Vec3 q{q_m.x() - hf.origin_x, hf.origin_y - q_m.y(), q_m.z()};
   const Nearest n = nearest_local(hf, q, search_m);
@@ -131,8 +130,8 @@ NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Ve
   return out;
 }
 
-void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
-                        TffSample* out, WorkerPool* pool) {
+void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end, TffSample* out,
+                        WorkerPool* pool) {
   const std::size_t nx = static_cast<std::size_t>(hf.nx);
   const std::size_t levels = static_cast<std::size_t>(params.band_levels);
   auto row = [&](int item, int) {

@@ -44,13 +44,12 @@ struct NearestTerrainPoint {
 // every triangle within `search_m` horizontally (a search radius of at least
 // the true distance gives the exact answer). For tests, pass a radius that
 // covers the grid.
-NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m,
-                                          double search_m);
+NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m, double search_m);
 
 // The band samples of rows [j_begin, j_end): out[((j - j_begin) * band_levels + b) * nx + i].
 // Each search is bounded by the sample's vertical distance to its own post,
 // which the nearest point can never exceed, so the result is exact.
-void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
-                        TffSample* out, WorkerPool* pool);
+void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end, TffSample* out,
+                        WorkerPool* pool);
 
 }  // namespace visvol::fields

@@ -22,15 +22,13 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
     msg << "observer (" << p.observer_x << ", " << p.observer_y << ") is outside the DEM";
     return invalid_argument(msg.str());
   }
-  if (!std::isfinite(p.observer_height_m) || !std::isfinite(p.target_height_m) ||
-      p.observer_height_m < -1.0e4 || p.observer_height_m > 1.0e5 ||
-      p.target_height_m < -1.0e4 || p.target_height_m > 1.0e5) {
+  if (!std::isfinite(p.observer_height_m) || !std::isfinite(p.target_height_m) || p.observer_height_m < -1.0e4 ||
+      p.observer_height_m > 1.0e5 || p.target_height_m < -1.0e4 || p.target_height_m > 1.0e5) {
     return invalid_argument("observer or target height is not a finite height within 100 km");
   }
   if (!std::isfinite(p.max_distance_m) || p.max_distance_m < 0 || p.max_distance_m > kMaxViewshedDistanceM) {
     msg.precision(6);
-    msg << "max distance: " << p.max_distance_m << " m is outside 0.." << kMaxViewshedDistanceM
-        << " m (0: unlimited)";
+    msg << "max distance: " << p.max_distance_m << " m is outside 0.." << kMaxViewshedDistanceM << " m (0: unlimited)";
     return invalid_argument(msg.str());
   }
   if (!std::isfinite(p.curvature_coeff) || p.curvature_coeff < 0 || p.curvature_coeff > 1) {
@@ -48,8 +46,8 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
   const int full = std::max(hf.nx, hf.ny) - 1;
   // In posts, clamped to the grid before it becomes an int.
   const int radius = p.max_distance_m > 0
-      ? static_cast<int>(std::min<double>(full, std::ceil(p.max_distance_m / hf.spacing_m)))
-      : full;
+                         ? static_cast<int>(std::min<double>(full, std::ceil(p.max_distance_m / hf.spacing_m)))
+                         : full;
 
   if (radius > kMaxHullRing) {
     msg.str("");
@@ -66,8 +64,8 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
   const PaddedTerrain terrain = pad_terrain(hf, g, 2);
   const double eye = hf.at(vs.observer_i, vs.observer_j) + p.observer_height_m;
   std::vector<float> horizon;
-  observer_horizon(terrain, radius, p.exact_rings, hf.spacing_m, p.curvature_coeff,
-                   vs.observer_i, vs.observer_j, eye, horizon, true);
+  observer_horizon(terrain, radius, p.exact_rings, hf.spacing_m, p.curvature_coeff, vs.observer_i, vs.observer_j, eye,
+                   horizon, true);
 
   const int side = 2 * radius + 1;
   vs.value.assign(hf.size(), kViewshedOutside);
@@ -83,8 +81,8 @@ Result<Viewshed> compute_viewshed(const Heightfield& hf, const ViewshedParams& p
       const double target = hf.at(i, j) + p.target_height_m - drop;
       // Rings 0 and 1 have no horizon: always visible.
       const bool visible = h <= kNoHorizon || target > eye + d * h;
-      vs.value[static_cast<std::size_t>(j) * static_cast<std::size_t>(hf.nx) +
-               static_cast<std::size_t>(i)] = visible ? kViewshedVisible : kViewshedHidden;
+      vs.value[static_cast<std::size_t>(j) * static_cast<std::size_t>(hf.nx) + static_cast<std::size_t>(i)] =
+          visible ? kViewshedVisible : kViewshedHidden;
     }
   }
   return vs;

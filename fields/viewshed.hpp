@@ -13,12 +13,12 @@
 namespace visvol::fields {
 
 struct ViewshedParams {
-  double observer_x = 0;          // world coordinates; snapped to the post whose pixel holds it
+  double observer_x = 0;  // world coordinates; snapped to the post whose pixel holds it
   double observer_y = 0;
-  double observer_height_m = 2.0; // eye above the ground
-  double target_height_m = 0.0;   // target above the ground
-  double max_distance_m = 0.0;    // 0: unlimited
-  double curvature_coeff = 0.0;   // see FieldParams::curvature_coeff
+  double observer_height_m = 2.0;  // eye above the ground
+  double target_height_m = 0.0;    // target above the ground
+  double max_distance_m = 0.0;     // 0: unlimited
+  double curvature_coeff = 0.0;    // see FieldParams::curvature_coeff
   // Rings evaluated exactly (see FieldParams::exact_rings); one observer can
   // afford many.
   int exact_rings = 256;
@@ -35,8 +35,7 @@ struct Viewshed {
   int observer_i = 0, observer_j = 0;
   std::vector<std::uint8_t> value;  // ny rows of nx cells
   std::uint8_t at(int i, int j) const {
-    return value[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-                 static_cast<std::size_t>(i)];
+    return value[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)];
   }
 };
 

@@ -28,8 +28,8 @@ struct Build {
   VolumeGeometry geom;
   BuildPlan plan;
   int radius = 0;
-  int win = 0;                  // rows in the histogram window
-  std::size_t slab_ints = 0;    // nx * (nz + 1): one row's histogram, column-major, junk level last
+  int win = 0;                // rows in the histogram window
+  std::size_t slab_ints = 0;  // nx * (nz + 1): one row's histogram, column-major, junk level last
   LevelMap levels;
   LevelRowLayout layout;
   PaddedTerrain terrain;
@@ -59,15 +59,10 @@ struct Build {
 
   int padded_width() const { return layout.chunks * kLanes; }
   std::size_t padded_index(int i, int j) const {
-    return static_cast<std::size_t>(j) * static_cast<std::size_t>(padded_width()) +
-           static_cast<std::size_t>(i);
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(padded_width()) + static_cast<std::size_t>(i);
   }
-  std::int32_t* slab(int y) {
-    return window.data() + static_cast<std::size_t>(y % win) * slab_ints;
-  }
-  const std::int32_t* slab(int y) const {
-    return window.data() + static_cast<std::size_t>(y % win) * slab_ints;
-  }
+  std::int32_t* slab(int y) { return window.data() + static_cast<std::size_t>(y % win) * slab_ints; }
+  const std::int32_t* slab(int y) const { return window.data() + static_cast<std::size_t>(y % win) * slab_ints; }
 };
 
 void prepare_observers(Build& b) {
@@ -85,7 +80,9 @@ void prepare_observers(Build& b) {
       const std::size_t pi = b.padded_index(i, j);
       b.eye_m[pi] = static_cast<float>(ground + b.params.eye_height_m);
       if (i < b.hf.nx) {
-        b.weight_padded[pi] = b.weights.weight[static_cast<std::size_t>(j) * static_cast<std::size_t>(b.hf.nx) + static_cast<std::size_t>(i)];
+        b.weight_padded[pi] =
+            b.weights
+                .weight[static_cast<std::size_t>(j) * static_cast<std::size_t>(b.hf.nx) + static_cast<std::size_t>(i)];
       }
       if (b.params.range_shape == RangeShape::cube) {
         const double top = std::floor((ground + cube_height - b.geom.z0_m) / b.geom.dz_m) + 1;
@@ -102,8 +99,7 @@ void prepare_observers(Build& b) {
         const double d = std::hypot(double(dx), double(dy)) * b.hf.spacing_m;
         if (d <= range_m) {
           b.span_m[static_cast<std::size_t>(dy + b.radius) * static_cast<std::size_t>(side) +
-                   static_cast<std::size_t>(dx + b.radius)] =
-              static_cast<float>(std::sqrt(range_m * range_m - d * d));
+                   static_cast<std::size_t>(dx + b.radius)] = static_cast<float>(std::sqrt(range_m * range_m - d * d));
         }
       }
     }
@@ -118,8 +114,7 @@ std::int32_t floor_level(const Build& b, double ground_m) {
 }
 
 // Phase 1 for one chunk of observers.
-void hull_phase(Build& b, int batch_first, int item, std::vector<float>& ring_a,
-                std::vector<float>& ring_b) {
+void hull_phase(Build& b, int batch_first, int item, std::vector<float>& ring_a, std::vector<float>& ring_b) {
   const int py = batch_first + item / b.layout.chunks;
   const int chunk = item % b.layout.chunks;
   ObserverChunk oc;
@@ -130,10 +125,10 @@ void hull_phase(Build& b, int batch_first, int item, std::vector<float>& ring_a,
     oc.eye_m[l] = b.eye_m[pi];
     oc.floor_level[l] = floor_level(b, b.hf.at(std::min(oc.px0 + l, b.hf.nx - 1), py));
   }
-  std::uint8_t* out = b.hull_levels.data() +
-                      static_cast<std::size_t>(py - batch_first) * b.layout.bytes_per_observer_row();
-  hull_levels_chunk(b.table, b.terrain, b.layout, b.levels, b.params.range_shape, oc,
-                    ring_a.data(), ring_b.data(), out);
+  std::uint8_t* out =
+      b.hull_levels.data() + static_cast<std::size_t>(py - batch_first) * b.layout.bytes_per_observer_row();
+  hull_levels_chunk(b.table, b.terrain, b.layout, b.levels, b.params.range_shape, oc, ring_a.data(), ring_b.data(),
+                    out);
 }
 
 // Phase 2: adds the contributions of the batch's observer rows to target row
@@ -153,21 +148,20 @@ std::uint64_t scatter_row(Build& b, int batch_first, int batch_rows, int y) {
   const int py_lo = std::max(batch_first, y - b.radius);
   const int py_hi = std::min(batch_first + batch_rows - 1, y + b.radius);
   for (int py = py_lo; py <= py_hi; ++py) {
-    const std::uint8_t* block = b.hull_levels.data() +
-        static_cast<std::size_t>(py - batch_first) * b.layout.bytes_per_observer_row();
+    const std::uint8_t* block =
+        b.hull_levels.data() + static_cast<std::size_t>(py - batch_first) * b.layout.bytes_per_observer_row();
     const std::int32_t* w = b.weight_padded.data() + b.padded_index(0, py);
     const std::int32_t* top = b.top_level.data() + b.padded_index(0, py);
     const float* eye = b.eye_m.data() + b.padded_index(0, py);
-    const bool open_top =
-        !sphere && std::all_of(top, top + b.padded_width(), [&](std::int32_t t) { return t >= nz; });
-    const float* span_row = sphere ? b.span_m.data() + static_cast<std::size_t>(y - py + b.radius) *
-                                                           static_cast<std::size_t>(side) + b.radius
-                                   : nullptr;
+    const bool open_top = !sphere && std::all_of(top, top + b.padded_width(), [&](std::int32_t t) { return t >= nz; });
+    const float* span_row =
+        sphere
+            ? b.span_m.data() + static_cast<std::size_t>(y - py + b.radius) * static_cast<std::size_t>(side) + b.radius
+            : nullptr;
     // Level of observer px over target column x.
     auto level = [&](int px, int x) {
       const int c = px / kLanes, px0 = c * kLanes;
-      return block[b.layout.offset(py, y, c, x - px - b.layout.first_dx(px0)) +
-                   static_cast<std::size_t>(px - px0)];
+      return block[b.layout.offset(py, y, c, x - px - b.layout.first_dx(px0)) + static_cast<std::size_t>(px - px0)];
     };
     auto add = [&](int px, int x) {
       std::int32_t* col = slab + static_cast<std::size_t>(x) * col_ints;
@@ -195,7 +189,10 @@ std::uint64_t scatter_row(Build& b, int batch_first, int batch_rows, int y) {
         cells += 4 * static_cast<std::uint64_t>(all_hi - all_lo + 1);
         for (int px = lo; px < all_lo; ++px)
           for (int j = 0; j < 4; ++j)
-            if (std::abs(x + j - px) <= b.radius) { add(px, x + j); ++cells; }
+            if (std::abs(x + j - px) <= b.radius) {
+              add(px, x + j);
+              ++cells;
+            }
         for (int c = all_lo / kLanes; c <= all_hi / kLanes; ++c) {
           const int px0 = c * kLanes;
           const int l0 = std::max(all_lo - px0, 0), l1 = std::min(all_hi - px0, kLanes - 1);
@@ -217,7 +214,10 @@ std::uint64_t scatter_row(Build& b, int batch_first, int batch_rows, int y) {
         }
         for (int px = all_hi + 1; px <= hi; ++px)
           for (int j = 0; j < 4; ++j)
-            if (std::abs(x + j - px) <= b.radius) { add(px, x + j); ++cells; }
+            if (std::abs(x + j - px) <= b.radius) {
+              add(px, x + j);
+              ++cells;
+            }
       }
     }
     for (; x < nx; ++x) {
@@ -263,8 +263,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, WorkerPool& pool,
-                 BuildStats& stats) {
+Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, WorkerPool& pool, BuildStats& stats) {
   const int ny = b.hf.ny;
   const int batch = b.plan.batch_rows;
   const std::size_t ring_floats = static_cast<std::size_t>(ring_size(std::max(b.radius, 1))) * kLanes;
@@ -278,8 +277,7 @@ Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, Work
     // phase 1: hull levels of the batch's observers
     auto t0 = std::chrono::steady_clock::now();
     pool.run(rows * b.layout.chunks, [&](int item, int worker) {
-      hull_phase(b, first, item, ring_a[static_cast<std::size_t>(worker)],
-                 ring_b[static_cast<std::size_t>(worker)]);
+      hull_phase(b, first, item, ring_a[static_cast<std::size_t>(worker)], ring_b[static_cast<std::size_t>(worker)]);
     });
     stats.hull_s += seconds_since(t0);
     // phase 2: scatter into target rows; finish rows no later observer reaches
@@ -308,8 +306,7 @@ Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, Work
 
 }  // namespace
 
-ObserverWeights observer_weights(const Heightfield& hf, const std::vector<float>& area,
-                                 const std::vector<float>& w) {
+ObserverWeights observer_weights(const Heightfield& hf, const std::vector<float>& area, const std::vector<float>& w) {
   ObserverWeights out;
   double sum_a = 0, sum_aw = 0;
   for (std::size_t n = 0; n < area.size(); ++n) {
@@ -338,7 +335,8 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
   const LevelRowLayout layout(hf.nx, hf.ny, plan.radius_posts);
   const std::size_t per_row = layout.bytes_per_observer_row();
   const std::size_t limit = static_cast<std::size_t>(params.max_memory_mib * kMiB);
-  const std::size_t slab = static_cast<std::size_t>(params.nz + 1) * static_cast<std::size_t>(hf.nx) * sizeof(std::int32_t);
+  const std::size_t slab =
+      static_cast<std::size_t>(params.nz + 1) * static_cast<std::size_t>(hf.nx) * sizeof(std::int32_t);
   auto total_for = [&](int batch) {
     return plan.table_bytes + plan.terrain_bytes + per_row * static_cast<std::size_t>(batch) +
            window_rows(hf.ny, plan.radius_posts, batch) * slab;
@@ -350,13 +348,11 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
   plan.window_bytes = window_rows(hf.ny, plan.radius_posts, batch) * slab;
   if (plan.total_bytes() > limit) {
     std::ostringstream msg;
-    msg << "field build for " << hf.nx << " x " << hf.ny << " x " << params.nz
-        << " voxels with hull radius " << plan.radius_posts << " posts needs "
-        << plan.total_bytes() / kMiB << " MiB of working memory (hull levels "
-        << plan.level_bytes / kMiB << ", histogram window " << plan.window_bytes / kMiB
-        << ", table " << plan.table_bytes / kMiB << ", terrain " << plan.terrain_bytes / kMiB
-        << "); the limit is " << params.max_memory_mib
-        << " MiB: use a smaller range, fewer levels or a smaller grid";
+    msg << "field build for " << hf.nx << " x " << hf.ny << " x " << params.nz << " voxels with hull radius "
+        << plan.radius_posts << " posts needs " << plan.total_bytes() / kMiB << " MiB of working memory (hull levels "
+        << plan.level_bytes / kMiB << ", histogram window " << plan.window_bytes / kMiB << ", table "
+        << plan.table_bytes / kMiB << ", terrain " << plan.terrain_bytes / kMiB << "); the limit is "
+        << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
     return resource_error(msg.str());
   }
   return plan;
@@ -384,8 +380,8 @@ Status build_visibility(const Heightfield& hf, const FieldParams& params, Volume
       for (std::uint64_t c : b.cells_per_worker) stats->hull_cells += c;
     }
   } catch (const std::bad_alloc&) {
-    return resource_error("field build: out of memory allocating " +
-                          std::to_string(plan->total_bytes() / kMiB) + " MiB of working memory");
+    return resource_error("field build: out of memory allocating " + std::to_string(plan->total_bytes() / kMiB) +
+                          " MiB of working memory");
   }
   return Status::ok_status();
 }
@@ -408,16 +404,16 @@ class DenseSink final : public VolumeRowSink {
 };
 }  // namespace
 
-Result<DenseVolume> build_visibility_dense(const Heightfield& hf, const FieldParams& params,
-                                           const ProgressFn& progress, BuildStats* stats) {
+Result<DenseVolume> build_visibility_dense(const Heightfield& hf, const FieldParams& params, const ProgressFn& progress,
+                                           BuildStats* stats) {
   VISVOL_RETURN_IF_ERROR(validate(hf, "heightfield"));
   VISVOL_RETURN_IF_ERROR(validate(params, hf));
   DenseVolume v;
   v.geometry = volume_geometry(hf, params);
   const double bytes = static_cast<double>(v.geometry.voxel_count()) * sizeof(float);
   if (bytes > params.max_memory_mib * kMiB) {
-    return resource_error("field of " + std::to_string(v.geometry.voxel_count()) +
-                          " voxels needs " + std::to_string(static_cast<long long>(bytes / kMiB)) +
+    return resource_error("field of " + std::to_string(v.geometry.voxel_count()) + " voxels needs " +
+                          std::to_string(static_cast<long long>(bytes / kMiB)) +
                           " MiB in memory, over the limit; stream it to a pack instead");
   }
   try {

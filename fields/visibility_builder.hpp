@@ -36,15 +36,13 @@ class VolumeRowSink {
 };
 
 struct BuildPlan {
-  int radius_posts = 0;            // hull radius actually used
-  int batch_rows = 0;              // observer rows per batch
+  int radius_posts = 0;  // hull radius actually used
+  int batch_rows = 0;    // observer rows per batch
   std::size_t table_bytes = 0;
   std::size_t terrain_bytes = 0;
-  std::size_t level_bytes = 0;     // hull levels of one batch
-  std::size_t window_bytes = 0;    // rolling histogram window
-  std::size_t total_bytes() const {
-    return table_bytes + terrain_bytes + level_bytes + window_bytes;
-  }
+  std::size_t level_bytes = 0;   // hull levels of one batch
+  std::size_t window_bytes = 0;  // rolling histogram window
+  std::size_t total_bytes() const { return table_bytes + terrain_bytes + level_bytes + window_bytes; }
 };
 
 // Sizes the working memory of a build; refuses (Errc::resource) when it would
@@ -72,15 +70,13 @@ Status build_visibility(const Heightfield& hf, const FieldParams& params, Volume
 
 // Builds F_p into memory.
 Result<DenseVolume> build_visibility_dense(const Heightfield& hf, const FieldParams& params,
-                                           const ProgressFn& progress = {},
-                                           BuildStats* stats = nullptr);
+                                           const ProgressFn& progress = {}, BuildStats* stats = nullptr);
 
 // Fixed-point observer weights: round(A * W * scale). F_p = count * norm.
 struct ObserverWeights {
   std::vector<std::int32_t> weight;  // per post
   double norm = 0;                   // 1 / (scale * sum of A)
 };
-ObserverWeights observer_weights(const Heightfield& hf, const std::vector<float>& area,
-                                 const std::vector<float>& w);
+ObserverWeights observer_weights(const Heightfield& hf, const std::vector<float>& area, const std::vector<float>& w);
 
 }  // namespace visvol::fields

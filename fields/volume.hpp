@@ -20,12 +20,11 @@ struct VolumeGeometry {
   double dz_m = 0;       // height between levels
 
   std::size_t voxel_count() const {
-    return static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) *
-           static_cast<std::size_t>(nz);
+    return static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   }
   std::size_t index(int i, int j, int k) const {
-    return (static_cast<std::size_t>(k) * static_cast<std::size_t>(ny) +
-            static_cast<std::size_t>(j)) * static_cast<std::size_t>(nx) +
+    return (static_cast<std::size_t>(k) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(j)) *
+               static_cast<std::size_t>(nx) +
            static_cast<std::size_t>(i);
   }
   double z_of(int k) const { return z0_m + k * dz_m; }

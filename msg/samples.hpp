@@ -40,12 +40,12 @@ inline constexpr std::size_t kMaxObserversPerKind = 256;
 // Both kinds of observers, and one clearance, max-agl and max-altitude.
 inline constexpr std::size_t kMaxConstraints = 2 * kMaxObserversPerKind + 3;
 inline constexpr std::size_t kMaxThumbnailBytes = 256 * 1024;  // PNG file bytes
-inline constexpr std::size_t kPackIdCapacity = 64;      // bytes with the NUL
+inline constexpr std::size_t kPackIdCapacity = 64;             // bytes with the NUL
 inline constexpr std::size_t kSourceCapacity = 64;
 inline constexpr std::size_t kReasonCapacity = 192;
 inline constexpr std::size_t kDeviceNameCapacity = 32;
-inline constexpr std::size_t kCrsCapacity = 64;         // "EPSG:32610"
-inline constexpr std::size_t kCrsWktCapacity = 4096;    // WKT of a projected CRS
+inline constexpr std::size_t kCrsCapacity = 64;       // "EPSG:32610"
+inline constexpr std::size_t kCrsWktCapacity = 4096;  // WKT of a projected CRS
 
 // Values equal the uint8 constants of drivers/dds/idl/visvol_msgs.idl (checked
 // by static_assert in the codecs).
@@ -103,8 +103,7 @@ bool copy_text(char (&dst)[N], std::string_view text) {
 template <std::size_t N>
 std::string_view text_of(const char (&src)[N]) {
   const void* nul = std::memchr(src, '\0', N);
-  const std::size_t n =
-      nul ? static_cast<std::size_t>(static_cast<const char*>(nul) - src) : N;
+  const std::size_t n = nul ? static_cast<std::size_t>(static_cast<const char*>(nul) - src) : N;
   return std::string_view(src, n);
 }
 
@@ -124,13 +123,13 @@ struct PathVertex {
 // planner). Fill back() in place and write only vertex_count vertices; the
 // publisher reads no further.
 struct PathSample {
-  std::uint64_t sequence;     // increases with every update of one planning run
-  std::int64_t stamp_ns;      // when the rope was in this state (Unix epoch)
+  std::uint64_t sequence;  // increases with every update of one planning run
+  std::int64_t stamp_ns;   // when the rope was in this state (Unix epoch)
   char pack_id[kPackIdCapacity];
   Objective objective;
-  bool converged;             // the rope has come to rest
-  bool inside_envelope;       // the vertices hold the vehicle's envelope (false: the rope's own path, or no fit)
-  double f_c;                 // path measure F_c (sum of F_p along the path, weighted)
+  bool converged;        // the rope has come to rest
+  bool inside_envelope;  // the vertices hold the vehicle's envelope (false: the rope's own path, or no fit)
+  double f_c;            // path measure F_c (sum of F_p along the path, weighted)
   double length_m;
   double min_clearance_m;
   std::uint32_t vertex_count;  // 0..kMaxPathVertices
@@ -150,11 +149,11 @@ struct TimingSummary {
 struct HealthSample {
   std::uint64_t sequence;
   std::int64_t stamp_ns;
-  double period_us;               // configured loop period
-  TimingSummary wakeup_latency;   // actual minus scheduled wake-up
-  TimingSummary compute_time;     // work per tick
-  std::uint64_t overruns;         // ticks whose work ran past the period (total)
-  std::uint64_t misses;           // deadlines missed outright (total)
+  double period_us;              // configured loop period
+  TimingSummary wakeup_latency;  // actual minus scheduled wake-up
+  TimingSummary compute_time;    // work per tick
+  std::uint64_t overruns;        // ticks whose work ran past the period (total)
+  std::uint64_t misses;          // deadlines missed outright (total)
   bool safe_state;
   char safe_state_reason[kReasonCapacity];
 };
@@ -187,12 +186,12 @@ struct ThumbnailSample {
 struct TerrainInfo {
   std::int64_t stamp_ns;
   char pack_id[kPackIdCapacity];
-  char crs[kCrsCapacity];          // "EPSG:32610"
-  char crs_wkt[kCrsWktCapacity];   // may be empty
-  WorldPoint min;                  // pack bounds
+  char crs[kCrsCapacity];         // "EPSG:32610"
+  char crs_wkt[kCrsWktCapacity];  // may be empty
+  WorldPoint min;                 // pack bounds
   WorldPoint max;
   double post_spacing_m;
-  WorldPoint planning_min;         // planning bounds (x, y; z unused): endpoints inside them
+  WorldPoint planning_min;  // planning bounds (x, y; z unused): endpoints inside them
   WorldPoint planning_max;
 };
 
@@ -216,25 +215,25 @@ struct Constraint {
 // zero.
 struct Command {
   CommandKind kind;
-  std::uint64_t sequence;          // the sender's, for its acknowledgement
-  char source[kSourceCapacity];    // the sender
+  std::uint64_t sequence;        // the sender's, for its acknowledgement
+  char source[kSourceCapacity];  // the sender
   struct Endpoints {
     WorldPoint start;
     WorldPoint end;
-  } endpoints;                                   // set_endpoints
-  Objective objective;                           // set_objective
-  Weights weights;                               // set_weights
+  } endpoints;          // set_endpoints
+  Objective objective;  // set_objective
+  Weights weights;      // set_weights
   struct Stiffness {
     double stretch_n_per_m;
     double bend_n_m_per_rad;
-  } stiffness;                                   // set_stiffness
-  RopeModel model;                               // set_model
-  std::uint32_t segment_count;                   // set_segment_count
+  } stiffness;                  // set_stiffness
+  RopeModel model;              // set_model
+  std::uint32_t segment_count;  // set_segment_count
   struct Constraints {
     std::uint32_t count;
     Constraint items[kMaxConstraints];
-  } constraints;                                 // set_constraints
-  char pack_id[kPackIdCapacity];                 // switch_terrain
+  } constraints;                  // set_constraints
+  char pack_id[kPackIdCapacity];  // switch_terrain
 };
 
 // An acknowledgement. Command intake sends accepted/rejected itself; the
@@ -243,7 +242,7 @@ struct Command {
 struct CommandAck {
   char source[kSourceCapacity];
   std::uint64_t sequence;
-  std::uint8_t kind;   // as received, possibly not a known CommandKind
+  std::uint8_t kind;  // as received, possibly not a known CommandKind
   AckResult result;
   char reason[kReasonCapacity];
 };

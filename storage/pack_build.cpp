@@ -23,13 +23,10 @@ namespace {
 using fields::Heightfield;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Height or area tiles of one level.
-Status write_2d(PackWriter& w, int level, Layer layer, const Heightfield& hf,
-                const std::vector<float>& values) {
+Status write_2d(PackWriter& w, int level, Layer layer, const Heightfield& hf, const std::vector<float>& values) {
   const TileGrid g = tile_grid(layer, hf.nx, hf.ny);
   std::vector<float> tile(static_cast<std::size_t>(kTile2dPosts * kTile2dPosts));
   for (int ty = 0; ty < g.tiles_y; ++ty) {
@@ -56,14 +53,21 @@ Status write_2d(PackWriter& w, int level, Layer layer, const Heightfield& hf,
 class BrickSink final : public fields::VolumeRowSink {
  public:
   BrickSink(PackWriter& w, int level, int nx, int ny, int nz, VisibilityEncoding enc)
-      : w_(w), level_(level), nx_(nx), ny_(ny), nz_(nz), enc_(enc),
-        band_(static_cast<std::size_t>(kBrickPosts) * static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx), 0.0f),
+      : w_(w),
+        level_(level),
+        nx_(nx),
+        ny_(ny),
+        nz_(nz),
+        enc_(enc),
+        band_(static_cast<std::size_t>(kBrickPosts) * static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx),
+              0.0f),
         brick_(w.payload_bytes(level, Layer::visibility)) {}
 
   Status write_row(int j, const float* values) override {
     const int y = j % kBrickPosts;
     for (int k = 0; k < nz_; ++k) {
-      std::memcpy(&band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) * static_cast<std::size_t>(nx_)],
+      std::memcpy(&band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) *
+                         static_cast<std::size_t>(nx_)],
                   values + static_cast<std::size_t>(k) * static_cast<std::size_t>(nx_),
                   static_cast<std::size_t>(nx_) * sizeof(float));
     }
@@ -81,7 +85,10 @@ class BrickSink final : public fields::VolumeRowSink {
           for (int x = 0; x < kBrickPosts; ++x) {
             const int i = tx * kBrickPosts + x;
             if (i >= nx_) break;
-            const float f = band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
+            const float f =
+                band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) *
+                          static_cast<std::size_t>(nx_) +
+                      static_cast<std::size_t>(i)];
             const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + y) * kBrickPosts + x);
             if (enc_ == VisibilityEncoding::uint16) {
               const std::uint16_t q = quantise_visibility(f);
@@ -127,7 +134,9 @@ Status write_tff(PackWriter& w, int level, const Heightfield& hf, const fields::
           for (int x = 0; x < kBrickPosts; ++x) {
             const int i = tx * kBrickPosts + x;
             if (i >= hf.nx) break;
-            const fields::TffSample& s = band[(static_cast<std::size_t>(y) * levels + static_cast<std::size_t>(b)) * nx + static_cast<std::size_t>(i)];
+            const fields::TffSample& s =
+                band[(static_cast<std::size_t>(y) * levels + static_cast<std::size_t>(b)) * nx +
+                     static_cast<std::size_t>(i)];
             std::int16_t* dst = &brick[static_cast<std::size_t>(((b * kBrickPosts + y) * kBrickPosts + x) * 4)];
             dst[0] = to_centimetres(s.dx_m);
             dst[1] = to_centimetres(s.dy_m);
@@ -136,7 +145,8 @@ Status write_tff(PackWriter& w, int level, const Heightfield& hf, const fields::
           }
         }
       }
-      VISVOL_RETURN_IF_ERROR(w.write_tile(level, Layer::tff, tx, ty, brick.data(), brick.size() * sizeof(std::int16_t)));
+      VISVOL_RETURN_IF_ERROR(
+          w.write_tile(level, Layer::tff, tx, ty, brick.data(), brick.size() * sizeof(std::int16_t)));
     }
   }
   return Status::ok_status();
@@ -180,8 +190,11 @@ Result<PlanningBounds> planning_bounds_for(const fields::VolumeGeometry& finest,
 }
 
 nlohmann::json planning_json(const PlanningBounds& b) {
-  return {{"xmin_m", b.box.xmin_m}, {"ymin_m", b.box.ymin_m}, {"xmax_m", b.box.xmax_m},
-          {"ymax_m", b.box.ymax_m}, {"margin_m", b.margin_m}};
+  return {{"xmin_m", b.box.xmin_m},
+          {"ymin_m", b.box.ymin_m},
+          {"xmax_m", b.box.xmax_m},
+          {"ymax_m", b.box.ymax_m},
+          {"margin_m", b.margin_m}};
 }
 
 std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std::string& source_json,
@@ -195,7 +208,7 @@ std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std:
   j["crs_name"] = p.crs_name;
   // GDAL geotransform of level 0's pixels (post (0, 0) is the first pixel's centre).
   j["geotransform"] = {hf.origin_x - 0.5 * hf.spacing_m, hf.spacing_m, 0.0,
-                       hf.origin_y + 0.5 * hf.spacing_m, 0.0, -hf.spacing_m};
+                       hf.origin_y + 0.5 * hf.spacing_m, 0.0,          -hf.spacing_m};
   j["vertical_unit"] = "metre";
   j["source"] = source_json.empty() ? nlohmann::json::object() : nlohmann::json::parse(source_json);
   j["planning_bounds"] = planning_json(planning);
@@ -225,9 +238,8 @@ std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std:
 
 const char* tool_version() { return VISVOL_VERSION; }
 
-Status build_pack(const Heightfield& hf, const PackBuildParams& params,
-                  const std::string& source_json, const std::string& out_path,
-                  const fields::ProgressFn& progress, PackBuildReport* report) {
+Status build_pack(const Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
+                  const std::string& out_path, const fields::ProgressFn& progress, PackBuildReport* report) {
   const auto t0 = Clock::now();
   VISVOL_RETURN_IF_ERROR(fields::validate(params.tff));
   if (params.lod_levels < 1 || params.lod_levels > kMaxLodLevels) {
@@ -282,11 +294,12 @@ Status build_pack(const Heightfield& hf, const PackBuildParams& params,
     VISVOL_RETURN_IF_ERROR(write_2d(w, level, Layer::area, in.terrain, fields::area_factor(in.terrain)));
     BrickSink sink(w, level, in.terrain.nx, in.terrain.ny, in.params.nz, params.encoding);
     fields::BuildStats stats;
-    Status st = fields::build_visibility(in.terrain, in.params, sink,
-                                         [&](double f) {
-                                           if (progress) progress(done + share * 0.9 * f);
-                                         },
-                                         &stats);
+    Status st = fields::build_visibility(
+        in.terrain, in.params, sink,
+        [&](double f) {
+          if (progress) progress(done + share * 0.9 * f);
+        },
+        &stats);
     if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
     local.levels.push_back(stats);
     const auto t_tff = Clock::now();

@@ -36,7 +36,7 @@ struct PackBuildReport {
   double tff_s = 0;                        // terrain force field, all levels
   double wall_s = 0;
   std::uint64_t file_bytes = 0;
-  PlanningBounds planning;                 // as recorded in the metadata
+  PlanningBounds planning;  // as recorded in the metadata
 };
 
 // The project's version string, recorded in every pack.
@@ -46,8 +46,8 @@ const char* tool_version();
 // hash, import options); it is stored in the metadata under "source". The
 // planning bounds are recorded under "planning_bounds"; a build whose bounds
 // would be empty is refused before anything is written.
-Status build_pack(const fields::Heightfield& hf, const PackBuildParams& params,
-                  const std::string& source_json, const std::string& out_path,
-                  const fields::ProgressFn& progress = {}, PackBuildReport* report = nullptr);
+Status build_pack(const fields::Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
+                  const std::string& out_path, const fields::ProgressFn& progress = {},
+                  PackBuildReport* report = nullptr);
 
 }  // namespace visvol::storage

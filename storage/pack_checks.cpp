@@ -70,22 +70,21 @@ Status check_one_level(const LevelEntry& e, const std::string& where) {
 Status check_reduction(const LevelEntry& fine, const LevelEntry& coarse, const std::string& where) {
   if (coarse.nx != fine.nx / 2 || coarse.ny != fine.ny / 2 || coarse.nz != fine.nz) {
     return corrupt(where + "grid " + std::to_string(coarse.nx) + " x " + std::to_string(coarse.ny) + " x " +
-                   std::to_string(coarse.nz) + " is not half of the finer level's " + std::to_string(fine.nx) +
-                   " x " + std::to_string(fine.ny) + " x " + std::to_string(fine.nz));
+                   std::to_string(coarse.nz) + " is not half of the finer level's " + std::to_string(fine.nx) + " x " +
+                   std::to_string(fine.ny) + " x " + std::to_string(fine.nz));
   }
   const double tolerance_m = 1e-6 * fine.spacing_m;
   if (!near(coarse.spacing_m, 2 * fine.spacing_m, tolerance_m) ||
       !near(coarse.origin_x, fine.origin_x + 0.5 * fine.spacing_m, tolerance_m) ||
       !near(coarse.origin_y, fine.origin_y - 0.5 * fine.spacing_m, tolerance_m)) {
-    return corrupt(where + "spacing " + number(coarse.spacing_m) + " m and origin (" + number(coarse.origin_x) +
-                   ", " + number(coarse.origin_y) + ") do not cover the finer level's area (twice its spacing, " +
+    return corrupt(where + "spacing " + number(coarse.spacing_m) + " m and origin (" + number(coarse.origin_x) + ", " +
+                   number(coarse.origin_y) + ") do not cover the finer level's area (twice its spacing, " +
                    "origin half a post inside)");
   }
   const double dz_tolerance_m = 1e-9 * fine.dz_m;
   if (!near(coarse.z0_m, fine.z0_m, dz_tolerance_m) || !near(coarse.dz_m, fine.dz_m, dz_tolerance_m)) {
     return corrupt(where + "voxel levels (" + number(coarse.z0_m) + " m every " + number(coarse.dz_m) +
-                   " m) differ from the finer level's (" + number(fine.z0_m) + " m every " + number(fine.dz_m) +
-                   " m)");
+                   " m) differ from the finer level's (" + number(fine.z0_m) + " m every " + number(fine.dz_m) + " m)");
   }
   return Status::ok_status();
 }
@@ -123,11 +122,10 @@ Status check_height_tile(const LevelEntry& level, const TileEntry& tile, const s
                 sizeof h);
     if (std::isfinite(h) && h >= lowest_m && h <= highest_m) return Status::ok_status();
     const int i = tile.tx * kTile2dPosts + x, j = tile.ty * kTile2dPosts + y;
-    return corrupt(path + ": height tile (" + std::to_string(tile.tx) + ", " + std::to_string(tile.ty) +
-                   ") of level " + std::to_string(tile.level) + ": post (" + std::to_string(i) + ", " +
-                   std::to_string(j) + ") has height " + number(h) + " m, not a finite height within the " +
-                   "level's voxel levels (" + number(level.z0_m) + ".." +
-                   number(level.z0_m + (level.nz - 1) * level.dz_m) + " m)");
+    return corrupt(path + ": height tile (" + std::to_string(tile.tx) + ", " + std::to_string(tile.ty) + ") of level " +
+                   std::to_string(tile.level) + ": post (" + std::to_string(i) + ", " + std::to_string(j) +
+                   ") has height " + number(h) + " m, not a finite height within the " + "level's voxel levels (" +
+                   number(level.z0_m) + ".." + number(level.z0_m + (level.nz - 1) * level.dz_m) + " m)");
   });
 }
 
@@ -138,8 +136,9 @@ Status check_visibility_tile(const LevelEntry& level, const TileEntry& tile, con
   for (int k = 0; k < level.nz; ++k) {
     for (int y = 0; y < y_end; ++y) {
       for (int x = 0; x < x_end; ++x) {
-        const std::size_t index = (static_cast<std::size_t>(k) * kBrickPosts + static_cast<std::size_t>(y)) *
-                                      kBrickPosts + static_cast<std::size_t>(x);
+        const std::size_t index =
+            (static_cast<std::size_t>(k) * kBrickPosts + static_cast<std::size_t>(y)) * kBrickPosts +
+            static_cast<std::size_t>(x);
         float f;
         std::memcpy(&f, data + index * sizeof f, sizeof f);
         if (f >= 0.0f && f <= 1.0f) continue;

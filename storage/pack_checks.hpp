@@ -21,11 +21,11 @@ namespace visvol::storage {
 // Sane ranges of a level's geometry (metres). Wider than any terrain the
 // builder makes; narrow enough that every grid index and every product of
 // sizes a reader computes stays finite and within int.
-inline constexpr double kMinSpacingM = 1e-3;        // post spacing
+inline constexpr double kMinSpacingM = 1e-3;  // post spacing
 inline constexpr double kMaxSpacingM = 1e6;
-inline constexpr double kMaxExtentM = 1e8;          // (posts - 1) x spacing, each side
-inline constexpr double kMaxAbsCoordinateM = 1e9;   // origin x, y
-inline constexpr double kMinDzM = 1e-3;             // voxel level spacing
+inline constexpr double kMaxExtentM = 1e8;         // (posts - 1) x spacing, each side
+inline constexpr double kMaxAbsCoordinateM = 1e9;  // origin x, y
+inline constexpr double kMinDzM = 1e-3;            // voxel level spacing
 inline constexpr double kMaxDzM = 1e5;
 inline constexpr double kMaxAbsLevelHeightM = 2e5;  // z0 and the top level
 

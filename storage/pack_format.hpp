@@ -37,7 +37,7 @@ inline constexpr std::uint32_t kPackVersion = 1;
 inline constexpr std::uint32_t kPageBytes = 4096;
 inline constexpr int kTile2dPosts = 64;   // height and area tiles
 inline constexpr int kBrickPosts = 16;    // visibility and tff tiles (columns a side)
-inline constexpr int kMaxLodLevels = 16;     // levels of detail
+inline constexpr int kMaxLodLevels = 16;  // levels of detail
 inline constexpr int kMaxVoxelLevels = 255;
 inline constexpr int kMaxBandLevels = 64;
 
@@ -50,25 +50,25 @@ enum class VisibilityEncoding : std::uint32_t { float32 = 0, uint16 = 1 };
 struct PackHeader {
   char magic[8];
   std::uint32_t version;
-  std::uint32_t header_bytes;          // sizeof(PackHeader)
-  std::uint64_t file_bytes;            // size of the whole file
-  std::uint32_t page_bytes;            // kPageBytes
-  std::uint32_t level_count;           // levels of detail, 1..kMaxLodLevels
+  std::uint32_t header_bytes;  // sizeof(PackHeader)
+  std::uint64_t file_bytes;    // size of the whole file
+  std::uint32_t page_bytes;    // kPageBytes
+  std::uint32_t level_count;   // levels of detail, 1..kMaxLodLevels
   std::uint64_t level_table_offset;
-  std::uint32_t level_entry_bytes;     // sizeof(LevelEntry)
-  std::uint32_t tile_entry_bytes;      // sizeof(TileEntry)
+  std::uint32_t level_entry_bytes;  // sizeof(LevelEntry)
+  std::uint32_t tile_entry_bytes;   // sizeof(TileEntry)
   std::uint64_t tile_table_offset;
   std::uint64_t tile_count;
   std::uint64_t metadata_offset;
   std::uint64_t metadata_bytes;
-  std::uint32_t tile2d_posts;          // kTile2dPosts
-  std::uint32_t brick_posts;           // kBrickPosts
-  std::uint32_t visibility_encoding;   // VisibilityEncoding
-  std::uint32_t band_levels;           // tff samples per column, 2..kMaxBandLevels
-  double band_offset_m;                // tff band: from terrain - offset to terrain + offset
-  std::uint32_t tables_crc32c;         // level table + tile table + metadata, in file order
-  std::uint8_t reserved[3984];         // zeros
-  std::uint32_t header_crc32c;         // every byte before this field
+  std::uint32_t tile2d_posts;         // kTile2dPosts
+  std::uint32_t brick_posts;          // kBrickPosts
+  std::uint32_t visibility_encoding;  // VisibilityEncoding
+  std::uint32_t band_levels;          // tff samples per column, 2..kMaxBandLevels
+  double band_offset_m;               // tff band: from terrain - offset to terrain + offset
+  std::uint32_t tables_crc32c;        // level table + tile table + metadata, in file order
+  std::uint8_t reserved[3984];        // zeros
+  std::uint32_t header_crc32c;        // every byte before this field
 };
 static_assert(sizeof(PackHeader) == kPageBytes, "the header is one page");
 static_assert(std::is_trivially_copyable_v<PackHeader>);
@@ -77,12 +77,12 @@ static_assert(offsetof(PackHeader, band_offset_m) == 96);
 static_assert(offsetof(PackHeader, header_crc32c) == kPageBytes - 4);
 
 struct LevelEntry {
-  std::int32_t nx, ny, nz;             // posts a side, voxel levels
-  std::int32_t range_posts;            // the field's range at this level
-  double spacing_m;                    // post spacing
-  double origin_x, origin_y;           // world coordinates of post (0, 0), the north-west post
-  double z0_m, dz_m;                   // voxel level heights: z0 + k * dz
-  std::uint64_t first_tile;            // index of this level's first tile entry
+  std::int32_t nx, ny, nz;    // posts a side, voxel levels
+  std::int32_t range_posts;   // the field's range at this level
+  double spacing_m;           // post spacing
+  double origin_x, origin_y;  // world coordinates of post (0, 0), the north-west post
+  double z0_m, dz_m;          // voxel level heights: z0 + k * dz
+  std::uint64_t first_tile;   // index of this level's first tile entry
 };
 static_assert(sizeof(LevelEntry) == 64);
 static_assert(offsetof(LevelEntry, spacing_m) == 16);
@@ -101,7 +101,7 @@ static_assert(std::is_trivially_copyable_v<TileEntry>);
 
 // Tile grid of one layer of a level.
 struct TileGrid {
-  int edge = 0;      // posts a side per tile
+  int edge = 0;  // posts a side per tile
   int tiles_x = 0, tiles_y = 0;
   int count() const { return tiles_x * tiles_y; }
 };
@@ -115,8 +115,7 @@ inline TileGrid tile_grid(Layer layer, int nx, int ny) {
 }
 
 // Bytes of one tile before page padding.
-inline std::size_t tile_payload_bytes(Layer layer, int nz, VisibilityEncoding enc,
-                                      int band_levels) {
+inline std::size_t tile_payload_bytes(Layer layer, int nz, VisibilityEncoding enc, int band_levels) {
   const std::size_t e = static_cast<std::size_t>(tile_edge(layer));
   switch (layer) {
     case Layer::height:
@@ -128,9 +127,7 @@ inline std::size_t tile_payload_bytes(Layer layer, int nz, VisibilityEncoding en
   }
   return 0;
 }
-inline std::size_t round_up_to_page(std::size_t n) {
-  return (n + kPageBytes - 1) / kPageBytes * kPageBytes;
-}
+inline std::size_t round_up_to_page(std::size_t n) { return (n + kPageBytes - 1) / kPageBytes * kPageBytes; }
 
 // Tile entries are ordered level, layer, ty, tx; this is the index within a
 // level's entries.

@@ -62,8 +62,7 @@ Result<double> finite_number(const nlohmann::json& object, const char* key, cons
 
 // The planning bounds a pack records: five finite numbers, a box that is not
 // empty and lies within level 0's posts, a margin >= 0.
-Result<PlanningBounds> recorded_planning_bounds(const nlohmann::json& object,
-                                                const fields::VolumeGeometry& finest,
+Result<PlanningBounds> recorded_planning_bounds(const nlohmann::json& object, const fields::VolumeGeometry& finest,
                                                 const std::string& where) {
   if (!object.is_object()) return corrupt(where + "is not a JSON object");
   double values[5];
@@ -93,15 +92,14 @@ Result<PlanningBounds> recorded_planning_bounds(const nlohmann::json& object,
 // level 0 and the range shape its build parameters name (when they name none,
 // the shape the level's range implies).
 Result<PlanningBounds> derived_planning_bounds(const nlohmann::json& metadata, const LevelEntry& finest,
-                                               const fields::VolumeGeometry& geometry,
-                                               const std::string& where) {
+                                               const fields::VolumeGeometry& geometry, const std::string& where) {
   fields::RangeShape shape = finest.range_posts > 0 ? fields::RangeShape::cube : fields::RangeShape::none;
   const auto build = metadata.find("build");
   if (build != metadata.end() && build->is_object() && build->contains("range_shape")) {
     const nlohmann::json& name = (*build)["range_shape"];
-    Result<fields::RangeShape> parsed =
-        name.is_string() ? fields::parse_range_shape(name.get<std::string>())
-                         : Result<fields::RangeShape>(invalid_argument("is not a string"));
+    Result<fields::RangeShape> parsed = name.is_string()
+                                            ? fields::parse_range_shape(name.get<std::string>())
+                                            : Result<fields::RangeShape>(invalid_argument("is not a string"));
     if (!parsed.ok()) return corrupt(where + "build.range_shape: " + parsed.status().message());
     shape = *parsed;
   }
@@ -163,21 +161,20 @@ Status Pack::validate_structure() {
     return bad("header checksum mismatch");
   }
   if (h.file_bytes != size_) {
-    return bad(h.file_bytes > size_ ? "truncated: " + std::to_string(size_) + " bytes, the header says " +
-                                          std::to_string(h.file_bytes)
-                                    : "file is " + std::to_string(size_) + " bytes, the header says " +
-                                          std::to_string(h.file_bytes));
+    return bad(h.file_bytes > size_
+                   ? "truncated: " + std::to_string(size_) + " bytes, the header says " + std::to_string(h.file_bytes)
+                   : "file is " + std::to_string(size_) + " bytes, the header says " + std::to_string(h.file_bytes));
   }
-  if (h.header_bytes != sizeof(PackHeader) || h.page_bytes != kPageBytes ||
-      h.level_entry_bytes != sizeof(LevelEntry) || h.tile_entry_bytes != sizeof(TileEntry) ||
-      h.tile2d_posts != static_cast<std::uint32_t>(kTile2dPosts) ||
+  if (h.header_bytes != sizeof(PackHeader) || h.page_bytes != kPageBytes || h.level_entry_bytes != sizeof(LevelEntry) ||
+      h.tile_entry_bytes != sizeof(TileEntry) || h.tile2d_posts != static_cast<std::uint32_t>(kTile2dPosts) ||
       h.brick_posts != static_cast<std::uint32_t>(kBrickPosts)) {
     return bad("header sizes (header, page, entry, tile) do not match this format");
   }
   if (h.level_count < 1 || h.level_count > static_cast<std::uint32_t>(kMaxLodLevels)) {
     return bad("level_count " + std::to_string(h.level_count) + " is outside 1.." + std::to_string(kMaxLodLevels));
   }
-  if (h.visibility_encoding > 1) return bad("visibility_encoding " + std::to_string(h.visibility_encoding) + " is unknown");
+  if (h.visibility_encoding > 1)
+    return bad("visibility_encoding " + std::to_string(h.visibility_encoding) + " is unknown");
   if (h.band_levels < 2 || h.band_levels > static_cast<std::uint32_t>(kMaxBandLevels) ||
       !(h.band_offset_m > 0 && h.band_offset_m <= kMaxBandOffsetM)) {
     return bad("terrain force band (" + std::to_string(h.band_levels) + " levels, offset " +
@@ -190,14 +187,13 @@ Status Pack::validate_structure() {
   if (h.tile_count > size_ / sizeof(TileEntry) || h.tile_table_offset % 8 != 0 ||
       h.tile_table_offset != h.level_table_offset + level_bytes ||
       !within(h.tile_table_offset, h.tile_count * sizeof(TileEntry), size_)) {
-    return bad("tile table (offset " + std::to_string(h.tile_table_offset) + ", " +
-               std::to_string(h.tile_count) + " tiles) is outside the file");
+    return bad("tile table (offset " + std::to_string(h.tile_table_offset) + ", " + std::to_string(h.tile_count) +
+               " tiles) is outside the file");
   }
   if (h.metadata_offset != h.tile_table_offset + h.tile_count * sizeof(TileEntry) ||
-      !within(h.metadata_offset, h.metadata_bytes, size_) ||
-      h.metadata_offset + h.metadata_bytes != size_) {
-    return bad("metadata (offset " + std::to_string(h.metadata_offset) + ", " +
-               std::to_string(h.metadata_bytes) + " bytes) is outside the file");
+      !within(h.metadata_offset, h.metadata_bytes, size_) || h.metadata_offset + h.metadata_bytes != size_) {
+    return bad("metadata (offset " + std::to_string(h.metadata_offset) + ", " + std::to_string(h.metadata_bytes) +
+               " bytes) is outside the file");
   }
   if (checksum(base_ + h.level_table_offset, size_ - h.level_table_offset) != h.tables_crc32c) {
     return bad("table or metadata checksum mismatch");
@@ -210,8 +206,8 @@ Status Pack::validate_structure() {
     const LevelEntry& e = levels_[l];
     const std::string name = "level " + std::to_string(l) + ": ";
     if (e.nx < 2 || e.ny < 2 || e.nx > 32768 || e.ny > 32768 || e.nz < 2 || e.nz > kMaxVoxelLevels) {
-      return bad(name + "grid " + std::to_string(e.nx) + " x " + std::to_string(e.ny) + " x " +
-                 std::to_string(e.nz) + " is out of range");
+      return bad(name + "grid " + std::to_string(e.nx) + " x " + std::to_string(e.ny) + " x " + std::to_string(e.nz) +
+                 " is out of range");
     }
     if (e.first_tile != expected_first) {
       return bad(name + "first_tile " + std::to_string(e.first_tile) + ", expected " + std::to_string(expected_first));
@@ -241,8 +237,8 @@ Status Pack::validate_structure() {
           }
           if (t.bytes != bytes || t.offset % kPageBytes != 0 || t.offset < kPageBytes ||
               !within(t.offset, t.bytes, h.level_table_offset)) {
-            return bad(describe(t) + ": offset " + std::to_string(t.offset) + " or size " +
-                       std::to_string(t.bytes) + " is invalid");
+            return bad(describe(t) + ": offset " + std::to_string(t.offset) + " or size " + std::to_string(t.bytes) +
+                       " is invalid");
           }
         }
       }
@@ -270,9 +266,8 @@ Status Pack::parse_metadata() {
     }
     const auto recorded = j.find("planning_bounds");
     Result<PlanningBounds> planning =
-        recorded != j.end()
-            ? recorded_planning_bounds(*recorded, geometry(0), path_ + ": metadata planning_bounds: ")
-            : derived_planning_bounds(j, levels_[0], geometry(0), path_ + ": metadata: ");
+        recorded != j.end() ? recorded_planning_bounds(*recorded, geometry(0), path_ + ": metadata planning_bounds: ")
+                            : derived_planning_bounds(j, levels_[0], geometry(0), path_ + ": metadata: ");
     if (!planning.ok()) return planning.status();
     metadata_.planning = *planning;
   } catch (const nlohmann::json::exception& e) {

@@ -32,7 +32,7 @@ namespace visvol::storage {
 
 // What the metadata says, parsed.
 struct PackMetadata {
-  std::string json;          // the whole metadata object, as stored
+  std::string json;  // the whole metadata object, as stored
   std::string crs_wkt;
   std::string crs_name;
   std::string tool;
@@ -60,12 +60,8 @@ class Pack {
   const PackMetadata& metadata() const { return metadata_; }
   int level_count() const { return static_cast<int>(header_->level_count); }
   const LevelEntry& level(int l) const { return levels_[l]; }
-  VisibilityEncoding encoding() const {
-    return static_cast<VisibilityEncoding>(header_->visibility_encoding);
-  }
-  fields::TffParams tff_params() const {
-    return {header_->band_offset_m, static_cast<int>(header_->band_levels)};
-  }
+  VisibilityEncoding encoding() const { return static_cast<VisibilityEncoding>(header_->visibility_encoding); }
+  fields::TffParams tff_params() const { return {header_->band_offset_m, static_cast<int>(header_->band_levels)}; }
   fields::VolumeGeometry geometry(int level) const;
 
   // The entry and bytes of a tile (entries are validated at open()).
@@ -114,17 +110,12 @@ enum class TileCheck : std::uint8_t { at_open, deferred };
 
 class PackLevel {
  public:
-  static Result<PackLevel> open(std::shared_ptr<const Pack> pack, int level,
-                                TileCheck check = TileCheck::at_open);
+  static Result<PackLevel> open(std::shared_ptr<const Pack> pack, int level, TileCheck check = TileCheck::at_open);
 
   const fields::VolumeGeometry& geometry() const { return geometry_; }
   // Inline: the sampler calls these tens of times per query.
-  float post(int i, int j) const {
-    return read_at<float>(height_[tile2d(i, j)], in_tile2d(i, j));
-  }
-  float area(int i, int j) const {
-    return read_at<float>(area_[tile2d(i, j)], in_tile2d(i, j));
-  }
+  float post(int i, int j) const { return read_at<float>(height_[tile2d(i, j)], in_tile2d(i, j)); }
+  float area(int i, int j) const { return read_at<float>(area_[tile2d(i, j)], in_tile2d(i, j)); }
   float voxel(int i, int j, int k) const {
     const std::uint8_t* t = visibility_[brick(i, j)];
     const std::size_t index = grid(k) * kBrickColumnStride + in_brick(i, j);
@@ -194,12 +185,8 @@ class PackLevel {
   // Grid indices of a valid read are never negative: as unsigned, the tile
   // divisions and remainders below are plain shifts and masks.
   static std::size_t grid(int v) { return static_cast<std::size_t>(static_cast<unsigned>(v)); }
-  std::size_t tile2d(int i, int j) const {
-    return grid(j) / kTile2dPosts * grid(tiles2d_x_) + grid(i) / kTile2dPosts;
-  }
-  static std::size_t in_tile2d(int i, int j) {
-    return grid(j) % kTile2dPosts * kTile2dPosts + grid(i) % kTile2dPosts;
-  }
+  std::size_t tile2d(int i, int j) const { return grid(j) / kTile2dPosts * grid(tiles2d_x_) + grid(i) / kTile2dPosts; }
+  static std::size_t in_tile2d(int i, int j) { return grid(j) % kTile2dPosts * kTile2dPosts + grid(i) % kTile2dPosts; }
   std::size_t brick(int i, int j) const { return grid(j) / kBrickPosts * grid(bricks_x_) + grid(i) / kBrickPosts; }
   static std::size_t in_brick(int i, int j) { return grid(j) % kBrickPosts * kBrickPosts + grid(i) % kBrickPosts; }
 

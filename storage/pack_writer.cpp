@@ -31,19 +31,17 @@ Status validate(const PackLayout& layout) {
   }
   if (layout.band_levels < 2 || layout.band_levels > kMaxBandLevels ||
       !(layout.band_offset_m > 0 && layout.band_offset_m <= kMaxBandOffsetM)) {
-    msg << "pack: terrain force band of " << layout.band_levels << " levels over +-"
-        << layout.band_offset_m << " m is outside 2.." << kMaxBandLevels << " levels, (0, "
-        << kMaxBandOffsetM << "] m";
+    msg << "pack: terrain force band of " << layout.band_levels << " levels over +-" << layout.band_offset_m
+        << " m is outside 2.." << kMaxBandLevels << " levels, (0, " << kMaxBandOffsetM << "] m";
     return invalid_argument(msg.str());
   }
   for (std::size_t l = 0; l < layout.levels.size(); ++l) {
     const LevelEntry& e = layout.levels[l];
-    if (e.nx < 2 || e.ny < 2 || e.nx > 32768 || e.ny > 32768 || e.nz < 2 ||
-        e.nz > kMaxVoxelLevels || !(e.spacing_m > 0) || !std::isfinite(e.spacing_m) ||
-        !(e.dz_m > 0) || !std::isfinite(e.dz_m) || !std::isfinite(e.z0_m) ||
-        !std::isfinite(e.origin_x) || !std::isfinite(e.origin_y)) {
-      msg << "pack: level " << l << " has an invalid grid (" << e.nx << " x " << e.ny << " x "
-          << e.nz << ", spacing " << e.spacing_m << " m, dz " << e.dz_m << " m)";
+    if (e.nx < 2 || e.ny < 2 || e.nx > 32768 || e.ny > 32768 || e.nz < 2 || e.nz > kMaxVoxelLevels ||
+        !(e.spacing_m > 0) || !std::isfinite(e.spacing_m) || !(e.dz_m > 0) || !std::isfinite(e.dz_m) ||
+        !std::isfinite(e.z0_m) || !std::isfinite(e.origin_x) || !std::isfinite(e.origin_y)) {
+      msg << "pack: level " << l << " has an invalid grid (" << e.nx << " x " << e.ny << " x " << e.nz << ", spacing "
+          << e.spacing_m << " m, dz " << e.dz_m << " m)";
       return invalid_argument(msg.str());
     }
   }
@@ -64,8 +62,8 @@ Status PackWriter::fail(Status status) {
 }
 
 std::size_t PackWriter::payload_bytes(int level, Layer layer) const {
-  return tile_payload_bytes(layer, layout_.levels[static_cast<std::size_t>(level)].nz,
-                            layout_.encoding, layout_.band_levels);
+  return tile_payload_bytes(layer, layout_.levels[static_cast<std::size_t>(level)].nz, layout_.encoding,
+                            layout_.band_levels);
 }
 
 Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout) {
@@ -101,8 +99,7 @@ Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, 
   return w;
 }
 
-Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void* payload,
-                              std::size_t bytes) {
+Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void* payload, std::size_t bytes) {
   if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
   if (level < 0 || level >= static_cast<int>(layout_.levels.size())) {
     return invalid_argument(path_ + ": no level " + std::to_string(level));
@@ -110,8 +107,8 @@ Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void
   const LevelEntry& e = layout_.levels[static_cast<std::size_t>(level)];
   const TileGrid g = tile_grid(layer, e.nx, e.ny);
   if (tx < 0 || ty < 0 || tx >= g.tiles_x || ty >= g.tiles_y) {
-    return invalid_argument(path_ + ": no " + to_string(layer) + " tile (" + std::to_string(tx) +
-                            ", " + std::to_string(ty) + ") at level " + std::to_string(level));
+    return invalid_argument(path_ + ": no " + to_string(layer) + " tile (" + std::to_string(tx) + ", " +
+                            std::to_string(ty) + ") at level " + std::to_string(level));
   }
   if (bytes != payload_bytes(level, layer)) {
     return invalid_argument(path_ + ": " + to_string(layer) + " tile of " + std::to_string(bytes) +
@@ -138,9 +135,8 @@ Status PackWriter::finish(const std::string& metadata_json) {
   for (std::size_t n = 0; n < tiles_.size(); ++n) {
     if (!written_[n]) {
       const TileEntry& t = tiles_[n];
-      return fail(Status(Errc::state, path_ + ": " + to_string(static_cast<Layer>(t.layer)) +
-                                          " tile (" + std::to_string(t.tx) + ", " +
-                                          std::to_string(t.ty) + ") of level " +
+      return fail(Status(Errc::state, path_ + ": " + to_string(static_cast<Layer>(t.layer)) + " tile (" +
+                                          std::to_string(t.tx) + ", " + std::to_string(t.ty) + ") of level " +
                                           std::to_string(t.level) + " was never written"));
     }
   }

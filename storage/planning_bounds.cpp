@@ -16,8 +16,8 @@ fields::Bounds2D post_extent(const fields::VolumeGeometry& level) {
   return b;
 }
 
-double planning_margin_m(const fields::VolumeGeometry& finest, fields::RangeShape shape,
-                         int range_posts, std::optional<double> margin_override_m) {
+double planning_margin_m(const fields::VolumeGeometry& finest, fields::RangeShape shape, int range_posts,
+                         std::optional<double> margin_override_m) {
   if (margin_override_m) return *margin_override_m;
   if (shape != fields::RangeShape::none) return range_posts * finest.spacing_m;
   const fields::Bounds2D extent = post_extent(finest);
@@ -34,8 +34,8 @@ fields::Bounds2D inset_post_extent(const fields::VolumeGeometry& finest, double 
   return b;
 }
 
-PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields::RangeShape shape,
-                                    int range_posts, std::optional<double> margin_override_m) {
+PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields::RangeShape shape, int range_posts,
+                                    std::optional<double> margin_override_m) {
   PlanningBounds p;
   p.margin_m = planning_margin_m(finest, shape, range_posts, margin_override_m);
   p.box = inset_post_extent(finest, p.margin_m);
@@ -44,8 +44,7 @@ PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields
 
 std::string describe(const fields::Bounds2D& box) {
   char text[128];
-  std::snprintf(text, sizeof text, "x %.2f..%.2f, y %.2f..%.2f", box.xmin_m, box.xmax_m, box.ymin_m,
-                box.ymax_m);
+  std::snprintf(text, sizeof text, "x %.2f..%.2f, y %.2f..%.2f", box.xmin_m, box.xmax_m, box.ymin_m, box.ymax_m);
   return text;
 }
 

@@ -30,16 +30,15 @@ inline constexpr double kUnrangedMarginDivisor = 8.0;
 
 // The margin the rule uses: `margin_override_m` when given, else the range in
 // metres (cube, sphere), else the smaller side of the post extent / 8 (none).
-double planning_margin_m(const fields::VolumeGeometry& finest, fields::RangeShape shape,
-                         int range_posts, std::optional<double> margin_override_m = std::nullopt);
+double planning_margin_m(const fields::VolumeGeometry& finest, fields::RangeShape shape, int range_posts,
+                         std::optional<double> margin_override_m = std::nullopt);
 
 // The finest level's post extent less `margin_m` on every side. Empty (see
 // Bounds2D::empty) when the margin leaves nothing of the grid.
 fields::Bounds2D inset_post_extent(const fields::VolumeGeometry& finest, double margin_m);
 
 // Both of the above: the planning bounds of a pack whose finest level is `finest`.
-PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields::RangeShape shape,
-                                    int range_posts,
+PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields::RangeShape shape, int range_posts,
                                     std::optional<double> margin_override_m = std::nullopt);
 
 // The post extent of a level: x from the west to the east post, y from the

@@ -166,10 +166,9 @@ Status ResidentPack::init() {
   }
   stats_.minimum_bytes = minimum;
   if (minimum > config_.budget_bytes) {
-    return Status(Errc::resource,
-                  "tile budget " + mib_text(config_.budget_bytes) + " cannot hold the minimum " + mib_text(minimum) +
-                      " of " + pack_->path() +
-                      " (the heights of every level and the coarsest level's field); raise the budget");
+    return Status(Errc::resource, "tile budget " + mib_text(config_.budget_bytes) + " cannot hold the minimum " +
+                                      mib_text(minimum) + " of " + pack_->path() +
+                                      " (the heights of every level and the coarsest level's field); raise the budget");
   }
   // the views: each falls back to the next coarser
   views_.resize(static_cast<std::size_t>(n));
@@ -187,7 +186,8 @@ Status ResidentPack::init() {
     const LevelEntry& e = pack_->level(l);
     const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
     for (int ty = 0; ty < hg.tiles_y; ++ty)
-      for (int tx = 0; tx < hg.tiles_x; ++tx) VISVOL_RETURN_IF_ERROR(make_resident(pack_->tile(l, Layer::height, tx, ty)));
+      for (int tx = 0; tx < hg.tiles_x; ++tx)
+        VISVOL_RETURN_IF_ERROR(make_resident(pack_->tile(l, Layer::height, tx, ty)));
   }
   LevelState& coarsest = *state_.back();
   for (std::size_t b = 0; b < coarsest.bricks.size(); ++b) {
@@ -215,8 +215,8 @@ Status ResidentPack::make_resident(const TileEntry& tile) {
     const int e = errno;
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.lock_failures;
-    stats_.last_error = Pack::describe(tile) + ": not locked (mlock: " + std::strerror(e) +
-                        "); it stays resident while memory lasts";
+    stats_.last_error =
+        Pack::describe(tile) + ": not locked (mlock: " + std::strerror(e) + "); it stays resident while memory lasts";
   }
   return {};
 }
@@ -231,8 +231,7 @@ void ResidentPack::release(const TileEntry& tile) {
 bool ResidentPack::wait_for_readers() {
   // seq_cst: after the evictions' stores in the total order (see tick_done)
   const std::uint64_t start = epoch_.load(std::memory_order_seq_cst);
-  while (reader_active_.load(std::memory_order_acquire) &&
-         epoch_.load(std::memory_order_seq_cst) < start + 2) {
+  while (reader_active_.load(std::memory_order_acquire) && epoch_.load(std::memory_order_seq_cst) < start + 2) {
     if (stop_.load(std::memory_order_acquire)) return false;
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
@@ -268,8 +267,8 @@ void ResidentPack::plan(const WorldBox& box, std::uint64_t budget_left) {
     for (int by = by0; by <= by1; ++by) {
       for (int bx = bx0; bx <= bx1; ++bx) {
         const double x = g.origin_x + (bx + 0.5) * brick_m, y = g.origin_y - (by + 0.5) * brick_m;
-        candidates.push_back({(x - cx) * (x - cx) + (y - cy) * (y - cy),
-                              static_cast<std::size_t>(by * s.bricks_x + bx)});
+        candidates.push_back(
+            {(x - cx) * (x - cx) + (y - cy) * (y - cy), static_cast<std::size_t>(by * s.bricks_x + bx)});
       }
     }
     std::sort(candidates.begin(), candidates.end(),

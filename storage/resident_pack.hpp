@@ -59,18 +59,18 @@ Status validate(const ResidentConfig& config);
 
 struct ResidentStats {
   std::uint64_t budget_bytes = 0;
-  std::uint64_t minimum_bytes = 0;     // heights of every level + the coarsest level's bricks
-  std::uint64_t resident_bytes = 0;    // tiles made resident now (accounted, page-rounded)
+  std::uint64_t minimum_bytes = 0;   // heights of every level + the coarsest level's bricks
+  std::uint64_t resident_bytes = 0;  // tiles made resident now (accounted, page-rounded)
   std::uint64_t pack_bytes = 0;
   std::uint64_t passes = 0;
   std::uint64_t bricks_loaded = 0;
   std::uint64_t bricks_evicted = 0;
-  std::uint64_t lock_failures = 0;     // tiles prefaulted but not locked (no CAP_IPC_LOCK)
-  std::uint64_t corrupt_bricks = 0;    // bricks whose checksum failed: never resident
-  std::uint64_t budget_short = 0;      // passes that could not hold every wanted brick
+  std::uint64_t lock_failures = 0;             // tiles prefaulted but not locked (no CAP_IPC_LOCK)
+  std::uint64_t corrupt_bricks = 0;            // bricks whose checksum failed: never resident
+  std::uint64_t budget_short = 0;              // passes that could not hold every wanted brick
   std::vector<std::uint32_t> resident_bricks;  // per level
   std::vector<std::uint32_t> brick_counts;     // per level
-  std::string last_error;              // the last corrupt tile or lock failure, named
+  std::string last_error;                      // the last corrupt tile or lock failure, named
 };
 
 class ResidentPack;
@@ -114,8 +114,8 @@ class ResidentLevel {
   const PackLevel* level_ = nullptr;
   const std::atomic<std::uint8_t>* state_ = nullptr;  // per brick: 1 resident
   int bricks_x_ = 0;
-  const ResidentLevel* coarser_ = nullptr;            // null: the coarsest, always resident
-  std::atomic<std::uint64_t>* fallbacks_ = nullptr;   // lookups served by a coarser level
+  const ResidentLevel* coarser_ = nullptr;           // null: the coarsest, always resident
+  std::atomic<std::uint64_t>* fallbacks_ = nullptr;  // lookups served by a coarser level
 };
 
 // The sampler the real-time thread uses (the interface of
@@ -157,8 +157,7 @@ class ResidentPack {
   // Locks the heights of every level and the coarsest level's bricks (checking
   // their checksums). Fails, saying what the minimum is, when the budget
   // cannot hold it.
-  static Result<std::unique_ptr<ResidentPack>> create(std::shared_ptr<const Pack> pack,
-                                                      const ResidentConfig& config);
+  static Result<std::unique_ptr<ResidentPack>> create(std::shared_ptr<const Pack> pack, const ResidentConfig& config);
   ~ResidentPack();  // stops the pager, unlocks everything
   ResidentPack(const ResidentPack&) = delete;
   ResidentPack& operator=(const ResidentPack&) = delete;
@@ -200,7 +199,7 @@ class ResidentPack {
     int bricks_x = 0, bricks_y = 0;
     std::vector<Brick> bricks;
     std::unique_ptr<std::atomic<std::uint8_t>[]> state;  // 1: resident
-    std::vector<std::uint8_t> target;                     // pager's plan of this pass
+    std::vector<std::uint8_t> target;                    // pager's plan of this pass
     std::atomic<std::uint64_t> fallbacks{0};
   };
 

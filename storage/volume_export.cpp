@@ -41,8 +41,8 @@ ExportedVolume extract_layer(const PackLevel& level, ExportLayer layer) {
   const char* names[] = {"visibility", "visibility_gradient_per_m", "height_m", "area_factor",
                          "terrain_displacement_m"};
   v.name = names[static_cast<int>(layer)];
-  v.values.resize(static_cast<std::size_t>(v.nx) * static_cast<std::size_t>(v.ny) *
-                  static_cast<std::size_t>(v.nz) * static_cast<std::size_t>(v.components));
+  v.values.resize(static_cast<std::size_t>(v.nx) * static_cast<std::size_t>(v.ny) * static_cast<std::size_t>(v.nz) *
+                  static_cast<std::size_t>(v.components));
   const fields::FieldSampler<PackLevel> sampler(level);
   std::size_t n = 0;
   for (int k = 0; k < v.nz; ++k) {
@@ -100,13 +100,13 @@ std::string vti_header(const ExportedVolume& v) {
   h.precision(17);
   h << "<?xml version=\"1.0\"?>\n"
     << "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-    << "  <ImageData WholeExtent=\"0 " << v.nx - 1 << " 0 " << v.ny - 1 << " 0 " << v.nz - 1
-    << "\" Origin=\"" << v.origin[0] << " " << v.origin[1] << " " << v.origin[2] << "\" Spacing=\""
-    << v.spacing[0] << " " << v.spacing[1] << " " << v.spacing[2] << "\">\n"
+    << "  <ImageData WholeExtent=\"0 " << v.nx - 1 << " 0 " << v.ny - 1 << " 0 " << v.nz - 1 << "\" Origin=\""
+    << v.origin[0] << " " << v.origin[1] << " " << v.origin[2] << "\" Spacing=\"" << v.spacing[0] << " " << v.spacing[1]
+    << " " << v.spacing[2] << "\">\n"
     << "    <Piece Extent=\"0 " << v.nx - 1 << " 0 " << v.ny - 1 << " 0 " << v.nz - 1 << "\">\n"
     << "      <PointData Scalars=\"" << v.name << "\">\n"
-    << "        <DataArray type=\"Float32\" Name=\"" << v.name << "\" NumberOfComponents=\""
-    << v.components << "\" format=\"appended\" offset=\"0\"/>\n"
+    << "        <DataArray type=\"Float32\" Name=\"" << v.name << "\" NumberOfComponents=\"" << v.components
+    << "\" format=\"appended\" offset=\"0\"/>\n"
     << "      </PointData>\n    </Piece>\n  </ImageData>\n"
     << "  <AppendedData encoding=\"raw\">\n   _";
   return h.str();

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The test command: installs what it needs, builds, and runs the whole suite
-# twice (optimised, then under AddressSanitizer + UndefinedBehaviorSanitizer,
+# The test command: installs what it needs, builds, checks the format, and
+# runs the whole suite twice (optimised, then under AddressSanitizer + UndefinedBehaviorSanitizer,
 # less the long numerical runs labelled `numeric`), the threaded tests under
 # ThreadSanitizer, then the fuzzers. Prints each
 # stage's time as it ends and all of them at the end, passed or not.
@@ -94,15 +94,16 @@ trap finish EXIT
 export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-10}
 if [[ $(id -u) -eq 0 ]]; then
   stage "install packages" tools/deps.sh build storage dds render can
-  tools/deps.sh vm fuzz >"$late_log" 2>&1 &
+  tools/deps.sh vm fuzz lint >"$late_log" 2>&1 &
   late_install=$!
 else
-  stage "install packages" tools/deps.sh build storage dds render can vm fuzz
+  stage "install packages" tools/deps.sh build storage dds render can vm fuzz lint
 fi
 # The VM runs in the ASan+UBSan tree only (the same suite, the socket code
 # under the sanitizers); natively, where the kernel has vcan, in both.
 stage "build: optimised" build_tree build -DVISVOL_HIL_QEMU=OFF
 stage "install: VM + fuzz packages" wait_for_late_packages
+stage "lint: format" tools/check_format.sh
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \

@@ -72,8 +72,7 @@ inline void count_error_frame(CanCounters& counters, const CanFrame& frame) {
 // node cannot stall a tick. Returns the number handed on; `*capped` tells whether
 // it stopped at the cap. Real-time safe when on_frame is.
 template <std::size_t N, typename OnFrame>
-std::size_t drain(CanBus& bus, CanFrame (&batch)[N], std::size_t max_frames, bool* capped,
-                  OnFrame&& on_frame) {
+std::size_t drain(CanBus& bus, CanFrame (&batch)[N], std::size_t max_frames, bool* capped, OnFrame&& on_frame) {
   std::size_t total = 0;
   *capped = false;
   while (total < max_frames) {

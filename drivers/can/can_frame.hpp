@@ -14,7 +14,7 @@
 
 namespace visvol::can {
 
-inline constexpr std::uint8_t kMaxDataBytes = 8;  // classic CAN
+inline constexpr std::uint8_t kMaxDataBytes = 8;               // classic CAN
 inline constexpr std::uint32_t kStandardIdMask = 0x7FFu;       // 11-bit identifier
 inline constexpr std::uint32_t kExtendedIdMask = 0x1FFFFFFFu;  // 29-bit identifier
 
@@ -61,11 +61,11 @@ inline constexpr std::uint8_t kCtrlActive = 0x40;  // back to error-active
 
 // What an error frame means for a driver.
 struct ErrorInfo {
-  bool bus_off = false;     // the controller left the bus: nothing is sent or received
-  bool restarted = false;   // the controller is back on the bus after bus-off
-  bool bus_error = false;   // a protocol, acknowledgement, timeout or transceiver error
-  bool passive = false;     // error-passive (warning before bus-off)
-  bool rx_overflow = false; // the controller lost received frames
+  bool bus_off = false;      // the controller left the bus: nothing is sent or received
+  bool restarted = false;    // the controller is back on the bus after bus-off
+  bool bus_error = false;    // a protocol, acknowledgement, timeout or transceiver error
+  bool passive = false;      // error-passive (warning before bus-off)
+  bool rx_overflow = false;  // the controller lost received frames
 };
 
 // Classifies an error frame; all false for anything else.
@@ -76,8 +76,7 @@ constexpr ErrorInfo classify_error(const CanFrame& frame) {
   const std::uint8_t ctrl = (cls & err::kController) != 0 && frame.len > 1 ? frame.data[1] : 0;
   info.bus_off = (cls & err::kBusOff) != 0;
   info.restarted = (cls & err::kRestarted) != 0;
-  info.bus_error = (cls & (err::kBusError | err::kProtocol | err::kNoAck | err::kTxTimeout |
-                           err::kTransceiver)) != 0;
+  info.bus_error = (cls & (err::kBusError | err::kProtocol | err::kNoAck | err::kTxTimeout | err::kTransceiver)) != 0;
   info.passive = (ctrl & (err::kCtrlRxPassive | err::kCtrlTxPassive)) != 0;
   info.rx_overflow = (ctrl & err::kCtrlRxOverflow) != 0;
   return info;

@@ -4,8 +4,7 @@
 
 namespace visvol::can {
 
-MemoryBus::Endpoint::Endpoint(MemoryBus* bus, std::size_t queue_capacity)
-    : bus_(bus), queue_(queue_capacity) {}
+MemoryBus::Endpoint::Endpoint(MemoryBus* bus, std::size_t queue_capacity) : bus_(bus), queue_(queue_capacity) {}
 
 void MemoryBus::Endpoint::set_filters(std::vector<CanFilter> filters, bool error_frames) {
   filters_ = std::move(filters);

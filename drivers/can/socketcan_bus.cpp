@@ -18,20 +18,15 @@ namespace visvol::can {
 
 // The error constants in can_frame.hpp are the kernel's.
 static_assert(err::kTxTimeout == CAN_ERR_TX_TIMEOUT && err::kLostArbitration == CAN_ERR_LOSTARB &&
-              err::kController == CAN_ERR_CRTL && err::kProtocol == CAN_ERR_PROT &&
-              err::kTransceiver == CAN_ERR_TRX && err::kNoAck == CAN_ERR_ACK &&
-              err::kBusOff == CAN_ERR_BUSOFF && err::kBusError == CAN_ERR_BUSERROR &&
+              err::kController == CAN_ERR_CRTL && err::kProtocol == CAN_ERR_PROT && err::kTransceiver == CAN_ERR_TRX &&
+              err::kNoAck == CAN_ERR_ACK && err::kBusOff == CAN_ERR_BUSOFF && err::kBusError == CAN_ERR_BUSERROR &&
               err::kRestarted == CAN_ERR_RESTARTED && err::kCounters == CAN_ERR_CNT &&
               err::kAllClasses == CAN_ERR_MASK);
-static_assert(err::kCtrlRxOverflow == CAN_ERR_CRTL_RX_OVERFLOW &&
-              err::kCtrlTxOverflow == CAN_ERR_CRTL_TX_OVERFLOW &&
-              err::kCtrlRxWarning == CAN_ERR_CRTL_RX_WARNING &&
-              err::kCtrlTxWarning == CAN_ERR_CRTL_TX_WARNING &&
-              err::kCtrlRxPassive == CAN_ERR_CRTL_RX_PASSIVE &&
-              err::kCtrlTxPassive == CAN_ERR_CRTL_TX_PASSIVE &&
+static_assert(err::kCtrlRxOverflow == CAN_ERR_CRTL_RX_OVERFLOW && err::kCtrlTxOverflow == CAN_ERR_CRTL_TX_OVERFLOW &&
+              err::kCtrlRxWarning == CAN_ERR_CRTL_RX_WARNING && err::kCtrlTxWarning == CAN_ERR_CRTL_TX_WARNING &&
+              err::kCtrlRxPassive == CAN_ERR_CRTL_RX_PASSIVE && err::kCtrlTxPassive == CAN_ERR_CRTL_TX_PASSIVE &&
               err::kCtrlActive == CAN_ERR_CRTL_ACTIVE);
-static_assert(kMaxDataBytes == CAN_MAX_DLEN && kStandardIdMask == CAN_SFF_MASK &&
-              kExtendedIdMask == CAN_EFF_MASK);
+static_assert(kMaxDataBytes == CAN_MAX_DLEN && kStandardIdMask == CAN_SFF_MASK && kExtendedIdMask == CAN_EFF_MASK);
 static_assert(sizeof(can_frame) == CAN_MTU && sizeof(can_frame) == 16);
 
 namespace {
@@ -131,8 +126,8 @@ Result<std::unique_ptr<SocketCanBus>> SocketCanBus::open(const SocketCanConfig& 
   const std::string& name = config.interface;
   if (name.empty()) return invalid_argument("CAN interface: no name given");
   if (name.size() >= IFNAMSIZ) {
-    return invalid_argument("CAN interface '" + name + "': name longer than " +
-                            std::to_string(IFNAMSIZ - 1) + " characters");
+    return invalid_argument("CAN interface '" + name + "': name longer than " + std::to_string(IFNAMSIZ - 1) +
+                            " characters");
   }
   if (config.filters.size() > CAN_RAW_FILTER_MAX) {
     return invalid_argument("CAN interface '" + name + "': " + std::to_string(config.filters.size()) +
@@ -155,9 +150,8 @@ Result<std::unique_ptr<SocketCanBus>> SocketCanBus::open(const SocketCanConfig& 
   for (const CanFilter& f : config.filters) {
     filters.push_back({f.id & CAN_SFF_MASK, (f.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG});
   }
-  if (!config.filters.empty() &&
-      ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
-                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
+  if (!config.filters.empty() && ::setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
+                                              static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
     return open_error(name, "setting receive filters", errno);
   }
   const can_err_mask_t err_mask = config.error_frames ? CAN_ERR_MASK : 0;
@@ -172,8 +166,7 @@ Result<std::unique_ptr<SocketCanBus>> SocketCanBus::open(const SocketCanConfig& 
     return open_error(name, "enabling SO_TIMESTAMPNS", errno);
   }
   if (config.receive_buffer_bytes > 0 &&
-      ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &config.receive_buffer_bytes,
-                   sizeof(config.receive_buffer_bytes)) != 0) {
+      ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &config.receive_buffer_bytes, sizeof(config.receive_buffer_bytes)) != 0) {
     return open_error(name, "setting SO_RCVBUF", errno);
   }
 
@@ -234,8 +227,7 @@ std::size_t SocketCanBus::receive(CanFrame* out, std::size_t capacity) {
         continue;
       }
       frame.timestamp_ns = mono_now_ns;
-      for (cmsghdr* c = CMSG_FIRSTHDR(&m.msg_hdr); c != nullptr;
-           c = CMSG_NXTHDR(const_cast<msghdr*>(&m.msg_hdr), c)) {
+      for (cmsghdr* c = CMSG_FIRSTHDR(&m.msg_hdr); c != nullptr; c = CMSG_NXTHDR(const_cast<msghdr*>(&m.msg_hdr), c)) {
         if (c->cmsg_level != SOL_SOCKET) continue;
         if (c->cmsg_type == SO_TIMESTAMPNS) {
           timespec ts{};

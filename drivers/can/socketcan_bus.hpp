@@ -30,7 +30,7 @@
 namespace visvol::can {
 
 struct SocketCanConfig {
-  std::string interface;          // network interface name; required, never defaulted
+  std::string interface;           // network interface name; required, never defaulted
   std::vector<CanFilter> filters;  // empty: every frame; at most 512
   bool error_frames = true;        // receive error frames (bus-off, restarts, bus errors)
   int receive_buffer_bytes = 0;    // SO_RCVBUF, bytes; 0 keeps the kernel default

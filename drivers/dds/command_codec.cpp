@@ -11,34 +11,23 @@
 namespace visvol::dds {
 namespace {
 
-static_assert(static_cast<int>(msg::CommandKind::set_endpoints) ==
-              visvol_msgs_msg_dds__COMMAND_SET_ENDPOINTS);
-static_assert(static_cast<int>(msg::CommandKind::set_objective) ==
-              visvol_msgs_msg_dds__COMMAND_SET_OBJECTIVE);
-static_assert(static_cast<int>(msg::CommandKind::set_weights) ==
-              visvol_msgs_msg_dds__COMMAND_SET_WEIGHTS);
-static_assert(static_cast<int>(msg::CommandKind::set_stiffness) ==
-              visvol_msgs_msg_dds__COMMAND_SET_STIFFNESS);
+static_assert(static_cast<int>(msg::CommandKind::set_endpoints) == visvol_msgs_msg_dds__COMMAND_SET_ENDPOINTS);
+static_assert(static_cast<int>(msg::CommandKind::set_objective) == visvol_msgs_msg_dds__COMMAND_SET_OBJECTIVE);
+static_assert(static_cast<int>(msg::CommandKind::set_weights) == visvol_msgs_msg_dds__COMMAND_SET_WEIGHTS);
+static_assert(static_cast<int>(msg::CommandKind::set_stiffness) == visvol_msgs_msg_dds__COMMAND_SET_STIFFNESS);
 static_assert(static_cast<int>(msg::CommandKind::set_model) == visvol_msgs_msg_dds__COMMAND_SET_MODEL);
-static_assert(static_cast<int>(msg::CommandKind::set_segment_count) ==
-              visvol_msgs_msg_dds__COMMAND_SET_SEGMENT_COUNT);
-static_assert(static_cast<int>(msg::CommandKind::set_constraints) ==
-              visvol_msgs_msg_dds__COMMAND_SET_CONSTRAINTS);
+static_assert(static_cast<int>(msg::CommandKind::set_segment_count) == visvol_msgs_msg_dds__COMMAND_SET_SEGMENT_COUNT);
+static_assert(static_cast<int>(msg::CommandKind::set_constraints) == visvol_msgs_msg_dds__COMMAND_SET_CONSTRAINTS);
 static_assert(static_cast<int>(msg::CommandKind::start) == visvol_msgs_msg_dds__COMMAND_START);
 static_assert(static_cast<int>(msg::CommandKind::stop) == visvol_msgs_msg_dds__COMMAND_STOP);
-static_assert(static_cast<int>(msg::CommandKind::switch_terrain) ==
-              visvol_msgs_msg_dds__COMMAND_SWITCH_TERRAIN);
+static_assert(static_cast<int>(msg::CommandKind::switch_terrain) == visvol_msgs_msg_dds__COMMAND_SWITCH_TERRAIN);
 static_assert(static_cast<int>(msg::RopeModel::spring_mass) == visvol_msgs_msg_dds__MODEL_SPRING_MASS);
 static_assert(static_cast<int>(msg::RopeModel::articulated) == visvol_msgs_msg_dds__MODEL_ARTICULATED);
-static_assert(static_cast<int>(msg::ConstraintKind::hidden_from) ==
-              visvol_msgs_msg_dds__CONSTRAINT_HIDDEN_FROM);
-static_assert(static_cast<int>(msg::ConstraintKind::visible_to) ==
-              visvol_msgs_msg_dds__CONSTRAINT_VISIBLE_TO);
-static_assert(static_cast<int>(msg::ConstraintKind::clearance) ==
-              visvol_msgs_msg_dds__CONSTRAINT_CLEARANCE);
+static_assert(static_cast<int>(msg::ConstraintKind::hidden_from) == visvol_msgs_msg_dds__CONSTRAINT_HIDDEN_FROM);
+static_assert(static_cast<int>(msg::ConstraintKind::visible_to) == visvol_msgs_msg_dds__CONSTRAINT_VISIBLE_TO);
+static_assert(static_cast<int>(msg::ConstraintKind::clearance) == visvol_msgs_msg_dds__CONSTRAINT_CLEARANCE);
 static_assert(static_cast<int>(msg::ConstraintKind::max_agl) == visvol_msgs_msg_dds__CONSTRAINT_MAX_AGL);
-static_assert(static_cast<int>(msg::ConstraintKind::max_altitude) ==
-              visvol_msgs_msg_dds__CONSTRAINT_MAX_ALTITUDE);
+static_assert(static_cast<int>(msg::ConstraintKind::max_altitude) == visvol_msgs_msg_dds__CONSTRAINT_MAX_ALTITUDE);
 static_assert(static_cast<int>(msg::AckResult::accepted) == visvol_msgs_msg_dds__ACK_ACCEPTED);
 static_assert(static_cast<int>(msg::AckResult::rejected) == visvol_msgs_msg_dds__ACK_REJECTED);
 static_assert(static_cast<int>(msg::AckResult::applied) == visvol_msgs_msg_dds__ACK_APPLIED);
@@ -52,9 +41,7 @@ std::string number(double v) {
   return buf;
 }
 
-Status reject(const std::string& field, const std::string& problem) {
-  return invalid_argument(field + ": " + problem);
-}
+Status reject(const std::string& field, const std::string& problem) { return invalid_argument(field + ": " + problem); }
 
 // A received string: Cyclone never hands out null, a hand-made message might.
 std::string_view view(const char* s) { return s ? std::string_view(s) : std::string_view(); }
@@ -71,23 +58,21 @@ Status check_finite(const std::string& field, double v) {
   return Status();
 }
 
-Status check_range(const std::string& field, double v, double lo, double hi,
-                   const char* unit) {
+Status check_range(const std::string& field, double v, double lo, double hi, const char* unit) {
   VISVOL_RETURN_IF_ERROR(check_finite(field, v));
   if (v < lo || v > hi) {
-    return reject(field, number(v) + " is outside [" + number(lo) + ", " + number(hi) + "]" +
-                             unit);
+    return reject(field, number(v) + " is outside [" + number(lo) + ", " + number(hi) + "]" + unit);
   }
   return Status();
 }
 
 // One coordinate of a point against [lo, hi] (finite, checked before):
 // "FIELD.AXIS: V m is outside the pack's RANGE [LO, HI] m" and `why`.
-Status check_axis(const std::string& field, const char* axis, double v, double lo, double hi,
-                  const std::string& range, const char* why) {
+Status check_axis(const std::string& field, const char* axis, double v, double lo, double hi, const std::string& range,
+                  const char* why) {
   if (!(v < lo || v > hi)) return Status();
-  return reject(field + "." + axis, number(v) + " m is outside the pack's " + range + " [" + number(lo) + ", " +
-                                        number(hi) + "] m" + why);
+  return reject(field + "." + axis,
+                number(v) + " m is outside the pack's " + range + " [" + number(lo) + ", " + number(hi) + "] m" + why);
 }
 
 Status check_inside(const std::string& field, const msg::WorldPoint& p, const CommandLimits& limits) {
@@ -116,15 +101,14 @@ Status check_endpoint(const std::string& field, const msg::WorldPoint& p, const 
 msg::WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return msg::WorldPoint{p.x, p.y, p.z}; }
 
 bool is_pack_char(char c) {
-  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-         c == '.' || c == '_' || c == '-';
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
 }
 
 Status decode_constraints(const visvol_msgs_msg_dds__Command_& wire, msg::Command& out) {
   const std::uint32_t n = wire.constraints._length;
   if (n > msg::kMaxConstraints) {
-    return reject("constraints", std::to_string(n) + " given, at most " +
-                                     std::to_string(msg::kMaxConstraints) + " fit");
+    return reject("constraints",
+                  std::to_string(n) + " given, at most " + std::to_string(msg::kMaxConstraints) + " fit");
   }
   if (n > 0 && wire.constraints._buffer == nullptr) {
     return reject("constraints", "malformed sequence (no elements)");
@@ -157,27 +141,24 @@ Status validate_item(const msg::Constraint& k, std::uint32_t i, const CommandLim
   const std::string height = item(i) + ".height_m";
   switch (k.kind) {
     case msg::ConstraintKind::hidden_from:
-    case msg::ConstraintKind::visible_to:
-      return check_inside(item(i) + ".position_m", k.position, limits);
-    case msg::ConstraintKind::clearance:
-      return check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m");
+    case msg::ConstraintKind::visible_to: return check_inside(item(i) + ".position_m", k.position, limits);
+    case msg::ConstraintKind::clearance: return check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m");
     case msg::ConstraintKind::max_agl:
       VISVOL_RETURN_IF_ERROR(check_range(height, k.height_m, 0.0, limits.max_clearance_m, " m"));
       if (k.height_m == 0.0) return reject(height, "a max-agl of 0 m leaves no height to fly (> 0)");
       return Status();
     case msg::ConstraintKind::max_altitude:
-      return check_range(height, k.height_m, limits.min.z_m, limits.max.z_m,
-                         " m (the pack's heights)");
+      return check_range(height, k.height_m, limits.min.z_m, limits.max.z_m, " m (the pack's heights)");
   }
   return reject(item(i) + ".kind", "unknown");  // decode checked it
 }
 
 // Where item i's kind is an envelope limit: it must be the only one of its kind.
 Status note_envelope_item(const msg::Constraint& k, std::uint32_t i, EnvelopeItems& seen) {
-  int* slot = k.kind == msg::ConstraintKind::clearance ? &seen.clearance
-              : k.kind == msg::ConstraintKind::max_agl ? &seen.max_agl
+  int* slot = k.kind == msg::ConstraintKind::clearance      ? &seen.clearance
+              : k.kind == msg::ConstraintKind::max_agl      ? &seen.max_agl
               : k.kind == msg::ConstraintKind::max_altitude ? &seen.max_altitude
-                                                       : nullptr;
+                                                            : nullptr;
   if (slot == nullptr) return Status();
   if (*slot >= 0) {
     return reject(item(i) + ".kind", std::string("a second ") + to_string(k.kind) + " (the first is " +
@@ -189,8 +170,8 @@ Status note_envelope_item(const msg::Constraint& k, std::uint32_t i, EnvelopeIte
 
 Status validate_constraints(const msg::Command::Constraints& cs, const CommandLimits& limits) {
   if (cs.count > limits.max_constraints) {
-    return reject("constraints", std::to_string(cs.count) + " given, at most " +
-                                     std::to_string(limits.max_constraints) + " reserved");
+    return reject("constraints",
+                  std::to_string(cs.count) + " given, at most " + std::to_string(limits.max_constraints) + " reserved");
   }
   const std::uint32_t n = cs.count < msg::kMaxConstraints ? cs.count : static_cast<std::uint32_t>(msg::kMaxConstraints);
   EnvelopeItems seen;
@@ -204,8 +185,8 @@ Status validate_constraints(const msg::Command::Constraints& cs, const CommandLi
   }
   if (hidden > msg::kMaxObserversPerKind || visible > msg::kMaxObserversPerKind) {
     return reject("constraints", std::to_string(hidden) + " hidden-from and " + std::to_string(visible) +
-                                     " visible-to points, at most " +
-                                     std::to_string(msg::kMaxObserversPerKind) + " of a kind");
+                                     " visible-to points, at most " + std::to_string(msg::kMaxObserversPerKind) +
+                                     " of a kind");
   }
   if (hidden + visible > limits.max_observers) {
     return reject("constraints", std::to_string(hidden + visible) +
@@ -216,8 +197,8 @@ Status validate_constraints(const msg::Command::Constraints& cs, const CommandLi
     const double clearance = cs.items[seen.clearance].height_m, ceiling = cs.items[seen.max_agl].height_m;
     if (!(ceiling > clearance)) {
       return reject(item(static_cast<std::uint32_t>(seen.max_agl)) + ".height_m",
-                    "max-agl " + number(ceiling) + " m is not above the clearance " + number(clearance) +
-                        " m of " + item(static_cast<std::uint32_t>(seen.clearance)) + ": no height is allowed");
+                    "max-agl " + number(ceiling) + " m is not above the clearance " + number(clearance) + " m of " +
+                        item(static_cast<std::uint32_t>(seen.clearance)) + ": no height is allowed");
     }
   }
   return Status();
@@ -228,8 +209,8 @@ Status validate_constraints(const msg::Command::Constraints& cs, const CommandLi
 Status check_source(std::string_view source) {
   if (source.empty()) return reject("source", "empty (name the sender)");
   if (source.size() >= msg::kSourceCapacity) {
-    return reject("source", std::to_string(source.size()) + " characters, at most " +
-                                std::to_string(msg::kSourceCapacity - 1));
+    return reject("source",
+                  std::to_string(source.size()) + " characters, at most " + std::to_string(msg::kSourceCapacity - 1));
   }
   if (!printable(source)) return reject("source", "holds characters outside printable ASCII");
   return Status();
@@ -239,8 +220,8 @@ Status check_pack_id(std::string_view field, std::string_view pack_id) {
   const std::string f(field);
   if (pack_id.empty()) return reject(f, "empty");
   if (pack_id.size() >= msg::kPackIdCapacity) {
-    return reject(f, std::to_string(pack_id.size()) + " characters, at most " +
-                         std::to_string(msg::kPackIdCapacity - 1));
+    return reject(f,
+                  std::to_string(pack_id.size()) + " characters, at most " + std::to_string(msg::kPackIdCapacity - 1));
   }
   for (const char c : pack_id) {
     if (!is_pack_char(c)) {
@@ -251,9 +232,7 @@ Status check_pack_id(std::string_view field, std::string_view pack_id) {
 }
 
 Status validate_limits(const CommandLimits& l) {
-  const auto bad = [](const std::string& what) {
-    return invalid_argument("command limits: " + what);
-  };
+  const auto bad = [](const std::string& what) { return invalid_argument("command limits: " + what); };
   const double bounds[6] = {l.min.x_m, l.min.y_m, l.min.z_m, l.max.x_m, l.max.y_m, l.max.z_m};
   for (const double v : bounds) {
     if (!std::isfinite(v)) return bad("pack bounds are not finite");
@@ -272,8 +251,8 @@ Status validate_limits(const CommandLimits& l) {
     }
   }
   if (l.min_segments < 1 || l.min_segments > l.max_segments) {
-    return bad("segments: need 1 <= min_segments (" + std::to_string(l.min_segments) +
-               ") <= max_segments (" + std::to_string(l.max_segments) + ")");
+    return bad("segments: need 1 <= min_segments (" + std::to_string(l.min_segments) + ") <= max_segments (" +
+               std::to_string(l.max_segments) + ")");
   }
   if (l.max_segments > msg::kMaxPathVertices - 1) {
     return bad("max_segments " + std::to_string(l.max_segments) + " above the " +
@@ -287,19 +266,17 @@ Status validate_limits(const CommandLimits& l) {
     return bad("max_constraints " + std::to_string(l.max_constraints) + " above the " +
                std::to_string(msg::kMaxConstraints) + " a command holds");
   }
-  const double maxima[4] = {l.max_weight, l.max_stretch_stiffness_n_per_m,
-                            l.max_bend_stiffness_n_m_per_rad, l.max_clearance_m};
+  const double maxima[4] = {l.max_weight, l.max_stretch_stiffness_n_per_m, l.max_bend_stiffness_n_m_per_rad,
+                            l.max_clearance_m};
   for (const double v : maxima) {
     if (!std::isfinite(v) || !(v > 0.0)) return bad("every maximum must be finite and > 0");
   }
   if (l.pack_count > kMaxKnownPacks) {
-    return bad("pack_count " + std::to_string(l.pack_count) + " above " +
-               std::to_string(kMaxKnownPacks));
+    return bad("pack_count " + std::to_string(l.pack_count) + " above " + std::to_string(kMaxKnownPacks));
   }
   for (std::uint32_t i = 0; i < l.pack_count; ++i) {
     VISVOL_RETURN_IF_ERROR(
-        check_pack_id("packs[" + std::to_string(i) + "]", msg::text_of(l.packs[i]))
-            .with_context("command limits"));
+        check_pack_id("packs[" + std::to_string(i) + "]", msg::text_of(l.packs[i])).with_context("command limits"));
   }
   return Status();
 }
@@ -307,8 +284,7 @@ Status validate_limits(const CommandLimits& l) {
 Status add_known_pack(CommandLimits& limits, std::string_view pack_id) {
   VISVOL_RETURN_IF_ERROR(check_pack_id("pack id", pack_id));
   if (limits.pack_count >= kMaxKnownPacks) {
-    return invalid_argument("command limits: more than " + std::to_string(kMaxKnownPacks) +
-                            " packs");
+    return invalid_argument("command limits: more than " + std::to_string(kMaxKnownPacks) + " packs");
   }
   msg::copy_text(limits.packs[limits.pack_count++], pack_id);
   return Status();
@@ -320,8 +296,7 @@ Status decode_command(const visvol_msgs_msg_dds__Command_& wire, msg::Command& o
   msg::copy_text(out.source, view(wire.source));
   out.sequence = wire.sequence_number;
   if (wire.kind < 1 || wire.kind > kLastKind) {
-    return reject("kind", std::to_string(wire.kind) + " is not a known command (1.." +
-                              std::to_string(kLastKind) + ")");
+    return reject("kind", std::to_string(wire.kind) + " is not a known command (1.." + std::to_string(kLastKind) + ")");
   }
   out.kind = static_cast<msg::CommandKind>(wire.kind);
   switch (out.kind) {
@@ -331,8 +306,7 @@ Status decode_command(const visvol_msgs_msg_dds__Command_& wire, msg::Command& o
     case msg::CommandKind::set_objective:
       if (wire.objective != static_cast<std::uint8_t>(msg::Objective::hide) &&
           wire.objective != static_cast<std::uint8_t>(msg::Objective::show)) {
-        return reject("objective",
-                      std::to_string(wire.objective) + " is not known (1 hide, 2 show)");
+        return reject("objective", std::to_string(wire.objective) + " is not known (1 hide, 2 show)");
       }
       out.objective = static_cast<msg::Objective>(wire.objective);
       return Status();
@@ -340,25 +314,19 @@ Status decode_command(const visvol_msgs_msg_dds__Command_& wire, msg::Command& o
       out.weights = msg::Weights{wire.k1_visibility, wire.k2_terrain, wire.k3_user, wire.k4_constraint};
       return Status();
     case msg::CommandKind::set_stiffness:
-      out.stiffness =
-          msg::Command::Stiffness{wire.stretch_stiffness_n_per_m, wire.bend_stiffness_n_m_per_rad};
+      out.stiffness = msg::Command::Stiffness{wire.stretch_stiffness_n_per_m, wire.bend_stiffness_n_m_per_rad};
       return Status();
     case msg::CommandKind::set_model:
       if (wire.model != static_cast<std::uint8_t>(msg::RopeModel::spring_mass) &&
           wire.model != static_cast<std::uint8_t>(msg::RopeModel::articulated)) {
-        return reject("model", std::to_string(wire.model) +
-                                   " is not known (1 spring-mass, 2 articulated)");
+        return reject("model", std::to_string(wire.model) + " is not known (1 spring-mass, 2 articulated)");
       }
       out.model = static_cast<msg::RopeModel>(wire.model);
       return Status();
-    case msg::CommandKind::set_segment_count:
-      out.segment_count = wire.segment_count;
-      return Status();
-    case msg::CommandKind::set_constraints:
-      return decode_constraints(wire, out);
+    case msg::CommandKind::set_segment_count: out.segment_count = wire.segment_count; return Status();
+    case msg::CommandKind::set_constraints: return decode_constraints(wire, out);
     case msg::CommandKind::start:
-    case msg::CommandKind::stop:
-      return Status();
+    case msg::CommandKind::stop: return Status();
     case msg::CommandKind::switch_terrain:
       VISVOL_RETURN_IF_ERROR(check_pack_id("pack_id", view(wire.pack_id)));
       msg::copy_text(out.pack_id, view(wire.pack_id));
@@ -380,16 +348,13 @@ Status validate_command(const msg::Command& c, const CommandLimits& limits) {
       return Status();
     }
     case msg::CommandKind::set_weights:
-      VISVOL_RETURN_IF_ERROR(check_range("k1_visibility", c.weights.k1_visibility, 0.0,
-                                         limits.max_weight, ""));
-      VISVOL_RETURN_IF_ERROR(
-          check_range("k2_terrain", c.weights.k2_terrain, 0.0, limits.max_weight, ""));
-      VISVOL_RETURN_IF_ERROR(
-          check_range("k3_user", c.weights.k3_user, 0.0, limits.max_weight, ""));
+      VISVOL_RETURN_IF_ERROR(check_range("k1_visibility", c.weights.k1_visibility, 0.0, limits.max_weight, ""));
+      VISVOL_RETURN_IF_ERROR(check_range("k2_terrain", c.weights.k2_terrain, 0.0, limits.max_weight, ""));
+      VISVOL_RETURN_IF_ERROR(check_range("k3_user", c.weights.k3_user, 0.0, limits.max_weight, ""));
       return check_range("k4_constraint", c.weights.k4_constraint, 0.0, limits.max_weight, "");
     case msg::CommandKind::set_stiffness:
-      VISVOL_RETURN_IF_ERROR(check_range("stretch_stiffness_n_per_m", c.stiffness.stretch_n_per_m,
-                                         0.0, limits.max_stretch_stiffness_n_per_m, " N/m"));
+      VISVOL_RETURN_IF_ERROR(check_range("stretch_stiffness_n_per_m", c.stiffness.stretch_n_per_m, 0.0,
+                                         limits.max_stretch_stiffness_n_per_m, " N/m"));
       if (c.stiffness.stretch_n_per_m == 0.0) {
         return reject("stretch_stiffness_n_per_m", "0 N/m would let the rope fall apart (> 0)");
       }
@@ -399,12 +364,10 @@ Status validate_command(const msg::Command& c, const CommandLimits& limits) {
       if (c.segment_count < limits.min_segments || c.segment_count > limits.max_segments) {
         return reject("segment_count", std::to_string(c.segment_count) + " is outside the " +
                                            std::to_string(limits.min_segments) + ".." +
-                                           std::to_string(limits.max_segments) +
-                                           " segments reserved");
+                                           std::to_string(limits.max_segments) + " segments reserved");
       }
       return Status();
-    case msg::CommandKind::set_constraints:
-      return validate_constraints(c.constraints, limits);
+    case msg::CommandKind::set_constraints: return validate_constraints(c.constraints, limits);
     case msg::CommandKind::switch_terrain: {
       const std::string_view id = msg::text_of(c.pack_id);
       if (limits.pack_count == 0) {
@@ -418,14 +381,12 @@ Status validate_command(const msg::Command& c, const CommandLimits& limits) {
     case msg::CommandKind::set_objective:
     case msg::CommandKind::set_model:
     case msg::CommandKind::start:
-    case msg::CommandKind::stop:
-      return Status();  // decode checked their values
+    case msg::CommandKind::stop: return Status();  // decode checked their values
   }
   return reject("kind", std::to_string(static_cast<int>(c.kind)) + " is not a known command");
 }
 
-Status decode_and_validate(const visvol_msgs_msg_dds__Command_& wire, const CommandLimits& limits,
-                           msg::Command& out) {
+Status decode_and_validate(const visvol_msgs_msg_dds__Command_& wire, const CommandLimits& limits, msg::Command& out) {
   VISVOL_RETURN_IF_ERROR(decode_command(wire, out));
   return validate_command(out, limits);
 }
@@ -451,14 +412,12 @@ const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const msg::Command& c)
   msg_.bend_stiffness_n_m_per_rad = c.stiffness.bend_n_m_per_rad;
   msg_.model = static_cast<std::uint8_t>(c.model);
   msg_.segment_count = c.segment_count;
-  const std::uint32_t n =
-      c.constraints.count < msg::kMaxConstraints ? c.constraints.count
-                                            : static_cast<std::uint32_t>(msg::kMaxConstraints);
+  const std::uint32_t n = c.constraints.count < msg::kMaxConstraints ? c.constraints.count
+                                                                     : static_cast<std::uint32_t>(msg::kMaxConstraints);
   for (std::uint32_t i = 0; i < n; ++i) {
     const msg::Constraint& k = c.constraints.items[i];
     constraints_[i] = visvol_msgs_msg_dds__Constraint_{
-        static_cast<std::uint8_t>(k.kind), {k.position.x_m, k.position.y_m, k.position.z_m},
-        k.height_m};
+        static_cast<std::uint8_t>(k.kind), {k.position.x_m, k.position.y_m, k.position.z_m}, k.height_m};
   }
   msg_.constraints._buffer = constraints_;
   msg_.constraints._length = n;

@@ -40,12 +40,12 @@ struct CommandLimits {
   std::uint32_t max_constraints = msg::kMaxConstraints;    // constraints reserved
   // hidden-from and visible-to points together: what the console takes (--max-observers)
   std::uint32_t max_observers = 2 * msg::kMaxObserversPerKind;
-  double max_weight = 1e6;                            // each of k1..k4 in [0, max]
-  double max_stretch_stiffness_n_per_m = 1e6;         // in (0, max]
-  double max_bend_stiffness_n_m_per_rad = 1e6;        // in [0, max]
-  double max_clearance_m = 10000.0;                   // clearance in [0, max], max-agl in (0, max];
-                                                      // max-altitude within the pack's z range
-  std::uint32_t pack_count = 0;                       // packs a terrain switch may name
+  double max_weight = 1e6;                      // each of k1..k4 in [0, max]
+  double max_stretch_stiffness_n_per_m = 1e6;   // in (0, max]
+  double max_bend_stiffness_n_m_per_rad = 1e6;  // in [0, max]
+  double max_clearance_m = 10000.0;             // clearance in [0, max], max-agl in (0, max];
+                                                // max-altitude within the pack's z range
+  std::uint32_t pack_count = 0;                 // packs a terrain switch may name
   char packs[kMaxKnownPacks][msg::kPackIdCapacity] = {};
 };
 
@@ -70,8 +70,7 @@ Status decode_command(const visvol_msgs_msg_dds__Command_& msg, msg::Command& ou
 // kind and max_observers in all.
 Status validate_command(const msg::Command& command, const CommandLimits& limits);
 // Both, as command intake applies them.
-Status decode_and_validate(const visvol_msgs_msg_dds__Command_& msg,
-                           const CommandLimits& limits, msg::Command& out);
+Status decode_and_validate(const visvol_msgs_msg_dds__Command_& msg, const CommandLimits& limits, msg::Command& out);
 
 // Sender side: a Command as the DDS message, in buffers this object owns.
 class CommandMessage {

@@ -10,14 +10,12 @@ namespace visvol::dds {
 namespace {
 
 double monotonic_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
 
-Result<std::unique_ptr<CommandIntake>> CommandIntake::start(const Participant& participant,
-                                                            const IntakeConfig& config,
+Result<std::unique_ptr<CommandIntake>> CommandIntake::start(const Participant& participant, const IntakeConfig& config,
                                                             msg::CommandQueue& commands,
                                                             msg::AckQueue* executive_acks) {
   if (!std::isfinite(config.ack_poll_interval_s) || config.ack_poll_interval_s < 0.001 ||
@@ -31,16 +29,14 @@ Result<std::unique_ptr<CommandIntake>> CommandIntake::start(const Participant& p
   if (!reader.ok()) return reader.status();
   Result<Writer> writer = Writer::create(participant, Topic::command_ack);
   if (!writer.ok()) return writer.status();
-  std::unique_ptr<CommandIntake> intake(new CommandIntake(
-      config, std::move(*processor), std::move(*reader), std::move(*writer), commands,
-      executive_acks));
+  std::unique_ptr<CommandIntake> intake(new CommandIntake(config, std::move(*processor), std::move(*reader),
+                                                          std::move(*writer), commands, executive_acks));
   intake->thread_ = std::thread([raw = intake.get()] { raw->run(); });
   return intake;
 }
 
-CommandIntake::CommandIntake(const IntakeConfig& config, CommandProcessor processor,
-                             Reader reader, Writer ack_writer, msg::CommandQueue& commands,
-                             msg::AckQueue* executive_acks)
+CommandIntake::CommandIntake(const IntakeConfig& config, CommandProcessor processor, Reader reader, Writer ack_writer,
+                             msg::CommandQueue& commands, msg::AckQueue* executive_acks)
     : config_(config),
       commands_(commands),
       executive_acks_(executive_acks),
@@ -91,9 +87,8 @@ void CommandIntake::run() {
 
 void CommandIntake::handle_commands() {
   for (;;) {
-    const Result<int> taken =
-        reader_.take<visvol_msgs_msg_dds__Command_>([this](const visvol_msgs_msg_dds__Command_& wire,
-                                                           const dds_sample_info_t&) {
+    const Result<int> taken = reader_.take<visvol_msgs_msg_dds__Command_>(
+        [this](const visvol_msgs_msg_dds__Command_& wire, const dds_sample_info_t&) {
           msg::CommandAck ack;
           {
             std::lock_guard<std::mutex> lock(mutex_);

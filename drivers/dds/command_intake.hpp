@@ -51,8 +51,7 @@ class CommandIntake {
  public:
   // Validates the configuration, creates the reader and the ack writer, and
   // starts the thread. `executive_acks` may be null.
-  static Result<std::unique_ptr<CommandIntake>> start(const Participant& participant,
-                                                      const IntakeConfig& config,
+  static Result<std::unique_ptr<CommandIntake>> start(const Participant& participant, const IntakeConfig& config,
                                                       msg::CommandQueue& commands,
                                                       msg::AckQueue* executive_acks = nullptr);
   ~CommandIntake();  // stop()
@@ -68,8 +67,8 @@ class CommandIntake {
   void stop();
 
  private:
-  CommandIntake(const IntakeConfig& config, CommandProcessor processor, Reader reader,
-                Writer ack_writer, msg::CommandQueue& commands, msg::AckQueue* executive_acks);
+  CommandIntake(const IntakeConfig& config, CommandProcessor processor, Reader reader, Writer ack_writer,
+                msg::CommandQueue& commands, msg::AckQueue* executive_acks);
   void run();
   void handle_commands();
   void publish_executive_acks();

@@ -19,8 +19,7 @@ void sanitize_source(const char* source, char (&out)[msg::kSourceCapacity]) {
 }
 
 Status validate(const RateLimit& r) {
-  const double values[4] = {r.per_source_per_s, r.per_source_burst, r.total_per_s,
-                            r.total_burst};
+  const double values[4] = {r.per_source_per_s, r.per_source_burst, r.total_per_s, r.total_burst};
   for (const double v : values) {
     if (!std::isfinite(v) || v <= 0.0) {
       return invalid_argument("command rate limit: every rate and burst must be finite and > 0");
@@ -34,8 +33,7 @@ Status validate(const RateLimit& r) {
 
 // Rate limiter ---------------------------------------------------------------
 
-RateLimiter::RateLimiter(const RateLimit& rate)
-    : rate_(rate), total_{rate.total_burst, 0.0} {}
+RateLimiter::RateLimiter(const RateLimit& rate) : rate_(rate), total_{rate.total_burst, 0.0} {}
 
 void RateLimiter::refill(Bucket& b, double now_s, double per_s, double burst) {
   if (now_s > b.last_s) {
@@ -73,8 +71,7 @@ RateLimiter::Verdict RateLimiter::allow(std::string_view source, double now_s) {
 
 // Processor ------------------------------------------------------------------
 
-Result<CommandProcessor> CommandProcessor::create(const CommandLimits& limits,
-                                                  const RateLimit& rate) {
+Result<CommandProcessor> CommandProcessor::create(const CommandLimits& limits, const RateLimit& rate) {
   VISVOL_RETURN_IF_ERROR(validate_limits(limits));
   VISVOL_RETURN_IF_ERROR(validate(rate));
   return CommandProcessor(limits, rate);
@@ -92,8 +89,8 @@ void CommandProcessor::reject(msg::CommandAck& ack, std::string_view reason) {
   msg::copy_text(ack.reason, reason);
 }
 
-void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& wire, double now_s,
-                               msg::CommandQueue& queue, msg::CommandAck& ack) {
+void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& wire, double now_s, msg::CommandQueue& queue,
+                               msg::CommandAck& ack) {
   ++counts_.received;
   ack = msg::CommandAck{};
   sanitize_source(wire.source, ack.source);
@@ -107,10 +104,8 @@ void CommandProcessor::process(const visvol_msgs_msg_dds__Command_& wire, double
     const RateLimit& r = limiter_.rate();
     const bool per_source = verdict == RateLimiter::Verdict::source_limited;
     char reason[msg::kReasonCapacity];
-    std::snprintf(reason, sizeof reason,
-                  "rate limit: %s sent more than %.0f commands at once or %.0f per second",
-                  per_source ? "this source" : "all sources together",
-                  per_source ? r.per_source_burst : r.total_burst,
+    std::snprintf(reason, sizeof reason, "rate limit: %s sent more than %.0f commands at once or %.0f per second",
+                  per_source ? "this source" : "all sources together", per_source ? r.per_source_burst : r.total_burst,
                   per_source ? r.per_source_per_s : r.total_per_s);
     reject(ack, reason);
     return;

@@ -67,8 +67,8 @@ class RateLimiter {
 
 struct CommandCounts {
   std::uint64_t received = 0;
-  std::uint64_t accepted = 0;      // pushed into the queue
-  std::uint64_t rejected = 0;      // every rejection, including the next two
+  std::uint64_t accepted = 0;  // pushed into the queue
+  std::uint64_t rejected = 0;  // every rejection, including the next two
   std::uint64_t rate_limited = 0;
   std::uint64_t queue_full = 0;
 };
@@ -85,14 +85,12 @@ class CommandProcessor {
 
   // Handles one received command: rate limit, decode, validate, push. Fills
   // `ack` in every case: accepted (queued), or rejected with the reason.
-  void process(const visvol_msgs_msg_dds__Command_& wire, double now_s, msg::CommandQueue& queue,
-               msg::CommandAck& ack);
+  void process(const visvol_msgs_msg_dds__Command_& wire, double now_s, msg::CommandQueue& queue, msg::CommandAck& ack);
 
   const CommandCounts& counts() const { return counts_; }
 
  private:
-  CommandProcessor(const CommandLimits& limits, const RateLimit& rate)
-      : limits_(limits), limiter_(rate) {}
+  CommandProcessor(const CommandLimits& limits, const RateLimit& rate) : limits_(limits), limiter_(rate) {}
   void reject(msg::CommandAck& ack, std::string_view reason);
 
   CommandLimits limits_;

@@ -16,19 +16,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
 }
 
-std::int64_t to_ns(double seconds) {
-  return static_cast<std::int64_t>(std::llround(seconds * 1e9));
-}
+std::int64_t to_ns(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
 
 Status check_range(const char* name, double v, double lo, double hi, const char* unit) {
   if (!std::isfinite(v) || v < lo || v > hi) {
-    return invalid_argument(std::string("publisher: ") + name + " = " + std::to_string(v) +
-                            " outside [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                            "] " + unit);
+    return invalid_argument(std::string("publisher: ") + name + " = " + std::to_string(v) + " outside [" +
+                            std::to_string(lo) + ", " + std::to_string(hi) + "] " + unit);
   }
   return Status();
 }
@@ -39,16 +35,12 @@ Status validate(const PublisherConfig& c) {
   constexpr double kMinHz = 1e-3;
   VISVOL_RETURN_IF_ERROR(check_range("path_hz", c.path_hz, kMinHz, 1000.0, "Hz"));
   VISVOL_RETURN_IF_ERROR(check_range("health_hz", c.health_hz, kMinHz, 1000.0, "Hz"));
-  VISVOL_RETURN_IF_ERROR(
-      check_range("device_status_hz", c.device_status_hz, kMinHz, 1000.0, "Hz"));
-  VISVOL_RETURN_IF_ERROR(
-      check_range("thumbnail_max_hz", c.thumbnail_max_hz, kMinHz, 1000.0, "Hz"));
+  VISVOL_RETURN_IF_ERROR(check_range("device_status_hz", c.device_status_hz, kMinHz, 1000.0, "Hz"));
+  VISVOL_RETURN_IF_ERROR(check_range("thumbnail_max_hz", c.thumbnail_max_hz, kMinHz, 1000.0, "Hz"));
   VISVOL_RETURN_IF_ERROR(check_range("poll_interval_s", c.poll_interval_s, 1e-5, 0.1, "s"));
-  VISVOL_RETURN_IF_ERROR(check_range("idle_poll_interval_s", c.idle_poll_interval_s,
-                                     c.poll_interval_s, 0.1, "s"));
+  VISVOL_RETURN_IF_ERROR(check_range("idle_poll_interval_s", c.idle_poll_interval_s, c.poll_interval_s, 0.1, "s"));
   VISVOL_RETURN_IF_ERROR(check_range("idle_after_s", c.idle_after_s, 1e-3, 3600.0, "s"));
-  VISVOL_RETURN_IF_ERROR(
-      check_range("path_refresh_wait_s", c.path_refresh_wait_s, 0.0, 0.1, "s"));
+  VISVOL_RETURN_IF_ERROR(check_range("path_refresh_wait_s", c.path_refresh_wait_s, 0.0, 0.1, "s"));
   VISVOL_RETURN_IF_ERROR(check_range("linger_s", c.linger_s, 0.0, 60.0, "s"));
   if (c.frame_id.empty()) return invalid_argument("publisher: empty frame id");
   return Status();
@@ -58,15 +50,14 @@ Result<std::unique_ptr<LivePublisher>> LivePublisher::start(const Participant& p
                                                             const PublisherConfig& config,
                                                             const CommandIntake* intake) {
   VISVOL_RETURN_IF_ERROR(validate(config));
-  Result<std::unique_ptr<PathPublisher>> paths =
-      PathPublisher::create(participant, config.frame_id);
+  Result<std::unique_ptr<PathPublisher>> paths = PathPublisher::create(participant, config.frame_id);
   if (!paths.ok()) return paths.status();
   Result<Writer> health = Writer::create(participant, Topic::health);
   if (!health.ok()) return health.status();
   Result<Writer> device = Writer::create(participant, Topic::device_status);
   if (!device.ok()) return device.status();
-  std::unique_ptr<LivePublisher> publisher(new LivePublisher(
-      config, intake, std::move(*paths), std::move(*health), std::move(*device)));
+  std::unique_ptr<LivePublisher> publisher(
+      new LivePublisher(config, intake, std::move(*paths), std::move(*health), std::move(*device)));
   publisher->thread_ = std::thread([raw = publisher.get()] { raw->run(); });
   return publisher;
 }
@@ -102,10 +93,8 @@ Status LivePublisher::stop() {
   // all writers within one linger time
   const auto start = Clock::now();
   Status delivery = paths_->wait_for_delivery(config_.linger_s);
-  const double left_s =
-      config_.linger_s - std::chrono::duration<double>(Clock::now() - start).count();
-  if (delivery.ok() &&
-      device_writer_.wait_for_acks(std::max(left_s, 0.0)) == DDS_RETCODE_TIMEOUT) {
+  const double left_s = config_.linger_s - std::chrono::duration<double>(Clock::now() - start).count();
+  if (delivery.ok() && device_writer_.wait_for_acks(std::max(left_s, 0.0)) == DDS_RETCODE_TIMEOUT) {
     delivery = Status(Errc::timeout, "device_status: not every subscriber acknowledged within " +
                                          std::to_string(config_.linger_s) + " s");
   }
@@ -145,16 +134,14 @@ void LivePublisher::run() {
     pass(now, false);
     const std::int64_t wake = next_wake_ns(now_ns());
     lock.lock();
-    wake_.wait_until(lock, Clock::time_point(std::chrono::nanoseconds(wake)),
-                     [this] { return stopping_; });
+    wake_.wait_until(lock, Clock::time_point(std::chrono::nanoseconds(wake)), [this] { return stopping_; });
   }
   lock.unlock();
   pass(now_ns(), true);
 }
 
 template <typename T, typename Publish>
-void LivePublisher::service(Stream& stream, LatestValue<T>& handoff, std::int64_t now,
-                            bool final, Publish&& publish) {
+void LivePublisher::service(Stream& stream, LatestValue<T>& handoff, std::int64_t now, bool final, Publish&& publish) {
   if (!final && now < stream.next_allowed_ns) return;
   const T* sample = handoff.take();
   if (!sample) return;
@@ -170,8 +157,7 @@ void LivePublisher::service(Stream& stream, LatestValue<T>& handoff, std::int64_
 
 void LivePublisher::pass(std::int64_t now, bool final) {
   // terrain first: a subscriber learns the CRS before the first path in it
-  service(terrain_stream_, terrain_, now, final,
-          [this](const msg::TerrainInfo& t) { return paths_->publish(t); });
+  service(terrain_stream_, terrain_, now, final, [this](const msg::TerrainInfo& t) { return paths_->publish(t); });
   service_path(now, final);
   service(health_stream_, health_, now, final, [this](const msg::HealthSample& h) {
     LayerCounters counters;
@@ -207,8 +193,8 @@ void LivePublisher::publish_path(const msg::PathSample& sample, std::int64_t now
 
 void LivePublisher::note_path_producer(const msg::PathSample& sample) {
   if (last_path_sequence_ != 0 && sample.sequence > last_path_sequence_ && sample.stamp_ns > last_path_stamp_ns_) {
-    path_period_ns_ = (sample.stamp_ns - last_path_stamp_ns_) /
-                      static_cast<std::int64_t>(sample.sequence - last_path_sequence_);
+    path_period_ns_ =
+        (sample.stamp_ns - last_path_stamp_ns_) / static_cast<std::int64_t>(sample.sequence - last_path_sequence_);
   } else if (sample.sequence <= last_path_sequence_) {
     path_period_ns_ = -1;  // a new planning run numbers from the start
   }
@@ -246,8 +232,7 @@ std::int64_t LivePublisher::next_wake_ns(std::int64_t now) const {
   const std::int64_t idle_poll = to_ns(config_.idle_poll_interval_s);
   const std::int64_t idle_after = to_ns(config_.idle_after_s);
   std::int64_t wake = now + idle_poll;
-  for (const Stream* s : {&path_stream_, &health_stream_, &device_stream_, &thumbnail_stream_,
-                          &terrain_stream_}) {
+  for (const Stream* s : {&path_stream_, &health_stream_, &device_stream_, &thumbnail_stream_, &terrain_stream_}) {
     if (now < s->next_allowed_ns) {
       wake = std::min(wake, s->next_allowed_ns);
     } else {

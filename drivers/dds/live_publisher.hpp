@@ -77,13 +77,13 @@ struct PublisherConfig {
 Status validate(const PublisherConfig& config);
 
 struct PublisherStats {
-  std::uint64_t paths = 0;          // published samples per hand-off
+  std::uint64_t paths = 0;  // published samples per hand-off
   std::uint64_t health = 0;
   std::uint64_t device_status = 0;
   std::uint64_t thumbnails = 0;
   std::uint64_t terrain = 0;
-  std::uint64_t paths_held = 0;     // stale paths kept back for a newer one
-  std::uint64_t errors = 0;         // samples not published (bad sample or DDS error)
+  std::uint64_t paths_held = 0;  // stale paths kept back for a newer one
+  std::uint64_t errors = 0;      // samples not published (bad sample or DDS error)
   std::string last_error;
 };
 
@@ -91,8 +91,7 @@ class LivePublisher {
  public:
   // Creates the writers and starts the thread. `intake` (may be null, must
   // outlive the publisher) supplies the command counters of health reports.
-  static Result<std::unique_ptr<LivePublisher>> start(const Participant& participant,
-                                                      const PublisherConfig& config,
+  static Result<std::unique_ptr<LivePublisher>> start(const Participant& participant, const PublisherConfig& config,
                                                       const CommandIntake* intake = nullptr);
   ~LivePublisher();  // stop()
   LivePublisher(const LivePublisher&) = delete;
@@ -122,16 +121,15 @@ class LivePublisher {
     std::atomic<std::uint64_t> published{0};
   };
 
-  LivePublisher(const PublisherConfig& config, const CommandIntake* intake,
-                std::unique_ptr<PathPublisher> paths, Writer health, Writer device);
+  LivePublisher(const PublisherConfig& config, const CommandIntake* intake, std::unique_ptr<PathPublisher> paths,
+                Writer health, Writer device);
   void run();
   void pass(std::int64_t now_ns, bool final);
   void service_path(std::int64_t now_ns, bool final);
   void publish_path(const msg::PathSample& sample, std::int64_t now_ns);
   std::int64_t next_wake_ns(std::int64_t now_ns) const;
   template <typename T, typename Publish>
-  void service(Stream& stream, LatestValue<T>& handoff, std::int64_t now_ns, bool final,
-               Publish&& publish);
+  void service(Stream& stream, LatestValue<T>& handoff, std::int64_t now_ns, bool final, Publish&& publish);
   void count_error(const Status& status);
 
   const PublisherConfig config_;
@@ -161,7 +159,7 @@ class LivePublisher {
 
   std::atomic<std::uint64_t> errors_{0};
   std::atomic<std::uint64_t> paths_held_{0};
-  mutable std::mutex mutex_;      // guards last_error_, stopping_, stopped_
+  mutable std::mutex mutex_;  // guards last_error_, stopping_, stopped_
   std::condition_variable wake_;
   std::string last_error_;
   bool stopping_ = false;

@@ -10,8 +10,7 @@ namespace {
 static_assert(static_cast<int>(msg::Objective::hide) == visvol_msgs_msg_dds__OBJECTIVE_HIDE);
 static_assert(static_cast<int>(msg::Objective::show) == visvol_msgs_msg_dds__OBJECTIVE_SHOW);
 static_assert(static_cast<int>(msg::DeviceState::unknown) == visvol_msgs_msg_dds__DEVICE_UNKNOWN);
-static_assert(static_cast<int>(msg::DeviceState::disconnected) ==
-              visvol_msgs_msg_dds__DEVICE_DISCONNECTED);
+static_assert(static_cast<int>(msg::DeviceState::disconnected) == visvol_msgs_msg_dds__DEVICE_DISCONNECTED);
 static_assert(static_cast<int>(msg::DeviceState::idle) == visvol_msgs_msg_dds__DEVICE_IDLE);
 static_assert(static_cast<int>(msg::DeviceState::active) == visvol_msgs_msg_dds__DEVICE_ACTIVE);
 static_assert(static_cast<int>(msg::DeviceState::fault) == visvol_msgs_msg_dds__DEVICE_FAULT);
@@ -39,8 +38,7 @@ geometry_msgs_msg_dds__Point_ to_point(const msg::WorldPoint& p) {
 }
 
 visvol_msgs_msg_dds__TimingSummary_ to_summary(const msg::TimingSummary& t) {
-  return visvol_msgs_msg_dds__TimingSummary_{t.min_us, t.mean_us, t.p99_us, t.max_us,
-                                              t.count};
+  return visvol_msgs_msg_dds__TimingSummary_{t.min_us, t.mean_us, t.p99_us, t.max_us, t.count};
 }
 
 }  // namespace
@@ -131,8 +129,8 @@ Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& wire, msg::Pat
   }
   const char* pack = wire.pack_id ? wire.pack_id : "";
   if (!msg::copy_text(out.pack_id, pack)) {
-    return invalid_argument("path update: pack_id longer than " +
-                            std::to_string(msg::kPackIdCapacity - 1) + " characters");
+    return invalid_argument("path update: pack_id longer than " + std::to_string(msg::kPackIdCapacity - 1) +
+                            " characters");
   }
   out.sequence = wire.sequence_number;
   out.stamp_ns = from_ros_time(wire.header.stamp);
@@ -145,8 +143,7 @@ Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& wire, msg::Pat
   out.vertex_count = n;
   for (std::uint32_t i = 0; i < n; ++i) {
     const geometry_msgs_msg_dds__Point_& p = wire.positions_m._buffer[i];
-    out.vertices[i] = msg::PathVertex{{p.x, p.y, p.z}, wire.visibility._buffer[i],
-                                 wire.clearance_m._buffer[i]};
+    out.vertices[i] = msg::PathVertex{{p.x, p.y, p.z}, wire.visibility._buffer[i], wire.clearance_m._buffer[i]};
   }
   return Status();
 }
@@ -175,8 +172,7 @@ Status HealthMessage::fill(const msg::HealthSample& sample, const LayerCounters&
 
 // Device status --------------------------------------------------------------
 
-DeviceStatusMessage::DeviceStatusMessage(std::string frame_id)
-    : frame_id_(std::move(frame_id)) {
+DeviceStatusMessage::DeviceStatusMessage(std::string frame_id) : frame_id_(std::move(frame_id)) {
   msg_.device = device_;
 }
 
@@ -204,8 +200,8 @@ ThumbnailMessage::ThumbnailMessage(std::string frame_id) : frame_id_(std::move(f
 
 Status ThumbnailMessage::fill(const msg::ThumbnailSample& sample) {
   if (sample.png_size_bytes == 0 || sample.png_size_bytes > msg::kMaxThumbnailBytes) {
-    return invalid_argument("thumbnail: png_size_bytes " + std::to_string(sample.png_size_bytes) +
-                            " outside 1.." + std::to_string(msg::kMaxThumbnailBytes));
+    return invalid_argument("thumbnail: png_size_bytes " + std::to_string(sample.png_size_bytes) + " outside 1.." +
+                            std::to_string(msg::kMaxThumbnailBytes));
   }
   if (sample.png_size_bytes < sizeof kPngSignature ||
       std::memcmp(sample.png, kPngSignature, sizeof kPngSignature) != 0) {

@@ -90,9 +90,8 @@ Status check_domain_entries(const std::string& xml, std::uint32_t domain_id) {
   std::size_t pos = 0;
   while ((pos = text.find("<Domain", pos)) != std::string::npos) {
     const std::size_t after = pos + 7;
-    if (after < text.size() && text[after] != ' ' && text[after] != '>' &&
-        text[after] != '\t' && text[after] != '\n' && text[after] != '\r' &&
-        text[after] != '/') {
+    if (after < text.size() && text[after] != ' ' && text[after] != '>' && text[after] != '\t' && text[after] != '\n' &&
+        text[after] != '\r' && text[after] != '/') {
       pos = after;  // <DomainTag> and the like
       continue;
     }
@@ -100,8 +99,7 @@ Status check_domain_entries(const std::string& xml, std::uint32_t domain_id) {
     if (tag_end == std::string::npos) break;
     const std::size_t close = text.find("</Domain>", tag_end);
     const std::string_view tag(text.data() + pos, tag_end - pos);
-    const std::string_view body(text.data() + tag_end,
-                                (close == std::string::npos ? text.size() : close) - tag_end);
+    const std::string_view body(text.data() + tag_end, (close == std::string::npos ? text.size() : close) - tag_end);
     ids.push_back(domain_element_id(tag, body));
     pos = tag_end;
   }
@@ -111,9 +109,8 @@ Status check_domain_entries(const std::string& xml, std::uint32_t domain_id) {
     if (id == "any" || id == std::to_string(domain_id)) return Status();
     list += (list.empty() ? "" : ", ") + id;
   }
-  return invalid_argument("cyclone configuration: no <Domain> applies to domain " +
-                          std::to_string(domain_id) + " (ids: " + list +
-                          "); Cyclone would ignore it and use its defaults");
+  return invalid_argument("cyclone configuration: no <Domain> applies to domain " + std::to_string(domain_id) +
+                          " (ids: " + list + "); Cyclone would ignore it and use its defaults");
 }
 
 }  // namespace
@@ -132,14 +129,12 @@ Result<std::string> read_cyclone_config(const std::string& path) {
 
 Status validate(const ParticipantConfig& config) {
   if (config.domain_id > kMaxDomainId) {
-    return invalid_argument("domain id " + std::to_string(config.domain_id) +
-                            ": above " + std::to_string(kMaxDomainId) +
-                            " (Cyclone's port mapping)");
+    return invalid_argument("domain id " + std::to_string(config.domain_id) + ": above " +
+                            std::to_string(kMaxDomainId) + " (Cyclone's port mapping)");
   }
   const std::string xml = trim(config.cyclone_xml);
   if (xml.empty()) {
-    return invalid_argument(
-        "cyclone configuration: empty (pass the XML itself, e.g. loopback_config())");
+    return invalid_argument("cyclone configuration: empty (pass the XML itself, e.g. loopback_config())");
   }
   if (xml.front() != '<') {
     return invalid_argument("cyclone configuration: not XML (must start with '<')");
@@ -149,10 +144,10 @@ Status validate(const ParticipantConfig& config) {
 }
 
 Status dds_error(std::string_view what, dds_return_t rc) {
-  const Errc code = rc == DDS_RETCODE_TIMEOUT ? Errc::timeout
-                    : rc == DDS_RETCODE_BAD_PARAMETER ? Errc::invalid_argument
+  const Errc code = rc == DDS_RETCODE_TIMEOUT            ? Errc::timeout
+                    : rc == DDS_RETCODE_BAD_PARAMETER    ? Errc::invalid_argument
                     : rc == DDS_RETCODE_OUT_OF_RESOURCES ? Errc::resource
-                    : Errc::io;
+                                                         : Errc::io;
   return Status(code, std::string(what) + ": " + dds_strretcode(rc));
 }
 
@@ -171,9 +166,8 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantConfig
                                      "visvol (with a configuration visvol cannot check)");
     }
     if (domain < 0) {
-      return dds_error("creating DDS domain " + std::to_string(id) +
-                           " (Cyclone prints the configuration problem above)",
-                       domain);
+      return dds_error(
+          "creating DDS domain " + std::to_string(id) + " (Cyclone prints the configuration problem above)", domain);
     }
     it = domains.emplace(id, DomainUse{domain, config.cyclone_xml, 0}).first;
     created = true;
@@ -210,9 +204,7 @@ Participant::~Participant() {
   }
 }
 
-std::string Participant::topic_name(Topic topic) const {
-  return dds::topic_name(namespace_, topic);
-}
+std::string Participant::topic_name(Topic topic) const { return dds::topic_name(namespace_, topic); }
 
 // Writer ---------------------------------------------------------------------
 
@@ -220,8 +212,7 @@ namespace {
 
 Result<dds_entity_t> create_topic(const Participant& participant, Topic topic) {
   const std::string name = participant.topic_name(topic);
-  const dds_entity_t t =
-      dds_create_topic(participant.handle(), &descriptor(topic), name.c_str(), nullptr, nullptr);
+  const dds_entity_t t = dds_create_topic(participant.handle(), &descriptor(topic), name.c_str(), nullptr, nullptr);
   if (t < 0) return dds_error("creating topic " + name, t);
   return t;
 }
@@ -229,15 +220,12 @@ Result<dds_entity_t> create_topic(const Participant& participant, Topic topic) {
 // Polls a matched count until it reaches `count`; discovery on loopback takes
 // milliseconds, so a 5 ms step costs little.
 template <typename Count>
-Status wait_for_count(Count&& current, std::uint32_t count, double timeout_s,
-                      const std::string& what) {
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::nanoseconds(to_duration(timeout_s));
+Status wait_for_count(Count&& current, std::uint32_t count, double timeout_s, const std::string& what) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::nanoseconds(to_duration(timeout_s));
   while (current() < count) {
     if (std::chrono::steady_clock::now() >= deadline) {
-      return Status(Errc::timeout, what + ": " + std::to_string(current()) + " of " +
-                                       std::to_string(count) + " matched after " +
-                                       std::to_string(timeout_s) + " s");
+      return Status(Errc::timeout, what + ": " + std::to_string(current()) + " of " + std::to_string(count) +
+                                       " matched after " + std::to_string(timeout_s) + " s");
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -289,8 +277,7 @@ std::uint32_t Writer::matched_readers() const {
 }
 
 Status Writer::wait_for_readers(std::uint32_t count, double timeout_s) const {
-  return wait_for_count([this] { return matched_readers(); }, count, timeout_s,
-                        "waiting for subscribers");
+  return wait_for_count([this] { return matched_readers(); }, count, timeout_s, "waiting for subscribers");
 }
 
 dds_return_t Writer::wait_for_acks(double timeout_s) const {
@@ -304,8 +291,7 @@ Result<Reader> Reader::create(const Participant& participant, Topic topic) {
   return create(participant, topic, qos.get());
 }
 
-Result<Reader> Reader::create(const Participant& participant, Topic topic,
-                              const dds_qos_t* qos) {
+Result<Reader> Reader::create(const Participant& participant, Topic topic, const dds_qos_t* qos) {
   Result<dds_entity_t> t = create_topic(participant, topic);
   if (!t.ok()) return t.status();
   const dds_entity_t r = dds_create_reader(participant.handle(), *t, qos, nullptr);
@@ -358,8 +344,7 @@ Result<bool> Reader::wait(double timeout_s) const {
   return n > 0;
 }
 
-dds_return_t Reader::take_loaned(void** samples, dds_sample_info_t* infos,
-                                 std::uint32_t max) const {
+dds_return_t Reader::take_loaned(void** samples, dds_sample_info_t* infos, std::uint32_t max) const {
   return dds_take(reader_, samples, infos, max, max);
 }
 
@@ -389,8 +374,7 @@ std::uint32_t Reader::matched_writers() const {
 }
 
 Status Reader::wait_for_writers(std::uint32_t count, double timeout_s) const {
-  return wait_for_count([this] { return matched_writers(); }, count, timeout_s,
-                        "waiting for publishers");
+  return wait_for_count([this] { return matched_writers(); }, count, timeout_s, "waiting for publishers");
 }
 
 }  // namespace visvol::dds

@@ -121,8 +121,7 @@ class Reader {
  public:
   static Result<Reader> create(const Participant& participant, Topic topic);
   // With the caller's QoS (e.g. a volatile path reader, as RViz uses).
-  static Result<Reader> create(const Participant& participant, Topic topic,
-                               const dds_qos_t* qos);
+  static Result<Reader> create(const Participant& participant, Topic topic, const dds_qos_t* qos);
   Reader() = default;
   ~Reader();
   Reader(Reader&& other) noexcept;

@@ -27,12 +27,10 @@ Result<std::unique_ptr<PathPublisher>> PathPublisher::create(const Participant& 
   Result<Writer> terrain = Writer::create(participant, Topic::terrain);
   if (!terrain.ok()) return terrain.status();
   return std::unique_ptr<PathPublisher>(
-      new PathPublisher(frame_id, std::move(*path), std::move(*update), std::move(*thumbnail),
-                        std::move(*terrain)));
+      new PathPublisher(frame_id, std::move(*path), std::move(*update), std::move(*thumbnail), std::move(*terrain)));
 }
 
-PathPublisher::PathPublisher(std::string frame_id, Writer path, Writer update, Writer thumbnail,
-                             Writer terrain)
+PathPublisher::PathPublisher(std::string frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain)
     : path_writer_(std::move(path)),
       update_writer_(std::move(update)),
       thumbnail_writer_(std::move(thumbnail)),
@@ -60,11 +58,9 @@ Status PathPublisher::publish(const msg::TerrainInfo& terrain) {
 }
 
 Status PathPublisher::wait_for_delivery(double timeout_s) const {
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::nanoseconds(to_duration(timeout_s));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::nanoseconds(to_duration(timeout_s));
   for (const Writer* w : {&update_writer_, &path_writer_, &thumbnail_writer_, &terrain_writer_}) {
-    const double left_s =
-        std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+    const double left_s = std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
     const dds_return_t rc = w->wait_for_acks(left_s > 0.0 ? left_s : 0.0);
     if (rc == DDS_RETCODE_TIMEOUT) {
       char text[256];
@@ -87,8 +83,6 @@ Status PathPublisher::wait_for_subscribers(std::uint32_t count, double timeout_s
 }
 
 std::uint32_t PathPublisher::path_subscribers() const { return path_writer_.matched_readers(); }
-std::uint32_t PathPublisher::path_update_subscribers() const {
-  return update_writer_.matched_readers();
-}
+std::uint32_t PathPublisher::path_update_subscribers() const { return update_writer_.matched_readers(); }
 
 }  // namespace visvol::dds

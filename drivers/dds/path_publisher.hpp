@@ -33,8 +33,7 @@ class PathPublisher {
  public:
   // frame_id: the world frame of every header (topics.hpp, kDefaultFrameId).
   static Result<std::unique_ptr<PathPublisher>> create(const Participant& participant,
-                                                       const std::string& frame_id =
-                                                           kDefaultFrameId);
+                                                       const std::string& frame_id = kDefaultFrameId);
 
   // The path as nav_msgs/Path and as visvol_msgs/PathUpdate.
   Status publish(const msg::PathSample& path);
@@ -55,8 +54,7 @@ class PathPublisher {
   std::uint32_t path_update_subscribers() const;
 
  private:
-  PathPublisher(std::string frame_id, Writer path, Writer update, Writer thumbnail,
-                Writer terrain);
+  PathPublisher(std::string frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain);
 
   Writer path_writer_;
   Writer update_writer_;

@@ -10,10 +10,10 @@ namespace visvol::dds {
 namespace {
 
 enum class Profile {
-  latest,      // reliable, transient-local, keep-last 1
-  telemetry,   // best effort, volatile, keep-last 1
-  command,     // reliable, volatile, keep-all
-  ack,         // reliable, transient-local, keep-last kAckHistoryDepth
+  latest,     // reliable, transient-local, keep-last 1
+  telemetry,  // best effort, volatile, keep-last 1
+  command,    // reliable, volatile, keep-all
+  ack,        // reliable, transient-local, keep-last kAckHistoryDepth
 };
 
 struct TopicSpec {
@@ -26,8 +26,7 @@ struct TopicSpec {
 const std::array<TopicSpec, kTopicCount> kTopics = {{
     {"visvol/path", &nav_msgs_msg_dds__Path__desc, Profile::latest},
     {"visvol/path_update", &visvol_msgs_msg_dds__PathUpdate__desc, Profile::latest},
-    {"visvol/thumbnail/compressed", &sensor_msgs_msg_dds__CompressedImage__desc,
-     Profile::latest},
+    {"visvol/thumbnail/compressed", &sensor_msgs_msg_dds__CompressedImage__desc, Profile::latest},
     {"visvol/terrain", &visvol_msgs_msg_dds__TerrainInfo__desc, Profile::latest},
     {"visvol/device_status", &visvol_msgs_msg_dds__DeviceStatus__desc, Profile::latest},
     {"visvol/health", &visvol_msgs_msg_dds__LoopHealth__desc, Profile::telemetry},
@@ -51,9 +50,7 @@ const char* describe_profile(Profile profile) {
 // before it fails; bounded so the publisher thread never stalls for long.
 constexpr dds_duration_t kMaxBlocking = DDS_MSECS(50);
 
-bool is_segment_start(char c) {
-  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
-}
+bool is_segment_start(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
 bool is_segment_char(char c) { return is_segment_start(c) || (c >= '0' && c <= '9'); }
 
 std::string_view strip_leading_slash(std::string_view ns) {
@@ -81,8 +78,7 @@ QosPtr make_qos(Profile profile, bool reader) {
       // Bounded memory on the console side: the reliable protocol holds the
       // rest back at the senders until intake has taken what it has.
       if (reader) {
-        dds_qset_resource_limits(qos.get(), kCommandReaderMaxQueued, DDS_LENGTH_UNLIMITED,
-                                 kCommandReaderMaxQueued);
+        dds_qset_resource_limits(qos.get(), kCommandReaderMaxQueued, DDS_LENGTH_UNLIMITED, kCommandReaderMaxQueued);
       }
       break;
     case Profile::ack:
@@ -101,9 +97,8 @@ QosPtr make_qos(Profile profile, bool reader) {
         dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, kAckHistoryDepth);
         // What a late joiner gets is the durability service's depth, not the
         // history's: Cyclone's default of 1 would hand over only the newest.
-        dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, kAckHistoryDepth,
-                                    DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED,
-                                    DDS_LENGTH_UNLIMITED);
+        dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, kAckHistoryDepth, DDS_LENGTH_UNLIMITED,
+                                    DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
       }
       break;
   }
@@ -137,17 +132,14 @@ Status validate_namespace(std::string_view ns) {
     const bool end = i == body.size() || body[i] == '/';
     if (end) {
       if (i == segment_start) {
-        return invalid_argument("namespace '" + std::string(ns) +
-                                "': empty segment (double or trailing '/')");
+        return invalid_argument("namespace '" + std::string(ns) + "': empty segment (double or trailing '/')");
       }
       segment_start = i + 1;
       continue;
     }
-    const bool ok =
-        i == segment_start ? is_segment_start(body[i]) : is_segment_char(body[i]);
+    const bool ok = i == segment_start ? is_segment_start(body[i]) : is_segment_char(body[i]);
     if (!ok) {
-      return invalid_argument("namespace '" + std::string(ns) + "': character " +
-                              std::to_string(i + 1) +
+      return invalid_argument("namespace '" + std::string(ns) + "': character " + std::to_string(i + 1) +
                               " must be a letter or '_' (or a digit after the first)");
     }
   }

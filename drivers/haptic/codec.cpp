@@ -114,8 +114,8 @@ const char* decode_error_name(DecodeError error) {
   return "invalid DecodeError";
 }
 
-DecodeError decode(std::int64_t timestamp_ns, std::uint32_t id, const std::uint8_t* data,
-                   std::size_t len, Message& out) {
+DecodeError decode(std::int64_t timestamp_ns, std::uint32_t id, const std::uint8_t* data, std::size_t len,
+                   Message& out) {
   if (id > can::kStandardIdMask) return DecodeError::unknown_id;
   MessageKind kind;
   std::uint8_t node;

@@ -79,8 +79,8 @@ inline constexpr std::size_t kDecodeErrors = 6;
 const char* decode_error_name(DecodeError error);
 
 // Decodes one frame into `out`. On any error `out` is unspecified.
-DecodeError decode(std::int64_t timestamp_ns, std::uint32_t id, const std::uint8_t* data,
-                   std::size_t len, Message& out);
+DecodeError decode(std::int64_t timestamp_ns, std::uint32_t id, const std::uint8_t* data, std::size_t len,
+                   Message& out);
 DecodeError decode(const can::CanFrame& frame, Message& out);
 
 can::CanFrame encode(const PositionMsg& msg, std::uint8_t node);
@@ -93,9 +93,7 @@ can::CanFrame encode(const NmtMsg& msg);
 can::CanFrame encode(const Message& msg);
 
 // Euclidean length of a 3-vector of a message (a force in N, a step in mm).
-inline double norm3(const std::array<double, 3>& v) {
-  return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-}
+inline double norm3(const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 // Signal conversions (exposed for tests and the simulator): physical value ->
 // counts, rounded to nearest, saturated to the signal's range, NaN -> 0.

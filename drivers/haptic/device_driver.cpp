@@ -80,8 +80,7 @@ Result<DeviceDriver> DeviceDriver::create(const DriverConfig& config, can::CanBu
 void DeviceDriver::poll(std::int64_t now_ns) {
   sample_.fresh = false;
   bool capped = false;
-  can::drain(*bus_, batch_, config_.max_frames_per_poll, &capped,
-             [this](const can::CanFrame& f) { on_frame(f); });
+  can::drain(*bus_, batch_, config_.max_frames_per_poll, &capped, [this](const can::CanFrame& f) { on_frame(f); });
   if (capped) ++counters_.capped_polls;
   update_state(now_ns);
 }
@@ -191,11 +190,8 @@ void DeviceDriver::on_position(const Message& m) {
     }
   }
   if (have_position_) {
-    const double dt_s =
-        static_cast<double>(std::max<std::int64_t>(m.timestamp_ns - sample_.timestamp_ns, 0)) /
-        kNsPerS;
-    const std::array<double, 3> step_mm = {p.pos_mm[0] - sample_.pos_mm[0],
-                                           p.pos_mm[1] - sample_.pos_mm[1],
+    const double dt_s = static_cast<double>(std::max<std::int64_t>(m.timestamp_ns - sample_.timestamp_ns, 0)) / kNsPerS;
+    const std::array<double, 3> step_mm = {p.pos_mm[0] - sample_.pos_mm[0], p.pos_mm[1] - sample_.pos_mm[1],
                                            p.pos_mm[2] - sample_.pos_mm[2]};
     if (norm3(step_mm) > config_.max_speed_mm_per_s * dt_s + kJumpSlackMm) {
       ++counters_.implausible;
@@ -212,8 +208,7 @@ void DeviceDriver::on_position(const Message& m) {
 
 void DeviceDriver::update_state(std::int64_t now_ns) {
   const bool alive = seen_device_ && now_ns - last_alive_ns_ < config_.heartbeat_timeout_ns;
-  const bool positions_fresh =
-      have_position_ && now_ns - sample_.timestamp_ns < config_.position_timeout_ns;
+  const bool positions_fresh = have_position_ && now_ns - sample_.timestamp_ns < config_.position_timeout_ns;
   const bool device_fault = report_.emergency_active || report_.fault_bits != 0;
 
   DeviceState next = DeviceState::fault;
@@ -243,8 +238,7 @@ void DeviceDriver::update_state(std::int64_t now_ns) {
     fault_ = reason;
   }
   sample_.valid = state_ == DeviceState::operational;
-  if (state_ == DeviceState::pre_operational &&
-      (nmt_due_ || now_ns - last_nmt_ns_ >= config_.nmt_retry_ns)) {
+  if (state_ == DeviceState::pre_operational && (nmt_due_ || now_ns - last_nmt_ns_ >= config_.nmt_retry_ns)) {
     send_nmt_start(now_ns);
   }
 }
@@ -263,8 +257,7 @@ void DeviceDriver::send_nmt_start(std::int64_t now_ns) {
 }
 
 Errc DeviceDriver::command(const std::array<double, 3>& force_n, bool enable) {
-  if (state_ == DeviceState::boot ||
-      (state_ == DeviceState::fault && fault_ == FaultReason::bus_off)) {
+  if (state_ == DeviceState::boot || (state_ == DeviceState::fault && fault_ == FaultReason::bus_off)) {
     return Errc::state;
   }
   CommandMsg c;

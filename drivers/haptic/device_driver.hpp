@@ -58,15 +58,15 @@ const char* state_name(DeviceState state);
 const char* fault_name(FaultReason reason);
 
 struct DriverConfig {
-  std::uint8_t node_id = kDefaultNodeId;                       // 1..127
+  std::uint8_t node_id = kDefaultNodeId;                         // 1..127
   std::int64_t position_timeout_ns = kConsolePositionTimeoutNs;  // zero force after this silence
   std::int64_t heartbeat_timeout_ns = kHeartbeatTimeoutNs;       // device lost after this
   std::int64_t nmt_retry_ns = kNmtRetryNs;                       // NMT start repeat period
   std::int64_t fault_clear_ns = kFaultClearNs;                   // clean status needed after EMCY
-  double position_limit_mm = 250.0;   // |coordinate| beyond this is implausible
-  double max_speed_mm_per_s = 5000.0; // faster jumps are implausible (a hand: < 3 m/s)
-  double max_force_n = 8.5;           // command clamp, N (the device's peak force)
-  std::size_t max_frames_per_poll = 256;  // drain cap per tick (>> 21 frames/ms at 1 Mbit/s)
+  double position_limit_mm = 250.0;                              // |coordinate| beyond this is implausible
+  double max_speed_mm_per_s = 5000.0;                            // faster jumps are implausible (a hand: < 3 m/s)
+  double max_force_n = 8.5;                                      // command clamp, N (the device's peak force)
+  std::size_t max_frames_per_poll = 256;                         // drain cap per tick (>> 21 frames/ms at 1 Mbit/s)
 };
 
 // The newest accepted position, as the servo reads it.
@@ -79,26 +79,26 @@ struct DeviceSample {
 };
 
 struct DriverCounters {
-  std::uint64_t frames = 0;            // frames handed over by the bus
-  std::uint64_t positions = 0;         // accepted position samples
+  std::uint64_t frames = 0;     // frames handed over by the bus
+  std::uint64_t positions = 0;  // accepted position samples
   std::uint64_t statuses = 0;
   std::uint64_t heartbeats = 0;
-  std::uint64_t emergencies = 0;       // emergency frames (faults and resets)
-  std::uint64_t malformed = 0;         // wrong length, reserved bits, bad values
-  std::uint64_t foreign = 0;           // valid frames of other nodes or console-bound kinds
-  std::uint64_t duplicates = 0;        // position frames repeating the last sequence number
-  std::uint64_t sequence_gaps = 0;     // position frames missing between sequence numbers
-  std::uint64_t implausible = 0;       // positions out of range or jumping too fast
+  std::uint64_t emergencies = 0;    // emergency frames (faults and resets)
+  std::uint64_t malformed = 0;      // wrong length, reserved bits, bad values
+  std::uint64_t foreign = 0;        // valid frames of other nodes or console-bound kinds
+  std::uint64_t duplicates = 0;     // position frames repeating the last sequence number
+  std::uint64_t sequence_gaps = 0;  // position frames missing between sequence numbers
+  std::uint64_t implausible = 0;    // positions out of range or jumping too fast
   std::uint64_t error_frames = 0;
   std::uint64_t bus_off = 0;
   std::uint64_t bus_restarts = 0;
-  std::uint64_t device_reboots = 0;    // boot-up heartbeats after the first contact
+  std::uint64_t device_reboots = 0;  // boot-up heartbeats after the first contact
   std::uint64_t nmt_sent = 0;
   std::uint64_t commands_sent = 0;
   std::uint64_t send_failures = 0;
-  std::uint64_t rejected_commands = 0; // non-finite forces replaced by zero
-  std::uint64_t clamped_commands = 0;  // forces clamped to max_force_n
-  std::uint64_t capped_polls = 0;      // polls that stopped at max_frames_per_poll
+  std::uint64_t rejected_commands = 0;                // non-finite forces replaced by zero
+  std::uint64_t clamped_commands = 0;                 // forces clamped to max_force_n
+  std::uint64_t capped_polls = 0;                     // polls that stopped at max_frames_per_poll
   std::array<std::uint64_t, kFaultReasons> faults{};  // entries into fault, per reason
 };
 
@@ -108,8 +108,8 @@ struct DeviceReport {
   std::uint16_t fault_bits = 0;
   std::uint8_t status_flags = 0;
   double motor_temperature_c = 0.0;
-  EmergencyMsg last_emergency;   // code 0 until the first emergency
-  bool emergency_active = false; // a latched emergency not yet cleared
+  EmergencyMsg last_emergency;    // code 0 until the first emergency
+  bool emergency_active = false;  // a latched emergency not yet cleared
 };
 
 class DeviceDriver {
@@ -160,10 +160,10 @@ class DeviceDriver {
   FaultReason fault_ = FaultReason::none;
   bool seen_device_ = false;
   bool bus_off_ = false;
-  std::int64_t last_alive_ns_ = 0;      // last heartbeat or status
-  std::int64_t clean_since_ns_ = -1;    // first clean status after a fault report; -1: none
+  std::int64_t last_alive_ns_ = 0;    // last heartbeat or status
+  std::int64_t clean_since_ns_ = -1;  // first clean status after a fault report; -1: none
   std::int64_t last_nmt_ns_ = 0;
-  bool nmt_due_ = true;                 // send NMT start at the next chance
+  bool nmt_due_ = true;  // send NMT start at the next chance
   bool have_sequence_ = false;
   std::uint8_t last_sequence_ = 0;
   bool have_position_ = false;

@@ -45,11 +45,11 @@ inline constexpr std::uint32_t kHeartbeatBase = 0x700;
 // One frame of the protocol.
 struct FrameSpec {
   MessageKind kind;
-  const char* name;       // as in haptic.dbc
-  std::uint32_t base;     // identifier for node 0; add the node id (except NMT)
-  std::uint8_t dlc;       // data length, bytes (exactly this; anything else is malformed)
-  bool from_device;       // sent by the device (else by the console)
-  double rate_hz;         // nominal rate while operational; 0: on event or demand
+  const char* name;    // as in haptic.dbc
+  std::uint32_t base;  // identifier for node 0; add the node id (except NMT)
+  std::uint8_t dlc;    // data length, bytes (exactly this; anything else is malformed)
+  bool from_device;    // sent by the device (else by the console)
+  double rate_hz;      // nominal rate while operational; 0: on event or demand
 };
 
 inline constexpr std::array<FrameSpec, kMessageKinds> kFrames = {{
@@ -61,29 +61,27 @@ inline constexpr std::array<FrameSpec, kMessageKinds> kFrames = {{
     {MessageKind::heartbeat, "Heartbeat", kHeartbeatBase, 1, true, 20.0},
 }};
 
-constexpr const FrameSpec& frame_spec(MessageKind kind) {
-  return kFrames[static_cast<std::size_t>(kind)];
-}
+constexpr const FrameSpec& frame_spec(MessageKind kind) { return kFrames[static_cast<std::size_t>(kind)]; }
 constexpr std::uint32_t frame_id(MessageKind kind, std::uint8_t node) {
   return kind == MessageKind::nmt ? kNmtId : frame_spec(kind).base + node;
 }
 static_assert(frame_spec(MessageKind::heartbeat).kind == MessageKind::heartbeat &&
-              frame_spec(MessageKind::status).kind == MessageKind::status &&
-              frame_spec(MessageKind::command).kind == MessageKind::command &&
-              frame_spec(MessageKind::position).kind == MessageKind::position &&
-              frame_spec(MessageKind::emergency).kind == MessageKind::emergency &&
-              frame_spec(MessageKind::nmt).kind == MessageKind::nmt,
+                  frame_spec(MessageKind::status).kind == MessageKind::status &&
+                  frame_spec(MessageKind::command).kind == MessageKind::command &&
+                  frame_spec(MessageKind::position).kind == MessageKind::position &&
+                  frame_spec(MessageKind::emergency).kind == MessageKind::emergency &&
+                  frame_spec(MessageKind::nmt).kind == MessageKind::nmt,
               "kFrames is indexed by MessageKind");
 static_assert(frame_id(MessageKind::position, kMaxNodeId) < frame_id(MessageKind::command, kMinNodeId) &&
-              frame_id(MessageKind::command, kMaxNodeId) < frame_id(MessageKind::status, kMinNodeId) &&
-              frame_id(MessageKind::heartbeat, kMaxNodeId) <= 0x7FF,
+                  frame_id(MessageKind::command, kMaxNodeId) < frame_id(MessageKind::status, kMinNodeId) &&
+                  frame_id(MessageKind::heartbeat, kMaxNodeId) <= 0x7FF,
               "identifier ranges of different kinds never overlap");
 
 // Scales: physical value = counts x scale.
 inline constexpr double kPositionMmPerCount = 0.01;      // encoder resolution
-inline constexpr double kForceNPerCount = 0.001;          // 1 mN
-inline constexpr double kTemperatureDegCPerCount = 0.1;   // 0.1 degC
-inline constexpr double kCurrentAPerCount = 0.001;        // 1 mA
+inline constexpr double kForceNPerCount = 0.001;         // 1 mN
+inline constexpr double kTemperatureDegCPerCount = 0.1;  // 0.1 degC
+inline constexpr double kCurrentAPerCount = 0.001;       // 1 mA
 
 // Timing (ns).
 inline constexpr std::int64_t kPositionPeriodNs = 1'000'000;
@@ -110,9 +108,7 @@ enum class NmtState : std::uint8_t {
   operational = 0x05,
   pre_operational = 0x7F,
 };
-constexpr bool valid_nmt_state(std::uint8_t v) {
-  return v == 0x00 || v == 0x04 || v == 0x05 || v == 0x7F;
-}
+constexpr bool valid_nmt_state(std::uint8_t v) { return v == 0x00 || v == 0x04 || v == 0x05 || v == 0x7F; }
 
 // NMT commands (CANopen values).
 enum class NmtCommand : std::uint8_t {
@@ -156,10 +152,10 @@ struct EmergencySpec {
 };
 inline constexpr std::array<EmergencySpec, 5> kEmergencies = {{
     {0x0000, 0, 0x00, "error reset"},
-    {0x2310, kFaultOverCurrent, 0x03, "over-current"},        // generic | current
-    {0x4210, kFaultOverTemperature, 0x09, "over-temperature"},// generic | temperature
-    {0x5000, kFaultAmplifier, 0x81, "amplifier"},             // generic | manufacturer
-    {0x7305, kFaultEncoder, 0x81, "encoder"},                 // generic | manufacturer
+    {0x2310, kFaultOverCurrent, 0x03, "over-current"},          // generic | current
+    {0x4210, kFaultOverTemperature, 0x09, "over-temperature"},  // generic | temperature
+    {0x5000, kFaultAmplifier, 0x81, "amplifier"},               // generic | manufacturer
+    {0x7305, kFaultEncoder, 0x81, "encoder"},                   // generic | manufacturer
 }};
 // The name of an emergency code ("unknown" for codes not in the table).
 constexpr const char* emergency_name(std::uint16_t code) {
@@ -184,8 +180,8 @@ struct Command {
   std::int16_t fx_counts;  // 1 mN, device frame
   std::int16_t fy_counts;
   std::int16_t fz_counts;
-  std::uint8_t flags;      // kCommand*
-  std::uint8_t sequence;   // +1 per frame, wraps
+  std::uint8_t flags;     // kCommand*
+  std::uint8_t sequence;  // +1 per frame, wraps
 };
 struct Status {
   std::uint8_t nmt_state;           // NmtState
@@ -211,20 +207,18 @@ struct Nmt {
 };
 
 template <typename T>
-constexpr bool kPlain = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T>;
+constexpr bool kPlain = std::is_trivially_copyable_v<T>&& std::is_standard_layout_v<T>;
 
 static_assert(kPlain<Position> && sizeof(Position) == 8 && offsetof(Position, y_counts) == 2 &&
               offsetof(Position, z_counts) == 4 && offsetof(Position, buttons) == 6 &&
               offsetof(Position, sequence) == 7);
 static_assert(kPlain<Command> && sizeof(Command) == 8 && offsetof(Command, fy_counts) == 2 &&
-              offsetof(Command, fz_counts) == 4 && offsetof(Command, flags) == 6 &&
-              offsetof(Command, sequence) == 7);
+              offsetof(Command, fz_counts) == 4 && offsetof(Command, flags) == 6 && offsetof(Command, sequence) == 7);
 static_assert(kPlain<Status> && sizeof(Status) == 8 && offsetof(Status, flags) == 1 &&
               offsetof(Status, fault_bits) == 2 && offsetof(Status, temperature_counts) == 4 &&
               offsetof(Status, reserved) == 6 && offsetof(Status, sequence) == 7);
-static_assert(kPlain<Emergency> && sizeof(Emergency) == 8 &&
-              offsetof(Emergency, error_register) == 2 && offsetof(Emergency, axis) == 3 &&
-              offsetof(Emergency, temperature_counts) == 4 &&
+static_assert(kPlain<Emergency> && sizeof(Emergency) == 8 && offsetof(Emergency, error_register) == 2 &&
+              offsetof(Emergency, axis) == 3 && offsetof(Emergency, temperature_counts) == 4 &&
               offsetof(Emergency, current_counts) == 6);
 static_assert(kPlain<Heartbeat> && sizeof(Heartbeat) == 1);
 static_assert(kPlain<Nmt> && sizeof(Nmt) == 2 && offsetof(Nmt, node) == 1);
@@ -232,11 +226,11 @@ static_assert(kPlain<Nmt> && sizeof(Nmt) == 2 && offsetof(Nmt, node) == 1);
 }  // namespace wire
 
 static_assert(sizeof(wire::Nmt) == frame_spec(MessageKind::nmt).dlc &&
-              sizeof(wire::Emergency) == frame_spec(MessageKind::emergency).dlc &&
-              sizeof(wire::Position) == frame_spec(MessageKind::position).dlc &&
-              sizeof(wire::Command) == frame_spec(MessageKind::command).dlc &&
-              sizeof(wire::Status) == frame_spec(MessageKind::status).dlc &&
-              sizeof(wire::Heartbeat) == frame_spec(MessageKind::heartbeat).dlc,
+                  sizeof(wire::Emergency) == frame_spec(MessageKind::emergency).dlc &&
+                  sizeof(wire::Position) == frame_spec(MessageKind::position).dlc &&
+                  sizeof(wire::Command) == frame_spec(MessageKind::command).dlc &&
+                  sizeof(wire::Status) == frame_spec(MessageKind::status).dlc &&
+                  sizeof(wire::Heartbeat) == frame_spec(MessageKind::heartbeat).dlc,
               "every layout fills its frame exactly");
 
 // Signals as haptic.dbc declares them (Intel byte order; start bit = the
@@ -296,8 +290,7 @@ constexpr bool signals_tile_frames() {
     for (const SignalSpec& s : kSignals) {
       if (s.kind != f.kind) continue;
       if (s.length_bits == 0 || s.start_bit + s.length_bits > 8 * f.dlc) return false;
-      const std::uint64_t bits = (s.length_bits == 64 ? ~0ull : ((1ull << s.length_bits) - 1))
-                                 << s.start_bit;
+      const std::uint64_t bits = (s.length_bits == 64 ? ~0ull : ((1ull << s.length_bits) - 1)) << s.start_bit;
       if ((covered & bits) != 0) return false;
       covered |= bits;
     }
@@ -312,9 +305,7 @@ static_assert(signals_tile_frames(), "kSignals must tile every frame without ove
 constexpr unsigned frame_bits(std::uint8_t dlc) { return 47u + 8u * dlc; }
 // Worst case with bit stuffing: one stuff bit per 4 bits after the first 5 of
 // the 34 + 8 dlc bits from SOF to the end of the CRC.
-constexpr unsigned frame_bits_stuffed(std::uint8_t dlc) {
-  return frame_bits(dlc) + (34u + 8u * dlc - 1u) / 4u;
-}
+constexpr unsigned frame_bits_stuffed(std::uint8_t dlc) { return frame_bits(dlc) + (34u + 8u * dlc - 1u) / 4u; }
 static_assert(frame_bits(8) == 111 && frame_bits_stuffed(8) == 135);
 static_assert(frame_bits(0) == 47 && frame_bits_stuffed(0) == 55);
 

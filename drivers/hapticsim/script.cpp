@@ -68,8 +68,7 @@ Status LineParser::number(const std::string& text, const char* what, double& out
 Status LineParser::seconds(const std::string& text, const char* what, bool allow_zero, double& out) const {
   VISVOL_RETURN_IF_ERROR(number(text, what, out));
   if (out < 0.0 || (!allow_zero && out == 0.0) || out > kMaxSeconds) {
-    return error(std::string(what) + " " + text + (allow_zero ? " must lie in [0, " : " must lie in (0, ") +
-                 "1e6] s");
+    return error(std::string(what) + " " + text + (allow_zero ? " must lie in [0, " : " must lie in (0, ") + "1e6] s");
   }
   return Status::ok_status();
 }
@@ -86,8 +85,8 @@ Status LineParser::expect_args(const std::vector<std::string>& tok, std::size_t 
 Status LineParser::check_target(const std::array<double, 3>& t) const {
   for (std::size_t i = 0; i < 3; ++i) {
     if (std::fabs(t[i]) > half_mm_[i]) {
-      return error("hand target " + std::to_string(t[i]) + " mm on axis " + "xyz"[i] +
-                   " is outside the workspace (+-" + std::to_string(half_mm_[i]) + " mm)");
+      return error("hand target " + std::to_string(t[i]) + " mm on axis " + "xyz"[i] + " is outside the workspace (+-" +
+                   std::to_string(half_mm_[i]) + " mm)");
     }
   }
   return Status::ok_status();
@@ -131,8 +130,8 @@ void LineParser::push_clutch(double t_s, bool on) {
   push(e);
 }
 
-Status LineParser::push_drag(const std::array<double, 3>& start, const std::array<double, 3>& by_mm,
-                             double dur_s, const std::vector<std::string>& tok) {
+Status LineParser::push_drag(const std::array<double, 3>& start, const std::array<double, 3>& by_mm, double dur_s,
+                             const std::vector<std::string>& tok) {
   double stroke_mm = kDefaultStrokeMm;
   if (tok.size() == 7) {
     VISVOL_RETURN_IF_ERROR(number(tok[6], "stroke", stroke_mm));

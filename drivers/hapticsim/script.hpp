@@ -36,14 +36,28 @@
 #include <string>
 #include <vector>
 
-#include "rt/base/status.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
+#include "rt/base/status.hpp"
 
 namespace visvol::hapticsim {
 
 enum class Action : std::uint8_t {
-  hold, let_go, move, grab, release, clutch_on, clutch_off,
-  drop, silent, garbage, wrong_length, freeze, reboot, bus_off, emergency, end,
+  hold,
+  let_go,
+  move,
+  grab,
+  release,
+  clutch_on,
+  clutch_off,
+  drop,
+  silent,
+  garbage,
+  wrong_length,
+  freeze,
+  reboot,
+  bus_off,
+  emergency,
+  end,
 };
 
 struct ScriptEvent {

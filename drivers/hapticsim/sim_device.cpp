@@ -8,15 +8,15 @@ namespace visvol::hapticsim {
 namespace {
 
 using haptic::MessageKind;
-using haptic::norm3;
 using haptic::NmtState;
+using haptic::norm3;
 
 constexpr double kNsPerS = 1e9;
 constexpr double kMmPerM = 1000.0;
-constexpr double kSubstepS = 0.00025;    // physics substep
-constexpr double kMaxStepS = 0.02;       // longer gaps (a stalled process) are cut short
+constexpr double kSubstepS = 0.00025;  // physics substep
+constexpr double kMaxStepS = 0.02;     // longer gaps (a stalled process) are cut short
 constexpr double kStickSpeedMPerS = 1e-6;
-constexpr double kNPerA = 0.5;           // motor force constant, for reported currents
+constexpr double kNPerA = 0.5;  // motor force constant, for reported currents
 constexpr double kTemperatureHysteresisC = 10.0;
 
 double sign(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
@@ -54,9 +54,12 @@ Status SimDevice::validate(const SimConfig& c) {
   for (const double h : c.workspace_half_mm) {
     if (!positive(h) || h > 320.0) return bad("workspace", "half-sizes must lie in (0, 320] mm");
   }
-  if (!non_negative(c.end_stop_n_per_m) || c.end_stop_n_per_m > 1e5) return bad("end stop stiffness", "must lie in [0, 1e5] N/m");
-  if (!non_negative(c.hand_stiffness_n_per_m) || c.hand_stiffness_n_per_m > 1e4) return bad("hand stiffness", "must lie in [0, 1e4] N/m");
-  if (!non_negative(c.hand_damping_n_s_per_m) || c.hand_damping_n_s_per_m > 100.0) return bad("hand damping", "must lie in [0, 100] N s/m");
+  if (!non_negative(c.end_stop_n_per_m) || c.end_stop_n_per_m > 1e5)
+    return bad("end stop stiffness", "must lie in [0, 1e5] N/m");
+  if (!non_negative(c.hand_stiffness_n_per_m) || c.hand_stiffness_n_per_m > 1e4)
+    return bad("hand stiffness", "must lie in [0, 1e4] N/m");
+  if (!non_negative(c.hand_damping_n_s_per_m) || c.hand_damping_n_s_per_m > 100.0)
+    return bad("hand damping", "must lie in [0, 100] N s/m");
   if (c.command_timeout_ns < 1'000'000) return bad("command watchdog", "must be at least 1 ms");
   if (c.heartbeat_period_ns < 1'000'000) return bad("heartbeat period", "must be at least 1 ms");
   if (c.status_period_ns < 1'000'000) return bad("status period", "must be at least 1 ms");
@@ -141,8 +144,7 @@ void SimDevice::receive(std::int64_t now_ns) {
     }
     if (m.kind == MessageKind::nmt && (m.nmt.node == 0 || m.nmt.node == config_.node_id)) {
       on_nmt(m.nmt, now_ns);
-    } else if (m.kind == MessageKind::command && m.node == config_.node_id &&
-               nmt_ == NmtState::operational) {
+    } else if (m.kind == MessageKind::command && m.node == config_.node_id && nmt_ == NmtState::operational) {
       if (have_command_) {
         counters_.command_gaps += static_cast<std::uint8_t>(m.command.sequence - command_.sequence - 1);
       }
@@ -239,8 +241,8 @@ void SimDevice::integrate(double dt_s) {
       const double half_m = config_.workspace_half_mm[i] / kMmPerM;
       double drive = motor_force_n_[i] - config_.viscous_n_s_per_m * v;
       if (hand_.holding) {
-        drive += config_.hand_stiffness_n_per_m * (hand_.target_mm[i] / kMmPerM - x) -
-                 config_.hand_damping_n_s_per_m * v;
+        drive +=
+            config_.hand_stiffness_n_per_m * (hand_.target_mm[i] / kMmPerM - x) - config_.hand_damping_n_s_per_m * v;
       }
       if (x > half_m) drive -= config_.end_stop_n_per_m * (x - half_m);
       if (x < -half_m) drive -= config_.end_stop_n_per_m * (x + half_m);
@@ -274,9 +276,9 @@ void SimDevice::transmit(std::int64_t now_ns) {
     if (now_ns >= next_status_ns_) {
       haptic::StatusMsg s;
       s.nmt_state = nmt_;
-      s.flags = static_cast<std::uint8_t>(
-          (norm3(motor_force_n_) > 0.0 ? haptic::kStatusForceEnabled : 0) |
-          (watchdog_tripped_ ? haptic::kStatusWatchdog : 0) | (saturated_ ? haptic::kStatusSaturated : 0));
+      s.flags = static_cast<std::uint8_t>((norm3(motor_force_n_) > 0.0 ? haptic::kStatusForceEnabled : 0) |
+                                          (watchdog_tripped_ ? haptic::kStatusWatchdog : 0) |
+                                          (saturated_ ? haptic::kStatusSaturated : 0));
       s.fault_bits = fault_bits_;
       s.motor_temperature_c = temperature_c_;
       s.sequence = status_sequence_++;
@@ -356,8 +358,7 @@ void SimDevice::inject_freeze(std::int64_t now_ns, std::int64_t duration_ns) {
   if (now_ns >= freeze_until_ns_) {
     frozen_frame_ = last_position_frame_.len != 0
                         ? last_position_frame_
-                        : haptic::encode(haptic::PositionMsg{position_mm(), 0, position_sequence_},
-                                         config_.node_id);
+                        : haptic::encode(haptic::PositionMsg{position_mm(), 0, position_sequence_}, config_.node_id);
   }
   freeze_until_ns_ = std::max(freeze_until_ns_, now_ns + duration_ns);
 }

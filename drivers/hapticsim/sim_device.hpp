@@ -31,56 +31,56 @@ namespace visvol::hapticsim {
 
 struct SimConfig {
   std::uint8_t node_id = haptic::kDefaultNodeId;
-  double mass_kg = 0.075;               // apparent mass at the handle
-  double viscous_n_s_per_m = 0.4;       // viscous friction
-  double coulomb_n = 0.03;              // dry friction
-  double peak_force_n = 8.5;            // motor force saturation
-  double encoder_mm = 0.01;             // position quantisation
+  double mass_kg = 0.075;                                          // apparent mass at the handle
+  double viscous_n_s_per_m = 0.4;                                  // viscous friction
+  double coulomb_n = 0.03;                                         // dry friction
+  double peak_force_n = 8.5;                                       // motor force saturation
+  double encoder_mm = 0.01;                                        // position quantisation
   std::array<double, 3> workspace_half_mm = {190.5, 133.5, 95.5};  // 381 x 267 x 191 mm
-  double end_stop_n_per_m = 3000.0;     // stiffness beyond the workspace
-  double hand_stiffness_n_per_m = 300.0;  // operator's grip
+  double end_stop_n_per_m = 3000.0;                                // stiffness beyond the workspace
+  double hand_stiffness_n_per_m = 300.0;                           // operator's grip
   double hand_damping_n_s_per_m = 3.0;
   std::int64_t command_timeout_ns = haptic::kDeviceCommandTimeoutNs;
   std::int64_t heartbeat_period_ns = haptic::kHeartbeatPeriodNs;
   std::int64_t status_period_ns = haptic::kStatusPeriodNs;
-  std::int64_t boot_delay_ns = 0;       // powered off (silent) for this long first
+  std::int64_t boot_delay_ns = 0;  // powered off (silent) for this long first
   double ambient_c = 25.0;
-  double heating_c_per_n2 = 10.0;       // steady-state rise per N^2 of force
+  double heating_c_per_n2 = 10.0;  // steady-state rise per N^2 of force
   double thermal_time_s = 30.0;
-  double over_temperature_c = 90.0;     // fault above, cleared 10 degC below
-  double drop_fraction = 0.0;           // frames dropped in both directions
-  std::uint64_t seed = 1;               // drops and garbage
+  double over_temperature_c = 90.0;  // fault above, cleared 10 degC below
+  double drop_fraction = 0.0;        // frames dropped in both directions
+  std::uint64_t seed = 1;            // drops and garbage
 };
 
 // The operator's hand.
 struct Hand {
-  bool holding = true;                      // false: the handle moves freely
-  std::array<double, 3> target_mm{};        // where the hand pulls the handle
-  bool grasp = false;                       // button 1
-  bool clutch = false;                      // button 2
+  bool holding = true;                // false: the handle moves freely
+  std::array<double, 3> target_mm{};  // where the hand pulls the handle
+  bool grasp = false;                 // button 1
+  bool clutch = false;                // button 2
 };
 
 // What happened, for summaries and test assertions.
 struct SimCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t send_failures = 0;
-  std::uint64_t tx_dropped = 0;          // dropped by drop injection
+  std::uint64_t tx_dropped = 0;  // dropped by drop injection
   std::uint64_t rx_dropped = 0;
-  std::uint64_t rx_ignored = 0;          // received while silent, bus-off or off
-  std::uint64_t commands = 0;            // valid force commands received in operational
-  std::uint64_t command_gaps = 0;        // commands missing between sequence numbers
-  std::uint64_t malformed = 0;           // frames for this device that failed to decode
-  std::uint64_t nmt_commands = 0;        // NMT commands for this node
-  std::uint64_t watchdog_trips = 0;      // force zeroed for lack of commands
+  std::uint64_t rx_ignored = 0;      // received while silent, bus-off or off
+  std::uint64_t commands = 0;        // valid force commands received in operational
+  std::uint64_t command_gaps = 0;    // commands missing between sequence numbers
+  std::uint64_t malformed = 0;       // frames for this device that failed to decode
+  std::uint64_t nmt_commands = 0;    // NMT commands for this node
+  std::uint64_t watchdog_trips = 0;  // force zeroed for lack of commands
   std::uint64_t saturated_steps = 0;
-  std::uint64_t force_steps = 0;         // steps with a non-zero motor force
+  std::uint64_t force_steps = 0;  // steps with a non-zero motor force
   std::uint64_t operational_steps = 0;
   std::uint64_t boots = 0;
-  std::uint64_t emergencies = 0;         // emergency frames sent (faults and resets)
+  std::uint64_t emergencies = 0;  // emergency frames sent (faults and resets)
   std::uint64_t garbage_sent = 0;
   std::uint64_t bus_off_events = 0;
-  double max_force_n = 0.0;              // largest motor force applied
-  double max_commanded_n = 0.0;          // largest enabled force command received
+  double max_force_n = 0.0;      // largest motor force applied
+  double max_commanded_n = 0.0;  // largest enabled force command received
   std::int64_t first_operational_ns = -1;
 };
 

@@ -25,8 +25,7 @@ class SimulatedDevice final : public rt::DeviceSimulation {
  public:
   // `script` may be empty (the hand rests at the centre); start_ns is when the
   // script's time 0 falls (CLOCK_MONOTONIC, or any clock the ticks use).
-  static Result<std::unique_ptr<SimulatedDevice>> create(const SimConfig& config,
-                                                         Script script, std::int64_t start_ns);
+  static Result<std::unique_ptr<SimulatedDevice>> create(const SimConfig& config, Script script, std::int64_t start_ns);
 
   void step(std::int64_t now_ns) override;
   can::CanBus& console_bus() { return bus_.endpoint(0); }

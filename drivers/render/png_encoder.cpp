@@ -71,8 +71,7 @@ void on_warning(png_structp, png_const_charp) {}  // nothing a valid RGB image c
 // The libpng sequence. Kept free of C++ objects with destructors: libpng
 // reports errors by longjmp back to the setjmp here.
 int write_png(Context* c, const std::uint8_t* const* rows, png_uint_32 width, png_uint_32 height, int level) {
-  png_structp png = png_create_write_struct_2(PNG_LIBPNG_VER_STRING, c, on_error, on_warning, c, on_malloc,
-                                              on_free);
+  png_structp png = png_create_write_struct_2(PNG_LIBPNG_VER_STRING, c, on_error, on_warning, c, on_malloc, on_free);
   if (png == nullptr) return 1;
   png_infop info = png_create_info_struct(png);
   if (info == nullptr) {
@@ -84,8 +83,8 @@ int write_png(Context* c, const std::uint8_t* const* rows, png_uint_32 width, pn
     return 1;
   }
   png_set_write_fn(png, c, on_write, on_flush);
-  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, level);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, level <= 3 ? PNG_FILTER_SUB : PNG_ALL_FILTERS);
   png_write_info(png, info);
@@ -104,8 +103,7 @@ std::size_t PngEncoder::worst_case_bytes(int width_px, int height_px) {
   return raw + (raw / 16383 + 1) * 5 + (raw / 8192 + 1) * 12 + 1024;
 }
 
-Result<std::unique_ptr<PngEncoder>> PngEncoder::create(int max_width_px, int max_height_px,
-                                                        int compression_level) {
+Result<std::unique_ptr<PngEncoder>> PngEncoder::create(int max_width_px, int max_height_px, int compression_level) {
   if (max_width_px < 1 || max_height_px < 1 || max_width_px > 16384 || max_height_px > 16384) {
     return invalid_argument("PNG size " + std::to_string(max_width_px) + " x " + std::to_string(max_height_px) +
                             " is outside 1..16384 pixels a side");
@@ -127,8 +125,8 @@ Result<std::unique_ptr<PngEncoder>> PngEncoder::create(int max_width_px, int max
 
 PngEncoder::~PngEncoder() = default;
 
-Result<std::size_t> PngEncoder::encode(const std::uint8_t* rgba, int width_px, int height_px,
-                                       std::size_t stride_bytes, std::uint8_t* out, std::size_t capacity_bytes) {
+Result<std::size_t> PngEncoder::encode(const std::uint8_t* rgba, int width_px, int height_px, std::size_t stride_bytes,
+                                       std::uint8_t* out, std::size_t capacity_bytes) {
   if (rgba == nullptr || out == nullptr) return invalid_argument("PNG encode: null pixels or output buffer");
   if (width_px < 1 || height_px < 1 || width_px > max_width_ || height_px > max_height_) {
     return invalid_argument("PNG encode: image " + std::to_string(width_px) + " x " + std::to_string(height_px) +
@@ -138,25 +136,25 @@ Result<std::size_t> PngEncoder::encode(const std::uint8_t* rgba, int width_px, i
   if (stride_bytes < static_cast<std::size_t>(width_px) * 4) {
     return invalid_argument("PNG encode: row stride " + std::to_string(stride_bytes) + " bytes is under 4 x width");
   }
-  for (int y = 0; y < height_px; ++y) rows_[static_cast<std::size_t>(y)] = rgba + static_cast<std::size_t>(y) * stride_bytes;
+  for (int y = 0; y < height_px; ++y)
+    rows_[static_cast<std::size_t>(y)] = rgba + static_cast<std::size_t>(y) * stride_bytes;
   Context& c = *context_;
   c = Context{};
   c.arena = arena_.get();
   c.arena_size = arena_size_;
   c.out = out;
   c.out_capacity = capacity_bytes;
-  const int rc = write_png(&c, rows_.get(), static_cast<png_uint_32>(width_px), static_cast<png_uint_32>(height_px),
-                           level_);
+  const int rc =
+      write_png(&c, rows_.get(), static_cast<png_uint_32>(width_px), static_cast<png_uint_32>(height_px), level_);
   arena_high_water_ = c.arena_offset;
   if (rc != 0) {
     if (c.out_full) {
-      return resource_error("PNG of " + std::to_string(width_px) + " x " + std::to_string(height_px) +
-                            " at level " + std::to_string(level_) + " does not fit the " +
-                            std::to_string(capacity_bytes) + "-byte output buffer");
+      return resource_error("PNG of " + std::to_string(width_px) + " x " + std::to_string(height_px) + " at level " +
+                            std::to_string(level_) + " does not fit the " + std::to_string(capacity_bytes) +
+                            "-byte output buffer");
     }
     if (c.arena_exhausted) {
-      return resource_error("PNG encode: libpng needed more than the " + std::to_string(arena_size_) +
-                            "-byte arena");
+      return resource_error("PNG encode: libpng needed more than the " + std::to_string(arena_size_) + "-byte arena");
     }
     return Status(Errc::io, std::string("PNG encode: libpng: ") + (c.error[0] ? c.error : "out of memory"));
   }

@@ -23,8 +23,7 @@ namespace visvol::render {
 class PngEncoder {
  public:
   // Sizes up to max_width_px x max_height_px; compression_level 0..9.
-  static Result<std::unique_ptr<PngEncoder>> create(int max_width_px, int max_height_px,
-                                                    int compression_level);
+  static Result<std::unique_ptr<PngEncoder>> create(int max_width_px, int max_height_px, int compression_level);
   ~PngEncoder();
   PngEncoder(const PngEncoder&) = delete;
   PngEncoder& operator=(const PngEncoder&) = delete;

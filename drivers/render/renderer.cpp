@@ -284,8 +284,8 @@ double Renderer::Impl::ground_m(double x_m, double y_m) const {
   const int i = std::min(static_cast<int>(gi), nx - 2), j = std::min(static_cast<int>(gj), ny - 2);
   const double fi = gi - i, fj = gj - j;
   const auto h = [&](int a, int b) {
-    return static_cast<double>(heights_m[static_cast<std::size_t>(b) * static_cast<std::size_t>(nx) +
-                                         static_cast<std::size_t>(a)]);
+    return static_cast<double>(
+        heights_m[static_cast<std::size_t>(b) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(a)]);
   };
   const double top = h(i, j) + fi * (h(i + 1, j) - h(i, j));
   const double bottom = h(i, j + 1) + fi * (h(i + 1, j + 1) - h(i, j + 1));
@@ -299,8 +299,8 @@ Status Renderer::Impl::build_meshes(int max_width, int max_height) {
   // the finest mesh has a vertex every two pixels at the largest size
   const int finest = std::max(1, static_cast<int>(std::floor(2.0 * posts / std::max(1, px))));
   for (int step : detail::mesh_steps(finest, posts)) {
-    detail::TerrainMesh m = detail::terrain_mesh(heights_m, nx, ny, step, spacing_m, origin_x_m, origin_y_m,
-                                                 frame, field_box.min.z());
+    detail::TerrainMesh m =
+        detail::terrain_mesh(heights_m, nx, ny, step, spacing_m, origin_x_m, origin_y_m, frame, field_box.min.z());
     Mesh g;
     g.step = step;
     g.nx = m.nx;
@@ -1022,8 +1022,7 @@ std::optional<PixelPoint> Renderer::Impl::slice_point(const PixelRect& scene, do
                     scene.y + (slice_z_top_m - z_m) / (slice_z_top_m - slice_z_bottom_m) * scene.height};
 }
 
-void Renderer::Impl::overlay_slice(const Frame& f, const FrameLayout& layout, const Sizes& z,
-                                   OverlayBuilder& o) const {
+void Renderer::Impl::overlay_slice(const Frame& f, const FrameLayout& layout, const Sizes& z, OverlayBuilder& o) const {
   // the path: a dark outline, then the line coloured by F_p, then the ends
   const PixelRect& scene = layout.scene;
   const std::size_t n = f.path_size;
@@ -1040,8 +1039,7 @@ void Renderer::Impl::overlay_slice(const Frame& f, const FrameLayout& layout, co
     }
   }
   marker(o, *slice_point(scene, 0, f.path[0].z_m), z.marker_radius_px, Shape::disc, kStartColour, kDark);
-  marker(o, *slice_point(scene, slice_length_m, f.path[n - 1].z_m), z.marker_radius_px, Shape::square, kWhite,
-         kDark);
+  marker(o, *slice_point(scene, slice_length_m, f.path[n - 1].z_m), z.marker_radius_px, Shape::square, kWhite, kDark);
   // the heights of the panel's top and bottom edges
   char label[32];
   std::snprintf(label, sizeof label, "%.0f m", slice_z_top_m);
@@ -1183,8 +1181,8 @@ void Renderer::Impl::draw_slice(const PixelRect& scene) const {
   glBindTexture(GL_TEXTURE_2D, profile_tex);
   glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, scene.width, 1, GL_RGBA, GL_FLOAT, profile.data());
   glUseProgram(slice.id);
-  glUniform4f(slice.viewport, static_cast<float>(scene.x), static_cast<float>(scene.y),
-              static_cast<float>(scene.width), static_cast<float>(scene.height));
+  glUniform4f(slice.viewport, static_cast<float>(scene.x), static_cast<float>(scene.y), static_cast<float>(scene.width),
+              static_cast<float>(scene.height));
   glUniform1i(slice.profile, 2);
   glUniform1i(slice.field, 0);
   glUniform1i(slice.colour_map, 1);

@@ -117,10 +117,10 @@ struct PixelRect {
 // Where things are in the last frame (pixels, x right, y down).
 struct FrameLayout {
   int width_px = 0, height_px = 0;
-  PixelRect scene;       // the 3D scene or the slice panel
-  PixelRect colour_bar;  // F_p 0 at the bottom row, 1 at the top row
-  double metres_per_px = 0;  // horizontal scale at the terrain's centre (slice: along the path)
-  double scale_bar_m = 0;    // the scale bar's length
+  PixelRect scene;                           // the 3D scene or the slice panel
+  PixelRect colour_bar;                      // F_p 0 at the bottom row, 1 at the top row
+  double metres_per_px = 0;                  // horizontal scale at the terrain's centre (slice: along the path)
+  double scale_bar_m = 0;                    // the scale bar's length
   std::size_t overlay_vertices_dropped = 0;  // always 0 unless the overlay's reserve is too small (a bug)
 };
 
@@ -129,9 +129,9 @@ struct SceneInfo {
   int terrain_nx = 0, terrain_ny = 0;  // level 0 posts
   std::vector<int> mesh_steps;         // post strides of the prepared meshes, finest first
   int volume_nx = 0, volume_ny = 0, volume_nz = 0;
-  int volume_stride = 1;               // posts averaged per texel side
+  int volume_stride = 1;  // posts averaged per texel side
   double vertical_exaggeration = 1.0;
-  double fp_max = 1.0;                 // F_p at the top of the colour scale
+  double fp_max = 1.0;  // F_p at the top of the colour scale
   std::string gl_renderer, gl_version;
 };
 

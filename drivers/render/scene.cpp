@@ -50,8 +50,8 @@ Mat4 ortho(double half_w, double half_h, double near_m, double far_m) {
 std::array<Vec3, 8> corners(const Box& b) {
   std::array<Vec3, 8> c;
   for (int n = 0; n < 8; ++n) {
-    c[static_cast<std::size_t>(n)] = Vec3((n & 1) ? b.max.x() : b.min.x(), (n & 2) ? b.max.y() : b.min.y(),
-                                          (n & 4) ? b.max.z() : b.min.z());
+    c[static_cast<std::size_t>(n)] =
+        Vec3((n & 1) ? b.max.x() : b.min.x(), (n & 2) ? b.max.y() : b.min.y(), (n & 4) ? b.max.z() : b.min.z());
   }
   return c;
 }
@@ -118,8 +118,8 @@ Camera oblique_camera(const Box& box, const PixelRect& viewport) {
   const Vec3 eye = centre + distance * Vec3(std::cos(elevation) * std::sin(azimuth),
                                             std::cos(elevation) * std::cos(azimuth), std::sin(elevation));
   const Mat4 view = look_at(eye, centre, Vec3::UnitZ());
-  const Mat4 proj = perspective(30.0 * kPi / 180.0, aspect_of(viewport), distance - 1.1 * radius,
-                                distance + 1.1 * radius);
+  const Mat4 proj =
+      perspective(30.0 * kPi / 180.0, aspect_of(viewport), distance - 1.1 * radius, distance + 1.1 * radius);
   return fitted(proj * view, box, viewport, true, eye);
 }
 
@@ -179,9 +179,9 @@ TerrainMesh terrain_mesh(const std::vector<float>& heights_m, int nx, int ny, in
   m.ny = static_cast<int>(sj.size());
   const auto at = [&](int a, int b) {
     const int i = si[static_cast<std::size_t>(a)], j = sj[static_cast<std::size_t>(b)];
-    return frame.to_scene(origin_x_m + i * spacing_m, origin_y_m - j * spacing_m,
-                          heights_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-                                    static_cast<std::size_t>(i)]);
+    return frame.to_scene(
+        origin_x_m + i * spacing_m, origin_y_m - j * spacing_m,
+        heights_m[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)]);
   };
   const auto push = [&](const Vec3& p, const Vec3& n, double skirt) {
     for (double v : {p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), skirt}) m.vertices.push_back(static_cast<float>(v));
@@ -202,8 +202,8 @@ TerrainMesh terrain_mesh(const std::vector<float>& heights_m, int nx, int ny, in
   const auto index = [&](int a, int b) { return static_cast<std::uint32_t>(b * m.nx + a); };
   for (int b = 0; b + 1 < m.ny; ++b) {
     for (int a = 0; a + 1 < m.nx; ++a) {
-      for (std::uint32_t v : {index(a, b), index(a, b + 1), index(a + 1, b), index(a + 1, b), index(a, b + 1),
-                              index(a + 1, b + 1)}) {
+      for (std::uint32_t v :
+           {index(a, b), index(a, b + 1), index(a + 1, b), index(a + 1, b), index(a, b + 1), index(a + 1, b + 1)}) {
         m.indices.push_back(v);
       }
     }

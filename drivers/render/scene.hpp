@@ -46,7 +46,7 @@ struct Camera {
   Mat4 view_proj = Mat4::Identity();  // scene -> clip
   Mat4 inverse = Mat4::Identity();    // clip -> scene
   PixelRect viewport;
-  Vec3 eye = Vec3::Zero();            // scene position (perspective cameras)
+  Vec3 eye = Vec3::Zero();  // scene position (perspective cameras)
   bool perspective = false;
 
   // Pixel position of a scene point; nullopt behind the camera.

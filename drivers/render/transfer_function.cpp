@@ -30,8 +30,8 @@ template <class Point, class Value>
 auto interpolate(const std::vector<Point>& points, double fp, Value value) {
   if (fp <= points.front().fp) return value(points.front());
   if (fp >= points.back().fp) return value(points.back());
-  const auto upper = std::upper_bound(points.begin(), points.end(), fp,
-                                      [](double f, const Point& p) { return f < p.fp; });
+  const auto upper =
+      std::upper_bound(points.begin(), points.end(), fp, [](double f, const Point& p) { return f < p.fp; });
   const Point& b = *upper;
   const Point& a = *(upper - 1);
   const double t = (fp - a.fp) / (b.fp - a.fp);
@@ -85,8 +85,7 @@ Status validate(const TransferFunction& tf, const std::string& name) {
   if (tf.colour.empty()) return invalid_argument(name + ": no colour points (need 'colour F R G B')");
   if (tf.opacity.empty()) return invalid_argument(name + ": no opacity points (need 'opacity F A')");
   if (tf.colour.size() > kMaxTransferPoints || tf.opacity.size() > kMaxTransferPoints) {
-    return invalid_argument(name + ": more than " + std::to_string(kMaxTransferPoints) +
-                            " points of one kind");
+    return invalid_argument(name + ": more than " + std::to_string(kMaxTransferPoints) + " points of one kind");
   }
   for (std::size_t i = 0; i < tf.colour.size(); ++i) {
     const ColourPoint& p = tf.colour[i];
@@ -142,11 +141,11 @@ Result<TransferFunction> parse_transfer_function(std::string_view text, const st
         return invalid_argument(where + what + " " + number_text(v[n]) + " is outside [0, 1]");
       }
     }
-    const double previous = colour ? (tf.colour.empty() ? -1.0 : tf.colour.back().fp)
-                                   : (tf.opacity.empty() ? -1.0 : tf.opacity.back().fp);
+    const double previous =
+        colour ? (tf.colour.empty() ? -1.0 : tf.colour.back().fp) : (tf.opacity.empty() ? -1.0 : tf.opacity.back().fp);
     if (!(v[0] > previous)) {
-      return invalid_argument(where + "F " + number_text(v[0]) + " is not above the previous " + w[0] +
-                              " point's " + number_text(previous));
+      return invalid_argument(where + "F " + number_text(v[0]) + " is not above the previous " + w[0] + " point's " +
+                              number_text(previous));
     }
     if ((colour ? tf.colour.size() : tf.opacity.size()) >= kMaxTransferPoints) {
       return invalid_argument(where + "more than " + std::to_string(kMaxTransferPoints) + " " + w[0] + " points");

@@ -27,10 +27,10 @@ struct VsiCloser {
 bool is_header_key(std::string word) {
   std::transform(word.begin(), word.end(), word.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  static const std::array<const char*, 19> keys = {
-      "ncols", "nrows", "xllcorner", "yllcorner", "xllcenter", "yllcenter", "cellsize",
-      "dx",    "dy",    "nodata_value", "north", "south", "east", "west", "rows", "cols",
-      "null",  "type",  "multiplier"};
+  static const std::array<const char*, 19> keys = {"ncols",     "nrows",    "xllcorner", "yllcorner", "xllcenter",
+                                                   "yllcenter", "cellsize", "dx",        "dy",        "nodata_value",
+                                                   "north",     "south",    "east",      "west",      "rows",
+                                                   "cols",      "null",     "type",      "multiplier"};
   return std::find(keys.begin(), keys.end(), word) != keys.end();
 }
 
@@ -96,9 +96,7 @@ std::string key_of(const std::string& word) { return word.substr(0, word.find(':
 
 }  // namespace
 
-bool is_ascii_grid_driver(const std::string& driver) {
-  return driver == "AAIGrid" || driver == "GRASSASCIIGrid";
-}
+bool is_ascii_grid_driver(const std::string& driver) { return driver == "AAIGrid" || driver == "GRASSASCIIGrid"; }
 
 Status check_ascii_grid_cells(const std::string& path, int nx, int ny) {
   std::unique_ptr<VSILFILE, VsiCloser> f(VSIFOpenL(path.c_str(), "rb"));
@@ -114,8 +112,7 @@ Status check_ascii_grid_cells(const std::string& path, int nx, int ny) {
     if (in_header) {
       if (take_nodata) nodata_token = word;
       const std::size_t colon = word.find(':');
-      if (starts_line && is_nodata_key(key_of(word)) && colon != std::string::npos &&
-          colon + 1 < word.size()) {
+      if (starts_line && is_nodata_key(key_of(word)) && colon != std::string::npos && colon + 1 < word.size()) {
         nodata_token = word.substr(colon + 1);  // "null:*"
       }
       take_nodata = starts_line && is_nodata_key(key_of(word));
@@ -123,10 +120,10 @@ Status check_ascii_grid_cells(const std::string& path, int nx, int ny) {
     }
     if (n < cells && !is_number(word) && word != nodata_token) {
       std::ostringstream msg;
-      msg << path << ": cell (" << n % static_cast<std::size_t>(nx) << ", "
-          << n / static_cast<std::size_t>(nx) << ") (column, row from the north-west) is '"
-          << (word.size() > kMaxCellChars ? word.substr(0, kMaxCellChars) + "..." : word)
-          << "', not a number" << (nodata_token.empty() ? "" : " nor the nodata value '" + nodata_token + "'")
+      msg << path << ": cell (" << n % static_cast<std::size_t>(nx) << ", " << n / static_cast<std::size_t>(nx)
+          << ") (column, row from the north-west) is '"
+          << (word.size() > kMaxCellChars ? word.substr(0, kMaxCellChars) + "..." : word) << "', not a number"
+          << (nodata_token.empty() ? "" : " nor the nodata value '" + nodata_token + "'")
           << "; GDAL would read it as 0 m";
       return invalid_argument(msg.str());
     }
@@ -135,8 +132,7 @@ Status check_ascii_grid_cells(const std::string& path, int nx, int ny) {
   if (words.failed()) return io_error(path + ": read failed while checking its cells");
   if (n != cells) {
     std::ostringstream msg;
-    msg << path << ": has " << n << " cells after its header; its size " << nx << " x " << ny
-        << " needs " << cells;
+    msg << path << ": has " << n << " cells after its header; its size " << nx << " x " << ny << " needs " << cells;
     return invalid_argument(msg.str());
   }
   return Status::ok_status();

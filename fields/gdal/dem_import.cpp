@@ -49,8 +49,7 @@ Result<OGRSpatialReference> parse_srs(const std::string& text, const std::string
   OGRSpatialReference srs;
   srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   // the limited forms: no URL fetched, no file read (EPSG:, WKT, PROJ strings)
-  if (srs.SetFromUserInput(text.c_str(), OGRSpatialReference::SET_FROM_USER_INPUT_LIMITATIONS_get()) !=
-      OGRERR_NONE) {
+  if (srs.SetFromUserInput(text.c_str(), OGRSpatialReference::SET_FROM_USER_INPUT_LIMITATIONS_get()) != OGRERR_NONE) {
     return invalid_argument(what + " '" + text + "' is not a CRS GDAL knows (try EPSG:<code>)");
   }
   return srs;
@@ -101,17 +100,16 @@ struct ImportPlan {
   DemInfo info;                    // the file as it is
   OGRSpatialReference source_srs;  // valid when has_srs
   bool has_srs = false;
-  DatasetPtr assumed;              // a VRT over the file with the assumed CRS, or none
-  std::string target;              // CRS to project to; empty: keep the source's
-  bool warp = false;               // reproject or resample
-  double spacing_m = 0;            // -tr of the warp; 0: GDAL's choice
-  std::string steps;               // what was decided, for people ("assumed CRS ...; ")
+  DatasetPtr assumed;    // a VRT over the file with the assumed CRS, or none
+  std::string target;    // CRS to project to; empty: keep the source's
+  bool warp = false;     // reproject or resample
+  double spacing_m = 0;  // -tr of the warp; 0: GDAL's choice
+  std::string steps;     // what was decided, for people ("assumed CRS ...; ")
 };
 
 // The source CRS: the file's own, or the one the user says it has (carried by
 // an in-memory VRT; the user's file is never touched).
-Status plan_source_srs(GDALDataset& src, const std::string& path, const ImportOptions& options,
-                       ImportPlan& plan) {
+Status plan_source_srs(GDALDataset& src, const std::string& path, const ImportOptions& options, ImportPlan& plan) {
   plan.source_srs.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   if (!plan.info.crs_wkt.empty()) {
     plan.has_srs = plan.source_srs.importFromWkt(plan.info.crs_wkt.c_str()) == OGRERR_NONE;
@@ -183,8 +181,8 @@ Result<ImportPlan> plan_import(GDALDataset& src, const std::string& path, const 
   VISVOL_RETURN_IF_ERROR(plan_target(path, options, plan));
   // Non-square pixels of a projected DEM become square ones of the same area.
   const double* gt = plan.info.geotransform;
-  const bool square = std::fabs(std::fabs(gt[1]) - std::fabs(gt[5])) <= 1e-3 * std::fabs(gt[1]) &&
-                      gt[2] == 0 && gt[4] == 0 && gt[1] > 0 && gt[5] < 0;
+  const bool square = std::fabs(std::fabs(gt[1]) - std::fabs(gt[5])) <= 1e-3 * std::fabs(gt[1]) && gt[2] == 0 &&
+                      gt[4] == 0 && gt[1] > 0 && gt[5] < 0;
   const bool resample = options.spacing_m > 0 || (!square && !geographic);
   plan.warp = !plan.target.empty() || resample;
   plan.spacing_m = options.spacing_m;
@@ -220,23 +218,22 @@ Result<BoundingBox> inner_footprint(void* transformer, int nx, int ny, const std
   std::vector<double> x, y, z;
   for (int n = 0; n <= kSteps; ++n) {
     const double f = static_cast<double>(n) / kSteps;
-    for (const auto& [px, py] : {std::pair{0.0, f * ny}, std::pair{1.0 * nx, f * ny},
-                                  std::pair{f * nx, 0.0}, std::pair{f * nx, 1.0 * ny}}) {
+    for (const auto& [px, py] :
+         {std::pair{0.0, f * ny}, std::pair{1.0 * nx, f * ny}, std::pair{f * nx, 0.0}, std::pair{f * nx, 1.0 * ny}}) {
       x.push_back(px);
       y.push_back(py);
       z.push_back(0.0);
     }
   }
   std::vector<int> ok(x.size(), 0);
-  GDALGenImgProjTransform(transformer, FALSE, static_cast<int>(x.size()), x.data(), y.data(), z.data(),
-                          ok.data());
+  GDALGenImgProjTransform(transformer, FALSE, static_cast<int>(x.size()), x.data(), y.data(), z.data(), ok.data());
   BoundingBox b{-HUGE_VAL, -HUGE_VAL, HUGE_VAL, HUGE_VAL};
   for (std::size_t n = 0; n < x.size(); ++n) {
     if (!ok[n]) return io_error(path + ": an edge of the DEM does not transform to the output CRS");
     switch (n % 4) {
-      case 0: b.xmin = std::max(b.xmin, x[n]); break;  // west edge
-      case 1: b.xmax = std::min(b.xmax, x[n]); break;  // east edge
-      case 2: b.ymax = std::min(b.ymax, y[n]); break;  // north edge
+      case 0: b.xmin = std::max(b.xmin, x[n]); break;   // west edge
+      case 1: b.xmax = std::min(b.xmax, x[n]); break;   // east edge
+      case 2: b.ymax = std::min(b.ymax, y[n]); break;   // north edge
       default: b.ymin = std::max(b.ymin, y[n]); break;  // south edge
     }
   }
@@ -267,8 +264,8 @@ Result<SuggestedWarp> suggest_warp(GDALDataset& in, const ImportPlan& plan, cons
       GDALCreateGenImgProjTransformer2(GDALDataset::ToHandle(&in), nullptr, transformer_options.List()));
   if (!w.transformer) return io_error(path + ": cannot transform to the output CRS: " + gdal::last_gdal_error());
   int nx = 0, ny = 0;
-  if (GDALSuggestedWarpOutput2(GDALDataset::ToHandle(&in), GDALGenImgProjTransform, w.transformer.get(), w.gt,
-                               &nx, &ny, w.extent, 0) != CE_None) {
+  if (GDALSuggestedWarpOutput2(GDALDataset::ToHandle(&in), GDALGenImgProjTransform, w.transformer.get(), w.gt, &nx, &ny,
+                               w.extent, 0) != CE_None) {
     return io_error(path + ": cannot find the output grid: " + gdal::last_gdal_error());
   }
   return w;
@@ -289,13 +286,12 @@ Result<ImportGrid> warped_grid(GDALDataset& in, const ImportPlan& plan, const st
 
 // Refuses a warp whose output would exceed the size limits, before GDAL
 // allocates and fills it (posts a side as gdalwarp rounds them).
-Status check_warp_size(GDALDataset& in, const ImportPlan& plan, const ImportOptions& options,
-                       const std::string& path) {
+Status check_warp_size(GDALDataset& in, const ImportPlan& plan, const ImportOptions& options, const std::string& path) {
   Result<SuggestedWarp> w = suggest_warp(in, plan, path);
   if (!w.ok()) return w.status();
   const double spacing_m = plan.spacing_m > 0 ? plan.spacing_m : w->gt[1];
-  const BoundingBox box = options.crop ? *options.crop
-                                       : BoundingBox{w->extent[0], w->extent[1], w->extent[2], w->extent[3]};
+  const BoundingBox box =
+      options.crop ? *options.crop : BoundingBox{w->extent[0], w->extent[1], w->extent[2], w->extent[3]};
   const double nx = std::floor((box.xmax - box.xmin) / spacing_m + 0.5);
   const double ny = std::floor((box.ymax - box.ymin) / spacing_m + 0.5);
   if (std::isfinite(nx) && std::isfinite(ny) && nx <= kMaxPostsPerSide && ny <= kMaxPostsPerSide &&
@@ -330,14 +326,16 @@ BoundingBox whole_posts(const BoundingBox& b, double spacing_m) {
 }
 
 // Each side of `need` that `covered` does not reach, and by how much.
-Status check_covered(const BoundingBox& covered, const BoundingBox& need, const BoundingBox& area,
-                     double margin_m, const std::string& option) {
+Status check_covered(const BoundingBox& covered, const BoundingBox& need, const BoundingBox& area, double margin_m,
+                     const std::string& option) {
   const double tolerance_m = 1e-6;
   const struct {
     const char* side;
     double short_m;
-  } sides[] = {{"west", covered.xmin - need.xmin}, {"east", need.xmax - covered.xmax},
-               {"south", covered.ymin - need.ymin}, {"north", need.ymax - covered.ymax}};
+  } sides[] = {{"west", covered.xmin - need.xmin},
+               {"east", need.xmax - covered.xmax},
+               {"south", covered.ymin - need.ymin},
+               {"north", need.ymax - covered.ymax}};
   std::ostringstream shortfall;
   for (const auto& s : sides) {
     if (s.short_m <= tolerance_m) continue;
@@ -346,11 +344,10 @@ Status check_covered(const BoundingBox& covered, const BoundingBox& need, const 
   }
   if (shortfall.tellp() == 0) return Status::ok_status();
   std::ostringstream msg;
-  msg << std::fixed << std::setprecision(1) << option << " " << area.xmin << " " << area.ymin << " "
-      << area.xmax << " " << area.ymax << " with its planning margin of " << margin_m
-      << " m needs the DEM over x " << need.xmin << ".." << need.xmax << ", y " << need.ymin << ".."
-      << need.ymax << " (pixel edges); it covers x " << covered.xmin << ".." << covered.xmax << ", y "
-      << covered.ymin << ".." << covered.ymax << ": " << shortfall.str();
+  msg << std::fixed << std::setprecision(1) << option << " " << area.xmin << " " << area.ymin << " " << area.xmax << " "
+      << area.ymax << " with its planning margin of " << margin_m << " m needs the DEM over x " << need.xmin << ".."
+      << need.xmax << ", y " << need.ymin << ".." << need.ymax << " (pixel edges); it covers x " << covered.xmin << ".."
+      << covered.xmax << ", y " << covered.ymin << ".." << covered.ymax << ": " << shortfall.str();
   return invalid_argument(msg.str());
 }
 
@@ -375,8 +372,7 @@ std::string utm_srs_for(double lon_deg, double lat_deg) {
   return "EPSG:" + std::to_string((lat_deg >= 0 ? 32600 : 32700) + zone);
 }
 
-Result<Heightfield> import_dem(const std::string& path, const ImportOptions& options,
-                               ImportReport* report) {
+Result<Heightfield> import_dem(const std::string& path, const ImportOptions& options, ImportReport* report) {
   VISVOL_RETURN_IF_ERROR(validate(options));
   Result<DatasetPtr> opened = gdal::open_raster(path, dem_drivers());
   if (!opened.ok()) return opened.status();
@@ -418,7 +414,13 @@ Result<Heightfield> import_dem(const std::string& path, const ImportOptions& opt
   } else if (options.crop) {
     const BoundingBox& b = *options.crop;
     Args args;
-    args.add("-of").add("MEM").add("-projwin").add(number(b.xmin)).add(number(b.ymax)).add(number(b.xmax)).add(number(b.ymin));
+    args.add("-of")
+        .add("MEM")
+        .add("-projwin")
+        .add(number(b.xmin))
+        .add(number(b.ymax))
+        .add(number(b.xmax))
+        .add(number(b.ymin));
     Result<DatasetPtr> t = run_translate(in, args, path);
     if (!t.ok()) return t.status();
     result = std::move(*t);
@@ -474,8 +476,7 @@ Result<BoundingBox> crop_for_area(const ImportGrid& grid, const BoundingBox& are
                                   const std::string& option) {
   if (!is_box(area)) return invalid_argument(option + ": " + not_a_box(area));
   if (!(std::isfinite(margin_m) && margin_m >= 0)) {
-    return invalid_argument(option + ": planning margin " + number(margin_m) +
-                            " m is not a finite number >= 0");
+    return invalid_argument(option + ": planning margin " + number(margin_m) + " m is not a finite number >= 0");
   }
   // The posts cover the area and margin; their pixels reach half a post further.
   const BoundingBox need = grown(area, margin_m + 0.5 * grid.spacing_m);

@@ -24,9 +24,9 @@ struct BoundingBox {
 
 struct ImportOptions {
   NodataPolicy nodata = NodataPolicy::refuse;
-  std::string target_srs;   // "EPSG:32632", WKT or PROJ; empty: keep a projected CRS, UTM for degrees
-  std::string assume_srs;   // CRS of a file that has none (e.g. an ESRI grid without .prj)
-  double spacing_m = 0;     // output post spacing; 0: keep (or GDAL's choice when projecting)
+  std::string target_srs;  // "EPSG:32632", WKT or PROJ; empty: keep a projected CRS, UTM for degrees
+  std::string assume_srs;  // CRS of a file that has none (e.g. an ESRI grid without .prj)
+  double spacing_m = 0;    // output post spacing; 0: keep (or GDAL's choice when projecting)
   std::optional<BoundingBox> crop;
   std::string resampling = "bilinear";  // near, bilinear, cubic, average
   std::size_t max_posts = std::size_t{1} << 28;
@@ -35,18 +35,17 @@ struct ImportOptions {
 Status validate(const ImportOptions& options);
 
 struct ImportReport {
-  DemInfo source;             // the file as it is
-  std::string output_crs;     // name of the output CRS
-  bool warped = false;        // reprojected or resampled
+  DemInfo source;          // the file as it is
+  std::string output_crs;  // name of the output CRS
+  bool warped = false;     // reprojected or resampled
   bool cropped = false;
-  std::string steps;          // what was done, for people ("projected to WGS 84 / UTM zone 32N ...")
+  std::string steps;  // what was done, for people ("projected to WGS 84 / UTM zone 32N ...")
 };
 
 // The UTM zone CRS ("EPSG:326zz" or "EPSG:327zz") for a longitude and latitude.
 std::string utm_srs_for(double lon_deg, double lat_deg);
 
-Result<Heightfield> import_dem(const std::string& path, const ImportOptions& options,
-                               ImportReport* report = nullptr);
+Result<Heightfield> import_dem(const std::string& path, const ImportOptions& options, ImportReport* report = nullptr);
 
 // The grid import_dem makes of a whole DEM (options.crop ignored), known from
 // its header alone: nothing is warped or read.
@@ -57,8 +56,8 @@ struct ImportGrid {
   // edge_x + n * pixel_x_m and edge_y - n * pixel_y_m. False: the warp puts
   // the grid's north-west corner on the crop's and lays whole posts from it.
   bool aligned = false;
-  double edge_x = 0, edge_y = 0;          // a pixel corner of the source (aligned only)
-  double pixel_x_m = 0, pixel_y_m = 0;    // pixel size (aligned only)
+  double edge_x = 0, edge_y = 0;        // a pixel corner of the source (aligned only)
+  double pixel_x_m = 0, pixel_y_m = 0;  // pixel size (aligned only)
   // The largest north-up box inside the DEM's footprint in the output CRS,
   // metres (pixel edges): a crop inside it has data everywhere.
   BoundingBox covered{0, 0, 0, 0};

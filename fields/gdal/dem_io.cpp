@@ -10,8 +10,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <climits>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -62,7 +62,8 @@ Status check_virtual_path(const std::string& path) {
     archive_reader = true;
   }
   if (!archive_reader) {
-    return invalid_argument(path + ": not a GDAL file system visvol reads; a DEM is a local file, plain or in "
+    return invalid_argument(path +
+                            ": not a GDAL file system visvol reads; a DEM is a local file, plain or in "
                             "a zip, gzip or tar archive (/vsizip/, /vsigzip/, /vsitar/)");
   }
   if (rest.empty()) return invalid_argument(path + ": names no archive");
@@ -106,8 +107,7 @@ Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::s
   for (const std::string& d : drivers) allowed.push_back(d.c_str());
   allowed.push_back(nullptr);
   CPLErrorReset();
-  GDALDataset* ds = GDALDataset::Open(path.c_str(),
-                                      GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
+  GDALDataset* ds = GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR,
                                       drivers.empty() ? nullptr : allowed.data());
   if (!ds) return io_error(path + ": cannot open as a raster: " + last_gdal_error());
   DatasetPtr owned(ds);
@@ -191,15 +191,13 @@ bool looks_like_degrees(const DemInfo& info) {
   const double x0 = gt[0], x1 = gt[0] + gt[1] * info.nx;
   const double y0 = gt[3], y1 = gt[3] + gt[5] * info.ny;
   auto within = [](double v, double limit) { return v >= -limit && v <= limit; };
-  return std::fabs(gt[1]) < 0.1 && within(x0, 360) && within(x1, 360) && within(y0, 90) &&
-         within(y1, 90);
+  return std::fabs(gt[1]) < 0.1 && within(x0, 360) && within(x1, 360) && within(y0, 90) && within(y1, 90);
 }
 
 constexpr int kMaxFillDistancePosts = 128;
 
 // Fills nodata posts in `raw` (in place) with GDALFillNodata on an in-memory copy.
-Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
-                   std::vector<float>& raw) {
+Status fill_nodata(const std::string& path, int nx, int ny, double nodata, std::vector<float>& raw) {
   GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
   if (!mem) return Status(Errc::unsupported, "GDAL has no MEM driver");
   DatasetPtr ds(mem->Create("", nx, ny, 1, GDT_Float32, nullptr));
@@ -217,8 +215,8 @@ Status fill_nodata(const std::string& path, int nx, int ny, double nodata,
   const double search = std::min(std::max(nx, ny), kMaxFillDistancePosts);
   // Its work rasters stay in memory: nothing is written to the working directory.
   const char* fill_options[] = {"TEMP_FILE_DRIVER=MEM", nullptr};
-  if (GDALFillNodata(GDALRasterBand::ToHandle(band), nullptr, search, 0, 0,
-                     const_cast<char**>(fill_options), nullptr, nullptr) != CE_None ||
+  if (GDALFillNodata(GDALRasterBand::ToHandle(band), nullptr, search, 0, 0, const_cast<char**>(fill_options), nullptr,
+                     nullptr) != CE_None ||
       band->RasterIO(GF_Read, 0, 0, nx, ny, raw.data(), nx, ny, GDT_Float32, 0, 0) != CE_None) {
     return io_error(path + ": filling nodata failed: " + last_gdal_error());
   }
@@ -258,8 +256,7 @@ Status check_pixel_size(const DemInfo& info, const std::string& name, bool geogr
     return Status::ok_status();
   }
   const double sx_m = gt[1] * info.linear_unit_m, sy_m = -gt[5] * info.linear_unit_m;
-  if (sx_m < kMinPostSpacingM || sx_m > kMaxPostSpacingM || sy_m < kMinPostSpacingM ||
-      sy_m > kMaxPostSpacingM) {
+  if (sx_m < kMinPostSpacingM || sx_m > kMaxPostSpacingM || sy_m < kMinPostSpacingM || sy_m > kMaxPostSpacingM) {
     msg << (info.linear_unit_m == 1.0 ? " m" : " CRS units") << " is outside " << kMinPostSpacingM << ".."
         << kMaxPostSpacingM << " m";
     return invalid_argument(msg.str());
@@ -340,8 +337,8 @@ Status check_metric_grid(const DemInfo& info, const std::string& name, std::size
     return invalid_argument(msg.str());
   }
   if (info.nx > kMaxPostsPerSide || info.ny > kMaxPostsPerSide || info.nx < 2 || info.ny < 2) {
-    msg << "grid is " << info.nx << " x " << info.ny << " posts; supported sizes are 2.."
-        << kMaxPostsPerSide << " a side";
+    msg << "grid is " << info.nx << " x " << info.ny << " posts; supported sizes are 2.." << kMaxPostsPerSide
+        << " a side";
     return invalid_argument(msg.str());
   }
   if (static_cast<std::size_t>(info.nx) * static_cast<std::size_t>(info.ny) > max_posts) {
@@ -398,8 +395,7 @@ Result<Heightfield> to_heightfield(GDALDataset& ds, const DemInfo& info, const s
   }
   if (bad > 0) {
     msg << name << ": " << bad << " posts are nodata or NaN, the first at ("
-        << first_bad % static_cast<std::size_t>(hf.nx) << ", "
-        << first_bad / static_cast<std::size_t>(hf.nx) << ")"
+        << first_bad % static_cast<std::size_t>(hf.nx) << ", " << first_bad / static_cast<std::size_t>(hf.nx) << ")"
         << (options.nodata == NodataPolicy::fill
                 ? " and lie more than 128 posts from data, too far to fill; crop the DEM"
                 : "; fill them (--fill-nodata) or crop the DEM");
@@ -444,8 +440,8 @@ Result<std::vector<float>> read_raster_like(const std::string& path, const Heigh
   GDALDataset& ds = **opened;
   if (ds.GetRasterXSize() != like.nx || ds.GetRasterYSize() != like.ny) {
     std::ostringstream msg;
-    msg << path << ": grid is " << ds.GetRasterXSize() << " x " << ds.GetRasterYSize()
-        << ", the terrain is " << like.nx << " x " << like.ny << "; they must match";
+    msg << path << ": grid is " << ds.GetRasterXSize() << " x " << ds.GetRasterYSize() << ", the terrain is " << like.nx
+        << " x " << like.ny << "; they must match";
     return invalid_argument(msg.str());
   }
   std::vector<double> raw;
@@ -492,8 +488,8 @@ std::string crs_name(const std::string& wkt) {
 
 namespace {
 
-Status write_geotiff(const std::string& path, const Heightfield& like, GDALDataType type,
-                     const void* values, double nodata) {
+Status write_geotiff(const std::string& path, const Heightfield& like, GDALDataType type, const void* values,
+                     double nodata) {
   register_gdal();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
   if (!driver) return Status(Errc::unsupported, "GDAL has no GTiff driver");
@@ -503,17 +499,20 @@ Status write_geotiff(const std::string& path, const Heightfield& like, GDALDataT
   if (!out.ok()) return out.status();
   const char* options[] = {"COMPRESS=DEFLATE", "TILED=YES", nullptr};
   CPLErrorReset();
-  GDALDataset* ds = driver->Create(out->write_path().c_str(), like.nx, like.ny, 1, type,
-                                   const_cast<char**>(options));
+  GDALDataset* ds = driver->Create(out->write_path().c_str(), like.nx, like.ny, 1, type, const_cast<char**>(options));
   if (!ds) return output_error(path + ": cannot create: " + last_gdal_error());
-  double gt[6] = {like.origin_x - 0.5 * like.spacing_m, like.spacing_m, 0,
-                  like.origin_y + 0.5 * like.spacing_m, 0, -like.spacing_m};
+  double gt[6] = {like.origin_x - 0.5 * like.spacing_m,
+                  like.spacing_m,
+                  0,
+                  like.origin_y + 0.5 * like.spacing_m,
+                  0,
+                  -like.spacing_m};
   bool ok = ds->SetGeoTransform(gt) == CE_None;
   if (!like.crs_wkt.empty()) ok = ok && ds->SetProjection(like.crs_wkt.c_str()) == CE_None;
   GDALRasterBand* band = ds->GetRasterBand(1);
   ok = ok && band->SetNoDataValue(nodata) == CE_None;
-  ok = ok && band->RasterIO(GF_Write, 0, 0, like.nx, like.ny, const_cast<void*>(values), like.nx,
-                            like.ny, type, 0, 0) == CE_None;
+  ok = ok && band->RasterIO(GF_Write, 0, 0, like.nx, like.ny, const_cast<void*>(values), like.nx, like.ny, type, 0,
+                            0) == CE_None;
   const std::string detail = ok ? "" : last_gdal_error();
   // GDAL 3.6's GDALClose returns nothing: a failed flush shows as an error state.
   CPLErrorReset();
@@ -525,14 +524,14 @@ Status write_geotiff(const std::string& path, const Heightfield& like, GDALDataT
 
 }  // namespace
 
-Status write_geotiff_u8(const std::string& path, const Heightfield& like,
-                        const std::vector<std::uint8_t>& values, int nodata) {
+Status write_geotiff_u8(const std::string& path, const Heightfield& like, const std::vector<std::uint8_t>& values,
+                        int nodata) {
   if (values.size() != like.size()) return invalid_argument(path + ": raster size mismatch");
   return write_geotiff(path, like, GDT_Byte, values.data(), nodata);
 }
 
-Status write_geotiff_f32(const std::string& path, const Heightfield& like,
-                         const std::vector<float>& values, double nodata) {
+Status write_geotiff_f32(const std::string& path, const Heightfield& like, const std::vector<float>& values,
+                         double nodata) {
   if (values.size() != like.size()) return invalid_argument(path + ": raster size mismatch");
   return write_geotiff(path, like, GDT_Float32, values.data(), nodata);
 }

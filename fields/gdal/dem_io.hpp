@@ -22,15 +22,15 @@ inline constexpr double kMinPixelDeg = 1.0e-7;
 inline constexpr double kMaxPixelDeg = 1.0;
 
 struct DemInfo {
-  std::string driver;        // GDAL driver short name ("GTiff", "USGSDEM", ...)
+  std::string driver;  // GDAL driver short name ("GTiff", "USGSDEM", ...)
   int nx = 0, ny = 0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
-  std::string crs_wkt;       // empty when the file has none
+  std::string crs_wkt;  // empty when the file has none
   std::string crs_name;
-  bool geographic = false;   // degrees: must be projected before use
-  double linear_unit_m = 1;  // metres per horizontal CRS unit
-  std::string vertical_unit; // band unit as GDAL reports it ("m", "ft", "")
-  double vertical_to_m = 1;  // factor applied to heights
+  bool geographic = false;    // degrees: must be projected before use
+  double linear_unit_m = 1;   // metres per horizontal CRS unit
+  std::string vertical_unit;  // band unit as GDAL reports it ("m", "ft", "")
+  double vertical_to_m = 1;   // factor applied to heights
   bool has_nodata = false;
   double nodata = 0;
 };
@@ -46,8 +46,7 @@ enum class NodataPolicy {
 
 // The formats visvol reads terrain from (GDAL short names).
 inline const std::vector<std::string>& dem_drivers() {
-  static const std::vector<std::string> names{"GTiff",   "AAIGrid", "GRASSASCIIGrid",
-                                              "USGSDEM", "SRTMHGT", "DTED"};
+  static const std::vector<std::string> names{"GTiff", "AAIGrid", "GRASSASCIIGrid", "USGSDEM", "SRTMHGT", "DTED"};
   return names;
 }
 
@@ -86,9 +85,9 @@ std::string crs_name(const std::string& wkt);
 
 // Writes a one-band raster on `like`'s grid as a GeoTIFF, through a temporary
 // file renamed into place (a crash never leaves a torn file).
-Status write_geotiff_u8(const std::string& path, const Heightfield& like,
-                        const std::vector<std::uint8_t>& values, int nodata);
-Status write_geotiff_f32(const std::string& path, const Heightfield& like,
-                         const std::vector<float>& values, double nodata);
+Status write_geotiff_u8(const std::string& path, const Heightfield& like, const std::vector<std::uint8_t>& values,
+                        int nodata);
+Status write_geotiff_f32(const std::string& path, const Heightfield& like, const std::vector<float>& values,
+                         double nodata);
 
 }  // namespace visvol::fields

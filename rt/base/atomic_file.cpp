@@ -33,14 +33,11 @@ std::string base_of(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-std::string temp_name_for(const std::string& path) {
-  return path + ".tmp." + std::to_string(::getpid());
-}
+std::string temp_name_for(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
 
 // Failures of the disk or the system, not of the path the user gave.
 bool is_resource_errno(int e) {
-  return e == ENOSPC || e == EDQUOT || e == EIO || e == EFBIG || e == ENOMEM || e == EMFILE ||
-         e == ENFILE;
+  return e == ENOSPC || e == EDQUOT || e == EIO || e == EFBIG || e == ENOMEM || e == EMFILE || e == ENFILE;
 }
 
 Status errno_status(int e, const std::string& message) {
@@ -217,9 +214,7 @@ void remove_temporary(const std::string& temp, bool is_directory) {
   ::close(parent);
 }
 
-bool process_runs(long pid) {
-  return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
-}
+bool process_runs(long pid) { return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM; }
 
 // The pid of `name` when it is `prefix` followed by digits only, else -1.
 long temporary_pid(const std::string& name, const std::string& prefix) {

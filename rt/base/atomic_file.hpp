@@ -68,9 +68,9 @@ class OutputFile {
   std::string temp_path_;   // the name registered for cleanup: file or directory
   std::string write_path_;  // == temp_path_ for a file, inside it for a directory
   int fd_ = -1;
-  int slot_ = -1;           // in the signal registry, or -1
+  int slot_ = -1;  // in the signal registry, or -1
   bool is_directory_ = false;
-  bool done_ = true;        // committed or discarded
+  bool done_ = true;  // committed or discarded
 };
 
 // What OutputFile::create would refuse about `path` itself (an existing

@@ -65,8 +65,8 @@ class LatestValue {
   static constexpr unsigned kFresh = 4u;
 
   std::array<T, 3> slots_{};
-  alignas(kCacheLine) unsigned back_ = 0;              // producer only
-  alignas(kCacheLine) unsigned front_ = 1;             // consumer only
+  alignas(kCacheLine) unsigned back_ = 0;   // producer only
+  alignas(kCacheLine) unsigned front_ = 1;  // consumer only
   alignas(kCacheLine) std::atomic<unsigned> middle_{2};
 };
 
@@ -108,8 +108,7 @@ class SpscQueue {
 
   // Either side: an estimate (exact when the other side is idle).
   std::size_t size_approx() const {
-    return static_cast<std::size_t>(head_.load(std::memory_order_acquire) -
-                                    tail_.load(std::memory_order_acquire));
+    return static_cast<std::size_t>(head_.load(std::memory_order_acquire) - tail_.load(std::memory_order_acquire));
   }
 
  private:

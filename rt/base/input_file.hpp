@@ -11,9 +11,9 @@
 // Thread-safety: an InputFile belongs to one thread. Not real-time safe.
 #pragma once
 
+#include <sys/types.h>
 #include <cstddef>
 #include <cstdint>
-#include <sys/types.h>
 
 #include <string>
 

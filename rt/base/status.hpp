@@ -26,16 +26,14 @@ enum class Errc : int {
   unsupported = -4,       // valid input this build cannot handle
   resource = -5,          // memory or another budget would be exceeded
   timeout = -6,
-  state = -7,             // the call is not valid in the current state
-  output = -8,            // an output could not be written (disk full, I/O error)
+  state = -7,   // the call is not valid in the current state
+  output = -8,  // an output could not be written (disk full, I/O error)
 };
 
 class [[nodiscard]] Status {
  public:
   Status() = default;
-  Status(Errc code, std::string message) : code_(code), message_(std::move(message)) {
-    assert(code != Errc::ok);
-  }
+  Status(Errc code, std::string message) : code_(code), message_(std::move(message)) { assert(code != Errc::ok); }
   static Status ok_status() { return Status(); }
 
   bool ok() const { return code_ == Errc::ok; }
@@ -54,21 +52,17 @@ class [[nodiscard]] Status {
   std::string message_;
 };
 
-inline Status invalid_argument(std::string message) {
-  return Status(Errc::invalid_argument, std::move(message));
-}
+inline Status invalid_argument(std::string message) { return Status(Errc::invalid_argument, std::move(message)); }
 inline Status io_error(std::string message) { return Status(Errc::io, std::move(message)); }
 inline Status output_error(std::string message) { return Status(Errc::output, std::move(message)); }
 inline Status corrupt(std::string message) { return Status(Errc::corrupt, std::move(message)); }
-inline Status resource_error(std::string message) {
-  return Status(Errc::resource, std::move(message));
-}
+inline Status resource_error(std::string message) { return Status(Errc::resource, std::move(message)); }
 
 // A value or the Status that explains why there is none.
 template <typename T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : value_(std::move(value)) {}  // NOLINT: implicit by design
+  Result(T value) : value_(std::move(value)) {}                                  // NOLINT: implicit by design
   Result(Status status) : status_(std::move(status)) { assert(!status_.ok()); }  // NOLINT
 
   bool ok() const { return value_.has_value(); }
@@ -100,8 +94,8 @@ class [[nodiscard]] Result {
 }  // namespace visvol
 
 // Returns early from the enclosing function when a Status is not ok.
-#define VISVOL_RETURN_IF_ERROR(expr)           \
-  do {                                         \
-    ::visvol::Status visvol_status_ = (expr);  \
+#define VISVOL_RETURN_IF_ERROR(expr)                 \
+  do {                                               \
+    ::visvol::Status visvol_status_ = (expr);        \
     if (!visvol_status_.ok()) return visvol_status_; \
   } while (false)

@@ -121,8 +121,8 @@ Status ConstraintHulls::build(const HullRequest& r, HullSet& out) const {
   if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxObserversPerKind ||
       r.visible_count > kMaxObserversPerKind || n > max_observers_ || (n > 0 && out.hulls.size() < 2)) {
     return invalid_argument(std::to_string(r.hidden_count) + " hidden-from and " + std::to_string(r.visible_count) +
-                            " visible-to points: this console takes " + std::to_string(max_observers_) +
-                            " (at most " + std::to_string(kMaxObserversPerKind) + " of a kind)");
+                            " visible-to points: this console takes " + std::to_string(max_observers_) + " (at most " +
+                            std::to_string(kMaxObserversPerKind) + " of a kind)");
   }
   std::optional<PointHullMaker> make;  // the level's terrain padded once for all of them
   if (n > 0) make.emplace(*level_);
@@ -166,9 +166,9 @@ void ConstraintHulls::run() {
       } catch (const std::exception& e) {  // bad_alloc on a level too large for the memory left
         s = Status(Errc::resource, std::string("building the hulls: ") + e.what());
       }
-      last_build_us_.store(std::chrono::duration_cast<std::chrono::microseconds>(
-                               std::chrono::steady_clock::now() - t0).count(),
-                           std::memory_order_relaxed);
+      last_build_us_.store(
+          std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count(),
+          std::memory_order_relaxed);
       if (s.ok()) {
         publish_set();
         built_.fetch_add(1, std::memory_order_relaxed);

@@ -51,9 +51,9 @@ inline constexpr int kMaxObserversPerKind = 256;
 // What the loop asks for: up to kMaxObserversPerKind observers of each kind
 // (none: that kind off). Plain data, for LatestValue.
 struct HullRequest {
-  std::uint64_t sequence = 0;   // the command's
+  std::uint64_t sequence = 0;  // the command's
   int hidden_count = 0, visible_count = 0;
-  double eye_height_m = 2.0;    // the observers' eyes above their points
+  double eye_height_m = 2.0;                           // the observers' eyes above their points
   double hidden_from_m[kMaxObserversPerKind][3] = {};  // standing points, world metres of the pack's CRS
   double visible_to_m[kMaxObserversPerKind][3] = {};
 
@@ -88,9 +88,9 @@ struct HullSet {
 };
 
 struct HullStats {
-  std::uint64_t built = 0;     // sets published
-  std::uint64_t failed = 0;    // requests refused (the previous set stays)
-  double last_build_ms = 0;    // wall time of the last build, refused or not
+  std::uint64_t built = 0;   // sets published
+  std::uint64_t failed = 0;  // requests refused (the previous set stays)
+  double last_build_ms = 0;  // wall time of the last build, refused or not
   std::string last_error;
 };
 
@@ -162,7 +162,7 @@ class ConstraintHulls {
   std::atomic<std::int64_t> last_build_us_{0};
   std::atomic<std::uint64_t> refused_sequence_{0};
   std::atomic<bool> abandon_{false};  // stop() asked: the build in progress ends
-  mutable std::mutex mutex_;  // last_error_, stopping_
+  mutable std::mutex mutex_;          // last_error_, stopping_
   std::condition_variable wake_;
   std::string last_error_;
   bool stopping_ = false;

@@ -75,8 +75,7 @@ Status check_envelope(const ForceGains& g) {
 
 }  // namespace
 
-Executive::Executive(const ExecutiveConfig& config, storage::ResidentPack& field)
-    : config_(config), field_(field) {}
+Executive::Executive(const ExecutiveConfig& config, storage::ResidentPack& field) : config_(config), field_(field) {}
 
 Executive::~Executive() = default;
 
@@ -95,7 +94,8 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
     return invalid_argument("executive: level " + std::to_string(c.level) + " is not in the pack (0.." +
                             std::to_string(field_.level_count() - 1) + ")");
   }
-  if (c.max_segments < 2 || c.max_segments > 100000 || c.max_segments + 1 > static_cast<int>(msg::kMaxPathVertices) * 64) {
+  if (c.max_segments < 2 || c.max_segments > 100000 ||
+      c.max_segments + 1 > static_cast<int>(msg::kMaxPathVertices) * 64) {
     return invalid_argument("executive: max segments " + std::to_string(c.max_segments) + " is outside 2..100000");
   }
   if (c.segments < 2 || c.segments > c.max_segments) {
@@ -107,8 +107,10 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
     if (every < 1) return invalid_argument("executive: hand-off intervals must be at least one tick");
   }
   if (c.fc_samples < 2) return invalid_argument("executive: fc_samples must be at least 2");
-  if (!(std::isfinite(c.stiffness) && c.stiffness > 0)) return invalid_argument("executive: stiffness must be positive");
-  if (!(std::isfinite(c.slack) && c.slack >= 0 && c.slack <= 10)) return invalid_argument("executive: slack must be in [0, 10]");
+  if (!(std::isfinite(c.stiffness) && c.stiffness > 0))
+    return invalid_argument("executive: stiffness must be positive");
+  if (!(std::isfinite(c.slack) && c.slack >= 0 && c.slack <= 10))
+    return invalid_argument("executive: slack must be in [0, 10]");
   if (!(std::isfinite(c.k3_user) && c.k3_user >= 0)) return invalid_argument("executive: k3 must be >= 0");
   if (!(c.workspace_half_mm > 1 && c.workspace_half_mm < 1000)) {
     return invalid_argument("executive: workspace half-size must be in (1, 1000) mm");
@@ -131,7 +133,8 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
   VISVOL_RETURN_IF_ERROR(check_point("start", c.start_m, g, sampler.height(c.start_m.x(), c.start_m.y())));
   VISVOL_RETURN_IF_ERROR(check_point("end", c.end_m, g, sampler.height(c.end_m.x(), c.end_m.y())));
   const Vec3 ends[2] = {c.start_m, c.end_m};
-  VISVOL_RETURN_IF_ERROR(describe_polyline(ends, 2, c.segments, 2, c.max_segments).with_context("executive: start to end"));
+  VISVOL_RETURN_IF_ERROR(
+      describe_polyline(ends, 2, c.segments, 2, c.max_segments).with_context("executive: start to end"));
   finest_ = fields::FieldSampler<storage::ResidentLevel>(field_.level(0));
   VISVOL_RETURN_IF_ERROR(check_ceiling("start", c.start_m, c.gains));
   VISVOL_RETURN_IF_ERROR(check_ceiling("end", c.end_m, c.gains));
@@ -188,8 +191,8 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
     last_proxy_m_ = sc.world_offset_m;
     // 1 mm of hand travel pulls as hard as the saturated field (k3 = 1); the
     // pull is capped at ten times that, which the rope's step still takes
-    const double saturated_n = FieldForces<storage::ResidentLevel, storage::ResidentSampler>::kSaturation * rope_->params().mass_kg *
-                               forces_->reference_acceleration();
+    const double saturated_n = FieldForces<storage::ResidentLevel, storage::ResidentSampler>::kSaturation *
+                               rope_->params().mass_kg * forces_->reference_acceleration();
     const double pull_at_1mm_n = sc.coupling_stiffness_n_per_m * sc.world_m_per_device_mm;
     user_force_per_n_ = saturated_n / pull_at_1mm_n;
     max_user_force_n_ = 10.0 * saturated_n;
@@ -229,9 +232,8 @@ Errc Executive::start_run() {
   // 20 m above the clearance, or half way up to a lower ceiling
   const ForceGains& gains = forces_->gains();
   const double lay_agl_m = std::min(gains.clearance_m + 20.0, 0.5 * (gains.clearance_m + gains.max_agl_m));
-  lay_with_slack([&](int i) { return Vec3(a + (static_cast<double>(i) / n) * (b - a)); }, n, 1, length,
-                 lay_agl_m, s.level().geometry(),
-                 [&](double x, double y) { return s.height(x, y); }, scratch_.get());
+  lay_with_slack([&](int i) { return Vec3(a + (static_cast<double>(i) / n) * (b - a)); }, n, 1, length, lay_agl_m,
+                 s.level().geometry(), [&](double x, double y) { return s.height(x, y); }, scratch_.get());
   // checked first: a refusal from reset() would build a message on this thread
   if (check_polyline(scratch_.get(), n + 1, n, 2, config_.max_segments) != Errc::ok) return Errc::invalid_argument;
   const Errc e = rope_->set_params(params_for(rope_->model(), n, std::max(length / n, 1e-3)));
@@ -419,8 +421,7 @@ Errc Executive::apply(const msg::Command& c, const char*& reason) {
       }
       return Errc::ok;
     }
-    case msg::CommandKind::set_constraints:
-      return apply_constraints(c, reason);
+    case msg::CommandKind::set_constraints: return apply_constraints(c, reason);
     case msg::CommandKind::start:
       if (start_run() != Errc::ok) {
         reason = "the rope could not be laid between the endpoints";
@@ -512,9 +513,8 @@ Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGain
   if (under_ceiling(p, g)) return {};
   const double agl = p.z() - finest_.height(p.x(), p.y());
   return invalid_argument(std::string(name) + ": " + std::to_string(agl) + " m above the terrain and " +
-                          std::to_string(p.z()) + " m high, above the ceiling (max-agl " +
-                          std::to_string(g.max_agl_m) + " m, max-altitude " + std::to_string(g.max_altitude_m) +
-                          " m)");
+                          std::to_string(p.z()) + " m high, above the ceiling (max-agl " + std::to_string(g.max_agl_m) +
+                          " m, max-altitude " + std::to_string(g.max_altitude_m) + " m)");
 }
 
 // Why an observer of a command cannot be had (null: it can). Real-time safe.
@@ -527,7 +527,8 @@ const char* Executive::observer_problem(const msg::Constraint& k) const {
       !hull_post(field_.level(config_.level).geometry(), p, pi, pj)) {
     return "a hidden-from or visible-to point is outside the pack";
   }
-  if (p.z() < finest_.height(p.x(), p.y()) - kHeightTolM) return "a hidden-from or visible-to point is below the terrain";
+  if (p.z() < finest_.height(p.x(), p.y()) - kHeightTolM)
+    return "a hidden-from or visible-to point is below the terrain";
   return nullptr;
 }
 
@@ -559,9 +560,9 @@ Errc Executive::apply_constraints(const msg::Command& c, const char*& reason) {
 
 // The command's items into `gains` (clearance, ceiling) and `r` (observers,
 // each checked on its own).
-Errc Executive::read_constraints(const msg::Command& c, ForceGains& gains, HullRequest& r,
-                                 const char*& reason) const {
-  const std::uint32_t n = std::min<std::uint32_t>(c.constraints.count, static_cast<std::uint32_t>(msg::kMaxConstraints));
+Errc Executive::read_constraints(const msg::Command& c, ForceGains& gains, HullRequest& r, const char*& reason) const {
+  const std::uint32_t n =
+      std::min<std::uint32_t>(c.constraints.count, static_cast<std::uint32_t>(msg::kMaxConstraints));
   for (std::uint32_t i = 0; i < n; ++i) {
     const msg::Constraint& k = c.constraints.items[i];
     switch (k.kind) {
@@ -572,8 +573,9 @@ Errc Executive::read_constraints(const msg::Command& c, ForceGains& gains, HullR
       case msg::ConstraintKind::visible_to: break;
     }
     if (hulls_ == nullptr) {
-      reason = "hidden-from and visible-to constraints are not supported without the console's hull builder "
-               "(visvol plan --hidden-from/--visible-to)";
+      reason =
+          "hidden-from and visible-to constraints are not supported without the console's hull builder "
+          "(visvol plan --hidden-from/--visible-to)";
       return Errc::unsupported;
     }
     if (const char* problem = observer_problem(k)) {
@@ -597,7 +599,8 @@ const char* Executive::constraints_problem(const ForceGains& g, const HullReques
   if (hulls_ != nullptr && r.observers() > hulls_->max_observers()) {
     return "more hidden-from and visible-to points than the console takes (--max-observers)";
   }
-  if (!(std::isfinite(g.clearance_m) && g.clearance_m >= 0) || std::isnan(g.max_agl_m) || std::isnan(g.max_altitude_m)) {
+  if (!(std::isfinite(g.clearance_m) && g.clearance_m >= 0) || std::isnan(g.max_agl_m) ||
+      std::isnan(g.max_altitude_m)) {
     return "a clearance or ceiling is not a height";
   }
   if (!(g.max_agl_m > g.clearance_m)) return "max-agl is not above the clearance: no height is allowed";
@@ -698,20 +701,20 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
 
 void Executive::tick(const TickTime& time) {
   const std::int64_t now_ns = time.woke_ns;
-  apply_commands();                                        // 1
+  apply_commands();  // 1
   if (hulls_ != nullptr) install_hulls();
-  if (simulation_ != nullptr) simulation_->step(now_ns);  // 2
+  if (simulation_ != nullptr) simulation_->step(now_ns);                        // 2
   if (device_ != nullptr) haptics(now_ns, static_cast<double>(now_ns) * 1e-9);  // 3, 4
-  if (counters_.running) {                                 // 5
+  if (counters_.running) {                                                      // 5
     rope_->step(config_.period_s, *forces_);
     counters_.run_s += config_.period_s;
     if (!finite_rope(*rope_)) recover_rope();
   }
-  if (device_ != nullptr) {                                // 6
+  if (device_ != nullptr) {  // 6
     const Errc sent = device_->command(out_.device_force_n, out_.device_enable);
     if (sent != Errc::ok && sent != Errc::state) ++counters_.send_failures;
   }
-  const std::uint64_t n = ++counters_.ticks;               // 7
+  const std::uint64_t n = ++counters_.ticks;  // 7
   if (counters_.running && n % static_cast<std::uint64_t>(config_.fc_every_ticks) == 0) measure();
   const bool path_due = n % static_cast<std::uint64_t>(config_.path_every_ticks) == 0;
   const bool device_due = n % static_cast<std::uint64_t>(config_.device_every_ticks) == 0;

@@ -62,16 +62,16 @@ inline constexpr int kMaxCommandsPerTick = 8;
 
 struct ExecutiveConfig {
   // The planning problem at start-up (commands change it later).
-  Vec3 start_m = Vec3::Zero();      // world metres of the pack's CRS
+  Vec3 start_m = Vec3::Zero();  // world metres of the pack's CRS
   Vec3 end_m = Vec3::Zero();
   Objective objective = Objective::hide;
   RopeModel model = RopeModel::articulated;
   int segments = 128;
-  int max_segments = 256;           // reserved: set-segments may not exceed it
-  double stiffness = 1.0;           // factor on the rope's scaled springs
-  double slack = 0.05;              // articulated: extra length over the straight start
-  ForceGains gains;                 // k1 magnitude (sign from the objective), k2, clearance, ceiling
-                                    // (max_agl_m, max_altitude_m; infinite: none)
+  int max_segments = 256;  // reserved: set-segments may not exceed it
+  double stiffness = 1.0;  // factor on the rope's scaled springs
+  double slack = 0.05;     // articulated: extra length over the straight start
+  ForceGains gains;        // k1 magnitude (sign from the objective), k2, clearance, ceiling
+                           // (max_agl_m, max_altitude_m; infinite: none)
   // Observers in force from the start (hidden-from and visible-to points, as
   // set-constraints gives them): built once set_constraint_hulls() gives the
   // executive a hull builder. Their eyes, and those of every command's
@@ -81,24 +81,24 @@ struct ExecutiveConfig {
   // The pack's planning bounds: the rope is pushed back inside them (absent:
   // inside the field's extent).
   std::optional<fields::Bounds2D> planning_bounds;
-  double k3_user = 1.0;             // the operator's pull
-  bool start_running = true;        // settle from the start, or wait for a start command
-  int level = 0;                    // the level of detail the rope runs on
+  double k3_user = 1.0;       // the operator's pull
+  bool start_running = true;  // settle from the start, or wait for a start command
+  int level = 0;              // the level of detail the rope runs on
   // Hand-offs, in ticks.
-  int path_every_ticks = 20;        // 50 Hz
-  int fc_every_ticks = 20;          // F_c and the equilibrium check
-  int focus_every_ticks = 50;       // the rope's box to the tile pager
-  int device_every_ticks = 100;     // device status
+  int path_every_ticks = 20;     // 50 Hz
+  int fc_every_ticks = 20;       // F_c and the equilibrium check
+  int focus_every_ticks = 50;    // the rope's box to the tile pager
+  int device_every_ticks = 100;  // device status
   int fc_samples = 128;
-  double focus_lead_m = 0.0;        // added around the rope's box (the pager adds its margin too)
+  double focus_lead_m = 0.0;  // added around the rope's box (the pager adds its margin too)
   // Haptics (absent without a device).
-  servo::ServoConfig servo;         // mapping and coupling are set from the scene when scale is 0
-  double workspace_half_mm = 100.0; // the rope's extent maps onto +-this much hand travel
+  servo::ServoConfig servo;               // mapping and coupling are set from the scene when scale is 0
+  double workspace_half_mm = 100.0;       // the rope's extent maps onto +-this much hand travel
   double hand_stiffness_n_per_m = 300.0;  // the soft joint as the hand feels it
   double hand_damping_n_s_per_m = 1.0;
-  double cue_n = 0.5;               // visibility cue at one reference gradient, N
+  double cue_n = 0.5;  // visibility cue at one reference gradient, N
   char pack_id[msg::kPackIdCapacity] = "pack";
-  double period_s = 0.001;          // the loop's period: the rope's time step
+  double period_s = 0.001;  // the loop's period: the rope's time step
 };
 
 // What the loop thread counts (plain values; copied out through snapshot()).
@@ -106,20 +106,20 @@ struct ExecutiveCounters {
   std::uint64_t ticks = 0;
   std::uint64_t commands_applied = 0;
   std::uint64_t commands_failed = 0;
-  std::uint64_t acks_dropped = 0;       // the ack queue was full
-  std::uint64_t paths = 0;              // path hand-offs
-  std::uint64_t safe_states = 0;        // overrun safe states
+  std::uint64_t acks_dropped = 0;  // the ack queue was full
+  std::uint64_t paths = 0;         // path hand-offs
+  std::uint64_t safe_states = 0;   // overrun safe states
   std::uint64_t grasps = 0;
-  std::uint64_t send_failures = 0;      // device commands refused (the CAN bus: full, down)
-  std::uint64_t runs = 0;               // planning runs started
-  std::uint64_t hull_sets = 0;          // hidden-from / visible-to hull sets put in force
-  std::uint64_t rope_resets = 0;        // the rope's state stopped being finite and was laid again
-  bool running = false;                 // the rope is stepping
+  std::uint64_t send_failures = 0;  // device commands refused (the CAN bus: full, down)
+  std::uint64_t runs = 0;           // planning runs started
+  std::uint64_t hull_sets = 0;      // hidden-from / visible-to hull sets put in force
+  std::uint64_t rope_resets = 0;    // the rope's state stopped being finite and was laid again
+  bool running = false;             // the rope is stepping
   bool converged = false;
   double fc = 0.0;
   double length_m = 0.0;
-  double equilibrium_s = 0.0;           // simulated time of this run when it converged
-  double run_s = 0.0;                   // simulated time of this run
+  double equilibrium_s = 0.0;  // simulated time of this run when it converged
+  double run_s = 0.0;          // simulated time of this run
   HapticState device_state = HapticState::boot;
   servo::SafeReason servo_reason = servo::SafeReason::none;
   bool haptics = false;
@@ -127,8 +127,8 @@ struct ExecutiveCounters {
 
 // The limits in force when a path was handed off (plain data).
 struct PathLimits {
-  ForceGains gains;        // the clearance and the ceilings
-  HullRequest observers;   // the hidden-from and visible-to set in force (none: sequence 0, no points)
+  ForceGains gains;       // the clearance and the ceilings
+  HullRequest observers;  // the hidden-from and visible-to set in force (none: sequence 0, no points)
 };
 
 // A path and the limits in force when it was handed off (plain data).
@@ -139,8 +139,8 @@ struct LimitedPath {
 
 // Where the executive's outputs go; every pointer may be null.
 struct ExecutiveOutputs {
-  LatestValue<msg::PathSample>* path = nullptr;            // DDS publisher
-  LatestValue<msg::PathSample>* path_render = nullptr;     // renderer
+  LatestValue<msg::PathSample>* path = nullptr;         // DDS publisher
+  LatestValue<msg::PathSample>* path_render = nullptr;  // renderer
   // Each path with the limits it is held to, in one hand-off: for a
   // consumer that fits it into the envelope.
   LatestValue<LimitedPath>* limited_path = nullptr;
@@ -153,11 +153,9 @@ class Executive final : public PeriodicTask {
   // Validates the configuration against the pack (endpoints inside and above
   // the terrain, segments within capacity) and reserves everything. `device`
   // may be null (no haptics); `simulation` may be null.
-  static Result<std::unique_ptr<Executive>> create(const ExecutiveConfig& config,
-                                                   storage::ResidentPack& field, HapticDevice* device,
-                                                   DeviceSimulation* simulation,
-                                                   msg::CommandQueue* commands,
-                                                   const ExecutiveOutputs& outputs);
+  static Result<std::unique_ptr<Executive>> create(const ExecutiveConfig& config, storage::ResidentPack& field,
+                                                   HapticDevice* device, DeviceSimulation* simulation,
+                                                   msg::CommandQueue* commands, const ExecutiveOutputs& outputs);
   ~Executive() override;
 
   void warm_up() override;
@@ -226,16 +224,16 @@ class Executive final : public PeriodicTask {
   ExecutiveConfig config_;
   storage::ResidentPack& field_;
   std::unique_ptr<FieldForces<storage::ResidentLevel, storage::ResidentSampler>> forces_;
-  std::unique_ptr<Rope> ropes_[2];   // indexed by RopeModel
+  std::unique_ptr<Rope> ropes_[2];  // indexed by RopeModel
   Rope* rope_ = nullptr;
   std::optional<servo::Servo> servo_;
   HapticDevice* device_ = nullptr;
   DeviceSimulation* simulation_ = nullptr;
   ConstraintHulls* hulls_ = nullptr;
-  const HullSet* in_force_ = nullptr;   // the set the forces hold (owned by hulls_)
+  const HullSet* in_force_ = nullptr;                    // the set the forces hold (owned by hulls_)
   fields::FieldSampler<storage::ResidentLevel> finest_;  // level 0's terrain: where observers and ceilings are judged
-  std::uint64_t hull_requests_ = 0;  // hull requests made (their sequence numbers, from 1)
-  std::uint64_t hull_pending_ = 0;   // the one being built, 0: none
+  std::uint64_t hull_requests_ = 0;                      // hull requests made (their sequence numbers, from 1)
+  std::uint64_t hull_pending_ = 0;                       // the one being built, 0: none
   // switch-terrain: the id written by the loop, then the flag (release)
   char switch_pack_id_[msg::kPackIdCapacity] = {};
   std::atomic<bool> switch_requested_{false};
@@ -252,19 +250,19 @@ class Executive final : public PeriodicTask {
   std::optional<double> stretch_override_, bend_override_;
   bool relaid_ = false;  // this run was laid again after its state stopped being finite
   EquilibriumDetector equilibrium_;
-  std::unique_ptr<Vec3[]> scratch_;      // max_segments + 1 points
+  std::unique_ptr<Vec3[]> scratch_;               // max_segments + 1 points
   std::unique_ptr<msg::PathSample> path_sample_;  // filled, then copied into each hand-off
-  std::unique_ptr<msg::Command> held_;   // the command being applied, or waiting for the next tick
-  bool holding_ = false;                 // held_ waits: the last tick's items were spent
-  double user_force_per_n_ = 0.0;        // rope newtons per servo coupling newton
+  std::unique_ptr<msg::Command> held_;            // the command being applied, or waiting for the next tick
+  bool holding_ = false;                          // held_ waits: the last tick's items were spent
+  double user_force_per_n_ = 0.0;                 // rope newtons per servo coupling newton
   double max_user_force_n_ = 0.0;
   bool grasping_ = false;
   int grasp_segment_ = 0;
   double grasp_fraction_ = 0.0;
   std::uint64_t path_sequence_ = 0;
   std::uint64_t device_sequence_ = 0;
-  servo::ServoOutput out_;              // this tick's servo output
-  Vec3 last_proxy_m_ = Vec3::Zero();    // where a grasp would take the rope
+  servo::ServoOutput out_;            // this tick's servo output
+  Vec3 last_proxy_m_ = Vec3::Zero();  // where a grasp would take the rope
   std::int64_t device_now_ns_ = 0;
   ExecutiveCounters counters_;
 };

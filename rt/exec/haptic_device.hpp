@@ -44,7 +44,7 @@ struct HapticHealth {
   double motor_temperature_c = 0.0;
   std::uint64_t rx_frames = 0;
   std::uint64_t tx_frames = 0;
-  std::uint64_t errors = 0;         // error frames, refused sends, drops, malformed reads
+  std::uint64_t errors = 0;  // error frames, refused sends, drops, malformed reads
   std::uint64_t bus_off_count = 0;
 };
 

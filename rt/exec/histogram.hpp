@@ -16,9 +16,9 @@ namespace visvol::rt {
 
 class DurationHistogram {
  public:
-  static constexpr int kFineBins = 1000;    // 1 us each: [0, 1 ms)
-  static constexpr int kMidBins = 900;      // 10 us each: [1 ms, 10 ms)
-  static constexpr int kCoarseBins = 900;   // 100 us each: [10 ms, 100 ms)
+  static constexpr int kFineBins = 1000;                                // 1 us each: [0, 1 ms)
+  static constexpr int kMidBins = 900;                                  // 10 us each: [1 ms, 10 ms)
+  static constexpr int kCoarseBins = 900;                               // 100 us each: [10 ms, 100 ms)
   static constexpr int kBins = kFineBins + kMidBins + kCoarseBins + 1;  // + overflow
 
   void add(std::int64_t duration_ns);
@@ -27,9 +27,7 @@ class DurationHistogram {
   std::uint64_t count() const { return count_; }
   double min_us() const { return count_ ? static_cast<double>(min_ns_) * 1e-3 : 0.0; }
   double max_us() const { return count_ ? static_cast<double>(max_ns_) * 1e-3 : 0.0; }
-  double mean_us() const {
-    return count_ ? static_cast<double>(sum_ns_) * 1e-3 / static_cast<double>(count_) : 0.0;
-  }
+  double mean_us() const { return count_ ? static_cast<double>(sum_ns_) * 1e-3 / static_cast<double>(count_) : 0.0; }
   // The duration below which a fraction p (0..1) of the samples lie, us (the
   // upper edge of its bin, at most the maximum); 0 when empty.
   double percentile_us(double p) const;

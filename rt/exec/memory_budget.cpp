@@ -43,8 +43,8 @@ Status MemoryBudget::check(std::uint64_t minimum_left, const std::string& left_f
   }
   if (remaining_bytes() < minimum_left) {
     return Status(Errc::resource, "memory budget " + mib_text(budget_) + " leaves " + mib_text(remaining_bytes()) +
-                                      " for " + left_for + ", which needs at least " + mib_text(minimum_left) +
-                                      ":\n" + table());
+                                      " for " + left_for + ", which needs at least " + mib_text(minimum_left) + ":\n" +
+                                      table());
   }
   return {};
 }

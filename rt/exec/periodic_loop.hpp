@@ -35,9 +35,9 @@
 namespace visvol::rt {
 
 struct TickTime {
-  std::uint64_t index = 0;        // 0, 1, 2, ...: ticks run (skipped deadlines not counted)
-  std::int64_t deadline_ns = 0;   // when the tick was due (CLOCK_MONOTONIC)
-  std::int64_t woke_ns = 0;       // when the thread woke
+  std::uint64_t index = 0;       // 0, 1, 2, ...: ticks run (skipped deadlines not counted)
+  std::int64_t deadline_ns = 0;  // when the tick was due (CLOCK_MONOTONIC)
+  std::int64_t woke_ns = 0;      // when the thread woke
   std::int64_t period_ns = 0;
 };
 
@@ -67,24 +67,24 @@ Status validate(const LoopConfig& config);
 struct LoopTotals {
   std::uint64_t ticks = 0;
   std::uint64_t overruns = 0;
-  std::uint64_t misses = 0;            // deadlines skipped
-  std::uint64_t safe_states = 0;       // safe_state() calls
+  std::uint64_t misses = 0;       // deadlines skipped
+  std::uint64_t safe_states = 0;  // safe_state() calls
   int consecutive_overruns = 0;
-  ThreadFaults faults_after_settle;    // of the loop thread, from tick settle_ticks on
+  ThreadFaults faults_after_settle;  // of the loop thread, from tick settle_ticks on
 };
 
 struct LoopReport {
   std::uint64_t sequence = 0;
-  DurationHistogram wake_latency;      // this window
-  DurationHistogram compute;           // this window
+  DurationHistogram wake_latency;  // this window
+  DurationHistogram compute;       // this window
   LoopTotals totals;
 };
 
 struct LoopRun {
-  DurationHistogram wake_latency;      // the whole run
+  DurationHistogram wake_latency;  // the whole run
   DurationHistogram compute;
   LoopTotals totals;
-  RealtimeReport realtime;             // what the thread got
+  RealtimeReport realtime;  // what the thread got
 };
 
 class PeriodicLoop {

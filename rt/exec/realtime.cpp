@@ -49,8 +49,8 @@ void make_current_thread_realtime(const RealtimeConfig& config, RealtimeReport& 
     if (rc == 0) {
       report.fifo = true;
     } else {
-      report.warnings.push_back("SCHED_FIFO priority " + std::to_string(config.priority) +
-                                " refused (" + errno_text(rc) +
+      report.warnings.push_back("SCHED_FIFO priority " + std::to_string(config.priority) + " refused (" +
+                                errno_text(rc) +
                                 "): the 1 kHz loop runs as an ordinary thread and other work can "
                                 "delay it; run with CAP_SYS_NICE or an rtprio limit");
     }
@@ -63,8 +63,8 @@ void make_current_thread_realtime(const RealtimeConfig& config, RealtimeReport& 
     if (rc == 0) {
       report.pinned = true;
     } else {
-      report.warnings.push_back("CPU " + std::to_string(config.cpu) + " affinity refused (" +
-                                errno_text(rc) + "): the loop may migrate between CPUs");
+      report.warnings.push_back("CPU " + std::to_string(config.cpu) + " affinity refused (" + errno_text(rc) +
+                                "): the loop may migrate between CPUs");
     }
   }
   prefault_stack(config.stack_prefault_bytes);

@@ -16,9 +16,9 @@
 namespace visvol::rt {
 
 struct RealtimeConfig {
-  int priority = 80;         // SCHED_FIFO priority 1..99; 0 keeps SCHED_OTHER
-  int cpu = -1;              // pin to this CPU; -1 leaves the affinity alone
-  bool lock_memory = true;   // mlockall: no page of the process is paged out
+  int priority = 80;                              // SCHED_FIFO priority 1..99; 0 keeps SCHED_OTHER
+  int cpu = -1;                                   // pin to this CPU; -1 leaves the affinity alone
+  bool lock_memory = true;                        // mlockall: no page of the process is paged out
   std::size_t stack_prefault_bytes = 256 * 1024;  // touched once so the stack never faults
 };
 

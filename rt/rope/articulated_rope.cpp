@@ -7,7 +7,6 @@ namespace visvol::rt {
 
 namespace {
 
-
 // The rotation vector of a unit quaternion, angle in [0, pi].
 Vec3 log_map(Eigen::Quaterniond q) {
   if (q.w() < 0) q.coeffs() = -q.coeffs();
@@ -28,7 +27,7 @@ namespace detail {
 Eigen::Quaterniond exp_map(const Vec3& w) {
   const double a2 = w.squaredNorm();
   if (a2 < 1e-6) {
-    const double c = 1.0 - a2 / 8.0 + a2 * a2 / 384.0;  // cos(a / 2)
+    const double c = 1.0 - a2 / 8.0 + a2 * a2 / 384.0;    // cos(a / 2)
     const double s = 0.5 - a2 / 48.0 + a2 * a2 / 3840.0;  // sin(a / 2) / a
     return Eigen::Quaterniond(c, s * w.x(), s * w.y(), s * w.z());
   }
@@ -79,7 +78,8 @@ Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
   VISVOL_RETURN_IF_ERROR(resample_polyline(polyline, points, segments, vertices_.data()));
   n_ = segments;
   double total = 0;
-  for (int i = 0; i < n_; ++i) total += (vertices_[static_cast<std::size_t>(i) + 1] - vertices_[static_cast<std::size_t>(i)]).norm();
+  for (int i = 0; i < n_; ++i)
+    total += (vertices_[static_cast<std::size_t>(i) + 1] - vertices_[static_cast<std::size_t>(i)]).norm();
   half_m_ = 0.5 * total / n_;
   if (!(half_m_ > 0)) return invalid_argument("rope: the polyline has no length");
   const double len = 2 * half_m_, r = p_.capsule_radius_m, m = p_.mass_kg;
@@ -102,7 +102,8 @@ Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
     build_joints();
     if (joint_count_ == 0) break;
     factor_chain();
-    for (int k = 0; k < joint_count_; ++k) rhs_[static_cast<std::size_t>(k)] = -joint_error(joints_[static_cast<std::size_t>(k)]);
+    for (int k = 0; k < joint_count_; ++k)
+      rhs_[static_cast<std::size_t>(k)] = -joint_error(joints_[static_cast<std::size_t>(k)]);
     solve_chain();
     apply_impulses(true);
   }
@@ -158,12 +159,15 @@ void ArticulatedRope::build_joints() {
   auto at = [&](int body, const Vec3& point, double sign) {
     return Attachment{body, point - x_[static_cast<std::size_t>(body)], sign};
   };
-  if (ends_.start_fixed) joints_[static_cast<std::size_t>(k++)] = Joint{at(0, end_a(0), 1.0), Attachment{-1, Vec3::Zero(), -1.0}, ends_.start_m};
+  if (ends_.start_fixed)
+    joints_[static_cast<std::size_t>(k++)] =
+        Joint{at(0, end_a(0), 1.0), Attachment{-1, Vec3::Zero(), -1.0}, ends_.start_m};
   for (int i = 0; i + 1 < n_; ++i) {
     joints_[static_cast<std::size_t>(k++)] = Joint{at(i, end_b(i), 1.0), at(i + 1, end_a(i + 1), -1.0), Vec3::Zero()};
   }
   if (ends_.end_fixed) {
-    joints_[static_cast<std::size_t>(k++)] = Joint{at(n_ - 1, end_b(n_ - 1), 1.0), Attachment{-1, Vec3::Zero(), -1.0}, ends_.end_m};
+    joints_[static_cast<std::size_t>(k++)] =
+        Joint{at(n_ - 1, end_b(n_ - 1), 1.0), Attachment{-1, Vec3::Zero(), -1.0}, ends_.end_m};
   }
   joint_count_ = k;
   for (int i = 0; i < n_; ++i) inv_inertia_[static_cast<std::size_t>(i)] = inverse_inertia_world(i);
@@ -286,7 +290,8 @@ void ArticulatedRope::add_joint_springs() {
     const Vec3 rel = w_[k + 1] - w_[k];
     const Vec3 ax = axis(i);
     const Vec3 rel_twist = rel.dot(ax) * ax;
-    const Vec3 damping = -p_.joint_damping_n_m_s_per_rad * (rel - rel_twist) - p_.twist_damping_n_m_s_per_rad * rel_twist;
+    const Vec3 damping =
+        -p_.joint_damping_n_m_s_per_rad * (rel - rel_twist) - p_.twist_damping_n_m_s_per_rad * rel_twist;
     torque_[k + 1] += spring + damping;
     torque_[k] -= spring + damping;
   }
@@ -326,7 +331,8 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
   // project away what the linearisation left open (with this step's factors)
   for (int it = 0; it < p_.projection_iterations && joint_count_ > 0; ++it) {
     refresh_attachments();
-    for (int k = 0; k < joint_count_; ++k) rhs_[static_cast<std::size_t>(k)] = -joint_error(joints_[static_cast<std::size_t>(k)]);
+    for (int k = 0; k < joint_count_; ++k)
+      rhs_[static_cast<std::size_t>(k)] = -joint_error(joints_[static_cast<std::size_t>(k)]);
     solve_chain();
     apply_impulses(true);
   }

@@ -68,8 +68,8 @@ class ArticulatedRope final : public Rope {
 
  private:
   struct Attachment {
-    int body = -1;   // -1: the world (an anchor)
-    Vec3 r;          // attachment point minus the body's centre, world axes
+    int body = -1;  // -1: the world (an anchor)
+    Vec3 r;         // attachment point minus the body's centre, world axes
     double sign = 1;
   };
   struct Joint {
@@ -102,8 +102,8 @@ class ArticulatedRope final : public Rope {
 
   RopeParams p_;
   RopeEnds ends_;
-  int n_ = 0;            // capsules
-  double half_m_ = 0.5;  // half capsule length
+  int n_ = 0;                     // capsules
+  double half_m_ = 0.5;           // half capsule length
   Eigen::Vector3d inertia_body_;  // principal moments, body z along the capsule
   // per capsule
   std::vector<Vec3> x_, v_, w_, force_, torque_;

@@ -40,13 +40,13 @@ struct EnvelopeFitSpec {
   VehicleEnvelope envelope;
   std::optional<fields::Bounds2D> planning_bounds;
   double top_m = std::numeric_limits<double>::infinity();  // highest height allowed (the field's top)
-  double margin_m = 0.5;       // kept inside the height limits (the checker samples elsewhere)
+  double margin_m = 0.5;  // kept inside the height limits (the checker samples elsewhere)
   // kept inside the climb and descent limits: a path written with millimetre
   // coordinates (CSV, GeoJSON) still checks as met when read back
   double angle_margin_deg = 0.1;
-  double hull_margin_m = 5.0;  // kept under hidden-from and over visible-to hulls
-  double step_m = 0;           // between-vertex samples; 0: a quarter post spacing
-  std::size_t max_points = 0;  // vertices the fit may end with (it splits segments); 0: 4 n + 64
+  double hull_margin_m = 5.0;           // kept under hidden-from and over visible-to hulls
+  double step_m = 0;                    // between-vertex samples; 0: a quarter post spacing
+  std::size_t max_points = 0;           // vertices the fit may end with (it splits segments); 0: 4 n + 64
   std::vector<const PointHull*> below;  // hidden-from hulls (finest level)
   std::vector<const PointHull*> above;  // visible-to hulls
 };

@@ -15,10 +15,10 @@
 namespace visvol::rt {
 
 struct EquilibriumCriteria {
-  double check_interval_s = 0.02;     // how often add() is called
-  double window_s = 0.5;              // the span every check must hold over
-  double max_rms_speed_mps = 1.0;     // the planner uses a tenth of a post spacing per second
-  double max_fc_rate = 2e-3;          // |dF_c/dt| / F_c, per second
+  double check_interval_s = 0.02;  // how often add() is called
+  double window_s = 0.5;           // the span every check must hold over
+  double max_rms_speed_mps = 1.0;  // the planner uses a tenth of a post spacing per second
+  double max_fc_rate = 2e-3;       // |dF_c/dt| / F_c, per second
 };
 
 class EquilibriumDetector {

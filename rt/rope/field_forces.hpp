@@ -44,10 +44,10 @@
 namespace visvol::rt {
 
 struct ForceGains {
-  double k1_visibility = -1.0;   // < 0 hides, > 0 shows
+  double k1_visibility = -1.0;  // < 0 hides, > 0 shows
   double k2_terrain = 1.0;
   double k_clearance = 1.0;
-  double k_hull = 1.0;           // hidden-from and visible-to constraints
+  double k_hull = 1.0;  // hidden-from and visible-to constraints
   double clearance_m = 30.0;
   double hull_margin_m = 20.0;
   // Ceiling: above min(terrain + max_agl_m, max_altitude_m) a push down as
@@ -64,10 +64,9 @@ inline constexpr int kMaxConstraintHulls = 8;
 struct PointHull {
   int nx = 0, ny = 0;
   double origin_x = 0, origin_y = 0, spacing_m = 1;
-  std::vector<float> height_m;  // ny rows of nx
+  std::vector<float> height_m;          // ny rows of nx
   double at(double x, double y) const;  // bilinear, clamped to the grid
 };
-
 
 // A level's terrain as a heightfield (a copy: allocates).
 template <class Level>
@@ -150,8 +149,7 @@ class FieldForces final : public RopeEnvironment, public PathField {
  public:
   static constexpr double kSaturation = 3.0;
 
-  FieldForces(const Level& level, const ForceGains& gains)
-      : sampler_(level), gains_(gains) {
+  FieldForces(const Level& level, const ForceGains& gains) : sampler_(level), gains_(gains) {
     const fields::VolumeGeometry& g = level.geometry();
     accel_ref_ = g.spacing_m / (0.1 * 0.1);
     gradient_ref_ = measure_reference_gradient();
@@ -185,8 +183,12 @@ class FieldForces final : public RopeEnvironment, public PathField {
   const PointHull* visible_to() const { return visible_count_ ? visible_[0] : nullptr; }
   int hidden_from_count() const { return hidden_count_; }
   int visible_to_count() const { return visible_count_; }
-  const PointHull* hidden_from(int k) const { return k >= 0 && k < hidden_count_ ? hidden_[static_cast<std::size_t>(k)] : nullptr; }
-  const PointHull* visible_to(int k) const { return k >= 0 && k < visible_count_ ? visible_[static_cast<std::size_t>(k)] : nullptr; }
+  const PointHull* hidden_from(int k) const {
+    return k >= 0 && k < hidden_count_ ? hidden_[static_cast<std::size_t>(k)] : nullptr;
+  }
+  const PointHull* visible_to(int k) const {
+    return k >= 0 && k < visible_count_ ? visible_[static_cast<std::size_t>(k)] : nullptr;
+  }
   double reference_acceleration() const { return accel_ref_; }
   double reference_gradient() const { return gradient_ref_; }
   const Sampler& sampler() const { return sampler_; }
@@ -223,8 +225,10 @@ class FieldForces final : public RopeEnvironment, public PathField {
     }
     const double hull_margin = std::max(gains_.hull_margin_m, 1e-3);
     double over = 0, under = 0;  // the most binding hull of each kind
-    for (int c = 0; c < hidden_count_; ++c) over = std::max(over, p.z() - hidden_[static_cast<std::size_t>(c)]->at(p.x(), p.y()) + hull_margin);
-    for (int c = 0; c < visible_count_; ++c) under = std::max(under, visible_[static_cast<std::size_t>(c)]->at(p.x(), p.y()) + hull_margin - p.z());
+    for (int c = 0; c < hidden_count_; ++c)
+      over = std::max(over, p.z() - hidden_[static_cast<std::size_t>(c)]->at(p.x(), p.y()) + hull_margin);
+    for (int c = 0; c < visible_count_; ++c)
+      under = std::max(under, visible_[static_cast<std::size_t>(c)]->at(p.x(), p.y()) + hull_margin - p.z());
     if (over > 0) {
       // Safety first: the push down fades out within the clearance margin.
       const double room = gains_.clearance_m > 0 ? std::clamp((h - gains_.clearance_m) / margin, 0.0, 1.0) : 1.0;
@@ -313,7 +317,8 @@ inline double PointHull::at(double x, double y) const {
   const int i = std::min(static_cast<int>(gi), nx - 2), j = std::min(static_cast<int>(gj), ny - 2);
   const double fi = gi - i, fj = gj - j;
   auto h = [&](int a, int b) {
-    return static_cast<double>(height_m[static_cast<std::size_t>(b) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(a)]);
+    return static_cast<double>(
+        height_m[static_cast<std::size_t>(b) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(a)]);
   };
   return (1 - fj) * ((1 - fi) * h(i, j) + fi * h(i + 1, j)) + fj * ((1 - fi) * h(i, j + 1) + fi * h(i + 1, j + 1));
 }

@@ -43,17 +43,17 @@ struct GlobalSearchParams {
   double clearance_m = 30.0;
   double max_agl_m = std::numeric_limits<double>::infinity();
   double max_altitude_m = std::numeric_limits<double>::infinity();
-  double max_climb_deg = 90.0;    // 90 (both): vertical edges too, as before limits existed
+  double max_climb_deg = 90.0;  // 90 (both): vertical edges too, as before limits existed
   double max_descent_deg = 90.0;
-  std::optional<fields::Bounds2D> bounds;  // columns outside are not used
+  std::optional<fields::Bounds2D> bounds;                 // columns outside are not used
   std::vector<const PointHull*> hidden_from, visible_to;  // hulls on this level
-  double constraint_penalty = 100.0;  // per metre in a forbidden volume (F_p is at most 1)
+  double constraint_penalty = 100.0;                      // per metre in a forbidden volume (F_p is at most 1)
 };
 
 struct GlobalPath {
-  std::vector<Vec3> points;   // from, voxel centres, to
-  double cost = 0;            // the search's own cost
-  std::size_t expanded = 0;   // nodes settled
+  std::vector<Vec3> points;  // from, voxel centres, to
+  double cost = 0;           // the search's own cost
+  std::size_t expanded = 0;  // nodes settled
 };
 
 template <class Level>
@@ -134,12 +134,15 @@ Result<GlobalPath> global_search(const Level& level, const Vec3& from, const Vec
     j = static_cast<int>(std::lround((g.origin_y - p.y()) / g.spacing_m));
     if (i < 0 || j < 0 || i >= g.nx || j >= g.ny) return false;
     const std::size_t c = static_cast<std::size_t>(j) * nx + static_cast<std::size_t>(i);
-    k = std::clamp(static_cast<int>(std::lround((p.z() - g.z0_m) / g.dz_m)), floor_k[c], std::max(floor_k[c], top_k[c]));
+    k = std::clamp(static_cast<int>(std::lround((p.z() - g.z0_m) / g.dz_m)), floor_k[c],
+                   std::max(floor_k[c], top_k[c]));
     return usable(i, j, k);
   };
   int si, sj, sk, ti, tj, tk;
-  if (!snap(from, si, sj, sk)) return invalid_argument("global search: the start is outside the level, its planning bounds or its envelope");
-  if (!snap(to, ti, tj, tk)) return invalid_argument("global search: the end is outside the level, its planning bounds or its envelope");
+  if (!snap(from, si, sj, sk))
+    return invalid_argument("global search: the start is outside the level, its planning bounds or its envelope");
+  if (!snap(to, ti, tj, tk))
+    return invalid_argument("global search: the end is outside the level, its planning bounds or its envelope");
 
   std::vector<float> dist(count, std::numeric_limits<float>::infinity());
   std::vector<std::int32_t> prev(count, -1);
@@ -181,7 +184,9 @@ Result<GlobalPath> global_search(const Level& level, const Vec3& from, const Vec
     }
   }
   if (!std::isfinite(dist[goal])) {
-    return invalid_argument("global search: no path inside the envelope (clearance, ceiling, climb and descent, planning bounds) joins the start and the end");
+    return invalid_argument(
+        "global search: no path inside the envelope (clearance, ceiling, climb and descent, planning bounds) joins the "
+        "start and the end");
   }
   out.cost = dist[goal];
   std::vector<Vec3> reversed;

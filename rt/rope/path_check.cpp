@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "fields/exact_visibility.hpp"
@@ -13,7 +13,7 @@ namespace visvol::rt {
 namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
-constexpr double kHeightTolM = 0.01;    // heights compare to a centimetre
+constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre
 constexpr double kAngleTolDeg = 1e-6;
 
 // Running tally of one requirement over weighted samples.
@@ -41,9 +41,7 @@ LimitResult limit(const char* name, const char* unit, double limit_value, double
 
 }  // namespace
 
-const char* to_string(ConstraintKind kind) {
-  return kind == ConstraintKind::visible_to ? "visible-to" : "hidden-from";
-}
+const char* to_string(ConstraintKind kind) { return kind == ConstraintKind::visible_to ? "visible-to" : "hidden-from"; }
 
 std::vector<std::string> PathCheck::unmet() const {
   std::vector<std::string> out;
@@ -160,7 +158,7 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
       const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);
       // the segment's ends are the vertices themselves
       const Vec3 p = k == 0 ? a : k == m ? b : Vec3(a + (b - a) * (static_cast<double>(k) / m));
-      std::vector<bool>* at_vertex = k == 0 ? &vertex_seen[static_cast<std::size_t>(s)]
+      std::vector<bool>* at_vertex = k == 0   ? &vertex_seen[static_cast<std::size_t>(s)]
                                      : k == m ? &vertex_seen[static_cast<std::size_t>(s + 1)]
                                               : nullptr;
       sample(p, w, at_vertex);

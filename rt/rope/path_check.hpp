@@ -43,11 +43,11 @@ struct ConstraintPoint {
 };
 
 struct PathCheckSpec {
-  VehicleEnvelope envelope;                   // limits; max_agl_m infinite: none
+  VehicleEnvelope envelope;  // limits; max_agl_m infinite: none
   std::vector<ConstraintPoint> constraints;
   std::optional<fields::Bounds2D> planning_bounds;
-  double curvature_coeff = 0;                 // the pack's Earth curvature and refraction
-  double sample_step_m = 0;                   // 0: a quarter of the terrain's post spacing
+  double curvature_coeff = 0;  // the pack's Earth curvature and refraction
+  double sample_step_m = 0;    // 0: a quarter of the terrain's post spacing
 };
 
 struct ConstraintResult {
@@ -58,33 +58,33 @@ struct ConstraintResult {
 };
 
 struct LimitResult {
-  std::string name;               // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius"
-  std::string unit;               // "m", "deg"
-  double limit = 0;               // as asked
-  double worst = 0;               // the path's worst value (lowest for a lower limit, highest for an upper)
+  std::string name;  // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius"
+  std::string unit;  // "m", "deg"
+  double limit = 0;  // as asked
+  double worst = 0;  // the path's worst value (lowest for a lower limit, highest for an upper)
   double satisfied_fraction = 1;  // of the path's length
   bool met = true;
 };
 
 struct VertexCheck {
-  double fp = 0;                 // F_p of the field at the vertex (informative)
-  double ground_m = 0;           // finest terrain below it
-  double clearance_m = 0;        // height above it
-  double climb_deg = 0;          // of the segment to the next vertex (negative: descent)
-  double turn_radius_m = 0;      // the largest flyable turn radius here (turn_radii_m; infinite: straight or an end)
-  std::vector<bool> seen_by;     // per constraint: the observer sees this vertex (R3)
+  double fp = 0;              // F_p of the field at the vertex (informative)
+  double ground_m = 0;        // finest terrain below it
+  double clearance_m = 0;     // height above it
+  double climb_deg = 0;       // of the segment to the next vertex (negative: descent)
+  double turn_radius_m = 0;   // the largest flyable turn radius here (turn_radii_m; infinite: straight or an end)
+  std::vector<bool> seen_by;  // per constraint: the observer sees this vertex (R3)
 };
 
 struct PathCheck {
-  double fc = 0;                  // F_c of the field along the path
+  double fc = 0;  // F_c of the field along the path
   double length_m = 0;
-  double duration_s = 0;          // at the vehicle's speed
+  double duration_s = 0;  // at the vehicle's speed
   std::vector<ConstraintResult> constraints;
   std::vector<LimitResult> envelope;
   double inside_bounds_fraction = 1;  // of the path's length inside the planning bounds
   bool inside_planning_bounds = true;
   std::vector<VertexCheck> per_vertex;
-  bool all_met = false;           // every constraint and limit, and inside the bounds
+  bool all_met = false;  // every constraint and limit, and inside the bounds
   // Sum over requirements of the unmet fraction (0 when all are met): a
   // ranking of infeasible paths, least violation first.
   double violation = 0;
@@ -101,9 +101,7 @@ class PathChecker {
   static Result<PathChecker> create(fields::Heightfield terrain, const PathField* field, PathCheckSpec spec);
 
   PathCheck check(const Vec3* vertices, int count) const;
-  PathCheck check(const std::vector<Vec3>& path) const {
-    return check(path.data(), static_cast<int>(path.size()));
-  }
+  PathCheck check(const std::vector<Vec3>& path) const { return check(path.data(), static_cast<int>(path.size())); }
 
   const PathCheckSpec& spec() const { return spec_; }
   const fields::Heightfield& terrain() const { return terrain_; }

@@ -36,20 +36,18 @@ void walk(const Vec3* v, int count, int samples, double total, Fn&& fn) {
 
 }  // namespace
 
-double path_fc(const Vec3* vertices, int count, const PathField& field, int samples,
-               Importance importance) {
+double path_fc(const Vec3* vertices, int count, const PathField& field, int samples, Importance importance) {
   if (count < 2 || samples < 2) return 0.0;
   const double total = polyline_length(vertices, count);
   if (!(total > 0)) return field.visibility(vertices[0]) * (importance ? importance(0.0) : 1.0);
   double sum = 0;
-  walk(vertices, count, samples, total, [&](const Vec3& p, double t) {
-    sum += field.visibility(p) * (importance ? importance(t) : 1.0);
-  });
+  walk(vertices, count, samples, total,
+       [&](const Vec3& p, double t) { sum += field.visibility(p) * (importance ? importance(t) : 1.0); });
   return sum / samples;
 }
 
-PathMetrics path_metrics(const Vec3* v, int count, const PathField& field, int samples,
-                         double clearance_step_m, Importance importance) {
+PathMetrics path_metrics(const Vec3* v, int count, const PathField& field, int samples, double clearance_step_m,
+                         Importance importance) {
   PathMetrics m;
   if (count < 2) return m;
   m.length_m = polyline_length(v, count);

@@ -18,30 +18,29 @@ namespace visvol::rt {
 class PathField {
  public:
   virtual ~PathField() = default;
-  virtual double visibility(const Vec3& p_m) const = 0;         // F_p
+  virtual double visibility(const Vec3& p_m) const = 0;  // F_p
   virtual double terrain_height_m(double x, double y) const = 0;
 };
 
 struct PathMetrics {
-  double fc = 0;                   // F_c, importance-weighted mean F_p
+  double fc = 0;  // F_c, importance-weighted mean F_p
   double length_m = 0;
-  double min_clearance_m = 0;      // lowest height above the terrain (sampled)
-  double max_climb_deg = 0;        // steepest ascent of a segment
-  double max_descent_deg = 0;      // steepest descent of a segment (positive)
-  double min_turn_radius_m = 0;    // tightest turn an autopilot flies at a waypoint (turn_radii_m)
+  double min_clearance_m = 0;    // lowest height above the terrain (sampled)
+  double max_climb_deg = 0;      // steepest ascent of a segment
+  double max_descent_deg = 0;    // steepest descent of a segment (positive)
+  double min_turn_radius_m = 0;  // tightest turn an autopilot flies at a waypoint (turn_radii_m)
 };
 
 // Importance along the path, t in [0, 1] by arc length; nullptr means 1.
 using Importance = double (*)(double t);
 
 // F_c alone, from `samples` arc-length samples (>= 2). Real-time safe.
-double path_fc(const Vec3* vertices, int count, const PathField& field, int samples,
-               Importance importance = nullptr);
+double path_fc(const Vec3* vertices, int count, const PathField& field, int samples, Importance importance = nullptr);
 
 // Every metric; clearance is sampled every `clearance_step_m` along the path.
 // Offline: allocates (turn_radii_m).
-PathMetrics path_metrics(const Vec3* vertices, int count, const PathField& field, int samples,
-                         double clearance_step_m, Importance importance = nullptr);
+PathMetrics path_metrics(const Vec3* vertices, int count, const PathField& field, int samples, double clearance_step_m,
+                         Importance importance = nullptr);
 
 // The fillet radius at vertex b between segments a-b and b-c (horizontal
 // plane) when each fillet may use half of each segment, infinite for a

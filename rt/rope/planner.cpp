@@ -31,10 +31,14 @@ Status validate(const PlanRequest& r) {
     double v;
     const char* name;
     double lo, hi;
-  } ranges[] = {{r.candidate_interval_s, "candidate interval", 1.0e-3, 1.0e3}, {r.visibility_gain, "visibility gain", 0.0, 1.0e3},
-                {r.terrain_gain, "terrain gain", 0.0, 1.0e3},     {r.stiffness, "stiffness", 1.0e-3, 1.0e3},
-                {r.slack < 0 ? 0.0 : r.slack, "slack", 0.0, 10.0},                    {r.length_weight, "length weight", 0.0, 1.0e3},
-                {r.dt_s, "time step", 1.0e-5, 0.01},              {r.max_seconds_per_level, "seconds per level", 1.0e-3, 1.0e5}};
+  } ranges[] = {{r.candidate_interval_s, "candidate interval", 1.0e-3, 1.0e3},
+                {r.visibility_gain, "visibility gain", 0.0, 1.0e3},
+                {r.terrain_gain, "terrain gain", 0.0, 1.0e3},
+                {r.stiffness, "stiffness", 1.0e-3, 1.0e3},
+                {r.slack < 0 ? 0.0 : r.slack, "slack", 0.0, 10.0},
+                {r.length_weight, "length weight", 0.0, 1.0e3},
+                {r.dt_s, "time step", 1.0e-5, 0.01},
+                {r.max_seconds_per_level, "seconds per level", 1.0e-3, 1.0e5}};
   for (const auto& c : ranges) {
     if (!(std::isfinite(c.v) && c.v >= c.lo && c.v <= c.hi)) {
       msg << "plan: " << c.name << " " << c.v << " is outside " << c.lo << ".." << c.hi;
@@ -46,9 +50,9 @@ Status validate(const PlanRequest& r) {
   const double vertex_steps = (r.segments + 1.0) * (r.max_seconds_per_level / std::min(r.dt_s, kMinPlanStep_s));
   if (vertex_steps > kMaxVertexStepsPerLevel) {
     msg.precision(3);
-    msg << "plan: " << r.segments << " segments for " << r.max_seconds_per_level
-        << " simulated s a level is " << vertex_steps << " vertex steps a level, over the "
-        << kMaxVertexStepsPerLevel << " allowed (about half a minute of wall time a level): use fewer "
+    msg << "plan: " << r.segments << " segments for " << r.max_seconds_per_level << " simulated s a level is "
+        << vertex_steps << " vertex steps a level, over the " << kMaxVertexStepsPerLevel
+        << " allowed (about half a minute of wall time a level): use fewer "
         << "--segments or a smaller --max-seconds";
     return invalid_argument(msg.str());
   }
@@ -62,8 +66,8 @@ Status validate(const PlanRequest& r) {
       }
       if (r.planning_bounds && !r.planning_bounds->contains(r.polyline[i].x(), r.polyline[i].y())) {
         msg.precision(1);
-        msg << std::fixed << "plan: initial path point " << i << " (" << r.polyline[i].x() << ", "
-            << r.polyline[i].y() << ") is outside the pack's planning bounds";
+        msg << std::fixed << "plan: initial path point " << i << " (" << r.polyline[i].x() << ", " << r.polyline[i].y()
+            << ") is outside the pack's planning bounds";
         return invalid_argument(msg.str());
       }
     }
@@ -151,8 +155,7 @@ std::vector<const PointHull*> ObserverHulls::of(ConstraintKind kind) const {
 
 }  // namespace detail
 
-RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness,
-                              double accel_ref) {
+RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness, double accel_ref) {
   RopeParams p;
   p.model = model;
   p.max_segments = std::max(segments, 2);
@@ -204,7 +207,8 @@ std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m)
   }
   auto lifted = [&](double amplitude) {
     std::vector<Vec3> out = base;
-    for (int i = 0; i <= kSegments; ++i) out[static_cast<std::size_t>(i)].z() += amplitude * std::sin(M_PI * i / kSegments);
+    for (int i = 0; i <= kSegments; ++i)
+      out[static_cast<std::size_t>(i)].z() += amplitude * std::sin(M_PI * i / kSegments);
     return out;
   };
   auto length = [](const std::vector<Vec3>& p) {

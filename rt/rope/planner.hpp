@@ -70,25 +70,25 @@ struct PlanRequest {
   RopeModel model = RopeModel::articulated;
   int segments = 128;
   InitialPath init = InitialPath::straight;
-  std::vector<Vec3> polyline;       // init == polyline: the path (already lifted if it was 2D)
-  VehicleEnvelope envelope;         // clearance, ceiling, climb, descent, turns
-  std::vector<ConstraintPoint> constraints;  // hidden from / visible to observers
+  std::vector<Vec3> polyline;                       // init == polyline: the path (already lifted if it was 2D)
+  VehicleEnvelope envelope;                         // clearance, ceiling, climb, descent, turns
+  std::vector<ConstraintPoint> constraints;         // hidden from / visible to observers
   std::optional<fields::Bounds2D> planning_bounds;  // the pack's trusted region
-  double curvature_coeff = 0;       // the pack's Earth curvature and refraction, for the sight lines
-  double visibility_gain = 1.0;     // |k1|; its sign comes from the objective
-  double terrain_gain = 1.0;        // k2
-  double stiffness = 1.0;           // scales the rope's springs
+  double curvature_coeff = 0;                       // the pack's Earth curvature and refraction, for the sight lines
+  double visibility_gain = 1.0;                     // |k1|; its sign comes from the objective
+  double terrain_gain = 1.0;                        // k2
+  double stiffness = 1.0;                           // scales the rope's springs
   // Articulated: extra length over the initial path; negative means the
   // default: 0.3 for a straight start, 0.05 for a path that already wanders.
   double slack = -1.0;
-  double length_weight = 0.0;       // global search: cost per metre on top of F_p
+  double length_weight = 0.0;  // global search: cost per metre on top of F_p
   // Time step at most (the planner takes less where the rope's springs or
   // the clearance push need it: stable_step_s). Offline there is no 1 kHz
   // loop to keep: 4 ms settles the same paths as 1 ms (visvol-planbench, same
   // F_c to 4 digits, same simulated time to equilibrium), a quarter the work.
   double dt_s = 0.004;
   double max_seconds_per_level = 40.0;
-  double candidate_interval_s = 0.25;  // rope states judged this often on the finest level
+  double candidate_interval_s = 0.25;       // rope states judged this often on the finest level
   std::size_t max_search_voxels = 8000000;  // the finest level the global search may run on
   int fc_samples = 256;
 };
@@ -96,10 +96,10 @@ struct PlanRequest {
 Status validate(const PlanRequest& request);
 
 struct PlanProgress {
-  int level = 0;               // level of detail being refined
+  int level = 0;  // level of detail being refined
   double simulated_s = 0;
-  double fc = 0;               // on that level
-  double rms_speed_mps = 0;    // of the rope's vertices
+  double fc = 0;             // on that level
+  double rms_speed_mps = 0;  // of the rope's vertices
   const Vec3* vertices = nullptr;
   int vertex_count = 0;
 };
@@ -109,23 +109,22 @@ struct PlanResult {
   PathMetrics initial, final_metrics, global;  // all on the finest level
   PathCheck initial_check, final_check;        // exact, on the finest terrain
   bool has_global = false;
-  int global_level = -1;       // the level the kept global search ran on
-  int first_level = -1;        // the level the rope settled on first (then every finer one)
-  std::string chosen;          // which path is the answer: "start", "global search", "rope"
-  int candidates = 0;          // paths judged
-  double simulated_s = 0;      // all levels
-  double equilibrium_s = 0;    // on the finest level, until equilibrium
-  bool converged = false;      // the finest level reached equilibrium
-  bool diverged = false;       // the rope's state stopped being finite (the best path before stands)
+  int global_level = -1;     // the level the kept global search ran on
+  int first_level = -1;      // the level the rope settled on first (then every finer one)
+  std::string chosen;        // which path is the answer: "start", "global search", "rope"
+  int candidates = 0;        // paths judged
+  double simulated_s = 0;    // all levels
+  double equilibrium_s = 0;  // on the finest level, until equilibrium
+  bool converged = false;    // the finest level reached equilibrium
+  bool diverged = false;     // the rope's state stopped being finite (the best path before stands)
   double wall_s = 0;
   double rope_length_m = 0;
-  double max_energy_j = 0;     // largest kinetic energy seen (stability)
+  double max_energy_j = 0;  // largest kinetic energy seen (stability)
 };
 
 // The rope's physical parameters for a segment length, sized against the
 // field's reference acceleration (stiffness scales the springs).
-RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness,
-                              double accel_ref);
+RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, double stiffness, double accel_ref);
 
 // The largest time step that keeps a rope of `p` well resolved in a field of
 // reference acceleration `accel_ref` (m/s^2, times the largest gain) with a
@@ -254,8 +253,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
 
   // the start
   // the straight line stands for a global search that finds nothing better
-  std::vector<Vec3> start_path = request.init == InitialPath::polyline ? request.polyline
-                                                                        : std::vector<Vec3>{request.from, request.to};
+  std::vector<Vec3> start_path =
+      request.init == InitialPath::polyline ? request.polyline : std::vector<Vec3>{request.from, request.to};
   consider(start_path.data(), static_cast<int>(start_path.size()), "start");
   if (request.init == InitialPath::global) {
     GlobalSearchParams gp;
@@ -306,15 +305,15 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     const double slack = request.slack >= 0 ? request.slack : (request.init == InitialPath::straight ? 0.3 : 0.05);
     rope_length *= 1.0 + slack;
     std::vector<Vec3> base(static_cast<std::size_t>(kLaidSegments) + 1);
-    VISVOL_RETURN_IF_ERROR(resample_polyline(start_path.data(), static_cast<int>(start_path.size()), kLaidSegments,
-                                             base.data()));
+    VISVOL_RETURN_IF_ERROR(
+        resample_polyline(start_path.data(), static_cast<int>(start_path.size()), kLaidSegments, base.data()));
     laid.resize(base.size());
     const double floor_m = envelope.clearance_m + 20.0;
     // A straight start bows out once; a planned one wiggles in place, a full
     // wave every eight rope segments.
     const int half_waves = request.init == InitialPath::straight ? 1 : std::max(1, request.segments / 4);
-    rope_length = lay_with_slack([&](int i) { return base[static_cast<std::size_t>(i)]; }, kLaidSegments,
-                                 half_waves, rope_length, floor_m, finest.geometry(),
+    rope_length = lay_with_slack([&](int i) { return base[static_cast<std::size_t>(i)]; }, kLaidSegments, half_waves,
+                                 rope_length, floor_m, finest.geometry(),
                                  [&](double x, double y) { return judge.terrain_height_m(x, y); }, laid.data());
   }
   const RopeParams rp = scaled_rope_params(request.model, request.segments, rope_length / request.segments,
@@ -364,7 +363,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
         result.diverged = true;  // the best path seen so far stands
         break;
       }
-      if (on_progress) on_progress({level, result.simulated_s + level_s, fc, rms, rope.vertices(), rope.segments() + 1});
+      if (on_progress)
+        on_progress({level, result.simulated_s + level_s, fc, rms, rope.vertices(), rope.segments() + 1});
       if (level == 0 && check % checks_per_candidate == 0) consider(rope.vertices(), rope.segments() + 1, "rope");
       if (equilibrium.add(rms, fc)) {
         settled = true;

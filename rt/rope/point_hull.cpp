@@ -32,7 +32,8 @@ Result<PointHull> PointHullMaker::operator()(const Vec3& p, const char* name) co
   const std::size_t side = 2 * static_cast<std::size_t>(radius) + 1;
   for (int j = 0; j < g_.ny; ++j) {
     for (int i = 0; i < g_.nx; ++i) {
-      const double h = horizon[static_cast<std::size_t>(j - pj + radius) * side + static_cast<std::size_t>(i - pi + radius)];
+      const double h =
+          horizon[static_cast<std::size_t>(j - pj + radius) * side + static_cast<std::size_t>(i - pi + radius)];
       const double d = std::hypot(double(i - pi), double(j - pj)) * g_.spacing_m;
       const double ground = hf_.at(i, j);
       const double lowest = h <= fields::kNoHorizon ? ground : std::max(ground, p.z() + d * h);

@@ -12,9 +12,7 @@
 
 namespace visvol::rt {
 
-const char* to_string(RopeModel model) {
-  return model == RopeModel::spring ? "spring" : "articulated";
-}
+const char* to_string(RopeModel model) { return model == RopeModel::spring ? "spring" : "articulated"; }
 
 Result<RopeModel> parse_rope_model(const char* text) {
   if (std::strcmp(text, "spring") == 0) return RopeModel::spring;
@@ -51,8 +49,7 @@ Status validate(const RopeParams& p) {
       !positive(p.capsule_radius_m, "capsule radius") ||
       !non_negative(p.stretch_stiffness_n_per_m, "stretch stiffness") ||
       !non_negative(p.stretch_damping_n_s_per_m, "stretch damping") ||
-      !non_negative(p.bend_spring_n_per_m, "bending spring") ||
-      !positive(p.rest_length_factor, "rest length factor")) {
+      !non_negative(p.bend_spring_n_per_m, "bending spring") || !positive(p.rest_length_factor, "rest length factor")) {
     return invalid_argument(msg.str());
   }
   if (!(p.verlet_damping >= 0 && p.verlet_damping <= 1)) {

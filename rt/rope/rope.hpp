@@ -40,24 +40,24 @@ class RopeEnvironment {
 
 struct RopeParams {
   RopeModel model = RopeModel::articulated;
-  int max_segments = 512;              // capacity reserved at construction
-  double mass_kg = 1.0;                // per segment (capsule) or per particle
-  double linear_damping_per_s = 6.0;   // viscous drag: dv/dt = -c v
+  int max_segments = 512;             // capacity reserved at construction
+  double mass_kg = 1.0;               // per segment (capsule) or per particle
+  double linear_damping_per_s = 6.0;  // viscous drag: dv/dt = -c v
   double angular_damping_per_s = 6.0;
   // Articulated: joint springs per radian of relative rotation, and joint damping.
   double bend_stiffness_n_m_per_rad = 400.0;
   double twist_stiffness_n_m_per_rad = 40.0;
   double joint_damping_n_m_s_per_rad = 2.0;  // of the relative bending spin
   double twist_damping_n_m_s_per_rad = 0.2;  // of the relative twisting spin
-  double capsule_radius_m = 1.0;       // for the inertia only
-  int projection_iterations = 2;       // position projections after each step
+  double capsule_radius_m = 1.0;             // for the inertia only
+  int projection_iterations = 2;             // position projections after each step
   // Spring-mass (paper): stretch springs K_S, K_V, bending springs between i and
   // i + 2, and the Verlet damping factor d in [0, 1].
   double stretch_stiffness_n_per_m = 4000.0;
   double stretch_damping_n_s_per_m = 20.0;
   double bend_spring_n_per_m = 400.0;
   double verlet_damping = 0.004;
-  double rest_length_factor = 1.0;     // spring rest length / initial segment length
+  double rest_length_factor = 1.0;  // spring rest length / initial segment length
 };
 
 // Checks ranges (finite, positive, capacity) before a rope is made.

@@ -48,7 +48,7 @@ class SpringMassRope final : public Rope {
 
   RopeParams p_;
   RopeEnds ends_;
-  int n_ = 0;  // segments; particles are n_ + 1
+  int n_ = 0;                 // segments; particles are n_ + 1
   double rest_m_ = 1.0;       // stretch spring rest length
   double bend_rest_m_ = 2.0;  // bending spring rest length
   double dt_prev_s_ = 0;      // the last step, for velocities

@@ -5,9 +5,7 @@
 
 namespace visvol::rt {
 
-const char* to_string(VehicleType type) {
-  return type == VehicleType::multirotor ? "multirotor" : "fixed-wing";
-}
+const char* to_string(VehicleType type) { return type == VehicleType::multirotor ? "multirotor" : "fixed-wing"; }
 
 Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
   VehicleEnvelope v;
@@ -33,7 +31,8 @@ Status validate(const VehicleEnvelope& v) {
   if (!(std::isfinite(v.speed_mps) && v.speed_mps > 0 && v.speed_mps <= 1000)) {
     return bad("speed", v.speed_mps, "is outside (0, 1000] m/s");
   }
-  if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90)) return bad("max-climb", v.max_climb_deg, "is outside (0, 90] deg");
+  if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90))
+    return bad("max-climb", v.max_climb_deg, "is outside (0, 90] deg");
   if (!(v.max_descent_deg > 0 && v.max_descent_deg <= 90)) {
     return bad("max-descent", v.max_descent_deg, "is outside (0, 90] deg");
   }
@@ -43,7 +42,8 @@ Status validate(const VehicleEnvelope& v) {
   if (!(std::isfinite(v.clearance_m) && v.clearance_m >= 0 && v.clearance_m <= 1e4)) {
     return bad("clearance", v.clearance_m, "is outside [0, 10000] m");
   }
-  if (!(v.max_agl_m > 0 && v.max_agl_m <= VehicleEnvelope::kNone)) return bad("max-agl", v.max_agl_m, "is not above 0 m");
+  if (!(v.max_agl_m > 0 && v.max_agl_m <= VehicleEnvelope::kNone))
+    return bad("max-agl", v.max_agl_m, "is not above 0 m");
   if (!(v.max_agl_m > v.clearance_m)) {
     msg << "vehicle " << v.name << ": max-agl " << v.max_agl_m << " m is not above the clearance " << v.clearance_m
         << " m: no height is allowed";

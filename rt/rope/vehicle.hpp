@@ -29,15 +29,15 @@ const char* to_string(VehicleType type);  // "fixed-wing", "multirotor"
 struct VehicleEnvelope {
   static constexpr double kNone = std::numeric_limits<double>::infinity();
 
-  std::string name = "fixed-wing";     // preset or file it came from
+  std::string name = "fixed-wing";  // preset or file it came from
   VehicleType type = VehicleType::fixed_wing;
-  double speed_mps = 20.0;             // cruise ground speed (exposure time, .plan speeds)
-  double max_climb_deg = 15.0;         // steepest climb of a segment
-  double max_descent_deg = 15.0;       // steepest descent of a segment (positive)
-  double min_turn_radius_m = 80.0;     // tightest fillet at a waypoint, 0 for none
-  double clearance_m = 30.0;           // least height above the finest terrain
-  double max_agl_m = kNone;            // highest height above the finest terrain
-  double max_altitude_m = kNone;       // highest height above the datum
+  double speed_mps = 20.0;          // cruise ground speed (exposure time, .plan speeds)
+  double max_climb_deg = 15.0;      // steepest climb of a segment
+  double max_descent_deg = 15.0;    // steepest descent of a segment (positive)
+  double min_turn_radius_m = 80.0;  // tightest fillet at a waypoint, 0 for none
+  double clearance_m = 30.0;        // least height above the finest terrain
+  double max_agl_m = kNone;         // highest height above the finest terrain
+  double max_altitude_m = kNone;    // highest height above the datum
 };
 
 // The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m

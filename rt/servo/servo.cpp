@@ -19,8 +19,8 @@ Status bad(const std::string& field, const std::string& why) {
 // A finite value in [lo, hi].
 Status check_range(const char* field, double v, double lo, double hi, const char* unit) {
   if (!finite(v) || v < lo || v > hi) {
-    return bad(field, "= " + std::to_string(v) + " " + unit + " is outside [" + std::to_string(lo) +
-                          ", " + std::to_string(hi) + "]");
+    return bad(field, "= " + std::to_string(v) + " " + unit + " is outside [" + std::to_string(lo) + ", " +
+                          std::to_string(hi) + "]");
   }
   return Status::ok_status();
 }
@@ -54,8 +54,7 @@ Status Servo::validate(const ServoConfig& c) {
   VISVOL_RETURN_IF_ERROR(check_range("world_m_per_device_mm", c.world_m_per_device_mm, 1e-9, 1e6, "m/mm"));
   if (!c.world_offset_m.allFinite()) return bad("world_offset_m", "is not finite");
   const Eigen::Matrix3d& r = c.device_to_world;
-  if (!r.allFinite() || (r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
-      r.determinant() < 0.0) {
+  if (!r.allFinite() || (r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-6 || r.determinant() < 0.0) {
     return bad("device_to_world", "is not a rotation (orthonormal, determinant +1)");
   }
   VISVOL_RETURN_IF_ERROR(check_range("coupling_stiffness_n_per_m", c.coupling_stiffness_n_per_m, 0.0, kHuge, "N/m"));
@@ -68,22 +67,24 @@ Status Servo::validate(const ServoConfig& c) {
   VISVOL_RETURN_IF_ERROR(check_range("ramp_in_s", c.ramp_in_s, 0.0, 60.0, "s"));
   VISVOL_RETURN_IF_ERROR(check_range("velocity_cutoff_hz", c.velocity_cutoff_hz, 0.1, 500.0, "Hz"));
   VISVOL_RETURN_IF_ERROR(check_range("max_tick_s", c.max_tick_s, 1e-4, 1.0, "s"));
-  VISVOL_RETURN_IF_ERROR(check_range("max_device_stiffness_n_per_m", c.max_device_stiffness_n_per_m, 0.0, kHuge, "N/m"));
-  VISVOL_RETURN_IF_ERROR(check_range("max_device_damping_n_s_per_m", c.max_device_damping_n_s_per_m, 0.0, kHuge, "N s/m"));
+  VISVOL_RETURN_IF_ERROR(
+      check_range("max_device_stiffness_n_per_m", c.max_device_stiffness_n_per_m, 0.0, kHuge, "N/m"));
+  VISVOL_RETURN_IF_ERROR(
+      check_range("max_device_damping_n_s_per_m", c.max_device_damping_n_s_per_m, 0.0, kHuge, "N s/m"));
   // What the hand feels per metre of handle motion: hand gain x K x (world m per handle m).
   const double handle_scale = c.world_m_per_device_mm * kMmPerM;
   const double felt_stiffness = c.hand_per_rope_force * c.coupling_stiffness_n_per_m * handle_scale;
   if (felt_stiffness > c.max_device_stiffness_n_per_m) {
-    return bad("coupling_stiffness_n_per_m",
-               "makes the hand feel " + std::to_string(felt_stiffness) + " N/m, above the device's stable " +
-                   std::to_string(c.max_device_stiffness_n_per_m) +
-                   " N/m (hand_per_rope_force x K x world_m_per_device_mm x 1000)");
+    return bad("coupling_stiffness_n_per_m", "makes the hand feel " + std::to_string(felt_stiffness) +
+                                                 " N/m, above the device's stable " +
+                                                 std::to_string(c.max_device_stiffness_n_per_m) +
+                                                 " N/m (hand_per_rope_force x K x world_m_per_device_mm x 1000)");
   }
   const double felt_damping = c.hand_per_rope_force * c.coupling_damping_n_s_per_m * handle_scale;
   if (felt_damping > c.max_device_damping_n_s_per_m) {
-    return bad("coupling_damping_n_s_per_m",
-               "makes the hand feel " + std::to_string(felt_damping) + " N s/m, above the device's " +
-                   std::to_string(c.max_device_damping_n_s_per_m) + " N s/m");
+    return bad("coupling_damping_n_s_per_m", "makes the hand feel " + std::to_string(felt_damping) +
+                                                 " N s/m, above the device's " +
+                                                 std::to_string(c.max_device_damping_n_s_per_m) + " N s/m");
   }
   return Status::ok_status();
 }
@@ -93,8 +94,7 @@ Result<Servo> Servo::create(const ServoConfig& config) {
   return Servo(config);
 }
 
-Servo::Servo(const ServoConfig& config)
-    : config_(config), alpha_per_s_(2.0 * kPi * config.velocity_cutoff_hz) {
+Servo::Servo(const ServoConfig& config) : config_(config), alpha_per_s_(2.0 * kPi * config.velocity_cutoff_hz) {
   s_.offset_m = config.world_offset_m;
 }
 
@@ -133,9 +133,9 @@ ServoOutput Servo::step(const ServoInput& in) {
     Eigen::Vector3d hand_world_n = Eigen::Vector3d::Zero();
     if (s_.grasping && in.point_valid) {
       const Eigen::Vector3d proxy_vel_m_per_s =
-          s_.clutched ? Eigen::Vector3d::Zero()
-                      : Eigen::Vector3d(config_.world_m_per_device_mm *
-                                        (config_.device_to_world * s_.device_vel_mm_per_s));
+          s_.clutched
+              ? Eigen::Vector3d::Zero()
+              : Eigen::Vector3d(config_.world_m_per_device_mm * (config_.device_to_world * s_.device_vel_mm_per_s));
       const Eigen::Vector3d coupling_n =
           config_.coupling_stiffness_n_per_m * (out.proxy_pos_m - in.point_pos_m) +
           config_.coupling_damping_n_s_per_m * (proxy_vel_m_per_s - in.point_vel_m_per_s);
@@ -157,10 +157,9 @@ ServoOutput Servo::step(const ServoInput& in) {
 }
 
 SafeReason Servo::check(const ServoInput& in, double dt_s, bool forced) const {
-  const bool inputs_finite =
-      finite(in.time_s) && (!in.sample_valid || in.device_pos_mm.allFinite()) &&
-      (!in.point_valid || (in.point_pos_m.allFinite() && in.point_vel_m_per_s.allFinite() &&
-                           in.grad_fp_per_m.allFinite()));
+  const bool inputs_finite = finite(in.time_s) && (!in.sample_valid || in.device_pos_mm.allFinite()) &&
+                             (!in.point_valid || (in.point_pos_m.allFinite() && in.point_vel_m_per_s.allFinite() &&
+                                                  in.grad_fp_per_m.allFinite()));
   if (!inputs_finite) return SafeReason::invalid_input;
   if (s_.have_time && (!(dt_s > 0.0) || dt_s > config_.max_tick_s)) return SafeReason::tick_gap;
   if (forced) return SafeReason::forced;
@@ -198,8 +197,7 @@ void Servo::track_buttons(const ServoInput& in, bool sample_usable, bool safe) {
     s_.frozen_proxy_m = proxy_m();
     s_.clutched = true;
   } else if (!in.clutch_button && s_.clutched) {
-    s_.offset_m = s_.frozen_proxy_m - config_.world_m_per_device_mm *
-                                          (config_.device_to_world * s_.device_pos_mm);
+    s_.offset_m = s_.frozen_proxy_m - config_.world_m_per_device_mm * (config_.device_to_world * s_.device_pos_mm);
     s_.clutched = false;
     s_.hand_time_s = in.time_s;  // the hand force ramps in again
   }

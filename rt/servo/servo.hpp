@@ -54,20 +54,20 @@ Eigen::Matrix3d default_device_to_world();
 
 struct ServoConfig {
   // Workspace mapping.
-  double world_m_per_device_mm = 0.01;          // scale: world metres per device millimetre
-  Eigen::Vector3d world_offset_m = Eigen::Vector3d::Zero();  // world point at the device origin
+  double world_m_per_device_mm = 0.01;                          // scale: world metres per device millimetre
+  Eigen::Vector3d world_offset_m = Eigen::Vector3d::Zero();     // world point at the device origin
   Eigen::Matrix3d device_to_world = default_device_to_world();  // rotation, det +1
   // Soft joint (world).
-  double coupling_stiffness_n_per_m = 40.0;     // K
-  double coupling_damping_n_s_per_m = 0.2;      // B
-  double hand_per_rope_force = 1.0;             // hand force, N, per N of coupling force
-  double cue_gain_n_m = 0.0;                    // cue force, N, per unit of grad F_p (1/m)
+  double coupling_stiffness_n_per_m = 40.0;  // K
+  double coupling_damping_n_s_per_m = 0.2;   // B
+  double hand_per_rope_force = 1.0;          // hand force, N, per N of coupling force
+  double cue_gain_n_m = 0.0;                 // cue force, N, per unit of grad F_p (1/m)
   // Safety.
-  double continuous_force_n = 1.4;              // clamp: the device's continuous rating
-  double slew_n_per_s = 100.0;                  // largest change of the device force per second
-  double ramp_in_s = 0.3;                       // force ramps from 0 to full after (re)enable
-  double velocity_cutoff_hz = 30.0;             // low-pass on the handle velocity estimate
-  double max_tick_s = 0.02;                     // a longer gap between ticks is a fault
+  double continuous_force_n = 1.4;   // clamp: the device's continuous rating
+  double slew_n_per_s = 100.0;       // largest change of the device force per second
+  double ramp_in_s = 0.3;            // force ramps from 0 to full after (re)enable
+  double velocity_cutoff_hz = 30.0;  // low-pass on the handle velocity estimate
+  double max_tick_s = 0.02;          // a longer gap between ticks is a fault
   // Limits the configuration is checked against (the device's).
   double peak_force_n = 8.5;                    // continuous_force_n may not exceed it
   double max_device_stiffness_n_per_m = 800.0;  // stable at 1 kHz
@@ -75,17 +75,17 @@ struct ServoConfig {
 };
 
 struct ServoInput {
-  double time_s = 0.0;                                  // tick time, monotonic, s
+  double time_s = 0.0;                                      // tick time, monotonic, s
   Eigen::Vector3d device_pos_mm = Eigen::Vector3d::Zero();  // handle, device frame, mm
   bool grasp_button = false;
   bool clutch_button = false;
-  bool sample_fresh = false;        // a new device sample arrived this tick
-  bool sample_valid = false;        // the driver holds a sample younger than its timeout
-  bool device_operational = false;  // the driver's state machine is operational
-  bool point_valid = false;         // the rope gives a grasped (or graspable) point
-  Eigen::Vector3d point_pos_m = Eigen::Vector3d::Zero();          // world, m
-  Eigen::Vector3d point_vel_m_per_s = Eigen::Vector3d::Zero();    // world, m/s
-  Eigen::Vector3d grad_fp_per_m = Eigen::Vector3d::Zero();        // grad F_p at the point, 1/m
+  bool sample_fresh = false;                                    // a new device sample arrived this tick
+  bool sample_valid = false;                                    // the driver holds a sample younger than its timeout
+  bool device_operational = false;                              // the driver's state machine is operational
+  bool point_valid = false;                                     // the rope gives a grasped (or graspable) point
+  Eigen::Vector3d point_pos_m = Eigen::Vector3d::Zero();        // world, m
+  Eigen::Vector3d point_vel_m_per_s = Eigen::Vector3d::Zero();  // world, m/s
+  Eigen::Vector3d grad_fp_per_m = Eigen::Vector3d::Zero();      // grad F_p at the point, 1/m
 };
 
 // Why the force was zeroed this tick (none on a normal tick).
@@ -104,11 +104,11 @@ struct ServoOutput {
   Eigen::Vector3d proxy_pos_m = Eigen::Vector3d::Zero();     // world, m
   Eigen::Vector3d rope_force_n = Eigen::Vector3d::Zero();    // on the grasped point, world, N
   Eigen::Vector3d device_force_n = Eigen::Vector3d::Zero();  // command, device frame, N
-  bool device_enable = false;     // send with enable on (false only with zero force)
-  bool grasping = false;          // the soft joint holds a rope point
-  bool clutched = false;          // the clutch button is held: proxy frozen, hand free
-  bool forces_enabled = false;    // grasping, unclutched: the hand feels the rope
-  bool awaiting_regrasp = false;  // forces withheld until the grasp button is pressed anew
+  bool device_enable = false;                                // send with enable on (false only with zero force)
+  bool grasping = false;                                     // the soft joint holds a rope point
+  bool clutched = false;                                     // the clutch button is held: proxy frozen, hand free
+  bool forces_enabled = false;                               // grasping, unclutched: the hand feels the rope
+  bool awaiting_regrasp = false;                             // forces withheld until the grasp button is pressed anew
   SafeReason safe_reason = SafeReason::none;
 };
 

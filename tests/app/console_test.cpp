@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -17,13 +16,13 @@
 #include <sstream>
 #include <thread>
 
+#include "../fields/terrains.hpp"
 #include "../storage/crafted_pack.hpp"
 #include "../tools/cli_runner.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
-#include "../fields/terrains.hpp"
 
 namespace {
 
@@ -186,10 +185,12 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
 TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   const std::string out = out_dir("envelope");
   const auto h1 = post(48, 20, 10), h2 = post(20, 70, 10), v1 = post(48, 60, 60), v2 = post(75, 40, 60);
-  const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
+  const Outcome r = console("--pack " + *pack_ +
+                            " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
                             "--script none --thumbnail-view none --objective show --max-agl 120 --max-altitude 2000 "
-                            "--hidden-from " + xyz(h1) + " --hidden-from " + xyz(h2) + " --visible-to " + xyz(v1) +
-                            " --visible-to " + xyz(v2) + " --eye-height 1.5 --out " + out);
+                            "--hidden-from " +
+                            xyz(h1) + " --hidden-from " + xyz(h2) + " --visible-to " + xyz(v1) + " --visible-to " +
+                            xyz(v2) + " --eye-height 1.5 --out " + out);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("constraints: clearance 30 m, max-agl 120 m, max-altitude 2000 m, 2 hidden-from, 2 visible-to"),
             std::string::npos)
@@ -255,9 +256,11 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
 // bounds this fractal's ridges need climbs of about 9 degrees.
 TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   const std::string out = out_dir("vehicle");
-  const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
+  const Outcome r = console("--pack " + *pack_ +
+                            " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
                             "--script none --thumbnail-view none --objective show --vehicle fixed-wing "
-                            "--max-climb 12 --max-descent 10 --min-turn-radius 150 --speed 25 --out " + out);
+                            "--max-climb 12 --max-descent 10 --min-turn-radius 150 --speed 25 --out " +
+                            out);
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_EQ(s["vehicle"]["name"], "fixed-wing");
@@ -311,8 +314,9 @@ TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
 
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   const std::string out = out_dir("run");
-  const Outcome r = console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 --script " +
-                            *script_ + " --out " + out);
+  const Outcome r =
+      console("--pack " + *pack_ + " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 --script " + *script_ +
+              " --out " + out);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("outputs: "), std::string::npos);
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
@@ -336,7 +340,7 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), vertices + 1);  // header + the flyable path's vertices
   const std::string health = slurp(out + "/health.csv");
   EXPECT_GE(std::count(health.begin(), health.end(), '\n'), 3);  // header + a line a second
-  EXPECT_GE(s["thumbnails"]["rendered"].get<int>(), 1);  // at least the one where the rope ended
+  EXPECT_GE(s["thumbnails"]["rendered"].get<int>(), 1);          // at least the one where the rope ended
   EXPECT_EQ(s["thumbnails"]["failed"].get<int>(), 0);
   EXPECT_EQ(slurp(out + "/thumbnail.png").substr(0, 4), "\x89PNG");
 }
@@ -358,8 +362,8 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   const std::string out = out_dir("dds");
   Outcome r;
   std::thread run([&] {
-    r = console("--pack " + *pack_ + " --seconds 4 --domain 223 --priority 0 --no-lock --segments 32 --script none --out " +
-                out);
+    r = console("--pack " + *pack_ +
+                " --seconds 4 --domain 223 --priority 0 --no-lock --segments 32 --script none --out " + out);
   });
   ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
   // the intake acknowledges at once: its ack writer must reach us first
@@ -478,7 +482,6 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   EXPECT_TRUE(s["check"]["all_met"].is_boolean());
 }
 
-
 // switch-terrain to a --terrain pack: the session on the first pack ends
 // (its outputs kept in session-1-ID) and one on the other pack runs for the
 // time left, writing the outputs; an unknown pack id is refused by the intake.
@@ -486,8 +489,10 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   using namespace visvol::dds;
   using namespace visvol::msg;
   const std::string other = ::testing::TempDir() + "/console_b_" + std::to_string(getpid()) + ".vvp";
-  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
-  const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_b_" + std::to_string(getpid());
+  ASSERT_TRUE(
+      visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
+  const std::string first_id = "console_" + std::to_string(getpid()),
+                    other_id = "console_b_" + std::to_string(getpid());
 
   ParticipantConfig pc;
   pc.domain_id = 225;
@@ -500,8 +505,10 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   const std::string out = out_dir("switch");
   Outcome r;
   std::thread run([&] {
-    r = console("--pack " + *pack_ + " --terrain " + other + " --seconds 8 --domain 225 --priority 0 --no-lock "
-                "--segments 32 --script none --thumbnail-view none --out " + out);
+    r = console("--pack " + *pack_ + " --terrain " + other +
+                " --seconds 8 --domain 225 --priority 0 --no-lock "
+                "--segments 32 --script none --thumbnail-view none --out " +
+                out);
   });
   ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
   // the intake acknowledges at once: its ack writer must reach us first
@@ -543,8 +550,7 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   EXPECT_EQ(refused, 1);
   EXPECT_EQ(applied, 1);
 
-  const nlohmann::json before =
-      nlohmann::json::parse(slurp(out + "/session-1-" + first_id + "/summary.json"));
+  const nlohmann::json before = nlohmann::json::parse(slurp(out + "/session-1-" + first_id + "/summary.json"));
   EXPECT_EQ(before["pack_id"], first_id);
   EXPECT_EQ(before["switched_to"], other_id);
   const nlohmann::json after = nlohmann::json::parse(slurp(out + "/summary.json"));
@@ -588,8 +594,10 @@ TEST_F(Console, RefusesToStartWithABadTerrainPack) {
   for (const Case& c : cases) {
     visvol::storage::testing::CraftedPack pack(*pack_);
     c.make(pack, bad);
-    const Outcome r = console("--pack " + *pack_ + " --terrain " + bad + " --seconds 2 --no-dds --priority 0 --no-lock "
-                              "--script none --thumbnail-view none --out " + out);
+    const Outcome r = console("--pack " + *pack_ + " --terrain " + bad +
+                              " --seconds 2 --no-dds --priority 0 --no-lock "
+                              "--script none --thumbnail-view none --out " +
+                              out);
     EXPECT_EQ(r.status, 2) << c.what << ": " << r.err;
     EXPECT_NE(r.err.find("--terrain " + bad + ": "), std::string::npos) << c.what << ": " << r.err;
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.what << ": " << r.err;
@@ -605,8 +613,10 @@ TEST_F(Console, ASwitchThatCannotStartGoesBackToThePackItLeft) {
   using namespace visvol::dds;
   using namespace visvol::msg;
   const std::string other = ::testing::TempDir() + "/console_c_" + std::to_string(getpid()) + ".vvp";
-  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
-  const std::string first_id = "console_" + std::to_string(getpid()), other_id = "console_c_" + std::to_string(getpid());
+  ASSERT_TRUE(
+      visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", other).ok());
+  const std::string first_id = "console_" + std::to_string(getpid()),
+                    other_id = "console_c_" + std::to_string(getpid());
 
   ParticipantConfig pc;
   pc.domain_id = 226;
@@ -619,8 +629,10 @@ TEST_F(Console, ASwitchThatCannotStartGoesBackToThePackItLeft) {
   const std::string out = out_dir("switch_back");
   Outcome r;
   std::thread run([&] {
-    r = console("--pack " + *pack_ + " --terrain " + other + " --seconds 6 --domain 226 --priority 0 --no-lock "
-                "--segments 32 --script none --thumbnail-view none --out " + out);
+    r = console("--pack " + *pack_ + " --terrain " + other +
+                " --seconds 6 --domain 226 --priority 0 --no-lock "
+                "--segments 32 --script none --thumbnail-view none --out " +
+                out);
   });
   ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
   ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";

@@ -69,7 +69,9 @@ class Flyable : public ::testing::Test {
       const bool end = i == 0 || i == vertices - 1;
       s.vertices[i].position = {g.origin_x + (0.05 + 0.9 * t) * (g.nx - 1) * g.spacing_m,
                                 g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m,
-                                highest + (end ? 95.0 : i % 2 ? 150.0 : 40.0)};
+                                highest + (end     ? 95.0
+                                           : i % 2 ? 150.0
+                                                   : 40.0)};
     }
     l.limits = rt::PathLimits{};
     l.limits.gains.clearance_m = 20;

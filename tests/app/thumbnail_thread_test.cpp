@@ -48,8 +48,8 @@ class Thumbnails : public ::testing::Test {
     s.vertex_count = 17;
     for (std::uint32_t i = 0; i < s.vertex_count; ++i) {
       const double t = i / 16.0;
-      s.vertices[i].position = {g.origin_x + t * (g.nx - 1) * g.spacing_m,
-                                g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m, g.top_m() - 20};
+      s.vertices[i].position = {g.origin_x + t * (g.nx - 1) * g.spacing_m, g.origin_y - 0.5 * (g.ny - 1) * g.spacing_m,
+                                g.top_m() - 20};
       s.vertices[i].visibility = 0.5;
     }
     return s;

@@ -12,9 +12,7 @@ namespace {
 
 using testing::blank;
 
-TEST(Heightfield, ValidGridPasses) {
-  EXPECT_TRUE(validate(blank(3, 2, 10.0), "dem").ok());
-}
+TEST(Heightfield, ValidGridPasses) { EXPECT_TRUE(validate(blank(3, 2, 10.0), "dem").ok()); }
 
 TEST(Heightfield, RejectsNaNPostNamingIt) {
   Heightfield hf = blank(4, 4, 10.0);

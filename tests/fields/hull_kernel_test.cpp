@@ -57,8 +57,7 @@ TEST(HullKernel, StencilCellsLieOnThePreviousRingAroundTheSightLine) {
 
 // Checks that the horizon gives R3's answer just above and below the hull for
 // every target within `rings`.
-void expect_horizon_is_exact(const Heightfield& hf, int radius, int exact_rings, int rings,
-                             double curvature) {
+void expect_horizon_is_exact(const Heightfield& hf, int radius, int exact_rings, int rings, double curvature) {
   VolumeGeometry g;
   g.nz = 10;
   g.dz_m = 10;
@@ -108,7 +107,7 @@ TEST(HullKernel, GridOnlyHorizonsEqualTheFullSquaresOnTheGrid) {
       if (i < -1 || j < -1 || i > hf.nx || j > hf.ny) narrow.height_m[narrow.index(i, j)] = 1e30f;
     }
   }
-  const int observers[][2] = {{0, 0},  {40, 28}, {0, 28}, {40, 0}, {20, 0}, {0, 14},
+  const int observers[][2] = {{0, 0},   {40, 28}, {0, 28},  {40, 0}, {20, 0}, {0, 14},
                               {40, 14}, {20, 28}, {20, 14}, {7, 23}, {33, 5}};
   for (const int r : {radius, 9}) {
     const int side = 2 * r + 1;
@@ -196,7 +195,7 @@ TEST(HullKernel, PaddingNeverBlocksAndGroundLevelsAreClamped) {
   g.z0_m = 50;
   g.dz_m = 20;
   const PaddedTerrain t = pad_terrain(hf, g, 4);
-  EXPECT_EQ(t.ground_level[t.index(0, 0)], 3);  // ceil((100 - 50) / 20)
+  EXPECT_EQ(t.ground_level[t.index(0, 0)], 3);   // ceil((100 - 50) / 20)
   EXPECT_EQ(t.ground_level[t.index(-1, 0)], 5);  // padding: never a target
   EXPECT_LT(t.height_m[t.index(-3, -3)], -1.0e5f);
 }

@@ -20,8 +20,8 @@ class ReferenceSampler {
 
   double height(double x, double y) const {
     const Cell c = cell_xy(x, y);
-    return lerp(lerp(post(c.i, c.j), post(c.i + 1, c.j), c.fi),
-                lerp(post(c.i, c.j + 1), post(c.i + 1, c.j + 1), c.fi), c.fj);
+    return lerp(lerp(post(c.i, c.j), post(c.i + 1, c.j), c.fi), lerp(post(c.i, c.j + 1), post(c.i + 1, c.j + 1), c.fi),
+                c.fj);
   }
 
   double visibility(double x, double y, double z) const {
@@ -95,8 +95,8 @@ class ReferenceSampler {
         const double w = (di ? c.fi : 1 - c.fi) * (dj ? c.fj : 1 - c.fj);
         if (w == 0) continue;
         const int i = c.i + di, j = c.j + dj;
-        const double b = std::clamp((z - post(i, j) + p.band_offset_m) / step, 0.0,
-                                    static_cast<double>(p.band_levels - 1));
+        const double b =
+            std::clamp((z - post(i, j) + p.band_offset_m) / step, 0.0, static_cast<double>(p.band_levels - 1));
         const int b0 = std::min(static_cast<int>(b), p.band_levels - 2);
         const double fb = b - b0;
         const TffSample lo = level_->tff(i, j, b0), hi = level_->tff(i, j, b0 + 1);

@@ -30,7 +30,9 @@ struct Fixture {
     // F = 0.01 i + 0.02 j + 0.1 k: linear, so trilinear sampling is exact.
     for (int k = 0; k < 4; ++k)
       for (int j = 0; j < 5; ++j)
-        for (int i = 0; i < 6; ++i) field.values[field.geometry.index(i, j, k)] = 0.01f * static_cast<float>(i) + 0.02f * static_cast<float>(j) + 0.1f * static_cast<float>(k);
+        for (int i = 0; i < 6; ++i)
+          field.values[field.geometry.index(i, j, k)] =
+              0.01f * static_cast<float>(i) + 0.02f * static_cast<float>(j) + 0.1f * static_cast<float>(k);
   }
 };
 
@@ -109,7 +111,6 @@ TEST(Sampler, RealFieldGradientPointsUpInOpenAir) {
     }
 }
 
-
 // The sampler reads each column's posts and tiles once per query; the values
 // must be exactly those of reading every voxel through the level.
 void expect_same_tff(const TffSample& a, const TffSample& b, const Eigen::Vector3d& p) {
@@ -134,8 +135,8 @@ template <class Level>
 void expect_matches_reference(const Level& level, const DenseLevel& dense) {
   const FieldSampler<Level> s(level);
   const testing::ReferenceSampler<DenseLevel> ref(dense);
-  const auto points = testing::probe_points(dense.geometry(), [&](double x, double y) { return ref.height(x, y); },
-                                            4000, 17);
+  const auto points = testing::probe_points(
+      dense.geometry(), [&](double x, double y) { return ref.height(x, y); }, 4000, 17);
   int above_ground = 0;
   for (const Eigen::Vector3d& q : points) {
     const double x = q.x(), y = q.y(), z = q.z();

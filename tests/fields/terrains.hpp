@@ -47,8 +47,7 @@ inline Heightfield two_prisms(int n, double spacing_m = 10.0, float ridge_m = 60
 }
 
 // Fractal (fBm) noise from a few octaves of random sines; deterministic per seed.
-inline Heightfield fractal(int n, std::uint32_t seed, double spacing_m = 30.0,
-                           double relief_m = 300.0) {
+inline Heightfield fractal(int n, std::uint32_t seed, double spacing_m = 30.0, double relief_m = 300.0) {
   Heightfield hf = blank(n, n, spacing_m, 0.0f);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -92,8 +91,6 @@ inline Heightfield crop(const Heightfield& src, int i0, int j0, int nx, int ny) 
   return hf;
 }
 
-inline std::string test_data(const std::string& name) {
-  return std::string(VISVOL_TEST_DATA) + "/" + name;
-}
+inline std::string test_data(const std::string& name) { return std::string(VISVOL_TEST_DATA) + "/" + name; }
 
 }  // namespace visvol::fields::testing

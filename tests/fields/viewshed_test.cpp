@@ -150,9 +150,8 @@ TEST(Viewshed, AgreesWithGrassRviewshedReference) {
   }
   const double fraction = double(agree) / static_cast<double>(ref.visible.size());
   RecordProperty("agreement", std::to_string(fraction));
-  std::cout << "r.viewshed reference: " << agree << " of " << ref.visible.size()
-            << " cells agree (" << 100.0 * fraction << "%); visible ours " << visible_ours
-            << ", GRASS " << visible_ref << "\n";
+  std::cout << "r.viewshed reference: " << agree << " of " << ref.visible.size() << " cells agree (" << 100.0 * fraction
+            << "%); visible ours " << visible_ours << ", GRASS " << visible_ref << "\n";
   EXPECT_GE(fraction, 0.99);
 }
 

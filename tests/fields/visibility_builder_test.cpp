@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include "fields/exact_visibility.hpp"
@@ -33,8 +33,8 @@ struct Accuracy {
   double fraction() const { return sampled ? double(within) / sampled : 0.0; }
 };
 
-Accuracy check_against_exact(const Heightfield& hf, const FieldParams& p, const DenseVolume& f,
-                             int samples, std::uint32_t seed) {
+Accuracy check_against_exact(const Heightfield& hf, const FieldParams& p, const DenseVolume& f, int samples,
+                             std::uint32_t seed) {
   const std::vector<float> area = area_factor(hf);
   const VolumeGeometry& g = f.geometry;
   std::mt19937 rng(seed);
@@ -304,8 +304,8 @@ TEST(VisibilityAccuracy, SharedRealDems) {
   // The other real DEMs of ../shared/data that are already in metres.
   const std::string shared = VISVOL_SHARED_DATA;
   int checked = 0;
-  for (const char* name : {"/dem/whitebox_dem.tif", "/dem/grass_viewshed_reference/elevation.ascii",
-                           "/dem/sf_north_usgs24k.dem"}) {
+  for (const char* name :
+       {"/dem/whitebox_dem.tif", "/dem/grass_viewshed_reference/elevation.ascii", "/dem/sf_north_usgs24k.dem"}) {
     Result<Heightfield> hf = read_heightfield(shared + name, {NodataPolicy::fill});
     if (!hf.ok() && hf.status().code() == Errc::io) continue;  // shared data absent
     ASSERT_TRUE(hf.ok()) << hf.status().message();

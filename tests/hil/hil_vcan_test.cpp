@@ -146,7 +146,8 @@ class Vcan : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!skip_reason()) skip_reason() = probe(true);
-    if (!skip_reason()->empty()) GTEST_SKIP() << *skip_reason() << "; hil_vcan_qemu runs the suite in a VM (where VISVOL_HIL_QEMU is on)";
+    if (!skip_reason()->empty())
+      GTEST_SKIP() << *skip_reason() << "; hil_vcan_qemu runs the suite in a VM (where VISVOL_HIL_QEMU is on)";
   }
   static std::unique_ptr<can::SocketCanBus> open(std::vector<can::CanFilter> filters = {}, bool errors = true,
                                                  int rcvbuf = 0) {
@@ -389,8 +390,8 @@ std::string summary(const Outcome& o, bool transitions = true) {
   const haptic::DriverCounters& c = o.counters;
   s << "console: positions " << c.positions << ", statuses " << c.statuses << ", heartbeats " << c.heartbeats
     << ", emergencies " << c.emergencies << ", malformed " << c.malformed << ", duplicates " << c.duplicates
-    << ", gaps " << c.sequence_gaps << ", implausible " << c.implausible << ", reboots " << c.device_reboots
-    << ", nmt " << c.nmt_sent << ", commands " << c.commands_sent << ", faults";
+    << ", gaps " << c.sequence_gaps << ", implausible " << c.implausible << ", reboots " << c.device_reboots << ", nmt "
+    << c.nmt_sent << ", commands " << c.commands_sent << ", faults";
   for (std::size_t i = 1; i < haptic::kFaultReasons; ++i) {
     s << ' ' << haptic::fault_name(static_cast<FaultReason>(i)) << '=' << c.faults[i];
   }
@@ -431,15 +432,25 @@ class Hil : public Vcan {
     EXPECT_TRUE(driver.ok() && servo.ok());
     Console console(std::move(driver).value(), std::move(servo).value());
 
-    const pid_t dump = spawn({env_or("VISVOL_CANDUMP", "candump"), "-L", interface_name() + ",0:0,#FFFFFFFF"},
-                             base + ".log");
+    const pid_t dump =
+        spawn({env_or("VISVOL_CANDUMP", "candump"), "-L", interface_name() + ",0:0,#FFFFFFFF"}, base + ".log");
     EXPECT_GT(dump, 0) << "cannot start candump";
     std::this_thread::sleep_for(std::chrono::milliseconds(150));  // candump opens its socket
     std::vector<std::string> argv = {env_or("VISVOL_HAPTICSIM", VISVOL_HAPTICSIM_DEFAULT),
-                                     "-i", interface_name(), "--node", std::to_string(kNode),
-                                     "--script", base + ".hsim", "--duration", std::to_string(duration_s),
-                                     "--boot-delay", "0.2", "--summary", base + ".json",
-                                     "--watchdog-ms", std::to_string(timeout_ms())};
+                                     "-i",
+                                     interface_name(),
+                                     "--node",
+                                     std::to_string(kNode),
+                                     "--script",
+                                     base + ".hsim",
+                                     "--duration",
+                                     std::to_string(duration_s),
+                                     "--boot-delay",
+                                     "0.2",
+                                     "--summary",
+                                     base + ".json",
+                                     "--watchdog-ms",
+                                     std::to_string(timeout_ms())};
     argv.insert(argv.end(), sim_args.begin(), sim_args.end());
     o.start_ns = mono_ns();  // before the simulator's clock starts
     const pid_t sim = spawn(argv, base + ".sim.txt");
@@ -517,8 +528,7 @@ class Hil : public Vcan {
       haptic::Message m;
       if (haptic::decode(f.frame, m) != haptic::DecodeError::ok) continue;
       if (m.kind == MessageKind::heartbeat && m.heartbeat.state == haptic::NmtState::boot_up) boot_up = true;
-      if (boot_up && m.kind == MessageKind::nmt && m.nmt.command == haptic::NmtCommand::start &&
-          m.nmt.node == kNode) {
+      if (boot_up && m.kind == MessageKind::nmt && m.nmt.command == haptic::NmtCommand::start && m.nmt.node == kNode) {
         started = true;
       }
     }
@@ -596,7 +606,8 @@ TEST_F(Hil, RecoversByItselfAfterADeviceReboot) {
   EXPECT_EQ(o.counters.device_reboots, 1u);
   EXPECT_EQ(o.sim.at("boots"), 2.0);
   int boot_ups = 0;
-  for (const auto& [t, m] : o.messages(MessageKind::heartbeat)) boot_ups += m.heartbeat.state == haptic::NmtState::boot_up;
+  for (const auto& [t, m] : o.messages(MessageKind::heartbeat))
+    boot_ups += m.heartbeat.state == haptic::NmtState::boot_up;
   EXPECT_EQ(boot_ups, 2);
   EXPECT_GE(o.counters.nmt_sent, 2u) << "started again after the reboot";
   EXPECT_GT(o.max_force(1.7, 2.3), 0.5);
@@ -626,7 +637,8 @@ TEST_F(Hil, BusOffSilencesTheConsoleUntilTheControllerRestarts) {
 }
 
 TEST_F(Hil, EmergencyIsDecodedFaultsAndClears) {
-  const Outcome o = run("emergency", "0.4 pull 30 0 0 0.3\n1.0 emergency over-temperature 0.2\n1.4 release\n1.5 grab\n", 2.0);
+  const Outcome o =
+      run("emergency", "0.4 pull 30 0 0 0.3\n1.0 emergency over-temperature 0.2\n1.4 release\n1.5 grab\n", 2.0);
   check_common(o);
   const auto emcy = o.messages(MessageKind::emergency);
   ASSERT_EQ(emcy.size(), 2u);

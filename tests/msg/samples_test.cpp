@@ -43,15 +43,14 @@ void expect_named_once(std::initializer_list<E> values) {
 TEST(ToString, NamesEveryValueOnce) {
   expect_named_once({CommandKind::set_endpoints, CommandKind::set_objective, CommandKind::set_weights,
                      CommandKind::set_stiffness, CommandKind::set_model, CommandKind::set_segment_count,
-                     CommandKind::set_constraints, CommandKind::start, CommandKind::stop,
-                     CommandKind::switch_terrain});
+                     CommandKind::set_constraints, CommandKind::start, CommandKind::stop, CommandKind::switch_terrain});
   expect_named_once({Objective::hide, Objective::show});
   expect_named_once({RopeModel::spring_mass, RopeModel::articulated});
   expect_named_once({ConstraintKind::hidden_from, ConstraintKind::visible_to, ConstraintKind::clearance,
                      ConstraintKind::max_agl, ConstraintKind::max_altitude});
   expect_named_once({AckResult::accepted, AckResult::rejected, AckResult::applied, AckResult::failed});
-  expect_named_once({DeviceState::unknown, DeviceState::disconnected, DeviceState::idle, DeviceState::active,
-                     DeviceState::fault});
+  expect_named_once(
+      {DeviceState::unknown, DeviceState::disconnected, DeviceState::idle, DeviceState::active, DeviceState::fault});
   EXPECT_STREQ(to_string(CommandKind::set_segment_count), "set-segments");
   EXPECT_STREQ(to_string(CommandKind::switch_terrain), "switch-terrain");
   EXPECT_STREQ(to_string(Objective::show), "show");
@@ -65,11 +64,11 @@ TEST(ToString, NamesEveryValueOnce) {
 }
 
 TEST(NowStamp, IsUnixEpochNanoseconds) {
-  const auto before = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                          std::chrono::system_clock::now().time_since_epoch()).count();
+  const auto before =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   const std::int64_t stamp = now_stamp_ns();
-  const auto after = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                         std::chrono::system_clock::now().time_since_epoch()).count();
+  const auto after =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
   EXPECT_GE(stamp, before - 1000000);  // the same clock, within a millisecond
   EXPECT_LE(stamp, after + 1000000);
 }

@@ -25,9 +25,7 @@ class CraftedPack {
   }
 
   PackHeader& header() { return *reinterpret_cast<PackHeader*>(bytes_.data()); }
-  LevelEntry& level(int l) {
-    return reinterpret_cast<LevelEntry*>(bytes_.data() + header().level_table_offset)[l];
-  }
+  LevelEntry& level(int l) { return reinterpret_cast<LevelEntry*>(bytes_.data() + header().level_table_offset)[l]; }
   TileEntry& tile(int l, Layer layer, int tx, int ty) {
     const LevelEntry& e = level(l);
     const std::uint64_t n = e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny);
@@ -63,7 +61,8 @@ class CraftedPack {
     auto* tiles = reinterpret_cast<TileEntry*>(bytes_.data() + h.tile_table_offset);
     // (a crafted table may point anywhere: only entries inside the file)
     const std::uint64_t size = bytes_.size();
-    const std::uint64_t entries = std::min<std::uint64_t>(h.tile_count, (size - h.tile_table_offset) / sizeof(TileEntry));
+    const std::uint64_t entries =
+        std::min<std::uint64_t>(h.tile_count, (size - h.tile_table_offset) / sizeof(TileEntry));
     for (std::uint64_t n = 0; n < entries; ++n) {
       if (tiles[n].offset > size || tiles[n].bytes > size - tiles[n].offset) continue;
       tiles[n].crc32c = crc32c(bytes_.data() + tiles[n].offset, tiles[n].bytes);

@@ -121,8 +121,7 @@ TEST_F(Crafted, LevelGeometryOutsideSaneRangesIsRefused) {
       {"NaN origin", [](CraftedPack& p) { p.level(0).origin_x = kNaN; }, "level 0: origin (nan, "},
       {"far origin", [](CraftedPack& p) { p.level(0).origin_y = 1e300; }, "origin"},
       {"NaN z0", [](CraftedPack& p) { p.level(0).z0_m = kNaN; }, "level 0: voxel levels from nan m"},
-      {"top beyond range",
-       [](CraftedPack& p) { p.level(0).z0_m = 199999; }, "not within +-200000 m or not rising"},
+      {"top beyond range", [](CraftedPack& p) { p.level(0).z0_m = 199999; }, "not within +-200000 m or not rising"},
       {"negative range", [](CraftedPack& p) { p.level(0).range_posts = -1; }, "range of -1 posts"},
   });
 }

@@ -200,8 +200,7 @@ TEST_F(PackFile, TruncationHeaderAndTableDamageAreNamed) {
     write_file(bad, bytes);
     const Result<std::shared_ptr<const Pack>> pack = Pack::open(bad);
     ASSERT_FALSE(pack.ok()) << c.what;
-    EXPECT_NE(pack.status().message().find(c.expect), std::string::npos)
-        << c.what << ": " << pack.status().message();
+    EXPECT_NE(pack.status().message().find(c.expect), std::string::npos) << c.what << ": " << pack.status().message();
   }
   std::remove(bad.c_str());
 }
@@ -239,13 +238,10 @@ TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
       {"tile count", [](PackHeader& h, std::vector<char>&) { h.tile_count = 1ull << 40; }, "tile table"},
       {"band", [](PackHeader& h, std::vector<char>&) { h.band_levels = 1000; }, "terrain force band"},
       {"encoding", [](PackHeader& h, std::vector<char>&) { h.visibility_encoding = 7; }, "visibility_encoding 7"},
-      {"misaligned tile",
-       [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 3)->offset += 8; }, "is invalid"},
+      {"misaligned tile", [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 3)->offset += 8; }, "is invalid"},
       {"tile beyond tables",
-       [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 5)->offset = h.level_table_offset; },
-       "is invalid"},
-      {"swapped identity",
-       [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 2)->tx = 9; }, "tile entry 2"},
+       [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 5)->offset = h.level_table_offset; }, "is invalid"},
+      {"swapped identity", [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 2)->tx = 9; }, "tile entry 2"},
       {"level grid",
        [&](PackHeader& h, std::vector<char>& b) {
          reinterpret_cast<LevelEntry*>(b.data() + h.level_table_offset)->nz = 1000;
@@ -256,8 +252,7 @@ TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
     write_file(bad, forge(good, c.edit));
     const Result<std::shared_ptr<const Pack>> pack = Pack::open(bad);
     ASSERT_FALSE(pack.ok()) << c.what;
-    EXPECT_NE(pack.status().message().find(c.expect), std::string::npos)
-        << c.what << ": " << pack.status().message();
+    EXPECT_NE(pack.status().message().find(c.expect), std::string::npos) << c.what << ": " << pack.status().message();
   }
   std::remove(bad.c_str());
 }

@@ -208,14 +208,14 @@ PlanningBounds read_planning(const std::string& path) {
 
 TEST(OlderPack, BoundsAreDerivedFromLevelZeroAndTheRangeShape) {
   for (const char* shape : {"cube", "sphere"}) {
-    const PlanningBounds b = read_planning(write_pack(
-        "old_range", level_40x30(8), nlohmann::json{{"build", {{"range_shape", shape}}}}.dump()));
+    const PlanningBounds b = read_planning(
+        write_pack("old_range", level_40x30(8), nlohmann::json{{"build", {{"range_shape", shape}}}}.dump()));
     EXPECT_FALSE(b.recorded);
     EXPECT_DOUBLE_EQ(b.margin_m, 240.0) << shape;
     expect_box(b.box, 1240, 4370, 1930, 4760);
   }
-  const PlanningBounds none = read_planning(
-      write_pack("old_none", level_40x30(0), R"({"build": {"range_shape": "none"}})"));
+  const PlanningBounds none =
+      read_planning(write_pack("old_none", level_40x30(0), R"({"build": {"range_shape": "none"}})"));
   EXPECT_FALSE(none.recorded);
   EXPECT_DOUBLE_EQ(none.margin_m, 108.75);
 }
@@ -255,8 +255,7 @@ void expect_refused(const std::string& metadata, const std::string& named) {
   EXPECT_NE(pack.status().message().find(named), std::string::npos) << pack.status().message();
 }
 
-std::string bounds_json(const std::string& xmin, const std::string& margin = "240",
-                        const std::string& xmax = "1930") {
+std::string bounds_json(const std::string& xmin, const std::string& margin = "240", const std::string& xmax = "1930") {
   return R"({"planning_bounds": {"xmin_m": )" + xmin + R"(, "ymin_m": 4370, "xmax_m": )" + xmax +
          R"(, "ymax_m": 4760, "margin_m": )" + margin + "}}";
 }

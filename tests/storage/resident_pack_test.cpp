@@ -217,7 +217,8 @@ void expect_columns_match(const PackLevel& level) {
     const PackLevel::Column c = level.column(i, j);
     for (int k = 0; k < g.nz; ++k) ASSERT_EQ(c.voxel(k), level.voxel(i, j, k)) << i << " " << j << " " << k;
     for (int b = 0; b < band; ++b) {
-      expect_same_tff(c.tff(b), level.tff(i, j, b), std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(b));
+      expect_same_tff(c.tff(b), level.tff(i, j, b),
+                      std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(b));
     }
   }
 }
@@ -292,7 +293,8 @@ TEST_F(ResidentPackTest, OneLookupForAllThreeIsWhatTheThreeCallsReturn) {
   ASSERT_TRUE(r->update().ok());
   const ResidentSampler s(r->level(0));
   const fields::VolumeGeometry g = r->level(0).geometry();
-  auto points = fields::testing::probe_points(g, [&](double x, double y) { return s.height(x, y); }, 3000, 300);
+  auto points = fields::testing::probe_points(
+      g, [&](double x, double y) { return s.height(x, y); }, 3000, 300);
   // and as many across the edge of what is resident around the focus
   const WorldBox seam = box_at(0.5, 0.5, 1500);
   std::mt19937 rng(301);

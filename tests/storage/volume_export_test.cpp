@@ -5,8 +5,8 @@
 
 #include <cstdio>
 #include <cstring>
-#include <memory>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include "../fields/terrains.hpp"

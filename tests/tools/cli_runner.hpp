@@ -45,7 +45,6 @@ inline Outcome visvol(const std::string& args, const std::string& input = "") {
 // its 30 m grid), small enough for a pack in a second.
 inline const std::string kDem = std::string(VISVOL_TEST_DATA) + "/sf_north_utm10_30m.tif";
 inline const std::string kCrop = "--crop 549975 4181565 551175 4182765";
-inline const std::string kSmallPackOptions =
-    kCrop + " --levels 16 --range 8 --lod 2 --tff-offset 60 --tff-levels 6";
+inline const std::string kSmallPackOptions = kCrop + " --levels 16 --range 8 --lod 2 --tff-offset 60 --tff-levels 6";
 
 }  // namespace visvol::test

@@ -47,8 +47,9 @@ const std::vector<Command>& commands() {
       {"verify", "", ""},
       {"sample", "--layer tff", "550590 4182150 300\n"},
       {"sample", "--layer gradient", "550590 4182150 300\n"},
-      {"plan", "--objective hide --from 550300 4182150 400 --to 550850 4182150 400 --segments 16 -o " +
-                   ::testing::TempDir() + "/crafted_cli_plan",
+      {"plan",
+       "--objective hide --from 550300 4182150 400 --to 550850 4182150 400 --segments 16 -o " + ::testing::TempDir() +
+           "/crafted_cli_plan",
        ""},
   };
   return c;
@@ -79,8 +80,7 @@ TEST_F(CraftedCli, EveryCommandRefusesAHostilePackWithStatus2) {
   };
   const std::vector<Case> cases = {
       {"NaN height", [](CraftedPack& p) { p.set_height(0, 20, 20, NAN); }, "post (20, 20) has height nan"},
-      {"denormal dz",
-       [](CraftedPack& p) { p.level(0).dz_m = p.level(1).dz_m = 4.9406564584124654e-324; },
+      {"denormal dz", [](CraftedPack& p) { p.level(0).dz_m = p.level(1).dz_m = 4.9406564584124654e-324; },
        "voxel level spacing dz 4.9406564584124654e-324 m"},
       {"NaN origin", [](CraftedPack& p) { p.level(0).origin_y = NAN; }, "level 0: origin (549990, nan)"},
       {"tool {}", metadata("tool", nlohmann::json::object()), "metadata tool is {}, not a string"},

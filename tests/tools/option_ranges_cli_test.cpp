@@ -32,9 +32,9 @@ void expect_refused(const std::string& args, const std::vector<std::string>& nam
 
 TEST(OptionRanges, ViewshedMaxDistanceOutOfRangeIsRefusedNotAborted) {
   const std::string out = temp("vs") + ".tif";
-  expect_refused("viewshed " + kDem + " --fill-nodata " + kCrop + " --observer 550500 4182000 --max-distance 1e308 -o " +
-                     out,
-                 {"max distance: 1e+308 m is outside 0..1e+08 m"});
+  expect_refused(
+      "viewshed " + kDem + " --fill-nodata " + kCrop + " --observer 550500 4182000 --max-distance 1e308 -o " + out,
+      {"max distance: 1e+308 m is outside 0..1e+08 m"});
   EXPECT_NE(access(out.c_str(), F_OK), 0);
 }
 
@@ -67,8 +67,8 @@ class PlanRanges : public ::testing::Test {
   }
   // A plan on the small pack: its planning bounds are x 550230..550920, y 4181820..4182510.
   static std::string plan(const std::string& args) {
-    return "plan " + *pack_ + " --from 550300 4181900 200 --to 550800 4182400 200 --objective hide " + args +
-           " -o " + temp("plan");
+    return "plan " + *pack_ + " --from 550300 4181900 200 --to 550800 4182400 200 --objective hide " + args + " -o " +
+           temp("plan");
   }
   static std::string* pack_;
 };
@@ -82,8 +82,8 @@ TEST_F(PlanRanges, SlackOutsideItsRangeIsRefused) {
 TEST_F(PlanRanges, InitPointsOffThePackOrUndergroundAreRefusedByIndex) {
   const std::string far = temp("init_far") + ".txt";
   std::ofstream(far) << "550400 4182000\n550500 4182100\n10550600 4182300\n";
-  expect_refused(plan("--init " + far), {"--init " + far, "point 3 (10550600.0, 4182300.0)",
-                                         "outside the pack's planning bounds"});
+  expect_refused(plan("--init " + far),
+                 {"--init " + far, "point 3 (10550600.0, 4182300.0)", "outside the pack's planning bounds"});
   // With heights: a mission 87 m underground was written with exit 0.
   const std::string deep = temp("init_deep") + ".txt";
   std::ofstream(deep) << "550400 4182000 400\n550600 4182300 -1e7\n";

@@ -88,8 +88,7 @@ class Outputs : public ::testing::Test {
   static std::vector<std::string> writers() {
     return {"build " + kDem + " " + kSmallPackOptions + " -o ",
             "viewshed " + kDem + " " + kCrop + " --observer 550500 4182100 -o ",
-            "export " + *pack_ + " --layer height -o ",
-            "render " + *pack_ + " --size 64x48 -o "};
+            "export " + *pack_ + " --layer height -o ", "render " + *pack_ + " --size 64x48 -o "};
   }
 
   static std::string* dir_;
@@ -158,7 +157,8 @@ TEST_F(Outputs, ABadOutputIsRefusedBeforeAnyWorkAndNothingIsWritten) {
     const Outcome b = visvol(w + nowhere);
     EXPECT_EQ(b.status, 2) << w << "\n" << b.err;
     EXPECT_NE(b.err.find("-o: " + nowhere + ": directory " + *dir_ + "/no_such_directory"), std::string::npos)
-        << w << "\n" << b.err;
+        << w << "\n"
+        << b.err;
     EXPECT_EQ(b.out, "") << w;
   }
 }
@@ -246,8 +246,8 @@ TEST_F(Outputs, AFullDiskExitsOneAndLeavesNothing) {
   const std::string out = *dir_ + "/limited.out";
   const std::pair<std::string, int> limited[] = {{writers()[0], 64}, {writers()[1], 1}};  // 512-byte blocks
   for (const auto& [w, blocks] : limited) {
-    const Outcome r = run_limited("sh -c \"trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; exec " +
-                                  VISVOL_BIN + " " + w + out + "\"");
+    const Outcome r = run_limited("sh -c \"trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; exec " + VISVOL_BIN +
+                                  " " + w + out + "\"");
     EXPECT_EQ(r.status, 1) << w << "\n" << r.err;
     EXPECT_NE(r.err.find(out + ": "), std::string::npos) << r.err;
     EXPECT_NE(std::system(("ls " + out + "* >/dev/null 2>&1").c_str()), 0) << w << " left a file";

@@ -172,8 +172,7 @@ TEST_F(PathIo, MissingGeoidGridIsNamedAndNoGeoJsonIsWritten) {
       << h.status().message();
   EXPECT_NE(h.status().message().find("proj-data"), std::string::npos) << h.status().message();
   ASSERT_FALSE(s.ok());
-  EXPECT_EQ(s.message().rfind("GeoJSON not written: the EGM96 geoid grid us_nga_egm96_15.tif", 0), 0u)
-      << s.message();
+  EXPECT_EQ(s.message().rfind("GeoJSON not written: the EGM96 geoid grid us_nga_egm96_15.tif", 0), 0u) << s.message();
   EXPECT_EQ(written.size(), 3u);
   EXPECT_TRUE(exists(base + ".csv"));
   EXPECT_TRUE(exists(base + ".kml"));
@@ -243,10 +242,10 @@ TEST_F(PathIo, ForeignGeoJsonHeightsAreReadAsEllipsoidal) {
 
 // A GeoJSON visvol wrote before heights were ellipsoidal says so: read as it is.
 TEST_F(PathIo, EarlierVisvolGeoJsonWithOrthometricHeightsIsReadAsItIs) {
-  const std::string f = file_with(
-      "old.geojson",
-      R"j({"type":"Feature","properties":{"height_reference":"the DEM's vertical datum (mean sea level)"},)j"
-      R"("geometry":{"type":"LineString","coordinates":[[-122.43,37.79,100.0],[-122.42,37.78,120.0]]}})");
+  const std::string f =
+      file_with("old.geojson",
+                R"j({"type":"Feature","properties":{"height_reference":"the DEM's vertical datum (mean sea level)"},)j"
+                R"("geometry":{"type":"LineString","coordinates":[[-122.43,37.79,100.0],[-122.42,37.78,120.0]]}})");
   Result<PathFile> path = read_path_file(f, wkt_);
   ASSERT_TRUE(path.ok()) << path.status().message();
   EXPECT_NEAR(path->points[0].z(), 100.0, 1e-9);

@@ -70,7 +70,8 @@ TEST_F(PlanCheck, AnUnmetConstraintExitsOneNamingItAndStillWritesThePath) {
   // an observer beside the start sees it: no path is hidden from it
   const Outcome r = visvol("plan " + *pack_ + kEnds +
                            " --objective hide --segments 32 --max-seconds 3 --vehicle multirotor"
-                           " --hidden-from 550330 4182420 0 --json -o " + b);
+                           " --hidden-from 550330 4182420 0 --json -o " +
+                           b);
   // a point given at 0 m is under these hills: refused by name
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("--hidden-from"), std::string::npos) << r.err;
@@ -80,7 +81,8 @@ TEST_F(PlanCheck, AnUnmetConstraintExitsOneNamingItAndStillWritesThePath) {
   const double ground = std::stod(h.out);
   const Outcome u = visvol("plan " + *pack_ + kEnds +
                            " --objective hide --segments 32 --max-seconds 3 --vehicle multirotor --hidden-from 550330 "
-                           "4182420 " + std::to_string(ground + 0.5) + " --json -o " + b);
+                           "4182420 " +
+                           std::to_string(ground + 0.5) + " --json -o " + b);
   EXPECT_EQ(u.status, 1) << u.err;
   EXPECT_NE(u.err.find("hidden-from"), std::string::npos) << u.err;
   const nlohmann::json s = nlohmann::json::parse(u.out);
@@ -98,10 +100,12 @@ TEST_F(PlanCheck, EnvelopeLimitsHoldOnEverySegment) {
   const std::string b = base("envelope");
   const Outcome r = visvol("plan " + *pack_ + kEnds +
                            " --objective show --segments 32 --max-seconds 5 --max-climb 8 --max-descent 8"
-                           " --min-turn-radius 60 --max-agl 300 --json -o " + b);
+                           " --min-turn-radius 60 --max-agl 300 --json -o " +
+                           b);
   ASSERT_EQ(r.status, 0) << r.err << r.out;
   // checked again, from the file, with the same limits
-  const Outcome c = visvol("check " + *pack_ + " " + b + ".csv --max-climb 8 --max-descent 8 --min-turn-radius 60"
+  const Outcome c = visvol("check " + *pack_ + " " + b +
+                           ".csv --max-climb 8 --max-descent 8 --min-turn-radius 60"
                            " --max-agl 300 --json");
   ASSERT_EQ(c.status, 0) << c.out;
   const nlohmann::json j = nlohmann::json::parse(c.out);
@@ -124,13 +128,25 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
   const double points[][3] = {{37.7900, -122.4340, 150}, {37.7880, -122.4320, 150}, {37.7860, -122.4300, 150}};
   int id = 1;
   for (const auto& p : points) {
-    items.push_back({{"type", "SimpleItem"}, {"command", 16}, {"frame", 3}, {"autoContinue", true},
-                     {"doJumpId", id++}, {"params", {0, 0, 0, nullptr, p[0], p[1], p[2]}}});
+    items.push_back({{"type", "SimpleItem"},
+                     {"command", 16},
+                     {"frame", 3},
+                     {"autoContinue", true},
+                     {"doJumpId", id++},
+                     {"params", {0, 0, 0, nullptr, p[0], p[1], p[2]}}});
   }
   const nlohmann::json mission = {
-      {"fileType", "Plan"}, {"version", 1}, {"groundStation", "QGroundControl"},
-      {"mission", {{"version", 2}, {"firmwareType", 12}, {"vehicleType", 2}, {"cruiseSpeed", 15},
-                   {"hoverSpeed", 5}, {"plannedHomePosition", {37.7900, -122.4340, 150}}, {"items", items}}},
+      {"fileType", "Plan"},
+      {"version", 1},
+      {"groundStation", "QGroundControl"},
+      {"mission",
+       {{"version", 2},
+        {"firmwareType", 12},
+        {"vehicleType", 2},
+        {"cruiseSpeed", 15},
+        {"hoverSpeed", 5},
+        {"plannedHomePosition", {37.7900, -122.4340, 150}},
+        {"items", items}}},
       {"geoFence", {{"version", 2}, {"polygons", nlohmann::json::array()}, {"circles", nlohmann::json::array()}}},
       {"rallyPoints", {{"version", 2}, {"points", nlohmann::json::array()}}}};
   std::ofstream(plan) << mission.dump(2);

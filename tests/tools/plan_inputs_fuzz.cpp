@@ -7,11 +7,11 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <ogr_spatialref.h>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
-#include <ogr_spatialref.h>
 #include <string>
 
 #include "app/mission_options.hpp"

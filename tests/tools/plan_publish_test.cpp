@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <unistd.h>
+#include <algorithm>
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -39,8 +39,7 @@ class PlanPublishCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     pack_ = new std::string(::testing::TempDir() + "/publish_" + std::to_string(getpid()) + ".vvp");
-    const Outcome r = visvol("build " + visvol::test::kDem + " " + visvol::test::kSmallPackOptions +
-                             " -o " + *pack_);
+    const Outcome r = visvol("build " + visvol::test::kDem + " " + visvol::test::kSmallPackOptions + " -o " + *pack_);
     ASSERT_EQ(r.status, 0) << r.err;
   }
   static void TearDownTestSuite() {
@@ -68,7 +67,8 @@ TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
   const Outcome r = visvol("plan " + *pack_ +
                            " --from 550300 4182450 150 --to 550850 4181850 150 --objective hide --vehicle multirotor"
                            " --init straight --model spring --segments 600 --max-seconds 1 --json"
-                           " --publish --domain " + std::to_string(kDomain) + " -o " + base);
+                           " --publish --domain " +
+                           std::to_string(kDomain) + " -o " + base);
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json summary = nlohmann::json::parse(r.out);
   ASSERT_TRUE(summary.contains("dds")) << r.out;

@@ -80,9 +80,11 @@ class RenderCli : public ::testing::Test {
     const Outcome build = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + *pack_);
     ASSERT_EQ(build.status, 0) << build.err;
     // a short real plan: its CSV is what operators hand to render
-    const Outcome plan = visvol("plan " + *pack_ +
-                                " --from 550300 4182450 320 --to 550850 4181850 320 --objective hide --vehicle multirotor"
-                                " --segments 16 --max-seconds 2 -o " + *dir_ + "/plan");
+    const Outcome plan =
+        visvol("plan " + *pack_ +
+               " --from 550300 4182450 320 --to 550850 4181850 320 --objective hide --vehicle multirotor"
+               " --segments 16 --max-seconds 2 -o " +
+               *dir_ + "/plan");
     ASSERT_EQ(plan.status, 0) << plan.err;
     std::ofstream(*dir_ + "/points.txt") << "# x y z\n550200 4182500 180\n550600 4182100 160\n551000 4181800 170\n";
   }
@@ -100,8 +102,8 @@ std::string* RenderCli::pack_ = nullptr;
 TEST_F(RenderCli, EveryViewFromAPlanCsvWritesAPngOfTheAskedSize) {
   for (const char* view : {"oblique", "top", "volume", "slice"}) {
     const std::string out = *dir_ + "/" + view + ".png";
-    const Outcome r = visvol("render " + *pack_ + " --path " + *dir_ + "/plan.csv --view " + view +
-                             " --size 200x150 -o " + out);
+    const Outcome r =
+        visvol("render " + *pack_ + " --path " + *dir_ + "/plan.csv --view " + view + " --size 200x150 -o " + out);
     ASSERT_EQ(r.status, 0) << view << ": " << r.err;
     EXPECT_NE(r.out.find("wrote " + out + ": 200 x 150, " + view + " view"), std::string::npos) << r.out;
     EXPECT_EQ(png_size(bytes_of(out)), std::make_pair(200, 150)) << view;
@@ -115,8 +117,8 @@ TEST_F(RenderCli, PlanGeoJsonIsConvertedBackToThePacksCrs) {
   const Ends csv = ends_of_csv(*dir_ + "/plan.csv");
   for (const char* view : {"top", "slice"}) {
     const std::string out = *dir_ + "/geo_" + view + ".png";
-    const Outcome r = visvol("render " + *pack_ + " --path " + *dir_ + "/plan.geojson --view " + view +
-                             " --size 160x120 -o " + out);
+    const Outcome r =
+        visvol("render " + *pack_ + " --path " + *dir_ + "/plan.geojson --view " + view + " --size 160x120 -o " + out);
     ASSERT_EQ(r.status, 0) << view << ": " << r.err;
     EXPECT_NE(r.out.find("path  17 points from " + *dir_ + "/plan.geojson (GeoJSON"), std::string::npos) << r.out;
     const Ends geo = ends_printed(r.out);
@@ -181,8 +183,8 @@ TEST_F(RenderCli, PlainTextPathMarkersAndOptionsChangeThePicture) {
   const auto a = bytes_of(*dir_ + "/plain.png"), b = bytes_of(*dir_ + "/marked.png");
   const auto c = bytes_of(*dir_ + "/height.png"), d = bytes_of(*dir_ + "/stored.png");
   EXPECT_EQ(png_size(a), std::make_pair(160, 120));
-  EXPECT_NE(a, b);  // markers drawn
-  EXPECT_NE(a, c);  // another colouring height
+  EXPECT_NE(a, b);                      // markers drawn
+  EXPECT_NE(a, c);                      // another colouring height
   EXPECT_GE(d.size(), 160u * 120 * 3);  // level 0: stored, not compressed
   EXPECT_LT(a.size(), d.size());
 }

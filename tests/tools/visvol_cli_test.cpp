@@ -136,8 +136,7 @@ TEST_F(Cli, SampleAnswersLineByLine) {
   EXPECT_EQ(r.status, 2);  // two bad lines
   std::istringstream lines(r.out);
   std::string a, b, c, d;
-  ASSERT_TRUE(std::getline(lines, a) && std::getline(lines, b) && std::getline(lines, c) &&
-              std::getline(lines, d));
+  ASSERT_TRUE(std::getline(lines, a) && std::getline(lines, b) && std::getline(lines, c) && std::getline(lines, d));
   EXPECT_GT(std::stod(b), 0.0);  // high above everything sees a lot
   EXPECT_GE(std::stod(b), std::stod(a));
   EXPECT_EQ(c, "nan");
@@ -173,7 +172,8 @@ TEST_F(Cli, PlanWritesThePathInFourFormats) {
   const std::string base = *pack_ + "_plan";
   const Outcome r = visvol("plan " + *pack_ +
                            " --from 550300 4182450 150 --to 550850 4181850 150 --objective hide"
-                           " --vehicle multirotor --init straight --segments 32 --max-seconds 5 --json -o " + base);
+                           " --vehicle multirotor --init straight --segments 32 --max-seconds 5 --json -o " +
+                           base);
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json summary = nlohmann::json::parse(r.out);
   EXPECT_LT(summary["fc_end"].get<double>(), summary["fc_start"].get<double>());
@@ -181,7 +181,7 @@ TEST_F(Cli, PlanWritesThePathInFourFormats) {
   const nlohmann::json gj = nlohmann::json::parse(slurp(base + ".geojson"));
   const nlohmann::json& coords = gj["features"][0]["geometry"]["coordinates"];
   EXPECT_EQ(gj["features"][0]["geometry"]["type"], "LineString");
-  ASSERT_GE(coords.size(), 33u);  // the rope's 33, and any the envelope fit added
+  ASSERT_GE(coords.size(), 33u);                          // the rope's 33, and any the envelope fit added
   EXPECT_NEAR(coords[0][0].get<double>(), -122.43, 0.1);  // San Francisco, WGS84 longitude
   EXPECT_NEAR(coords[0][1].get<double>(), 37.79, 0.1);
   // RFC 7946: above the WGS84 ellipsoid, EGM96's geoid being about 32 m under it here
@@ -210,8 +210,7 @@ TEST_F(Cli, PlanWritesThePathInFourFormats) {
 // straight line.
 TEST_F(Cli, PlanStartsFromTheCsvOrGeoJsonOfAnEarlierPlan) {
   const std::string base = *pack_ + "_first", again = *pack_ + "_again";
-  const std::string ends =
-      " --from 550300 4182450 150 --to 550850 4181850 150 --objective hide --vehicle multirotor";
+  const std::string ends = " --from 550300 4182450 150 --to 550850 4181850 150 --objective hide --vehicle multirotor";
   const Outcome first =
       visvol("plan " + *pack_ + ends + " --init straight --segments 32 --max-seconds 5 --json -o " + base);
   ASSERT_EQ(first.status, 0) << first.err;
@@ -236,9 +235,8 @@ TEST_F(Cli, PlanRefusesBadRequests) {
   const std::string base = *pack_ + "_bad";
   const std::string ok_ends = " --from 550300 4182450 150 --to 550850 4181850 150";
   for (const std::string& args :
-       {std::string(" --from 1 2 250 --to 551050 4181700 250 --objective hide"),
-        ok_ends + " --objective sideways", ok_ends + " --objective hide --segments 0",
-        ok_ends + " --objective hide --init /nonexistent/path.txt",
+       {std::string(" --from 1 2 250 --to 551050 4181700 250 --objective hide"), ok_ends + " --objective sideways",
+        ok_ends + " --objective hide --segments 0", ok_ends + " --objective hide --init /nonexistent/path.txt",
         std::string(" --from 550300 4182450 -900 --to 550850 4181850 320 --objective hide")}) {
     const Outcome r = visvol("plan " + *pack_ + args + " -o " + base);
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
@@ -253,9 +251,7 @@ class CliArea : public ::testing::Test {
  protected:
   static constexpr double kArea[4] = {550100, 4181300, 550900, 4182100};
   static std::string area() { return " --area 550100 4181300 550900 4182100"; }
-  static std::string options() {
-    return " --fill-nodata --levels 16 --lod 1 --range 8 --tff-offset 60 --tff-levels 6";
-  }
+  static std::string options() { return " --fill-nodata --levels 16 --lod 1 --range 8 --tff-offset 60 --tff-levels 6"; }
 
   // Builds with `args`, returns `info --json` of the pack.
   nlohmann::json build_and_info(const std::string& args) {
@@ -340,8 +336,7 @@ TEST(CliBuildRefuses, AreaWithCropOrNotABox) {
 
 TEST(CliBuildRefuses, AreaTheDemDoesNotCover) {
   // The DEM's posts end at x 555060: the area needs them to 554900 + 240 m.
-  expect_refused(" --range 8 --area 554100 4181300 554900 4182100",
-                 {"--area", "80.0 m short on the east side"});
+  expect_refused(" --range 8 --area 554100 4181300 554900 4182100", {"--area", "80.0 m short on the east side"});
   expect_refused(" --range 8 --area 543000 4170000 544000 4192500",
                  {"m short on the west side", "m short on the south side", "m short on the north side"});
 }
@@ -351,8 +346,7 @@ TEST(CliBuildRefuses, BadMarginsAndEmptyBounds) {
   expect_refused(" --range 8 " + kCrop + " --planning-margin nan", {"--planning-margin"});
   // 20 posts of range leave nothing of the 1170 m of posts of the crop
   expect_refused(" " + kCrop + " --range 20", {"1170 x 1170 m", "--planning-margin", "--range"});
-  expect_refused(" " + kCrop + " --range-shape none --planning-margin 585",
-                 {"1170 x 1170 m", "--planning-margin"});
+  expect_refused(" " + kCrop + " --range-shape none --planning-margin 585", {"1170 x 1170 m", "--planning-margin"});
 }
 
 TEST(CliViewshed, WritesAGeoTiff) {

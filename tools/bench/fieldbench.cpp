@@ -24,9 +24,9 @@
 #include "fields/exact_visibility.hpp"
 #include "fields/gdal/dem_import.hpp"
 #include "fields/gdal/dem_io.hpp"
-#include "storage/pack_build.hpp"
 #include "fields/viewshed.hpp"
 #include "fields/visibility_builder.hpp"
+#include "storage/pack_build.hpp"
 
 namespace {
 
@@ -34,9 +34,7 @@ using namespace visvol;
 using namespace visvol::fields;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -164,10 +162,10 @@ ExactFigures bench_exact(const Heightfield& dem) {
         const double v = exact_visibility(hf, area, p, i, j, z);
         if (z < hf.at(i, j) + g.dz_m) continue;
         // The accuracy criterion: between the exact values a level below and above.
-        const double lo = std::min({exact_visibility(hf, area, p, i, j, z - g.dz_m), v,
-                                    exact_visibility(hf, area, p, i, j, z + g.dz_m)});
-        const double hi = std::max({exact_visibility(hf, area, p, i, j, z - g.dz_m), v,
-                                    exact_visibility(hf, area, p, i, j, z + g.dz_m)});
+        const double lo = std::min(
+            {exact_visibility(hf, area, p, i, j, z - g.dz_m), v, exact_visibility(hf, area, p, i, j, z + g.dz_m)});
+        const double hi = std::max(
+            {exact_visibility(hf, area, p, i, j, z - g.dz_m), v, exact_visibility(hf, area, p, i, j, z + g.dz_m)});
         ++counted;
         inside += f->at(i, j, k) >= lo - 0.005 && f->at(i, j, k) <= hi + 0.005;
       }
@@ -186,8 +184,8 @@ struct ViewshedFigures {
 };
 
 // Times r.viewshed inside a throw-away GRASS location and reads its output.
-bool run_grass(const std::string& dem, double x, double y, const ViewshedParams& p,
-               const std::string& out_tif, double& seconds, std::string& note) {
+bool run_grass(const std::string& dem, double x, double y, const ViewshedParams& p, const std::string& out_tif,
+               double& seconds, std::string& note) {
   if (std::system("command -v grass >/dev/null 2>&1") != 0) {
     note = "grass not installed (Debian package grass-core)";
     return false;
@@ -201,16 +199,12 @@ bool run_grass(const std::string& dem, double x, double y, const ViewshedParams&
                         << "r.in.gdal -o input='" << dem << "' output=dem --quiet\n"
                         << "g.region raster=dem\n"
                         << "TIMEFORMAT=%R\n"
-                        << "{ time r.viewshed input=dem output=vs coordinates=" << std::fixed << x
-                        << "," << y << " observer_elevation=" << p.observer_height_m
-                        << " target_elevation=" << p.target_height_m
-                        << " max_distance=" << p.max_distance_m << " --quiet ; } 2> '" << timing
-                        << "'\n"
-                        << "r.out.gdal input=vs output='" << out_tif
-                        << "' format=GTiff type=Float32 --quiet -c\n";
+                        << "{ time r.viewshed input=dem output=vs coordinates=" << std::fixed << x << "," << y
+                        << " observer_elevation=" << p.observer_height_m << " target_elevation=" << p.target_height_m
+                        << " max_distance=" << p.max_distance_m << " --quiet ; } 2> '" << timing << "'\n"
+                        << "r.out.gdal input=vs output='" << out_tif << "' format=GTiff type=Float32 --quiet -c\n";
   const std::string log = std::string(dir) + "/grass.log";
-  const std::string cmd = "grass --tmp-location '" + dem + "' --exec bash '" + script + "' >'" +
-                          log + "' 2>&1";
+  const std::string cmd = "grass --tmp-location '" + dem + "' --exec bash '" + script + "' >'" + log + "' 2>&1";
   const bool ok = std::system(cmd.c_str()) == 0;
   if (ok) std::ifstream(timing) >> seconds;
   if (!ok) {
@@ -227,8 +221,7 @@ bool run_grass(const std::string& dem, double x, double y, const ViewshedParams&
   return ok && seconds >= 0;
 }
 
-ViewshedFigures bench_viewshed(const std::string& dem_path, const Heightfield& hf, int range,
-                               int repeat, bool grass) {
+ViewshedFigures bench_viewshed(const std::string& dem_path, const Heightfield& hf, int range, int repeat, bool grass) {
   ViewshedFigures v;
   ViewshedParams p;
   p.observer_x = hf.x_of(hf.nx / 2);
@@ -394,7 +387,8 @@ int main(int argc, char** argv) {
   }
 
   const RangeFigures* r64 = nullptr;
-  for (const RangeFigures& f : figures) if (f.range == 64) r64 = &f;
+  for (const RangeFigures& f : figures)
+    if (f.range == 64) r64 = &f;
   const bool hf512 = hf->nx == 512 && hf->ny == 512;
   if (json) {
     nlohmann::json j;
@@ -404,25 +398,39 @@ int main(int argc, char** argv) {
     j["nz"] = 128;
     j["repeat"] = repeat;
     for (const RangeFigures& f : figures) {
-      j["builds"].push_back({{"range_posts", f.range}, {"ok", f.ok}, {"wall_s", f.wall_s},
-                             {"hull_s", f.hull_s}, {"scatter_s", f.scatter_s},
-                             {"hull_cells", f.cells}, {"cells_per_s_per_core", f.mcells * 1e6},
-                             {"peak_rss_mib", f.rss_mib}, {"threads", f.threads}});
+      j["builds"].push_back({{"range_posts", f.range},
+                             {"ok", f.ok},
+                             {"wall_s", f.wall_s},
+                             {"hull_s", f.hull_s},
+                             {"scatter_s", f.scatter_s},
+                             {"hull_cells", f.cells},
+                             {"cells_per_s_per_core", f.mcells * 1e6},
+                             {"peak_rss_mib", f.rss_mib},
+                             {"threads", f.threads}});
     }
     if (!no_exact) {
-      j["exact_reference"] = {{"grid", exact.n}, {"nz", exact.nz}, {"range_posts", exact.range},
-                              {"fast_s", exact.fast_s}, {"exact_s", exact.exact_s},
+      j["exact_reference"] = {{"grid", exact.n},
+                              {"nz", exact.nz},
+                              {"range_posts", exact.range},
+                              {"fast_s", exact.fast_s},
+                              {"exact_s", exact.exact_s},
                               {"ratio", exact.fast_s > 0 ? exact.exact_s / exact.fast_s : 0},
                               {"within_fraction", exact.within}};
     }
     if (stream) {
-      j["stream_build"] = {{"ok", streamed.ok}, {"posts", streamed.n}, {"wall_s", streamed.wall_s},
-                           {"peak_rss_mib", streamed.rss_mib}, {"pack_mib", streamed.pack_mib},
+      j["stream_build"] = {{"ok", streamed.ok},
+                           {"posts", streamed.n},
+                           {"wall_s", streamed.wall_s},
+                           {"peak_rss_mib", streamed.rss_mib},
+                           {"pack_mib", streamed.pack_mib},
                            {"error", streamed.error}};
     }
-    j["viewshed"] = {{"radius_m", vs_range * hf->spacing_m}, {"visvol_s", vs.ours_s},
-                     {"rviewshed_s", vs.grass_s}, {"agreement", vs.agreement},
-                     {"visvol_visible", vs.ours_visible}, {"rviewshed_visible", vs.grass_visible},
+    j["viewshed"] = {{"radius_m", vs_range * hf->spacing_m},
+                     {"visvol_s", vs.ours_s},
+                     {"rviewshed_s", vs.grass_s},
+                     {"agreement", vs.agreement},
+                     {"visvol_visible", vs.ours_visible},
+                     {"rviewshed_visible", vs.grass_visible},
                      {"note", vs.grass_note}};
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
@@ -432,8 +440,8 @@ int main(int argc, char** argv) {
               hf->nx, hf->ny, hf->spacing_m, figures.empty() ? 0 : figures[0].threads, repeat);
   std::printf("range posts  wall s  hull s  scatter s  hull cells  Mcells/s/core  peak RSS MiB\n");
   for (const RangeFigures& f : figures) {
-    std::printf("%11d  %6.2f  %6.2f  %9.2f  %10.3g  %13.1f  %12.1f%s\n", f.range, f.wall_s, f.hull_s,
-                f.scatter_s, f.cells, f.mcells, f.rss_mib, f.ok ? "" : "  (FAILED)");
+    std::printf("%11d  %6.2f  %6.2f  %9.2f  %10.3g  %13.1f  %12.1f%s\n", f.range, f.wall_s, f.hull_s, f.scatter_s,
+                f.cells, f.mcells, f.rss_mib, f.ok ? "" : "  (FAILED)");
   }
   std::printf("(a hull cell is one observer-target column pair: one hull height, one voxel update)\n");
   if (r64 && hf512) {
@@ -441,23 +449,24 @@ int main(int argc, char** argv) {
                 r64->wall_s <= 5.0 ? "met" : "NOT met");
   }
   if (!no_exact) {
-    std::printf("\nexact R3 reference, %d x %d x %d at range %d, one thread: fast %.3f s, exact %.1f s, "
-                "ratio %.0fx; %.2f%% of voxels within the accuracy bracket\n",
-                exact.n, exact.n, exact.nz, exact.range, exact.fast_s, exact.exact_s,
-                exact.fast_s > 0 ? exact.exact_s / exact.fast_s : 0.0, 100.0 * exact.within);
+    std::printf(
+        "\nexact R3 reference, %d x %d x %d at range %d, one thread: fast %.3f s, exact %.1f s, "
+        "ratio %.0fx; %.2f%% of voxels within the accuracy bracket\n",
+        exact.n, exact.n, exact.nz, exact.range, exact.fast_s, exact.exact_s,
+        exact.fast_s > 0 ? exact.exact_s / exact.fast_s : 0.0, 100.0 * exact.within);
   }
   if (stream) {
     if (streamed.ok) {
-      std::printf("\nstreamed pack build %d x %d x 128, range 64, 3 levels of detail: %.1f s, "
-                  "peak RSS %.0f MiB (target under 1536 MiB: %s), pack %.0f MiB\n",
-                  streamed.n, streamed.n, streamed.wall_s, streamed.rss_mib,
-                  streamed.rss_mib < 1536.0 ? "met" : "NOT met", streamed.pack_mib);
+      std::printf(
+          "\nstreamed pack build %d x %d x 128, range 64, 3 levels of detail: %.1f s, "
+          "peak RSS %.0f MiB (target under 1536 MiB: %s), pack %.0f MiB\n",
+          streamed.n, streamed.n, streamed.wall_s, streamed.rss_mib, streamed.rss_mib < 1536.0 ? "met" : "NOT met",
+          streamed.pack_mib);
     } else {
       std::printf("\nstreamed pack build failed: %s\n", streamed.error.c_str());
     }
   }
-  std::printf("\nviewshed, observer at the grid centre 2 m up, target 0 m, radius %.0f m:\n",
-              vs_range * hf->spacing_m);
+  std::printf("\nviewshed, observer at the grid centre 2 m up, target 0 m, radius %.0f m:\n", vs_range * hf->spacing_m);
   std::printf("  visvol      %.4f s, %zu cells visible\n", vs.ours_s, vs.ours_visible);
   if (vs.grass_s >= 0) {
     std::printf("  r.viewshed  %.4f s, %zu cells visible (its own timing inside GRASS)\n", vs.grass_s,

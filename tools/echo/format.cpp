@@ -40,27 +40,26 @@ const char* name_of(std::uint8_t value) {
 }
 
 void add_timing(std::string& out, const char* key, const visvol_msgs_msg_dds__TimingSummary_& t) {
-  add(out, " %s_us(min/mean/p99/max)=%.1f/%.1f/%.1f/%.1f", key, t.min_us, t.mean_us, t.p99_us,
-      t.max_us);
+  add(out, " %s_us(min/mean/p99/max)=%.1f/%.1f/%.1f/%.1f", key, t.min_us, t.mean_us, t.p99_us, t.max_us);
 }
 
 }  // namespace
 
 std::string format_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool with_vertices) {
   std::string out;
-  add(out, "path seq=%llu stamp=%s frame=%s pack=%s objective=%s vertices=%u length_m=%.3f "
-           "f_c=%.6g min_clearance_m=%.3f converged=%s inside_envelope=%s",
+  add(out,
+      "path seq=%llu stamp=%s frame=%s pack=%s objective=%s vertices=%u length_m=%.3f "
+      "f_c=%.6g min_clearance_m=%.3f converged=%s inside_envelope=%s",
       static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
-      quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(),
-      name_of<msg::Objective>(m.objective), m.positions_m._length, m.length_m, m.f_c,
-      m.min_clearance_m, m.converged ? "yes" : "no", m.inside_envelope ? "yes" : "no");
+      quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(), name_of<msg::Objective>(m.objective),
+      m.positions_m._length, m.length_m, m.f_c, m.min_clearance_m, m.converged ? "yes" : "no",
+      m.inside_envelope ? "yes" : "no");
   if (with_vertices) {
     for (std::uint32_t i = 0; i < m.positions_m._length; ++i) {
       const geometry_msgs_msg_dds__Point_& p = m.positions_m._buffer[i];
       const double vis = i < m.visibility._length ? m.visibility._buffer[i] : 0.0;
       const double clr = i < m.clearance_m._length ? m.clearance_m._buffer[i] : 0.0;
-      add(out, "\n  [%u] x_m=%.3f y_m=%.3f z_m=%.3f visibility=%.6f clearance_m=%.3f", i, p.x, p.y,
-          p.z, vis, clr);
+      add(out, "\n  [%u] x_m=%.3f y_m=%.3f z_m=%.3f visibility=%.6f clearance_m=%.3f", i, p.x, p.y, p.z, vis, clr);
     }
   }
   return out;
@@ -68,49 +67,47 @@ std::string format_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool w
 
 std::string format_health(const visvol_msgs_msg_dds__LoopHealth_& m) {
   std::string out;
-  add(out, "health seq=%llu stamp=%s period_us=%.1f",
-      static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
-      m.period_us);
+  add(out, "health seq=%llu stamp=%s period_us=%.1f", static_cast<unsigned long long>(m.sequence_number),
+      stamp(m.header.stamp).c_str(), m.period_us);
   add_timing(out, "wakeup", m.wakeup_latency);
   add_timing(out, "compute", m.compute_time);
   add(out, " overruns=%llu misses=%llu safe_state=%s", static_cast<unsigned long long>(m.overruns),
       static_cast<unsigned long long>(m.misses), m.safe_state ? "yes" : "no");
   if (m.safe_state) add(out, " reason=%s", quoted(m.safe_state_reason).c_str());
   add(out, " commands_accepted=%llu commands_rejected=%llu publish_errors=%llu",
-      static_cast<unsigned long long>(m.commands_accepted),
-      static_cast<unsigned long long>(m.commands_rejected),
+      static_cast<unsigned long long>(m.commands_accepted), static_cast<unsigned long long>(m.commands_rejected),
       static_cast<unsigned long long>(m.publish_errors));
   return out;
 }
 
 std::string format_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m) {
   std::string out;
-  add(out, "device seq=%llu stamp=%s name=%s state=%s fault_bits=0x%08x motor_temperature_c=%.1f "
-           "last_position_age_ms=%.1f can_rx=%llu can_tx=%llu can_errors=%llu bus_off=%u",
-      static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
-      quoted(m.device).c_str(), name_of<msg::DeviceState>(m.state), m.fault_bits,
-      m.motor_temperature_c, m.last_position_age_ms,
-      static_cast<unsigned long long>(m.can_rx_frames),
-      static_cast<unsigned long long>(m.can_tx_frames),
+  add(out,
+      "device seq=%llu stamp=%s name=%s state=%s fault_bits=0x%08x motor_temperature_c=%.1f "
+      "last_position_age_ms=%.1f can_rx=%llu can_tx=%llu can_errors=%llu bus_off=%u",
+      static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(), quoted(m.device).c_str(),
+      name_of<msg::DeviceState>(m.state), m.fault_bits, m.motor_temperature_c, m.last_position_age_ms,
+      static_cast<unsigned long long>(m.can_rx_frames), static_cast<unsigned long long>(m.can_tx_frames),
       static_cast<unsigned long long>(m.can_errors), m.bus_off_count);
   return out;
 }
 
 std::string format_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m) {
   std::string out;
-  add(out, "terrain stamp=%s frame=%s pack=%s crs=%s min_m=(%.3f, %.3f, %.3f) "
-           "max_m=(%.3f, %.3f, %.3f) post_spacing_m=%.3f planning_m=x %.3f..%.3f, y %.3f..%.3f wkt_chars=%zu",
+  add(out,
+      "terrain stamp=%s frame=%s pack=%s crs=%s min_m=(%.3f, %.3f, %.3f) "
+      "max_m=(%.3f, %.3f, %.3f) post_spacing_m=%.3f planning_m=x %.3f..%.3f, y %.3f..%.3f wkt_chars=%zu",
       stamp(m.header.stamp).c_str(), quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(),
-      quoted(m.crs).c_str(), m.min_m.x, m.min_m.y, m.min_m.z, m.max_m.x, m.max_m.y, m.max_m.z,
-      m.post_spacing_m, m.planning_min_m.x, m.planning_max_m.x, m.planning_min_m.y, m.planning_max_m.y,
+      quoted(m.crs).c_str(), m.min_m.x, m.min_m.y, m.min_m.z, m.max_m.x, m.max_m.y, m.max_m.z, m.post_spacing_m,
+      m.planning_min_m.x, m.planning_max_m.x, m.planning_min_m.y, m.planning_max_m.y,
       m.crs_wkt ? std::string(m.crs_wkt).size() : 0);
   return out;
 }
 
 std::string format_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m) {
   std::string out;
-  add(out, "thumbnail stamp=%s format=%s bytes=%u", stamp(m.header.stamp).c_str(),
-      quoted(m.format).c_str(), m.data._length);
+  add(out, "thumbnail stamp=%s format=%s bytes=%u", stamp(m.header.stamp).c_str(), quoted(m.format).c_str(),
+      m.data._length);
   return out;
 }
 

@@ -59,7 +59,7 @@ struct WatchOptions {
 struct CommandOptions {
   std::string kind;
   std::string source;
-  bool source_given = false;  // --source "" is an error, not the default
+  bool source_given = false;              // --source "" is an error, not the default
   std::optional<std::uint64_t> sequence;  // default: milliseconds since 1970
   double timeout_s = 5.0;
   bool wait_applied = false;
@@ -130,9 +130,8 @@ Result<std::unique_ptr<Participant>> open(const Common& common) {
 
 const std::map<std::string, Topic>& watchable() {
   static const std::map<std::string, Topic> topics = {
-      {"path", Topic::path_update},     {"health", Topic::health},
-      {"device", Topic::device_status}, {"terrain", Topic::terrain},
-      {"thumbnail", Topic::thumbnail},  {"acks", Topic::command_ack},
+      {"path", Topic::path_update}, {"health", Topic::health},       {"device", Topic::device_status},
+      {"terrain", Topic::terrain},  {"thumbnail", Topic::thumbnail}, {"acks", Topic::command_ack},
   };
   return topics;
 }
@@ -169,8 +168,7 @@ std::size_t print_all(Topic topic, const Reader& reader, bool vertices) {
       (void)reader.take<visvol_msgs_msg_dds__CommandAck_>(
           [&](const auto& m, const dds_sample_info_t&) { line(echo::format_ack(m)); });
       break;
-    default:
-      break;
+    default: break;
   }
   if (printed > 0) std::fflush(stdout);
   return printed;
@@ -180,8 +178,7 @@ int run_watch(const Common& common, const WatchOptions& options) {
   std::set<std::string> names(options.topics.begin(), options.topics.end());
   for (const std::string& n : names) {
     if (!watchable().count(n)) {
-      return usage_error("--topics: unknown topic '" + n +
-                         "' (path, health, device, terrain, thumbnail, acks)");
+      return usage_error("--topics: unknown topic '" + n + "' (path, health, device, terrain, thumbnail, acks)");
     }
   }
   Result<std::unique_ptr<Participant>> p = open(common);
@@ -193,8 +190,8 @@ int run_watch(const Common& common, const WatchOptions& options) {
     if (!r.ok()) return failure(r.status().message());
     readers.emplace_back(topic, std::move(*r));
   }
-  std::fprintf(stderr, "visvol-echo: watching %zu topic(s) on domain %u%s%s\n", readers.size(),
-               common.domain, common.ns.empty() ? "" : ", namespace ", common.ns.c_str());
+  std::fprintf(stderr, "visvol-echo: watching %zu topic(s) on domain %u%s%s\n", readers.size(), common.domain,
+               common.ns.empty() ? "" : ", namespace ", common.ns.c_str());
 
   const auto start = std::chrono::steady_clock::now();
   std::size_t printed = 0;
@@ -202,12 +199,11 @@ int run_watch(const Common& common, const WatchOptions& options) {
     (void)readers.front().second.wait(0.02);
     for (const auto& [topic, reader] : readers) printed += print_all(topic, reader, options.vertices);
     if (options.count > 0 && printed >= options.count) return kExitOk;
-    const double elapsed_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (options.timeout_s > 0.0 && elapsed_s >= options.timeout_s) {
       if (options.count == 0) return kExitOk;
-      return failure(std::to_string(printed) + " of " + std::to_string(options.count) +
-                     " message(s) within " + seconds(options.timeout_s));
+      return failure(std::to_string(printed) + " of " + std::to_string(options.count) + " message(s) within " +
+                     seconds(options.timeout_s));
     }
   }
   return kExitOk;
@@ -309,23 +305,21 @@ int run_command(const Common& common, const CommandOptions& options) {
   const Status hearing = heard.ok() ? acks->wait_for_writers(1, options.timeout_s) : heard;
   if (!hearing.ok()) {
     return failure("no command intake on domain " + std::to_string(common.domain) +
-                   (common.ns.empty() ? "" : " namespace " + common.ns) + " within " +
-                   seconds(options.timeout_s));
+                   (common.ns.empty() ? "" : " namespace " + common.ns) + " within " + seconds(options.timeout_s));
   }
   CommandMessage msg;
   const dds_return_t rc = writer->write(&msg.fill(*command));
   if (rc < 0) return failure(dds_error("sending the command", rc).message());
 
   const std::string source(text_of(command->source));
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1e3));
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1e3));
   int result = -1;
   while (result < 0 && !g_interrupted.load() && std::chrono::steady_clock::now() < deadline) {
     (void)acks->wait(0.05);
     (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
         [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
-          if (result >= 0 || !m.source || source != m.source ||
-              m.sequence_number != command->sequence) {
+          if (result >= 0 || !m.source || source != m.source || m.sequence_number != command->sequence) {
             return;  // someone else's
           }
           std::printf("%s\n", echo::format_ack(m).c_str());
@@ -337,8 +331,8 @@ int run_command(const Common& common, const CommandOptions& options) {
         });
   }
   if (result < 0) {
-    return failure(std::string("no ") + (options.wait_applied ? "applied/failed " : "") +
-                   "acknowledgement within " + seconds(options.timeout_s));
+    return failure(std::string("no ") + (options.wait_applied ? "applied/failed " : "") + "acknowledgement within " +
+                   seconds(options.timeout_s));
   }
   return result;
 }
@@ -385,16 +379,14 @@ void add_command_kinds(CLI::App& command, CommandOptions& o) {
       ->required()
       ->check(CLI::Range(1u, 1000000u));
   CLI::App* constraints = kind(
-      "set-constraints",
-      "replace the observers (none given: clear them); clearance and ceilings change when given");
+      "set-constraints", "replace the observers (none given: clear them); clearance and ceilings change when given");
   constraints->add_option("--hidden-from", o.hidden_from,
                           "X,Y,Z: stay hidden from an observer standing there (m); repeatable");
   constraints->add_option("--visible-to", o.visible_to,
                           "X,Y,Z: stay visible to an observer standing there (m); repeatable");
   constraints->add_option("--clearance", o.clearances, "keep at least this height above the terrain (m)")
       ->check(kFinite);
-  constraints->add_option("--max-agl", o.max_agls, "keep at most this height above the terrain (m)")
-      ->check(kFinite);
+  constraints->add_option("--max-agl", o.max_agls, "keep at most this height above the terrain (m)")->check(kFinite);
   constraints->add_option("--max-altitude", o.max_altitudes, "keep at most this height above the datum (m)")
       ->check(kFinite);
   kind("start", "start planning");
@@ -427,42 +419,37 @@ int main(int argc, char** argv) {
       "rejected or unanswered, too few messages within --timeout), 2 bad arguments.");
   app.fallthrough();
   app.require_subcommand(1);
-  app.add_option("--domain", common.domain, "DDS domain id (0..232)")
-      ->check(CLI::Range(0u, kMaxDomainId));
-  app.add_option("--config", common.config_file, "Cyclone DDS XML configuration file")
-      ->check(CLI::ExistingFile);
+  app.add_option("--domain", common.domain, "DDS domain id (0..232)")->check(CLI::Range(0u, kMaxDomainId));
+  app.add_option("--config", common.config_file, "Cyclone DDS XML configuration file")->check(CLI::ExistingFile);
   app.add_option("--namespace", common.ns, "topic namespace of the console (ROS style)");
 
   CLI::App* watch_app = app.add_subcommand("watch", "print messages as they arrive");
-  watch_app->add_option("--topics", watch.topics,
-                        "path, health, device, terrain, thumbnail, acks (default: path health)")
+  watch_app
+      ->add_option("--topics", watch.topics, "path, health, device, terrain, thumbnail, acks (default: path health)")
       ->delimiter(',');
   CLI::App* path_app = app.add_subcommand("path", "print path updates as they arrive");
   CLI::App* health_app = app.add_subcommand("health", "print health reports as they arrive");
   for (CLI::App* sub : {watch_app, path_app, health_app}) {
     sub->add_option("--count", watch.count, "exit after N messages (0: until interrupted)")
         ->check(CLI::NonNegativeNumber);
-    sub->add_option("--timeout", watch.timeout_s,
-                    "give up after S seconds (exit 1 if --count was not reached)")
+    sub->add_option("--timeout", watch.timeout_s, "give up after S seconds (exit 1 if --count was not reached)")
         ->check(CLI::Range(0.0, 86400.0));
     sub->add_flag("--vertices", watch.vertices, "print every vertex of a path");
   }
   path_app->callback([&] { watch.topics = {"path"}; });
   health_app->callback([&] { watch.topics = {"health"}; });
 
-  CLI::App* command_app =
-      app.add_subcommand("command", "send one command and print its acknowledgement");
+  CLI::App* command_app = app.add_subcommand("command", "send one command and print its acknowledgement");
   command_app->require_subcommand(1);
   CLI::Option* source_option = command_app->add_option(
-      "--source", command.source,
-      "sender name in the acknowledgement (default visvol-echo@HOST:PID)");
-  command_app->add_option("--sequence", command.sequence,
-                          "the command's number (default: milliseconds since 1970, new each run); "
-                          "the console keeps its last 1024 answers, so a number this --source used "
-                          "before may be answered by the old acknowledgement")
+      "--source", command.source, "sender name in the acknowledgement (default visvol-echo@HOST:PID)");
+  command_app
+      ->add_option("--sequence", command.sequence,
+                   "the command's number (default: milliseconds since 1970, new each run); "
+                   "the console keeps its last 1024 answers, so a number this --source used "
+                   "before may be answered by the old acknowledgement")
       ->check(CLI::NonNegativeNumber);
-  command_app->add_option("--timeout", command.timeout_s,
-                          "seconds to wait for the console and its answer (default 5)")
+  command_app->add_option("--timeout", command.timeout_s, "seconds to wait for the console and its answer (default 5)")
       ->check(CLI::Range(0.1, 3600.0));
   command_app->add_flag("--wait-applied", command.wait_applied,
                         "wait until the planner reports the command applied or failed");

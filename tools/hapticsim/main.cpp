@@ -14,9 +14,9 @@
 #include <string>
 
 #include "drivers/can/socketcan_bus.hpp"
-#include "rt/base/atomic_file.hpp"
 #include "drivers/hapticsim/script.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
+#include "rt/base/atomic_file.hpp"
 
 namespace {
 
@@ -100,31 +100,29 @@ void add_options(CLI::App& app, Options& o) {
   app.footer(kFooter);
 }
 
-std::string summary_json(const Options& o, const SimDevice& d, const visvol::can::CanCounters& bus,
-                         double run_s) {
+std::string summary_json(const Options& o, const SimDevice& d, const visvol::can::CanCounters& bus, double run_s) {
   const SimCounters& c = d.counters();
   char buf[2048];
-  std::snprintf(
-      buf, sizeof(buf),
-      "{\"node\":%d,\"run_s\":%.3f,\"frames_sent\":%llu,\"send_failures\":%llu,\"tx_dropped\":%llu,"
-      "\"rx_dropped\":%llu,\"rx_ignored\":%llu,\"commands\":%llu,\"command_gaps\":%llu,\"malformed\":%llu,"
-      "\"nmt_commands\":%llu,\"watchdog_trips\":%llu,\"saturated_steps\":%llu,\"force_steps\":%llu,"
-      "\"operational_steps\":%llu,\"boots\":%llu,\"emergencies\":%llu,\"garbage_sent\":%llu,"
-      "\"bus_off_events\":%llu,\"max_force_n\":%.4f,\"max_commanded_n\":%.4f,\"first_operational_s\":%.4f,"
-      "\"bus_received\":%llu,\"bus_dropped\":%llu,\"final_nmt_state\":%u}",
-      o.node, run_s, static_cast<unsigned long long>(c.frames_sent),
-      static_cast<unsigned long long>(c.send_failures), static_cast<unsigned long long>(c.tx_dropped),
-      static_cast<unsigned long long>(c.rx_dropped), static_cast<unsigned long long>(c.rx_ignored),
-      static_cast<unsigned long long>(c.commands), static_cast<unsigned long long>(c.command_gaps),
-      static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.nmt_commands),
-      static_cast<unsigned long long>(c.watchdog_trips), static_cast<unsigned long long>(c.saturated_steps),
-      static_cast<unsigned long long>(c.force_steps), static_cast<unsigned long long>(c.operational_steps),
-      static_cast<unsigned long long>(c.boots), static_cast<unsigned long long>(c.emergencies),
-      static_cast<unsigned long long>(c.garbage_sent), static_cast<unsigned long long>(c.bus_off_events),
-      c.max_force_n, c.max_commanded_n,
-      c.first_operational_ns < 0 ? -1.0 : static_cast<double>(c.first_operational_ns) / 1e9,
-      static_cast<unsigned long long>(bus.received), static_cast<unsigned long long>(bus.dropped),
-      static_cast<unsigned>(d.nmt_state()));
+  std::snprintf(buf, sizeof(buf),
+                "{\"node\":%d,\"run_s\":%.3f,\"frames_sent\":%llu,\"send_failures\":%llu,\"tx_dropped\":%llu,"
+                "\"rx_dropped\":%llu,\"rx_ignored\":%llu,\"commands\":%llu,\"command_gaps\":%llu,\"malformed\":%llu,"
+                "\"nmt_commands\":%llu,\"watchdog_trips\":%llu,\"saturated_steps\":%llu,\"force_steps\":%llu,"
+                "\"operational_steps\":%llu,\"boots\":%llu,\"emergencies\":%llu,\"garbage_sent\":%llu,"
+                "\"bus_off_events\":%llu,\"max_force_n\":%.4f,\"max_commanded_n\":%.4f,\"first_operational_s\":%.4f,"
+                "\"bus_received\":%llu,\"bus_dropped\":%llu,\"final_nmt_state\":%u}",
+                o.node, run_s, static_cast<unsigned long long>(c.frames_sent),
+                static_cast<unsigned long long>(c.send_failures), static_cast<unsigned long long>(c.tx_dropped),
+                static_cast<unsigned long long>(c.rx_dropped), static_cast<unsigned long long>(c.rx_ignored),
+                static_cast<unsigned long long>(c.commands), static_cast<unsigned long long>(c.command_gaps),
+                static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.nmt_commands),
+                static_cast<unsigned long long>(c.watchdog_trips), static_cast<unsigned long long>(c.saturated_steps),
+                static_cast<unsigned long long>(c.force_steps), static_cast<unsigned long long>(c.operational_steps),
+                static_cast<unsigned long long>(c.boots), static_cast<unsigned long long>(c.emergencies),
+                static_cast<unsigned long long>(c.garbage_sent), static_cast<unsigned long long>(c.bus_off_events),
+                c.max_force_n, c.max_commanded_n,
+                c.first_operational_ns < 0 ? -1.0 : static_cast<double>(c.first_operational_ns) / 1e9,
+                static_cast<unsigned long long>(bus.received), static_cast<unsigned long long>(bus.dropped),
+                static_cast<unsigned>(d.nmt_state()));
   return buf;
 }
 
@@ -153,7 +151,8 @@ int main(int argc, char** argv) {
   }
   if (!(o.duration_s >= 0.0 && o.duration_s <= 1e6)) return usage_error("--duration must lie in [0, 1e6] s");
   if (!(o.boot_delay_s >= 0.0 && o.boot_delay_s <= 3600.0)) return usage_error("--boot-delay must lie in [0, 3600] s");
-  if (!(o.watchdog_ms >= 1.0 && o.watchdog_ms <= 10000.0)) return usage_error("--watchdog-ms must lie in [1, 10000] ms");
+  if (!(o.watchdog_ms >= 1.0 && o.watchdog_ms <= 10000.0))
+    return usage_error("--watchdog-ms must lie in [1, 10000] ms");
   o.sim.node_id = static_cast<std::uint8_t>(o.node);
   o.sim.boot_delay_ns = static_cast<std::int64_t>(o.boot_delay_s * 1e9);
   o.sim.command_timeout_ns = static_cast<std::int64_t>(o.watchdog_ms * 1e6);

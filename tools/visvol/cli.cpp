@@ -16,13 +16,10 @@ int fail(const std::string& command, const Status& status) {
   return input ? kExitUsage : kExitFailure;
 }
 
-Status write_text_file(const std::string& path, const std::string& text) {
-  return write_file_atomically(path, text);
-}
+Status write_text_file(const std::string& path, const std::string& text) { return write_file_atomically(path, text); }
 
 Progress::Progress(std::string label)
-    : label_(std::move(label)), tty_(::isatty(STDERR_FILENO) != 0),
-      start_(std::chrono::steady_clock::now()) {}
+    : label_(std::move(label)), tty_(::isatty(STDERR_FILENO) != 0), start_(std::chrono::steady_clock::now()) {}
 
 Progress::~Progress() {
   if (tty_ && last_width_ >= 0 && !finished_) std::fputc('\n', stderr);
@@ -30,8 +27,7 @@ Progress::~Progress() {
 
 void Progress::update(double fraction) {
   fraction = std::clamp(fraction, 0.0, 1.0);
-  const double elapsed =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   if (tty_) {
     constexpr int kBar = 30;
     const int width = static_cast<int>(fraction * kBar + 0.5);
@@ -39,8 +35,7 @@ void Progress::update(double fraction) {
     last_width_ = width;
     std::fprintf(stderr, "\r%s [%s%s] %3.0f%% %6.1f s", label_.c_str(),
                  std::string(static_cast<std::size_t>(width), '#').c_str(),
-                 std::string(static_cast<std::size_t>(kBar - width), ' ').c_str(),
-                 100.0 * fraction, elapsed);
+                 std::string(static_cast<std::size_t>(kBar - width), ' ').c_str(), 100.0 * fraction, elapsed);
     std::fflush(stderr);
     return;
   }

@@ -87,8 +87,7 @@ std::vector<Sample> samples(const LodLevel& level) {
     if (t.height_m[n] > t.height_m[static_cast<std::size_t>(hi)]) hi = static_cast<int>(n);
     if (t.height_m[n] < t.height_m[static_cast<std::size_t>(lo)]) lo = static_cast<int>(n);
   }
-  const fields::FieldSampler<fields::DenseLevelView> sampler(
-      fields::DenseLevelView(level.terrain, level.field));
+  const fields::FieldSampler<fields::DenseLevelView> sampler(fields::DenseLevelView(level.terrain, level.field));
   std::vector<Sample> out;
   const struct {
     const char* name;
@@ -188,8 +187,8 @@ Status check_area_inside(const BuildOptions& o, const BuildInput& in, const Heig
   const fields::Bounds2D b =
       storage::planning_bounds_rule(finest, params.range_shape, params.range_posts, in.planning_margin_m).box;
   const double rounding_m = 1e-6;
-  if (b.xmin_m <= o.area[0] + rounding_m && b.ymin_m <= o.area[1] + rounding_m &&
-      b.xmax_m >= o.area[2] - rounding_m && b.ymax_m >= o.area[3] - rounding_m) {
+  if (b.xmin_m <= o.area[0] + rounding_m && b.ymin_m <= o.area[1] + rounding_m && b.xmax_m >= o.area[2] - rounding_m &&
+      b.ymax_m >= o.area[3] - rounding_m) {
     return Status::ok_status();
   }
   return Status(Errc::state, "--area: the planning bounds " + storage::describe(b) +
@@ -197,48 +196,45 @@ Status check_area_inside(const BuildOptions& o, const BuildInput& in, const Heig
 }
 
 // The source description, with the area the crop came from.
-std::string build_source_json(const BuildOptions& o, const BuildInput& in,
-                              const fields::ImportReport& imported) {
+std::string build_source_json(const BuildOptions& o, const BuildInput& in, const fields::ImportReport& imported) {
   nlohmann::json j = nlohmann::json::parse(source_json(o.dem, in.import, imported));
   if (!o.area.empty()) j["import"]["area"] = o.area;
   return j.dump();
 }
 
-void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
-                const std::vector<LodLevel>& levels, const std::vector<fields::BuildStats>& stats,
-                double wall_s) {
+void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams& p, const std::vector<LodLevel>& levels,
+                const std::vector<fields::BuildStats>& stats, double wall_s) {
   const fields::HeightRange hr = fields::height_range(hf);
   const fields::VolumeGeometry& g = levels[0].field.geometry;
   std::printf("DEM        %s\n", o.dem.c_str());
-  std::printf("           %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx,
-              hf.ny, hf.spacing_m, fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
-  std::printf("field      %d levels from %.1f m every %.2f m (top %.1f m), eye %.2f m,\n", g.nz,
-              g.z0_m, g.dz_m, g.top_m(), p.eye_height_m);
-  std::printf("           range %s %d posts, curvature %.5f, %d exact rings\n",
-              fields::to_string(p.range_shape), p.range_posts, p.curvature_coeff, p.exact_rings);
-  std::printf("\nlevel  grid              spacing  range      time    hull cells  Mcells/s/core  F_p min..max (mean)\n");
+  std::printf("           %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx, hf.ny, hf.spacing_m,
+              fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
+  std::printf("field      %d levels from %.1f m every %.2f m (top %.1f m), eye %.2f m,\n", g.nz, g.z0_m, g.dz_m,
+              g.top_m(), p.eye_height_m);
+  std::printf("           range %s %d posts, curvature %.5f, %d exact rings\n", fields::to_string(p.range_shape),
+              p.range_posts, p.curvature_coeff, p.exact_rings);
+  std::printf(
+      "\nlevel  grid              spacing  range      time    hull cells  Mcells/s/core  F_p min..max (mean)\n");
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const fields::VolumeGeometry& lg = levels[l].field.geometry;
     const LevelSummary s = summarise(levels[l]);
     char grid[64];
     std::snprintf(grid, sizeof grid, "%dx%dx%d", lg.nx, lg.ny, lg.nz);
-    std::printf("%5zu  %-16s %6.0f m  %7.0f m  %6.2f s  %10.3g  %13.1f  %.4f..%.4f (%.4f)\n", l,
-                grid, lg.spacing_m, p.range_posts * lg.spacing_m, stats[l].wall_s,
-                static_cast<double>(stats[l].hull_cells), stats[l].cells_per_s_per_core() / 1e6,
-                s.min_f, s.max_f, s.mean_f);
+    std::printf("%5zu  %-16s %6.0f m  %7.0f m  %6.2f s  %10.3g  %13.1f  %.4f..%.4f (%.4f)\n", l, grid, lg.spacing_m,
+                p.range_posts * lg.spacing_m, stats[l].wall_s, static_cast<double>(stats[l].hull_cells),
+                stats[l].cells_per_s_per_core() / 1e6, s.min_f, s.max_f, s.mean_f);
   }
   std::printf("\nsamples of level 0 (world x, y, z in the DEM's CRS, metres):\n");
   for (const Sample& s : samples(levels[0])) {
-    std::printf("  %-13s %+6.0f m  (%.1f, %.1f, %.1f)  F_p %.4f  grad (%.2e, %.2e, %.2e) /m\n",
-                s.where.c_str(), s.height_above_ground_m, s.x, s.y, s.z, s.f, s.gradient.x(),
-                s.gradient.y(), s.gradient.z());
+    std::printf("  %-13s %+6.0f m  (%.1f, %.1f, %.1f)  F_p %.4f  grad (%.2e, %.2e, %.2e) /m\n", s.where.c_str(),
+                s.height_above_ground_m, s.x, s.y, s.z, s.f, s.gradient.x(), s.gradient.y(), s.gradient.z());
   }
   std::printf("\ntotal %.2f s on %d threads\n", wall_s, stats[0].threads);
 }
 
 std::string summary_json(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
-                         const std::vector<LodLevel>& levels,
-                         const std::vector<fields::BuildStats>& stats, double wall_s) {
+                         const std::vector<LodLevel>& levels, const std::vector<fields::BuildStats>& stats,
+                         double wall_s) {
   using nlohmann::json;
   const fields::HeightRange hr = fields::height_range(hf);
   json j;
@@ -289,48 +285,43 @@ std::string summary_json(const BuildOptions& o, const Heightfield& hf, const Fie
 }
 
 void print_pack_summary(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
-                        const fields::ImportReport& imported,
-                        const storage::PackBuildReport& report) {
+                        const fields::ImportReport& imported, const storage::PackBuildReport& report) {
   const fields::HeightRange hr = fields::height_range(hf);
-  std::printf("DEM        %s (%s, %d x %d)\n", o.dem.c_str(), imported.source.driver.c_str(),
-              imported.source.nx, imported.source.ny);
+  std::printf("DEM        %s (%s, %d x %d)\n", o.dem.c_str(), imported.source.driver.c_str(), imported.source.nx,
+              imported.source.ny);
   if (!imported.steps.empty()) std::printf("import     %s\n", imported.steps.c_str());
-  std::printf("terrain    %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx, hf.ny,
-              hf.spacing_m, fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
-  std::printf("field      %d levels, range %s %d posts, eye %.2f m, curvature %.5f, %d exact rings\n",
-              p.nz, fields::to_string(p.range_shape), p.range_posts, p.eye_height_m,
-              p.curvature_coeff, p.exact_rings);
+  std::printf("terrain    %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx, hf.ny, hf.spacing_m,
+              fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
+  std::printf("field      %d levels, range %s %d posts, eye %.2f m, curvature %.5f, %d exact rings\n", p.nz,
+              fields::to_string(p.range_shape), p.range_posts, p.eye_height_m, p.curvature_coeff, p.exact_rings);
   std::printf("\nlevel  grid         spacing  range      F_p time  Mcells/s/core\n");
   for (std::size_t l = 0; l < report.levels.size(); ++l) {
     const double spacing = hf.spacing_m * static_cast<double>(1 << l);
     char grid[32];
     std::snprintf(grid, sizeof grid, "%dx%d", hf.nx >> l, hf.ny >> l);
-    std::printf("%5zu  %-11s %6.0f m  %7.0f m  %6.2f s  %13.1f\n", l, grid, spacing,
-                p.range_posts * spacing, report.levels[l].wall_s,
-                report.levels[l].cells_per_s_per_core() / 1e6);
+    std::printf("%5zu  %-11s %6.0f m  %7.0f m  %6.2f s  %13.1f\n", l, grid, spacing, p.range_posts * spacing,
+                report.levels[l].wall_s, report.levels[l].cells_per_s_per_core() / 1e6);
   }
-  std::printf("\nterrain force field %.2f s (band +-%.0f m, %d levels)\n", report.tff_s,
-              o.tff_offset_m, o.tff_levels);
+  std::printf("\nterrain force field %.2f s (band +-%.0f m, %d levels)\n", report.tff_s, o.tff_offset_m, o.tff_levels);
   std::printf("planning   %s\n", storage::describe(report.planning).c_str());
   std::printf("pack       %s, %.1f MiB, written in %.2f s\n", o.out.c_str(),
               static_cast<double>(report.file_bytes) / (1024.0 * 1024.0), report.wall_s);
 }
 
-int run_pack_build(const BuildOptions& o, const BuildInput& in, const Heightfield& hf,
-                   const FieldParams& params, const fields::ImportReport& imported) {
+int run_pack_build(const BuildOptions& o, const BuildInput& in, const Heightfield& hf, const FieldParams& params,
+                   const fields::ImportReport& imported) {
   storage::PackBuildParams pp;
   pp.field = params;
   pp.lod_levels = o.lod;
-  pp.encoding = o.encoding == "float32" ? storage::VisibilityEncoding::float32
-                                        : storage::VisibilityEncoding::uint16;
+  pp.encoding = o.encoding == "float32" ? storage::VisibilityEncoding::float32 : storage::VisibilityEncoding::uint16;
   pp.tff.band_offset_m = o.tff_offset_m;
   pp.tff.band_levels = o.tff_levels;
   pp.crs_name = fields::crs_name(hf.crs_wkt);
   pp.planning_margin_m = in.planning_margin_m;
   storage::PackBuildReport report;
   Progress progress("building " + o.out);
-  const Status st = storage::build_pack(hf, pp, build_source_json(o, in, imported), o.out,
-                                        [&](double f) { progress.update(f); }, &report);
+  const Status st = storage::build_pack(
+      hf, pp, build_source_json(o, in, imported), o.out, [&](double f) { progress.update(f); }, &report);
   if (!st.ok()) return fail("build", st);
   progress.finish();
   print_pack_summary(o, hf, params, imported, report);
@@ -353,14 +344,13 @@ int run_build(const BuildOptions& o) {
   std::vector<fields::BuildStats> stats;
   Result<std::vector<LodLevel>> levels = [&] {
     Progress progress("building F_p");
-    auto r = fields::build_pyramid_dense(*hf, *params, o.lod,
-                                         [&](double f) { progress.update(f); }, &stats);
+    auto r = fields::build_pyramid_dense(
+        *hf, *params, o.lod, [&](double f) { progress.update(f); }, &stats);
     if (r.ok()) progress.finish();
     return r;
   }();
   if (!levels.ok()) return fail("build", levels.status());
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.json) {
     std::printf("%s", summary_json(o, *hf, *params, *levels, stats, wall_s).c_str());
   } else {
@@ -377,38 +367,29 @@ int run_build(const BuildOptions& o) {
 
 Runner add_build_command(CLI::App& app) {
   auto o = std::make_shared<BuildOptions>();
-  CLI::App* c = app.add_subcommand(
-      "build",
-      "Build the visibility field F_p of a DEM, its levels of detail and the terrain force field "
-      "into a field pack (-o), or in memory with a summary only");
-  c->add_option("DEM", o->dem,
-                "Terrain: GeoTIFF, SRTM .hgt, USGS .dem, ESRI or GRASS ASCII grid, DTED")
-      ->required();
+  CLI::App* c =
+      app.add_subcommand("build",
+                         "Build the visibility field F_p of a DEM, its levels of detail and the terrain force field "
+                         "into a field pack (-o), or in memory with a summary only");
+  c->add_option("DEM", o->dem, "Terrain: GeoTIFF, SRTM .hgt, USGS .dem, ESRI or GRASS ASCII grid, DTED")->required();
   c->add_option("-o,--output", o->out, "Field pack to write (written whole or not at all)");
   c->add_option("--levels", o->levels, "Voxel levels in height (2..255)")->capture_default_str();
-  c->add_option("--ceiling", o->ceiling_m, "Height of the top level above the highest post, m")
-      ->capture_default_str();
+  c->add_option("--ceiling", o->ceiling_m, "Height of the top level above the highest post, m")->capture_default_str();
   c->add_option("--eye-height", o->eye_m, "Observer eye above its post, m")->capture_default_str();
-  c->add_option("--range", o->range_posts, "Range in posts: cube half-side or sphere radius")
-      ->capture_default_str();
-  c->add_option("--range-shape", o->range_shape, "none, cube (the paper's) or sphere")
-      ->capture_default_str();
-  c->add_option("--curvature", o->curvature,
-                "Earth curvature and refraction coefficient, 0 off (0.85714 is usual)")
+  c->add_option("--range", o->range_posts, "Range in posts: cube half-side or sphere radius")->capture_default_str();
+  c->add_option("--range-shape", o->range_shape, "none, cube (the paper's) or sphere")->capture_default_str();
+  c->add_option("--curvature", o->curvature, "Earth curvature and refraction coefficient, 0 off (0.85714 is usual)")
       ->capture_default_str();
   c->add_option("--weights", o->weights, "Observer likelihood raster in [0, 1] on the DEM's grid");
   c->add_option("--lod", o->lod, "Levels of detail (each halves the grid)")->capture_default_str();
   c->add_option("--threads", o->threads, "Worker threads, 0 for all cores")->capture_default_str();
-  c->add_option("--exact-rings", o->exact_rings, "Rings around each observer evaluated exactly")
-      ->capture_default_str();
+  c->add_option("--exact-rings", o->exact_rings, "Rings around each observer evaluated exactly")->capture_default_str();
   c->add_option("--encoding", o->encoding, "F_p in the pack: uint16 (quantised) or float32")
       ->check(CLI::IsMember({"uint16", "float32"}))
       ->capture_default_str();
-  c->add_option("--tff-offset", o->tff_offset_m,
-                "Terrain force field band: this far below and above the terrain, m")
+  c->add_option("--tff-offset", o->tff_offset_m, "Terrain force field band: this far below and above the terrain, m")
       ->capture_default_str();
-  c->add_option("--tff-levels", o->tff_levels, "Terrain force field samples per column")
-      ->capture_default_str();
+  c->add_option("--tff-levels", o->tff_levels, "Terrain force field samples per column")->capture_default_str();
   add_import_options(c, o->import);
   c->add_option("--area", o->area,
                 "Plan over the box XMIN YMIN XMAX YMAX (output CRS, m): import it with the planning "
@@ -417,7 +398,8 @@ Runner add_build_command(CLI::App& app) {
   c->add_option("--planning-margin", o->planning_margin_m,
                 "Planning bounds: this far inside the DEM's posts on every side, m (default: the range "
                 "in metres; for --range-shape none, 1/8 of the DEM's smaller side)");
-  c->add_option("--max-memory", o->max_memory_mib, "Refuse builds needing more working memory, MiB (at most 16777216, 16 TiB)")
+  c->add_option("--max-memory", o->max_memory_mib,
+                "Refuse builds needing more working memory, MiB (at most 16777216, 16 TiB)")
       ->capture_default_str();
   c->add_flag("--json", o->json, "Print the summary as one JSON object");
   c->add_option("--json-file", o->json_file, "Also write the JSON summary to this file");

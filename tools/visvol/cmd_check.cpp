@@ -6,10 +6,10 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "app/mission_options.hpp"
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "app/mission_options.hpp"
 #include "path_io.hpp"
 #include "planning_pack.hpp"
 #include "rt/rope/field_forces.hpp"
@@ -35,8 +35,8 @@ void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path) {
     for (std::size_t k = 0; k < v.seen_by.size(); ++k) {
       if (v.seen_by[k]) seen += (seen.empty() ? "" : ",") + std::to_string(k + 1);
     }
-    std::printf("%5zu %12.1f %12.1f %8.1f %8.5f %9.1f %7.1f %9s  %s\n", i, path[i].x(), path[i].y(), path[i].z(),
-                v.fp, v.clearance_m, v.climb_deg,
+    std::printf("%5zu %12.1f %12.1f %8.1f %8.5f %9.1f %7.1f %9s  %s\n", i, path[i].x(), path[i].y(), path[i].z(), v.fp,
+                v.clearance_m, v.climb_deg,
                 std::isfinite(v.turn_radius_m) ? std::to_string(std::lround(v.turn_radius_m)).c_str() : "-",
                 seen.empty() ? "-" : seen.c_str());
   }

@@ -11,11 +11,11 @@
 #include <sstream>
 
 #include "cli.hpp"
-#include "rt/base/atomic_file.hpp"
 #include "commands.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/sampler.hpp"
 #include "import_cli.hpp"
+#include "rt/base/atomic_file.hpp"
 #include "rt/base/input_file.hpp"
 #include "storage/pack_reader.hpp"
 #include "storage/volume_export.hpp"
@@ -50,8 +50,10 @@ nlohmann::json planning_json(const storage::PlanningBounds& p) {
 // "planning   x A..B, y C..D (margin M m)", saying so when derived or empty.
 void print_planning(const storage::PlanningBounds& p) {
   if (p.box.empty()) {
-    std::printf("planning   none: a margin of %.0f m leaves nothing of the grid (derived; the pack "
-                "predates recorded bounds)\n", p.margin_m);
+    std::printf(
+        "planning   none: a margin of %.0f m leaves nothing of the grid (derived; the pack "
+        "predates recorded bounds)\n",
+        p.margin_m);
     return;
   }
   std::printf("planning   %s%s\n", storage::describe(p).c_str(),
@@ -88,8 +90,12 @@ nlohmann::json pack_info_json(const Pack& pack) {
   j["created_utc"] = member(meta, "created_utc", "");
   for (int l = 0; l < pack.level_count(); ++l) {
     const storage::LevelEntry& e = pack.level(l);
-    j["levels"].push_back({{"nx", e.nx}, {"ny", e.ny}, {"nz", e.nz}, {"spacing_m", e.spacing_m},
-                           {"origin_x", e.origin_x}, {"origin_y", e.origin_y},
+    j["levels"].push_back({{"nx", e.nx},
+                           {"ny", e.ny},
+                           {"nz", e.nz},
+                           {"spacing_m", e.spacing_m},
+                           {"origin_x", e.origin_x},
+                           {"origin_y", e.origin_y},
                            {"range_m", e.range_posts * e.spacing_m}});
   }
   return j;
@@ -101,23 +107,21 @@ void print_pack_info(const Pack& pack) {
   std::printf("pack       %s (format %u, %s)\n", pack.path().c_str(), pack.header().version,
               j["tool"].get<std::string>().c_str());
   std::printf("size       %.1f MiB, %llu tiles, F_p %s\n", double(pack.file_bytes()) / 1048576.0,
-              static_cast<unsigned long long>(pack.tile_count()),
-              j["visibility_encoding"].get<std::string>().c_str());
-  std::printf("crs        %s\n", pack.metadata().crs_name.empty() ? "(local metres)" : pack.metadata().crs_name.c_str());
-  std::printf("grid       %d x %d posts x %d levels, %.2f m; post (0, 0) at (%.2f, %.2f)\n", l0.nx,
-              l0.ny, l0.nz, l0.spacing_m, l0.origin_x, l0.origin_y);
+              static_cast<unsigned long long>(pack.tile_count()), j["visibility_encoding"].get<std::string>().c_str());
+  std::printf("crs        %s\n",
+              pack.metadata().crs_name.empty() ? "(local metres)" : pack.metadata().crs_name.c_str());
+  std::printf("grid       %d x %d posts x %d levels, %.2f m; post (0, 0) at (%.2f, %.2f)\n", l0.nx, l0.ny, l0.nz,
+              l0.spacing_m, l0.origin_x, l0.origin_y);
   std::printf("heights    levels from %.2f m every %.3f m (top %.2f m)\n", l0.z0_m, l0.dz_m,
               l0.z0_m + (l0.nz - 1) * l0.dz_m);
-  std::printf("tff band   +-%.1f m, %u samples a column\n", pack.header().band_offset_m,
-              pack.header().band_levels);
+  std::printf("tff band   +-%.1f m, %u samples a column\n", pack.header().band_offset_m, pack.header().band_levels);
   print_planning(pack.metadata().planning);
   std::printf("build      %s\n", j["build"].dump().c_str());
   std::printf("source     %s\n", j["source"].dump().c_str());
   std::printf("levels of detail:\n");
   for (int l = 0; l < pack.level_count(); ++l) {
     const storage::LevelEntry& e = pack.level(l);
-    std::printf("  %d: %d x %d posts, %.1f m, range %.0f m\n", l, e.nx, e.ny, e.spacing_m,
-                e.range_posts * e.spacing_m);
+    std::printf("  %d: %d x %d posts, %.1f m, range %.0f m\n", l, e.nx, e.ny, e.spacing_m, e.range_posts * e.spacing_m);
   }
 }
 
@@ -148,26 +152,34 @@ int run_info(const InfoOptions& o) {
     nlohmann::json j;
     j["path"] = o.path;
     j["driver"] = rep.source.driver;
-    j["source"] = {{"nx", rep.source.nx}, {"ny", rep.source.ny}, {"pixel_size", {gt[1], gt[5]}},
-                   {"crs", rep.source.crs_name}, {"vertical_unit", rep.source.vertical_unit},
+    j["source"] = {{"nx", rep.source.nx},
+                   {"ny", rep.source.ny},
+                   {"pixel_size", {gt[1], gt[5]}},
+                   {"crs", rep.source.crs_name},
+                   {"vertical_unit", rep.source.vertical_unit},
                    {"nodata", rep.source.has_nodata ? nlohmann::json(rep.source.nodata) : nlohmann::json()}};
-    j["imported"] = {{"nx", hf->nx}, {"ny", hf->ny}, {"cell_size_m", hf->spacing_m},
-                     {"origin_x", hf->origin_x}, {"origin_y", hf->origin_y},
-                     {"crs", rep.output_crs}, {"crs_wkt", hf->crs_wkt},
-                     {"height_min_m", hr.min_m}, {"height_max_m", hr.max_m}, {"steps", rep.steps}};
+    j["imported"] = {{"nx", hf->nx},
+                     {"ny", hf->ny},
+                     {"cell_size_m", hf->spacing_m},
+                     {"origin_x", hf->origin_x},
+                     {"origin_y", hf->origin_y},
+                     {"crs", rep.output_crs},
+                     {"crs_wkt", hf->crs_wkt},
+                     {"height_min_m", hr.min_m},
+                     {"height_max_m", hr.max_m},
+                     {"steps", rep.steps}};
     std::printf("%s\n", j.dump(2).c_str());
     return kExitOk;
   }
   std::printf("DEM        %s (%s)\n", o.path.c_str(), rep.source.driver.c_str());
-  std::printf("source     %d x %d, pixel %.6g x %.6g, %s, heights in %s%s\n", rep.source.nx,
-              rep.source.ny, gt[1], -gt[5], rep.source.crs_name.empty() ? "no CRS" : rep.source.crs_name.c_str(),
+  std::printf("source     %d x %d, pixel %.6g x %.6g, %s, heights in %s%s\n", rep.source.nx, rep.source.ny, gt[1],
+              -gt[5], rep.source.crs_name.empty() ? "no CRS" : rep.source.crs_name.c_str(),
               rep.source.vertical_unit.empty() ? "m" : rep.source.vertical_unit.c_str(),
               rep.source.has_nodata ? (", nodata " + std::to_string(rep.source.nodata)).c_str() : "");
   if (!rep.steps.empty()) std::printf("import     %s\n", rep.steps.c_str());
-  std::printf("terrain    %d x %d posts, %.2f m spacing, %s\n", hf->nx, hf->ny, hf->spacing_m,
-              rep.output_crs.c_str());
-  std::printf("           post (0, 0) at (%.2f, %.2f), heights %.1f..%.1f m\n", hf->origin_x,
-              hf->origin_y, hr.min_m, hr.max_m);
+  std::printf("terrain    %d x %d posts, %.2f m spacing, %s\n", hf->nx, hf->ny, hf->spacing_m, rep.output_crs.c_str());
+  std::printf("           post (0, 0) at (%.2f, %.2f), heights %.1f..%.1f m\n", hf->origin_x, hf->origin_y, hr.min_m,
+              hr.max_m);
   return kExitOk;
 }
 
@@ -192,8 +204,8 @@ struct SampleOptions {
 
 int run_sample(const SampleOptions& o) {
   if (o.layer != "visibility" && o.layer != "gradient" && o.layer != "height" && o.layer != "tff") {
-    return fail("sample", invalid_argument("--layer '" + o.layer +
-                                           "' is not one of visibility, gradient, height, tff"));
+    return fail("sample",
+                invalid_argument("--layer '" + o.layer + "' is not one of visibility, gradient, height, tff"));
   }
   Result<std::shared_ptr<const Pack>> pack = Pack::open(o.path);
   if (!pack.ok()) return fail("sample", pack.status());
@@ -211,10 +223,9 @@ int run_sample(const SampleOptions& o) {
     std::istringstream in(line);
     double x, y, z;
     std::string rest;
-    if (!(in >> x >> y >> z) || (in >> rest) || !std::isfinite(x) || !std::isfinite(y) ||
-        !std::isfinite(z)) {
-      std::fprintf(stderr, "visvol sample: line %ld: expected three finite numbers 'x y z', got '%s'\n",
-                   line_no, line.c_str());
+    if (!(in >> x >> y >> z) || (in >> rest) || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+      std::fprintf(stderr, "visvol sample: line %ld: expected three finite numbers 'x y z', got '%s'\n", line_no,
+                   line.c_str());
       std::printf("nan\n");
       ++bad;
       continue;
@@ -261,10 +272,11 @@ int run_export(const ExportOptions& o) {
   const storage::ExportedVolume v = storage::extract_layer(*level, *layer);
   const Status st = storage::write_volume(o.out, v, *format);
   if (!st.ok()) return fail("export", st);
-  std::printf("wrote %s: %s, %d x %d x %d x %d component(s), origin (%.2f, %.2f, %.2f) m, spacing "
-              "(%.2f, %.2f, %.3f) m\n",
-              o.out.c_str(), v.name.c_str(), v.nx, v.ny, v.nz, v.components, v.origin[0],
-              v.origin[1], v.origin[2], v.spacing[0], v.spacing[1], v.spacing[2]);
+  std::printf(
+      "wrote %s: %s, %d x %d x %d x %d component(s), origin (%.2f, %.2f, %.2f) m, spacing "
+      "(%.2f, %.2f, %.3f) m\n",
+      o.out.c_str(), v.name.c_str(), v.nx, v.ny, v.nz, v.components, v.origin[0], v.origin[1], v.origin[2],
+      v.spacing[0], v.spacing[1], v.spacing[2]);
   return kExitOk;
 }
 
@@ -289,8 +301,7 @@ Runner add_verify_command(CLI::App& app) {
 Runner add_sample_command(CLI::App& app) {
   auto o = std::make_shared<SampleOptions>();
   CLI::App* c = app.add_subcommand(
-      "sample",
-      "Read lines 'x y z' (world metres in the pack's CRS) on stdin and print one line per point");
+      "sample", "Read lines 'x y z' (world metres in the pack's CRS) on stdin and print one line per point");
   c->add_option("PACK", o->path, "Field pack")->required();
   c->add_option("--layer", o->layer,
                 "visibility (F_p), gradient (per metre: gx gy gz), height (m), tff (outward "
@@ -302,8 +313,8 @@ Runner add_sample_command(CLI::App& app) {
 
 Runner add_export_command(CLI::App& app) {
   auto o = std::make_shared<ExportOptions>();
-  CLI::App* c = app.add_subcommand(
-      "export", "Write a layer as MetaImage or VTK image data for ParaView, 3D Slicer, VolView");
+  CLI::App* c =
+      app.add_subcommand("export", "Write a layer as MetaImage or VTK image data for ParaView, 3D Slicer, VolView");
   c->add_option("PACK", o->path, "Field pack")->required();
   c->add_option("--layer", o->layer, "visibility, gradient, height, area or tff")->capture_default_str();
   c->add_option("--lod", o->lod, "Level of detail (0 is the finest)")->capture_default_str();

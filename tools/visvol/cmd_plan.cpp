@@ -76,8 +76,8 @@ Status check_init_points(const std::string& file_name, const PathFile& file, con
     if (file.has_heights) msg << ", " << v.z();
     msg << ") ";
     if (!b.contains(v.x(), v.y())) {
-      msg << "is outside the pack's planning bounds (x " << b.xmin_m << ".." << b.xmax_m << ", y " << b.ymin_m
-          << ".." << b.ymax_m << ")";
+      msg << "is outside the pack's planning bounds (x " << b.xmin_m << ".." << b.xmax_m << ", y " << b.ymin_m << ".."
+          << b.ymax_m << ")";
       return invalid_argument(msg.str());
     }
     if (!file.has_heights) continue;
@@ -159,9 +159,9 @@ int run_plan(const PlanOptions& o) {
       fp = finest.visibility(v.x(), v.y(), v.z());
       clearance_m = v.z() - finest.height(v.x(), v.y());
     };
-    Result<std::unique_ptr<PlanPublisher>> p = PlanPublisher::create(
-        o.dds, terrain_info(*pack, o.pack),
-        r.objective == rt::Objective::show ? msg::Objective::show : msg::Objective::hide, probe);
+    Result<std::unique_ptr<PlanPublisher>> p =
+        PlanPublisher::create(o.dds, terrain_info(*pack, o.pack),
+                              r.objective == rt::Objective::show ? msg::Objective::show : msg::Objective::hide, probe);
     if (!p.ok()) return fail("plan", p.status());
     publisher = std::move(*p);
   }
@@ -205,27 +205,39 @@ int run_plan(const PlanOptions& o) {
   const rt::PathMetrics& b = res->final_metrics;
   const rt::PathCheck& check = res->final_check;
   if (o.json) {
-    nlohmann::json j = {{"objective", report.objective}, {"model", report.model}, {"init", o.init},
-                        {"segments", r.segments}, {"fc_start", a.fc}, {"fc_end", b.fc},
+    nlohmann::json j = {{"objective", report.objective},
+                        {"model", report.model},
+                        {"init", o.init},
+                        {"segments", r.segments},
+                        {"fc_start", a.fc},
+                        {"fc_end", b.fc},
                         {"fc_start_met_all", res->initial_check.all_met},
-                        {"length_start_m", a.length_m}, {"length_m", b.length_m},
+                        {"length_start_m", a.length_m},
+                        {"length_m", b.length_m},
                         {"vertices", res->final_path.size()},
-                        {"min_clearance_start_m", a.min_clearance_m}, {"min_clearance_m", b.min_clearance_m},
-                        {"chosen", res->chosen}, {"candidates", res->candidates},
-                        {"simulated_s", res->simulated_s}, {"equilibrium_s", res->equilibrium_s},
-                        {"converged", res->converged}, {"diverged", res->diverged}, {"wall_s", res->wall_s},
+                        {"min_clearance_start_m", a.min_clearance_m},
+                        {"min_clearance_m", b.min_clearance_m},
+                        {"chosen", res->chosen},
+                        {"candidates", res->candidates},
+                        {"simulated_s", res->simulated_s},
+                        {"equilibrium_s", res->equilibrium_s},
+                        {"converged", res->converged},
+                        {"diverged", res->diverged},
+                        {"wall_s", res->wall_s},
                         {"outputs", written}};
     j.update(check_json(check, r.envelope));
     const fields::Bounds2D& box = planning.bounds;
-    j["planning_bounds"] = {{"xmin_m", box.xmin_m}, {"ymin_m", box.ymin_m}, {"xmax_m", box.xmax_m},
-                            {"ymax_m", box.ymax_m}};
+    j["planning_bounds"] = {
+        {"xmin_m", box.xmin_m}, {"ymin_m", box.ymin_m}, {"xmax_m", box.xmax_m}, {"ymax_m", box.ymax_m}};
     if (res->has_global) {
       j["fc_global_search"] = res->global.fc;
       j["global_search_level"] = res->global_level;
     }
     if (publisher) {
-      j["dds"] = {{"domain", o.dds.domain_id}, {"paths_published", publisher->published()},
-                  {"publish_errors", publisher->errors()}, {"subscribers", publisher->subscribers()},
+      j["dds"] = {{"domain", o.dds.domain_id},
+                  {"paths_published", publisher->published()},
+                  {"publish_errors", publisher->errors()},
+                  {"subscribers", publisher->subscribers()},
                   {"delivered", delivery.ok()}};
     }
     std::printf("%s\n", j.dump(2).c_str());
@@ -240,8 +252,9 @@ int run_plan(const PlanOptions& o) {
     std::printf("length     %.0f m, %zu waypoints, %.0f s at %.1f m/s\n", b.length_m, res->final_path.size(),
                 check.duration_s, r.envelope.speed_mps);
     std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %d levels), %.2f s wall\n",
-                res->diverged ? "NO (the rope diverged; the best path before stands)"
-                : res->converged ? "at equilibrium" : "NOT at equilibrium (time limit)",
+                res->diverged    ? "NO (the rope diverged; the best path before stands)"
+                : res->converged ? "at equilibrium"
+                                 : "NOT at equilibrium (time limit)",
                 res->equilibrium_s, res->simulated_s, res->first_level + 1, res->wall_s);
     print_check(check, r.envelope);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
@@ -266,8 +279,8 @@ int run_plan(const PlanOptions& o) {
 
 Runner add_plan_command(CLI::App& app) {
   auto o = std::make_shared<PlanOptions>();
-  CLI::App* c = app.add_subcommand(
-      "plan", "Settle a force-directed rope from A to B in a pack's field and write the path");
+  CLI::App* c =
+      app.add_subcommand("plan", "Settle a force-directed rope from A to B in a pack's field and write the path");
   c->add_option("PACK", o->pack, "Field pack")->required();
   c->add_option("--from", o->from, "Start X Y Z (pack CRS, m; Z above the DEM's datum)")->expected(3)->required();
   c->add_option("--to", o->to, "End X Y Z")->expected(3)->required();
@@ -317,8 +330,7 @@ Runner add_plan_command(CLI::App& app) {
   c->add_option("--namespace", o->dds.topic_namespace, "Topic namespace for --publish (ROS style)");
   c->add_option("--publish-hz", o->dds.rate_hz, "Path updates per second at most while settling")
       ->capture_default_str();
-  c->add_option("--linger", o->dds.linger_s,
-                "Seconds to wait at the end for subscribers to acknowledge the last path")
+  c->add_option("--linger", o->dds.linger_s, "Seconds to wait at the end for subscribers to acknowledge the last path")
       ->capture_default_str();
   return [o] { return run_plan(*o); };
 }

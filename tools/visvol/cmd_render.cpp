@@ -81,8 +81,8 @@ struct Extent {
   std::string describe(double x, double y) const {
     char text[240];
     std::snprintf(text, sizeof text, "(%.1f, %.1f) is %.0f m outside the pack (x %.1f..%.1f, y %.1f..%.1f%s)", x, y,
-                  outside_m(x, y), x0, x1, y0, y1, outside_m(x, y) > 0.5 * std::max(x1 - x0, y1 - y0)
-                                                        ? "; wrong CRS?" : "");
+                  outside_m(x, y), x0, x1, y0, y1,
+                  outside_m(x, y) > 0.5 * std::max(x1 - x0, y1 - y0) ? "; wrong CRS?" : "");
     return text;
   }
 };
@@ -100,8 +100,9 @@ Result<RenderPath> read_render_path(const std::string& file, const std::string& 
   Result<PathFile> read = read_path_file(file, crs_wkt);
   if (!read.ok()) return read.status();
   if (!read->has_heights) {
-    return invalid_argument(file + ": points have no heights; render needs 'x y z' per line, a plan CSV or a "
-                                   "GeoJSON LineString with heights");
+    return invalid_argument(file +
+                            ": points have no heights; render needs 'x y z' per line, a plan CSV or a "
+                            "GeoJSON LineString with heights");
   }
   if (read->points.size() > kMaxRenderPathPoints) {
     return invalid_argument(file + ": " + std::to_string(read->points.size()) + " points; at most " +
@@ -217,8 +218,8 @@ void print_path(const std::string& file, const RenderPath& path) {
                        : path.format == PathFormat::plan_csv ? "plan CSV"
                                                              : "x y z text";
   const PathPoint &a = path.points.front(), &b = path.points.back();
-  std::printf("path  %zu points from %s (%s): start (%.2f, %.2f, %.2f), end (%.2f, %.2f, %.2f) m\n",
-              path.points.size(), file.c_str(), format, a.x_m, a.y_m, a.z_m, b.x_m, b.y_m, b.z_m);
+  std::printf("path  %zu points from %s (%s): start (%.2f, %.2f, %.2f), end (%.2f, %.2f, %.2f) m\n", path.points.size(),
+              file.c_str(), format, a.x_m, a.y_m, a.z_m, b.x_m, b.y_m, b.z_m);
 }
 
 int run_render(const RenderOptions& o) {
@@ -339,9 +340,10 @@ Runner add_render_command(CLI::App& app) {
   c->add_option("--visible-to", o->visible_to, "Mark a point X Y Z (m) the path stays visible to; repeatable")
       ->expected(3)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  CLI::Option* height = c->add_option("--height-above-ground", o->height_above_ground_m,
-                "Colour the terrain by F_p this many metres above the ground (default: at the path's mean "
-                "altitude, or 30 m without a path)");
+  CLI::Option* height =
+      c->add_option("--height-above-ground", o->height_above_ground_m,
+                    "Colour the terrain by F_p this many metres above the ground (default: at the path's mean "
+                    "altitude, or 30 m without a path)");
   c->add_option("--exaggeration", o->exaggeration,
                 "Vertical exaggeration of the 3D views, 0..1000 (0: automatic, the field a fifth as tall as wide, "
                 "1..10)")

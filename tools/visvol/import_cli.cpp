@@ -21,11 +21,9 @@ void add_import_options(CLI::App* app, ImportCli& o) {
                   "the UTM zone of the centre for a geographic DEM");
   app->add_option("--assume-srs", o.assume_srs,
                   "CRS of a DEM that carries none (e.g. EPSG:4326 for an ESRI grid without .prj)");
-  app->add_option("--spacing", o.spacing_m, "Resample to this post spacing, m (0: keep)")
-      ->capture_default_str();
+  app->add_option("--spacing", o.spacing_m, "Resample to this post spacing, m (0: keep)")->capture_default_str();
   app->add_option("--crop", o.crop, "Keep the box XMIN YMIN XMAX YMAX (output CRS, m)")->expected(4);
-  app->add_option("--resampling", o.resampling,
-                  "near, bilinear, cubic, cubicspline, lanczos or average")
+  app->add_option("--resampling", o.resampling, "near, bilinear, cubic, cubicspline, lanczos or average")
       ->capture_default_str();
 }
 
@@ -40,8 +38,7 @@ fields::ImportOptions import_options(const ImportCli& o) {
   return options;
 }
 
-Result<fields::Heightfield> import(const std::string& path, const ImportCli& o,
-                                   fields::ImportReport* report) {
+Result<fields::Heightfield> import(const std::string& path, const ImportCli& o, fields::ImportReport* report) {
   return fields::import_dem(path, import_options(o), report);
 }
 
@@ -72,8 +69,7 @@ Result<std::string> sha256_file(const std::string& path) {
   return out;
 }
 
-std::string source_json(const std::string& path, const ImportCli& o,
-                        const fields::ImportReport& report) {
+std::string source_json(const std::string& path, const ImportCli& o, const fields::ImportReport& report) {
   nlohmann::json j;
   j["path"] = path;
   const Result<std::string> sha = sha256_file(path);
@@ -82,12 +78,8 @@ std::string source_json(const std::string& path, const ImportCli& o,
   j["size"] = {report.source.nx, report.source.ny};
   j["crs"] = report.source.crs_name;
   j["vertical_unit"] = report.source.vertical_unit.empty() ? "m" : report.source.vertical_unit;
-  j["import"] = {{"fill_nodata", o.fill_nodata},
-                 {"t_srs", o.t_srs},
-                 {"assume_srs", o.assume_srs},
-                 {"spacing_m", o.spacing_m},
-                 {"crop", o.crop},
-                 {"resampling", o.resampling},
+  j["import"] = {{"fill_nodata", o.fill_nodata}, {"t_srs", o.t_srs}, {"assume_srs", o.assume_srs},
+                 {"spacing_m", o.spacing_m},     {"crop", o.crop},   {"resampling", o.resampling},
                  {"steps", report.steps}};
   return j.dump();
 }

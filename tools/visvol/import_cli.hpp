@@ -24,13 +24,11 @@ void add_import_options(CLI::App* app, ImportCli& o);
 fields::ImportOptions import_options(const ImportCli& o);
 
 // Imports `path` with the options, naming the file in errors.
-Result<fields::Heightfield> import(const std::string& path, const ImportCli& o,
-                                   fields::ImportReport* report);
+Result<fields::Heightfield> import(const std::string& path, const ImportCli& o, fields::ImportReport* report);
 
 // A JSON object describing the source and how it was imported (for pack
 // metadata): path, SHA-256, driver, CRS, options.
-std::string source_json(const std::string& path, const ImportCli& o,
-                        const fields::ImportReport& report);
+std::string source_json(const std::string& path, const ImportCli& o, const fields::ImportReport& report);
 
 // SHA-256 of a file as lowercase hex, or an error naming it.
 Result<std::string> sha256_file(const std::string& path);

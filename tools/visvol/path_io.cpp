@@ -323,8 +323,9 @@ Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path,
   VISVOL_RETURN_IF_ERROR(check_count(out, path));
   VISVOL_RETURN_IF_ERROR(read_vertex_fp(properties, out.points.size(), path, out.fp));
   if (crs_wkt.empty()) {
-    return invalid_argument(path + ": a GeoJSON path is in WGS84 longitude and latitude, and there is no pack CRS "
-                                   "to convert it to (use the CSV or x y z text in the pack's CRS)");
+    return invalid_argument(path +
+                            ": a GeoJSON path is in WGS84 longitude and latitude, and there is no pack CRS "
+                            "to convert it to (use the CSV or x y z text in the pack's CRS)");
   }
   // RFC 7946: heights above the WGS84 ellipsoid; the pack's are the DEM's
   if (out.has_heights && !heights_are_orthometric(properties)) {
@@ -378,8 +379,8 @@ Status read_home_altitude(const nlohmann::json& mission, const std::string& wher
   }
   for (std::size_t k = 0; k < 3; ++k) {
     if (!(*it)[k].is_number() || !std::isfinite((*it)[k].get<double>())) {
-      return invalid_argument(where + "mission.plannedHomePosition[" + std::to_string(k) + "] " +
-                              json_brief((*it)[k]) + " is not a finite number");
+      return invalid_argument(where + "mission.plannedHomePosition[" + std::to_string(k) + "] " + json_brief((*it)[k]) +
+                              " is not a finite number");
     }
   }
   altitude_m = (*it)[2].get<double>();
@@ -461,9 +462,10 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     double altitude_m = v[2];
     if (frame == mavlink::kFrameGlobalRelativeAlt || frame == mavlink::kFrameGlobalRelativeAltInt) {
       if (!have_home) {
-        VISVOL_RETURN_IF_ERROR(read_home_altitude(mission, where + "frame " + std::to_string(frame) + " (" +
-                                                               frame_name(static_cast<int>(frame)) +
-                                                               ", above home) needs the home altitude: ",
+        VISVOL_RETURN_IF_ERROR(read_home_altitude(mission,
+                                                  where + "frame " + std::to_string(frame) + " (" +
+                                                      frame_name(static_cast<int>(frame)) +
+                                                      ", above home) needs the home altitude: ",
                                                   home_altitude_m));
         have_home = true;
       }
@@ -482,8 +484,9 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                             std::to_string(items.size()) + "); a path needs at least 2");
   }
   if (crs_wkt.empty()) {
-    return invalid_argument(file + "a .plan is in WGS84 latitude and longitude, and there is no pack CRS to convert "
-                                   "it to");
+    return invalid_argument(file +
+                            "a .plan is in WGS84 latitude and longitude, and there is no pack CRS to convert "
+                            "it to");
   }
   // altitudes above mean sea level: the DEM's heights, kept
   Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
@@ -542,8 +545,8 @@ Result<std::unique_ptr<OGRCoordinateTransformation>> wgs84_transform(const std::
   wgs84.SetWellKnownGeogCS("WGS84");
   pack.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  std::unique_ptr<OGRCoordinateTransformation> ct(
-      to_wgs84 ? OGRCreateCoordinateTransformation(&pack, &wgs84) : OGRCreateCoordinateTransformation(&wgs84, &pack));
+  std::unique_ptr<OGRCoordinateTransformation> ct(to_wgs84 ? OGRCreateCoordinateTransformation(&pack, &wgs84)
+                                                           : OGRCreateCoordinateTransformation(&wgs84, &pack));
   if (!ct) return Status(Errc::unsupported, "no transformation between the pack's CRS and WGS84");
   return ct;
 }
@@ -580,7 +583,7 @@ Result<std::vector<Vec3>> from_wgs84(const std::vector<Vec3>& lon_lat_h, const s
 namespace {
 
 constexpr const char* kOrthometricCrs = "EPSG:4326+5773";  // WGS 84 + EGM96 height
-constexpr const char* kEllipsoidalCrs = "EPSG:4979";        // WGS 84 (3D): height above the ellipsoid
+constexpr const char* kEllipsoidalCrs = "EPSG:4979";       // WGS 84 (3D): height above the ellipsoid
 // The grid PROJ's EPSG transformation uses, and its name before PROJ 7.
 constexpr const char* kGeoidGridNames = "us_nga_egm96_15.tif (egm96_15.gtx before PROJ 7)";
 
@@ -750,8 +753,7 @@ Status validate_report(const PathReport& r) {
     return invalid_argument(vehicle + "max-climb " + std::to_string(v.max_climb_deg) + " deg is outside (0, 90]");
   }
   if (!(std::isfinite(v.min_turn_radius_m) && v.min_turn_radius_m >= 0)) {
-    return invalid_argument(vehicle + "min-turn-radius " + std::to_string(v.min_turn_radius_m) +
-                            " m is not 0 or more");
+    return invalid_argument(vehicle + "min-turn-radius " + std::to_string(v.min_turn_radius_m) + " m is not 0 or more");
   }
   if (!std::isfinite(r.home_ground_m)) return invalid_argument("path outputs: home_ground_m is not set");
   if (!std::isfinite(r.land_ground_m)) return invalid_argument("path outputs: land_ground_m is not set");
@@ -770,8 +772,7 @@ Status check_plan_ground(const PathReport& r) {
   return check("land_ground_m", r.land_ground_m, r.vertices.back(), "last");
 }
 
-std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo,
-                     const Result<GeoidShift>& ellipsoidal) {
+std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo, const Result<GeoidShift>& ellipsoidal) {
   std::ostringstream csv;
   csv << "# visvol plan path (" << r.objective << "); one row per vertex\n"
       << "# x_m y_m: " << crs_description(r.crs_wkt) << " in metres\n"
@@ -866,24 +867,24 @@ nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
 
 nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const GeoidShift& ellipsoidal) {
   const rt::PathMetrics& m = r.metrics;
-  nlohmann::json props = {
-      {"objective", r.objective},
-      {"model", r.model},
-      {"pack", r.pack},
-      {"fc", m.fc},
-      {"length_m", m.length_m},
-      {"min_clearance_m", m.min_clearance_m},
-      {"max_climb_deg", m.max_climb_deg},
-      {"max_descent_deg", m.max_descent_deg},
-      {"min_turn_radius_m",
-       std::isfinite(m.min_turn_radius_m) ? nlohmann::json(m.min_turn_radius_m) : nlohmann::json()},
-      {"height_reference", "coordinates: height above the WGS84 ellipsoid (RFC 7946); vertex_height_orthometric_m: "
+  nlohmann::json props = {{"objective", r.objective},
+                          {"model", r.model},
+                          {"pack", r.pack},
+                          {"fc", m.fc},
+                          {"length_m", m.length_m},
+                          {"min_clearance_m", m.min_clearance_m},
+                          {"max_climb_deg", m.max_climb_deg},
+                          {"max_descent_deg", m.max_descent_deg},
+                          {"min_turn_radius_m",
+                           std::isfinite(m.min_turn_radius_m) ? nlohmann::json(m.min_turn_radius_m) : nlohmann::json()},
+                          {"height_reference",
+                           "coordinates: height above the WGS84 ellipsoid (RFC 7946); vertex_height_orthometric_m: "
                            "the DEM's height (above mean sea level)"},
-      {"vertical_datum", "WGS 84 ellipsoid (EPSG:4979)"},
-      {"vertical_datum_source", kVerticalDatumSource},
-      {"geoid_grid", ellipsoidal.grid},
-      {"requirements_met", r.requirements_met},
-      {"unmet", r.unmet}};
+                          {"vertical_datum", "WGS 84 ellipsoid (EPSG:4979)"},
+                          {"vertical_datum_source", kVerticalDatumSource},
+                          {"geoid_grid", ellipsoidal.grid},
+                          {"requirements_met", r.requirements_met},
+                          {"unmet", r.unmet}};
   nlohmann::json fp = nlohmann::json::array(), clearance = nlohmann::json::array(),
                  orthometric = nlohmann::json::array(), coords = nlohmann::json::array();
   for (std::size_t i = 0; i < geo.size(); ++i) {
@@ -896,9 +897,10 @@ nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const 
   props["vertex_clearance_m"] = clearance;
   props["vertex_height_orthometric_m"] = orthometric;
   return {{"type", "FeatureCollection"},
-          {"features", {{{"type", "Feature"},
-                         {"geometry", {{"type", "LineString"}, {"coordinates", coords}}},
-                         {"properties", props}}}}};
+          {"features",
+           {{{"type", "Feature"},
+             {"geometry", {{"type", "LineString"}, {"coordinates", coords}}},
+             {"properties", props}}}}};
 }
 
 Status write_output(const std::string& file, const std::string& text, std::vector<std::string>& written) {

@@ -53,11 +53,11 @@ using rt::Vec3;
 
 // MAVLink and QGroundControl numbers the .plan writer and reader use.
 namespace mavlink {
-inline constexpr int kCmdNavWaypoint = 16;     // MAV_CMD_NAV_WAYPOINT
-inline constexpr int kCmdNavLand = 21;         // MAV_CMD_NAV_LAND
-inline constexpr int kCmdNavTakeoff = 22;      // MAV_CMD_NAV_TAKEOFF
-inline constexpr int kCmdNavLoiterToAlt = 31;  // MAV_CMD_NAV_LOITER_TO_ALT
-inline constexpr int kCmdDoLandStart = 189;    // MAV_CMD_DO_LAND_START
+inline constexpr int kCmdNavWaypoint = 16;            // MAV_CMD_NAV_WAYPOINT
+inline constexpr int kCmdNavLand = 21;                // MAV_CMD_NAV_LAND
+inline constexpr int kCmdNavTakeoff = 22;             // MAV_CMD_NAV_TAKEOFF
+inline constexpr int kCmdNavLoiterToAlt = 31;         // MAV_CMD_NAV_LOITER_TO_ALT
+inline constexpr int kCmdDoLandStart = 189;           // MAV_CMD_DO_LAND_START
 inline constexpr int kFrameGlobal = 0;                // MAV_FRAME_GLOBAL: altitude above mean sea level
 inline constexpr int kFrameGlobalRelativeAlt = 3;     // MAV_FRAME_GLOBAL_RELATIVE_ALT: above home
 inline constexpr int kFrameGlobalInt = 5;             // MAV_FRAME_GLOBAL_INT (deprecated twin of 0)
@@ -69,11 +69,11 @@ inline constexpr int kTypeFixedWing = 1;              // MAV_TYPE_FIXED_WING
 inline constexpr int kTypeQuadrotor = 2;              // MAV_TYPE_QUADROTOR
 }  // namespace mavlink
 namespace qgc {
-inline constexpr int kPlanVersion = 1;             // the file's "version"
-inline constexpr int kMissionVersion = 2;          // mission.version
-inline constexpr int kGeoFenceVersion = 2;         // geoFence.version
-inline constexpr int kRallyPointsVersion = 2;      // rallyPoints.version
-inline constexpr int kAltitudeModeAbsolute = 2;    // QGroundControl's AltMode: MAV_FRAME_GLOBAL
+inline constexpr int kPlanVersion = 1;           // the file's "version"
+inline constexpr int kMissionVersion = 2;        // mission.version
+inline constexpr int kGeoFenceVersion = 2;       // geoFence.version
+inline constexpr int kRallyPointsVersion = 2;    // rallyPoints.version
+inline constexpr int kAltitudeModeAbsolute = 2;  // QGroundControl's AltMode: MAV_FRAME_GLOBAL
 }  // namespace qgc
 
 enum class PathFormat { text, plan_csv, geojson, qgc_plan };
@@ -103,7 +103,7 @@ struct VertexInfo {
 enum class Autopilot { px4, ardupilot };
 
 struct PathReport {
-  std::vector<Vec3> vertices;         // pack CRS, metres
+  std::vector<Vec3> vertices;          // pack CRS, metres
   std::vector<VertexInfo> per_vertex;  // one per vertex
   rt::PathMetrics metrics;
   std::string objective, model, pack, crs_wkt;
@@ -112,7 +112,7 @@ struct PathReport {
   // each not above its vertex.
   double home_ground_m = std::numeric_limits<double>::quiet_NaN();
   double land_ground_m = std::numeric_limits<double>::quiet_NaN();
-  rt::VehicleEnvelope vehicle;        // the .plan's vehicle type, speeds, takeoff pitch, loiter radius
+  rt::VehicleEnvelope vehicle;  // the .plan's vehicle type, speeds, takeoff pitch, loiter radius
   Autopilot autopilot = Autopilot::px4;
   // The exact check's verdict (rt::PathCheck), written into the GeoJSON's
   // properties so that a path that breaks a requirement says so where it goes.
@@ -160,8 +160,7 @@ inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as
 // without the geoid grid all but the GeoJSON are (and the CSV has no
 // h_ellipsoidal_m), and the status names the grid; a path whose first or last
 // vertex is below its ground height gets no .plan, and the status says so.
-Status write_path_outputs(const std::string& base, const PathReport& report,
-                          std::vector<std::string>& written);
+Status write_path_outputs(const std::string& base, const PathReport& report, std::vector<std::string>& written);
 
 // What write_path_outputs would refuse about its four file names (an existing
 // symlink, device, FIFO or directory, no such directory), checked before the

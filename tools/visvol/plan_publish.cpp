@@ -40,8 +40,8 @@ std::vector<int> subsample_indices(int n, int max) {
 }
 
 Result<std::unique_ptr<PlanPublisher>> PlanPublisher::create(const PublishOptions& options,
-                                                             const msg::TerrainInfo& terrain,
-                                                             msg::Objective objective, VertexProbe probe) {
+                                                             const msg::TerrainInfo& terrain, msg::Objective objective,
+                                                             VertexProbe probe) {
   VISVOL_RETURN_IF_ERROR(validate(options));
   dds::ParticipantConfig config;
   config.domain_id = options.domain_id;
@@ -58,9 +58,8 @@ Result<std::unique_ptr<PlanPublisher>> PlanPublisher::create(const PublishOption
   Result<std::unique_ptr<dds::PathPublisher>> publisher = dds::PathPublisher::create(**participant);
   if (!publisher.ok()) return publisher.status();
   VISVOL_RETURN_IF_ERROR((*publisher)->publish(terrain));
-  return std::unique_ptr<PlanPublisher>(new PlanPublisher(options, std::move(*participant),
-                                                          std::move(*publisher), terrain, objective,
-                                                          std::move(probe)));
+  return std::unique_ptr<PlanPublisher>(
+      new PlanPublisher(options, std::move(*participant), std::move(*publisher), terrain, objective, std::move(probe)));
 }
 
 PlanPublisher::PlanPublisher(const PublishOptions& options, std::unique_ptr<dds::Participant> participant,
@@ -86,15 +85,15 @@ void PlanPublisher::progress(const rt::Vec3* vertices, int count, double f_c) {
   if (!publish(vertices, count, f_c, length_m, nan, false, false).ok()) ++errors_;
 }
 
-Status PlanPublisher::finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics,
-                             bool converged, bool inside_envelope) {
-  VISVOL_RETURN_IF_ERROR(publish(vertices.data(), static_cast<int>(vertices.size()), metrics.fc,
-                                 metrics.length_m, metrics.min_clearance_m, converged, inside_envelope));
+Status PlanPublisher::finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics, bool converged,
+                             bool inside_envelope) {
+  VISVOL_RETURN_IF_ERROR(publish(vertices.data(), static_cast<int>(vertices.size()), metrics.fc, metrics.length_m,
+                                 metrics.min_clearance_m, converged, inside_envelope));
   return publisher_->wait_for_delivery(options_.linger_s);
 }
 
-Status PlanPublisher::publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
-                              double min_clearance_m, bool converged, bool inside_envelope) {
+Status PlanPublisher::publish(const rt::Vec3* vertices, int count, double f_c, double length_m, double min_clearance_m,
+                              bool converged, bool inside_envelope) {
   msg::PathSample& s = *sample_;
   s.sequence = ++sequence_;
   s.stamp_ns = msg::now_stamp_ns();

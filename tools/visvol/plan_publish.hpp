@@ -24,8 +24,8 @@ struct PublishOptions {
   std::uint32_t domain_id = 0;
   std::string cyclone_config_path;  // empty: the compiled-in loopback configuration
   std::string topic_namespace;
-  double rate_hz = 10.0;            // path updates while the rope settles, at most
-  double linger_s = 5.0;            // waiting for subscribers to acknowledge the last path
+  double rate_hz = 10.0;  // path updates while the rope settles, at most
+  double linger_s = 5.0;  // waiting for subscribers to acknowledge the last path
 };
 Status validate(const PublishOptions& options);
 
@@ -38,8 +38,7 @@ using VertexProbe = std::function<void(const rt::Vec3& v, double& visibility, do
 
 class PlanPublisher {
  public:
-  static Result<std::unique_ptr<PlanPublisher>> create(const PublishOptions& options,
-                                                       const msg::TerrainInfo& terrain,
+  static Result<std::unique_ptr<PlanPublisher>> create(const PublishOptions& options, const msg::TerrainInfo& terrain,
                                                        msg::Objective objective, VertexProbe probe);
 
   // A path while the rope settles: published when rate_hz allows, else dropped.
@@ -49,8 +48,8 @@ class PlanPublisher {
   // acknowledge it. `inside_envelope`: the check found every envelope limit
   // met (sent as such only when no vertex had to be dropped to fit the
   // message). An error says what was not delivered.
-  Status finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics,
-                bool converged, bool inside_envelope);
+  Status finish(const std::vector<rt::Vec3>& vertices, const rt::PathMetrics& metrics, bool converged,
+                bool inside_envelope);
 
   std::uint64_t published() const { return sequence_; }
   std::uint64_t errors() const { return errors_; }
@@ -61,8 +60,8 @@ class PlanPublisher {
                 std::unique_ptr<dds::PathPublisher> publisher, const msg::TerrainInfo& terrain,
                 msg::Objective objective, VertexProbe probe);
   // min_clearance_m NaN: the lowest of the published vertices.
-  Status publish(const rt::Vec3* vertices, int count, double f_c, double length_m,
-                 double min_clearance_m, bool converged, bool inside_envelope);
+  Status publish(const rt::Vec3* vertices, int count, double f_c, double length_m, double min_clearance_m,
+                 bool converged, bool inside_envelope);
 
   PublishOptions options_;
   std::unique_ptr<dds::Participant> participant_;

@@ -17,7 +17,7 @@ struct PlanningPack {
   std::shared_ptr<const storage::Pack> pack;
   std::vector<storage::PackLevel> levels;  // finest first
   double curvature_coeff = 0;
-  fields::Bounds2D bounds;                 // the trusted region, pack CRS metres
+  fields::Bounds2D bounds;  // the trusted region, pack CRS metres
 };
 
 // Errors name the pack and the problem (a bad tile, metadata that is not what

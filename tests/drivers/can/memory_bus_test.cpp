@@ -109,8 +109,7 @@ TEST(Drain, HandsOnEveryPendingFrameUpToTheCap) {
   CanFrame batch[16];
   std::vector<std::uint8_t> seen;
   bool capped = true;
-  EXPECT_EQ(drain(bus.endpoint(1), batch, 256, &capped, [&](const CanFrame& f) { seen.push_back(f.data[0]); }),
-            40u);
+  EXPECT_EQ(drain(bus.endpoint(1), batch, 256, &capped, [&](const CanFrame& f) { seen.push_back(f.data[0]); }), 40u);
   EXPECT_FALSE(capped);
   ASSERT_EQ(seen.size(), 40u);
   for (std::uint8_t i = 0; i < 40; ++i) EXPECT_EQ(seen[i], i);

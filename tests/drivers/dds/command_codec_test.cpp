@@ -247,8 +247,7 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   EXPECT_EQ(verdict(c), "constraints: 4 given, at most 3 reserved");
   c.m.constraints._length = 2;
   c.constraints[1] = {2, {10.0, 3000.0, 5.0}, 0.0};
-  EXPECT_EQ(verdict(c),
-            "constraints[1].position_m.y: 3000 m is outside the pack's y range [0, 2000] m");
+  EXPECT_EQ(verdict(c), "constraints[1].position_m.y: 3000 m is outside the pack's y range [0, 2000] m");
   c.constraints[1] = {3, {}, 301.0};
   EXPECT_EQ(verdict(c), "constraints[1].height_m: 301 is outside [0, 300] m");
   c.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
@@ -284,7 +283,8 @@ TEST(ValidateCommand, EndpointsStayInsideThePlanningBoundsObserversNeedNot) {
   msg::Command k{};
   k.kind = msg::CommandKind::set_constraints;
   k.constraints.count = 1;
-  k.constraints.items[0] = {msg::ConstraintKind::hidden_from, {50.0, 1950.0, 20.0}, 0.0};  // beyond the bounds, on the pack
+  k.constraints.items[0] = {
+      msg::ConstraintKind::hidden_from, {50.0, 1950.0, 20.0}, 0.0};  // beyond the bounds, on the pack
   EXPECT_TRUE(validate_command(k, l).ok()) << validate_command(k, l).message();
   l.plan_max.x_m = 1500.0;  // beyond the pack
   EXPECT_NE(validate_limits(l).message().find("inside the pack bounds"), std::string::npos);

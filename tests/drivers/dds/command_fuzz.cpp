@@ -73,9 +73,8 @@ bool terminated_printable(const char (&text)[N]) {
 }
 
 bool finite_inside(const msg::WorldPoint& p, const CommandLimits& l) {
-  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) &&
-         p.x_m >= l.min.x_m && p.x_m <= l.max.x_m && p.y_m >= l.min.y_m && p.y_m <= l.max.y_m &&
-         p.z_m >= l.min.z_m && p.z_m <= l.max.z_m;
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) && p.x_m >= l.min.x_m &&
+         p.x_m <= l.max.x_m && p.y_m >= l.min.y_m && p.y_m <= l.max.y_m && p.z_m >= l.min.z_m && p.z_m <= l.max.z_m;
 }
 
 bool in_range(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
@@ -94,10 +93,8 @@ void check_accepted(const msg::Command& c, const visvol_msgs_msg_dds__Command_& 
       check(c.objective == msg::Objective::hide || c.objective == msg::Objective::show);
       break;
     case msg::CommandKind::set_weights:
-      check(in_range(c.weights.k1_visibility, 0.0, l.max_weight) &&
-            in_range(c.weights.k2_terrain, 0.0, l.max_weight) &&
-            in_range(c.weights.k3_user, 0.0, l.max_weight) &&
-            in_range(c.weights.k4_constraint, 0.0, l.max_weight));
+      check(in_range(c.weights.k1_visibility, 0.0, l.max_weight) && in_range(c.weights.k2_terrain, 0.0, l.max_weight) &&
+            in_range(c.weights.k3_user, 0.0, l.max_weight) && in_range(c.weights.k4_constraint, 0.0, l.max_weight));
       break;
     case msg::CommandKind::set_stiffness:
       check(in_range(c.stiffness.stretch_n_per_m, 0.0, l.max_stretch_stiffness_n_per_m) &&
@@ -146,10 +143,8 @@ void check_accepted(const msg::Command& c, const visvol_msgs_msg_dds__Command_& 
       check(msg::text_of(c.pack_id) == "sf_north" || msg::text_of(c.pack_id) == "taunus");
       break;
     case msg::CommandKind::start:
-    case msg::CommandKind::stop:
-      break;
-    default:
-      check(false);  // an unknown kind reached the queue
+    case msg::CommandKind::stop: break;
+    default: check(false);  // an unknown kind reached the queue
   }
 }
 
@@ -203,8 +198,8 @@ void check_constraints_verdict(const visvol_msgs_msg_dds__Command_& msg, const m
 }
 
 // One command through the processor, and the oracle.
-void run_one(CommandProcessor& processor, msg::CommandQueue& queue,
-             const visvol_msgs_msg_dds__Command_& msg, double now_s) {
+void run_one(CommandProcessor& processor, msg::CommandQueue& queue, const visvol_msgs_msg_dds__Command_& msg,
+             double now_s) {
   const CommandCounts before = processor.counts();
   msg::CommandAck ack;
   std::memset(&ack, 0xa5, sizeof ack);  // nothing may be left unset
@@ -269,8 +264,7 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, msg::Comma
   for (int i = 0; i < 32 && fdp.remaining_bytes() > 0; ++i) {
     std::string source = fdp.ConsumeBool() ? "operator" : fdp.ConsumeRandomLengthString(80);
     std::string pack = fdp.ConsumeBool() ? "sf_north" : fdp.ConsumeRandomLengthString(80);
-    std::vector<visvol_msgs_msg_dds__Constraint_> constraints(
-        fdp.ConsumeIntegralInRange<std::size_t>(0, 24));
+    std::vector<visvol_msgs_msg_dds__Constraint_> constraints(fdp.ConsumeIntegralInRange<std::size_t>(0, 24));
     for (visvol_msgs_msg_dds__Constraint_& k : constraints) {
       k.kind = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 6);
       k.position_m = fuzz_point(fdp);
@@ -280,8 +274,8 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, msg::Comma
     msg.source = source.data();
     msg.pack_id = pack.data();
     msg.sequence_number = fdp.ConsumeIntegral<std::uint64_t>();
-    msg.kind = fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint8_t>(1, 10)
-                                 : fdp.ConsumeIntegral<std::uint8_t>();
+    msg.kind =
+        fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint8_t>(1, 10) : fdp.ConsumeIntegral<std::uint8_t>();
     msg.start_m = fuzz_point(fdp);
     msg.end_m = fuzz_point(fdp);
     msg.objective = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 3);
@@ -292,8 +286,8 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, msg::Comma
     msg.stretch_stiffness_n_per_m = fuzz_double(fdp);
     msg.bend_stiffness_n_m_per_rad = fuzz_double(fdp);
     msg.model = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 3);
-    msg.segment_count = fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint32_t>(0, 300)
-                                          : fdp.ConsumeIntegral<std::uint32_t>();
+    msg.segment_count =
+        fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint32_t>(0, 300) : fdp.ConsumeIntegral<std::uint32_t>();
     msg.constraints._buffer = constraints.data();
     msg.constraints._length = static_cast<std::uint32_t>(constraints.size());
     msg.constraints._maximum = msg.constraints._length;
@@ -321,8 +315,7 @@ const ddsi_sertype_default& command_sertype() {
   return type;
 }
 
-void wire(const std::uint8_t* data, std::size_t size, CommandProcessor& processor,
-          msg::CommandQueue& queue) {
+void wire(const std::uint8_t* data, std::size_t size, CommandProcessor& processor, msg::CommandQueue& queue) {
   if (size < 4 || size > (1u << 20)) return;
   // encapsulation: plain CDR, XCDR1 (0x0000 BE, 0x0001 LE) or XCDR2 (0x0006 BE, 0x0007 LE)
   const unsigned id = (static_cast<unsigned>(data[0]) << 8) | data[1];
@@ -331,7 +324,10 @@ void wire(const std::uint8_t* data, std::size_t size, CommandProcessor& processo
   switch (id) {
     case 0x0000: big_endian = true; break;
     case 0x0001: break;
-    case 0x0006: big_endian = true; version = CDR_ENC_VERSION_2; break;
+    case 0x0006:
+      big_endian = true;
+      version = CDR_ENC_VERSION_2;
+      break;
     case 0x0007: version = CDR_ENC_VERSION_2; break;
     default: return;  // Cyclone refuses it
   }

@@ -43,8 +43,7 @@ class Sender {
     EXPECT_TRUE(writer_.ok() && acks_.ok());
   }
   bool ready(double timeout_s) {
-    return writer_->wait_for_readers(1, timeout_s).ok() &&
-           acks_->wait_for_writers(1, timeout_s).ok();
+    return writer_->wait_for_readers(1, timeout_s).ok() && acks_->wait_for_writers(1, timeout_s).ok();
   }
   void send(const visvol_msgs_msg_dds__Command_& msg) { ASSERT_EQ(writer_->write(&msg), 0); }
   void send(msg::Command c) {
@@ -53,14 +52,16 @@ class Sender {
   }
   // Collects acknowledgements until `count` have arrived or the time passes.
   std::map<std::uint64_t, msg::CommandAck> acks(std::size_t count, double timeout_s) {
-    wait_until([&] {
-      (void)acks_->take<visvol_msgs_msg_dds__CommandAck_>(
-          [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
-            received_[m.sequence_number] = decode_ack(m);
-          },
-          64);
-      return received_.size() >= count;
-    }, timeout_s);
+    wait_until(
+        [&] {
+          (void)acks_->take<visvol_msgs_msg_dds__CommandAck_>(
+              [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
+                received_[m.sequence_number] = decode_ack(m);
+              },
+              64);
+          return received_.size() >= count;
+        },
+        timeout_s);
     return received_;
   }
 
@@ -89,8 +90,7 @@ struct Fixture {
     console = make_participant(loopback(kDomain));
     operator_side = make_participant(loopback(kDomain));
     if (!console || !operator_side) return;
-    Result<std::unique_ptr<CommandIntake>> r =
-        CommandIntake::start(*console, config, queue, &executive_acks);
+    Result<std::unique_ptr<CommandIntake>> r = CommandIntake::start(*console, config, queue, &executive_acks);
     EXPECT_TRUE(r.ok()) << r.status().message();
     if (r.ok()) intake = std::move(*r);
   }
@@ -153,25 +153,31 @@ TEST(CommandIntake, AcksWrittenBeforeTheSendersReaderMatchedStillArrive) {
     ASSERT_EQ(writer->write(&m.fill(o)), 0);
   }
   int popped = 0;
-  ASSERT_TRUE(wait_until([&] {
-    msg::Command got{};
-    while (f.queue.try_pop(got)) ++popped;
-    return popped == 3;
-  }, 5.0));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        msg::Command got{};
+        while (f.queue.try_pop(got)) ++popped;
+        return popped == 3;
+      },
+      5.0));
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the acks are out, to nobody
 
   Result<Reader> acks = Reader::create(*f.operator_side, Topic::command_ack);
   ASSERT_TRUE(acks.ok());
   ASSERT_TRUE(acks->wait_for_writers(1, 5.0).ok());
   std::set<std::uint64_t> accepted;
-  ASSERT_TRUE(wait_until([&] {
-    (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
-        [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
-          const msg::CommandAck ack = decode_ack(a);
-          if (ack.result == msg::AckResult::accepted) accepted.insert(ack.sequence);
-        }, 8);
-    return accepted.size() == 3;
-  }, 5.0)) << accepted.size() << " of 3 acks arrived";
+  ASSERT_TRUE(wait_until(
+      [&] {
+        (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
+            [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
+              const msg::CommandAck ack = decode_ack(a);
+              if (ack.result == msg::AckResult::accepted) accepted.insert(ack.sequence);
+            },
+            8);
+        return accepted.size() == 3;
+      },
+      5.0))
+      << accepted.size() << " of 3 acks arrived";
   EXPECT_EQ(accepted, (std::set<std::uint64_t>{41, 42, 43}));
 }
 
@@ -271,8 +277,7 @@ TEST(CommandIntake, FloodIsRateLimitedAndEveryCommandAcknowledged) {
   const auto t0 = std::chrono::steady_clock::now();
   for (std::uint64_t seq = 1; seq <= kFlood; ++seq) sender.send(base(msg::CommandKind::start, seq));
   const auto acks = sender.acks(kFlood, 20.0);
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(acks.size(), kFlood);
 
   std::size_t accepted = 0, limited = 0;
@@ -280,8 +285,7 @@ TEST(CommandIntake, FloodIsRateLimitedAndEveryCommandAcknowledged) {
     if (ack.result == msg::AckResult::accepted) {
       ++accepted;
     } else {
-      EXPECT_NE(std::string(ack.reason).find("rate limit: this source sent more than 10"),
-                std::string::npos)
+      EXPECT_NE(std::string(ack.reason).find("rate limit: this source sent more than 10"), std::string::npos)
           << ack.reason;
       ++limited;
     }
@@ -345,8 +349,7 @@ TEST(CommandIntake, ExecutiveAcksArePublished) {
   ASSERT_TRUE(f.executive_acks.try_push(done));
 
   // the same source and sequence, now with the outcome
-  ASSERT_TRUE(wait_until(
-      [&] { return sender.acks(1, 0.0).at(5).result == msg::AckResult::failed; }, 5.0));
+  ASSERT_TRUE(wait_until([&] { return sender.acks(1, 0.0).at(5).result == msg::AckResult::failed; }, 5.0));
   EXPECT_STREQ(sender.acks(1, 0.0).at(5).reason, "taunus.pack: checksum of tile 3 wrong");
   EXPECT_EQ(f.intake->stats().executive_acks, 1u);
 }
@@ -375,8 +378,7 @@ TEST(CommandIntake, NewLimitsApplyAfterATerrainSwitch) {
 TEST(CommandIntake, HealthReportsItsCounters) {
   Fixture f(default_config());
   ASSERT_NE(f.intake, nullptr);
-  Result<std::unique_ptr<LivePublisher>> pub =
-      LivePublisher::start(*f.console, PublisherConfig{}, f.intake.get());
+  Result<std::unique_ptr<LivePublisher>> pub = LivePublisher::start(*f.console, PublisherConfig{}, f.intake.get());
   ASSERT_TRUE(pub.ok());
   Result<Reader> health = Reader::create(*f.operator_side, Topic::health);
   ASSERT_TRUE(health.ok());
@@ -390,17 +392,20 @@ TEST(CommandIntake, HealthReportsItsCounters) {
   ASSERT_TRUE(health->wait_for_writers(1, 5.0).ok());
 
   std::uint64_t accepted = 0, rejected = 0;
-  ASSERT_TRUE(wait_until([&] {
-    msg::HealthSample& h = (*pub)->health().back();
-    h = msg::HealthSample{};
-    (*pub)->health().publish();
-    (void)health->take<visvol_msgs_msg_dds__LoopHealth_>(
-        [&](const visvol_msgs_msg_dds__LoopHealth_& m, const dds_sample_info_t&) {
-          accepted = m.commands_accepted;
-          rejected = m.commands_rejected;
-        });
-    return accepted == 1 && rejected == 1;
-  }, 5.0)) << accepted << " " << rejected;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        msg::HealthSample& h = (*pub)->health().back();
+        h = msg::HealthSample{};
+        (*pub)->health().publish();
+        (void)health->take<visvol_msgs_msg_dds__LoopHealth_>(
+            [&](const visvol_msgs_msg_dds__LoopHealth_& m, const dds_sample_info_t&) {
+              accepted = m.commands_accepted;
+              rejected = m.commands_rejected;
+            });
+        return accepted == 1 && rejected == 1;
+      },
+      5.0))
+      << accepted << " " << rejected;
 }
 
 TEST(CommandIntake, RejectsBadConfiguration) {

@@ -12,8 +12,7 @@ namespace {
 
 using Verdict = RateLimiter::Verdict;
 
-RateLimit rate(double per_s, double burst, double total_per_s = 1000.0,
-               double total_burst = 1000.0) {
+RateLimit rate(double per_s, double burst, double total_per_s = 1000.0, double total_burst = 1000.0) {
   return RateLimit{per_s, burst, total_per_s, total_burst};
 }
 
@@ -132,8 +131,7 @@ TEST(CommandProcessor, RateLimitedBeforeDecoding) {
   Raw good(msg::CommandKind::start, 2);
   p->process(good.m, 5.0, queue, ack);
   EXPECT_EQ(ack.result, msg::AckResult::rejected);
-  EXPECT_STREQ(ack.reason,
-               "rate limit: this source sent more than 2 commands at once or 1 per second");
+  EXPECT_STREQ(ack.reason, "rate limit: this source sent more than 2 commands at once or 1 per second");
   EXPECT_EQ(p->counts().rate_limited, 1u);
   p->process(good.m, 6.0, queue, ack);
   EXPECT_EQ(ack.result, msg::AckResult::accepted);

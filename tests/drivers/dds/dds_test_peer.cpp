@@ -38,8 +38,7 @@ using namespace visvol;
 using namespace visvol::dds;
 
 int usage() {
-  std::fprintf(stderr,
-               "usage: dds_test_peer listen|publish|commands DOMAIN NS ARG [ARG]\n");
+  std::fprintf(stderr, "usage: dds_test_peer listen|publish|commands DOMAIN NS ARG [ARG]\n");
   return 2;
 }
 
@@ -79,8 +78,7 @@ int listen(Participant& p, std::uint64_t last_seq, double timeout_s) {
     (void)updates->wait(0.05);
     (void)updates->take<visvol_msgs_msg_dds__PathUpdate_>(
         [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
-          std::printf("update %llu %u\n", static_cast<unsigned long long>(m.sequence_number),
-                      m.positions_m._length);
+          std::printf("update %llu %u\n", static_cast<unsigned long long>(m.sequence_number), m.positions_m._length);
           if (m.sequence_number == last_seq) {
             last_seen = true;
             last_stamp = from_ros_time(m.header.stamp);
@@ -150,8 +148,7 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
   Result<Writer> writer = Writer::create(p, Topic::command);
   Result<Reader> acks = Reader::create(p, Topic::command_ack);
   if (!writer.ok() || !acks.ok()) return 1;
-  if (!writer->wait_for_readers(1, timeout_s).ok() ||
-      !acks->wait_for_writers(1, timeout_s).ok()) {
+  if (!writer->wait_for_readers(1, timeout_s).ok() || !acks->wait_for_writers(1, timeout_s).ok()) {
     std::printf("timeout no command intake\n");
     return 3;
   }
@@ -186,8 +183,8 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
           if (std::string(a.source) != source) return;
           answered.insert(a.sequence_number);
           const char* result = to_string(static_cast<msg::AckResult>(a.result));
-          std::printf("ack %llu %s %s\n", static_cast<unsigned long long>(a.sequence_number),
-                      result ? result : "?", a.reason);
+          std::printf("ack %llu %s %s\n", static_cast<unsigned long long>(a.sequence_number), result ? result : "?",
+                      a.reason);
         });
     std::fflush(stdout);
   }

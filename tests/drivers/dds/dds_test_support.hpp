@@ -30,8 +30,7 @@ namespace visvol::dds::test {
 // "t<pid>": topics of this process only.
 inline std::string process_namespace() { return "t" + std::to_string(::getpid()); }
 
-inline ParticipantConfig loopback(std::uint32_t domain,
-                                  const std::string& ns = process_namespace()) {
+inline ParticipantConfig loopback(std::uint32_t domain, const std::string& ns = process_namespace()) {
   ParticipantConfig c;
   c.domain_id = domain;
   c.cyclone_xml = std::string(loopback_config());
@@ -61,8 +60,8 @@ inline void fill_path(msg::PathSample& s, std::uint64_t sequence, std::uint32_t 
   s.min_clearance_m = 12.5;
   s.vertex_count = n;
   for (std::uint32_t i = 0; i < n; ++i) {
-    s.vertices[i] = msg::PathVertex{{544000.0 + 10.0 * i, 4189000.0, 150.0 + static_cast<double>(sequence)},
-                               0.001 * i, 12.5 + i};
+    s.vertices[i] =
+        msg::PathVertex{{544000.0 + 10.0 * i, 4189000.0, 150.0 + static_cast<double>(sequence)}, 0.001 * i, 12.5 + i};
   }
 }
 
@@ -75,8 +74,8 @@ inline std::unique_ptr<msg::PathSample> make_path(std::uint64_t sequence, std::u
 
 // Polls `done` every millisecond until it holds or the timeout passes.
 inline bool wait_until(const std::function<bool()>& done, double timeout_s) {
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::microseconds(static_cast<std::int64_t>(timeout_s * 1e6));
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::microseconds(static_cast<std::int64_t>(timeout_s * 1e6));
   while (!done()) {
     if (std::chrono::steady_clock::now() >= deadline) return done();
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -179,8 +178,8 @@ class Child {
   // Waits for the exit, collecting output; kills the child after timeout_s.
   // Returns the exit status, or -1 when it had to be killed.
   int wait(double timeout_s) {
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::milliseconds(static_cast<std::int64_t>(timeout_s * 1e3));
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<std::int64_t>(timeout_s * 1e3));
     while (!exited_) {
       drain(10);
       int status = 0;

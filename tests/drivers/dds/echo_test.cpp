@@ -21,8 +21,8 @@ using test::make_participant;
 constexpr std::uint32_t kDomain = test::kDomainEcho;
 
 std::vector<std::string> echo(std::vector<std::string> args) {
-  std::vector<std::string> argv = {VISVOL_ECHO, "--domain", std::to_string(kDomain),
-                                   "--namespace", test::process_namespace()};
+  std::vector<std::string> argv = {VISVOL_ECHO, "--domain", std::to_string(kDomain), "--namespace",
+                                   test::process_namespace()};
   argv.insert(argv.end(), args.begin(), args.end());
   return argv;
 }
@@ -38,8 +38,7 @@ struct Console {
     config.limits.min = {540000.0, 4180000.0, -10.0};
     config.limits.max = {551100.0, 4194000.0, 900.0};
     config.limits.max_segments = 200;
-    Result<std::unique_ptr<CommandIntake>> r =
-        CommandIntake::start(*participant, config, queue, &executive_acks);
+    Result<std::unique_ptr<CommandIntake>> r = CommandIntake::start(*participant, config, queue, &executive_acks);
     EXPECT_TRUE(r.ok());
     if (r.ok()) intake = std::move(*r);
   }
@@ -50,8 +49,7 @@ TEST(Echo, AcceptedCommandExitsZeroAndReachesTheQueue) {
   ASSERT_NE(console.intake, nullptr);
   Child c(echo({"command", "--source", "operator-1", "--sequence", "7", "set-objective", "hide"}));
   ASSERT_EQ(c.wait(30.0), 0) << c.output();
-  EXPECT_NE(c.output().find("ack source=\"operator-1\" seq=7 kind=set-objective result=accepted"),
-            std::string::npos)
+  EXPECT_NE(c.output().find("ack source=\"operator-1\" seq=7 kind=set-objective result=accepted"), std::string::npos)
       << c.output();
   msg::Command got{};
   ASSERT_TRUE(console.queue.try_pop(got));
@@ -59,16 +57,15 @@ TEST(Echo, AcceptedCommandExitsZeroAndReachesTheQueue) {
   EXPECT_EQ(got.objective, msg::Objective::hide);
   EXPECT_EQ(got.sequence, 7u);
 
-  Child e(echo({"command", "set-endpoints", "541000", "4181000", "120", "550000", "4190000",
-                "80"}));
+  Child e(echo({"command", "set-endpoints", "541000", "4181000", "120", "550000", "4190000", "80"}));
   ASSERT_EQ(e.wait(30.0), 0) << e.output();
   ASSERT_TRUE(console.queue.try_pop(got));
   EXPECT_EQ(got.endpoints.end.y_m, 4190000.0);
   EXPECT_EQ(msg::text_of(got.source).rfind("visvol-echo@", 0), 0u);
 
-  Child k(echo({"command", "set-constraints", "--hidden-from", "545000,4185000,10",
-                "--hidden-from", "546000,4186000,20", "--visible-to", "547000,4187000,30",
-                "--clearance", "50", "--max-agl", "300", "--max-altitude", "800"}));
+  Child k(
+      echo({"command", "set-constraints", "--hidden-from", "545000,4185000,10", "--hidden-from", "546000,4186000,20",
+            "--visible-to", "547000,4187000,30", "--clearance", "50", "--max-agl", "300", "--max-altitude", "800"}));
   ASSERT_EQ(k.wait(30.0), 0) << k.output();
   ASSERT_TRUE(console.queue.try_pop(got));
   ASSERT_EQ(got.constraints.count, 6u);
@@ -88,9 +85,8 @@ TEST(Echo, RejectedCommandPrintsTheReasonAndExitsOne) {
   ASSERT_NE(console.intake, nullptr);
   Child c(echo({"command", "set-segments", "5000"}));
   ASSERT_EQ(c.wait(30.0), 1) << c.output();
-  EXPECT_NE(c.output().find(
-                "result=rejected reason=\"segment_count: 5000 is outside the 2..200 segments "
-                "reserved\""),
+  EXPECT_NE(c.output().find("result=rejected reason=\"segment_count: 5000 is outside the 2..200 segments "
+                            "reserved\""),
             std::string::npos)
       << c.output();
   Child t(echo({"command", "switch-terrain", "alps"}));
@@ -170,24 +166,24 @@ TEST(Echo, PrintsPathUpdatesAndHealth) {
   ASSERT_EQ(c.wait(30.0), 0) << c.output();
   const std::string out = c.output();
   EXPECT_NE(out.find("path seq=41 "), std::string::npos) << out;
-  EXPECT_NE(out.find("frame=\"visvol_world\" pack=\"sf_north\" objective=hide vertices=3"),
-            std::string::npos)
-      << out;
-  EXPECT_NE(out.find("  [2] x_m=544020.000 y_m=4189000.000 z_m=191.000"), std::string::npos)
-      << out;
+  EXPECT_NE(out.find("frame=\"visvol_world\" pack=\"sf_north\" objective=hide vertices=3"), std::string::npos) << out;
+  EXPECT_NE(out.find("  [2] x_m=544020.000 y_m=4189000.000 z_m=191.000"), std::string::npos) << out;
 
   Child h(echo({"health", "--count", "1", "--timeout", "20"}));
   ASSERT_TRUE(h.wait_for_output("watching", 20.0)) << h.output();
   // health is volatile: publish while it listens
-  ASSERT_TRUE(test::wait_until([&] {
-    msg::HealthSample& s = (*pub)->health().back();
-    s = msg::HealthSample{};
-    s.sequence = 5;
-    s.period_us = 1000.0;
-    (*pub)->health().publish();
-    h.drain(20);
-    return h.output().find("health seq=5") != std::string::npos;
-  }, 20.0)) << h.output();
+  ASSERT_TRUE(test::wait_until(
+      [&] {
+        msg::HealthSample& s = (*pub)->health().back();
+        s = msg::HealthSample{};
+        s.sequence = 5;
+        s.period_us = 1000.0;
+        (*pub)->health().publish();
+        h.drain(20);
+        return h.output().find("health seq=5") != std::string::npos;
+      },
+      20.0))
+      << h.output();
   EXPECT_EQ(h.wait(30.0), 0) << h.output();
 }
 

@@ -26,10 +26,8 @@ using test::make_path;
 using test::wait_until;
 constexpr std::uint32_t kDomain = test::kDomainInterprocess;
 
-std::vector<std::string> peer(const std::string& mode, const std::string& a,
-                              const std::string& b = "") {
-  std::vector<std::string> argv = {VISVOL_DDS_PEER, mode, std::to_string(kDomain),
-                                   test::process_namespace(), a};
+std::vector<std::string> peer(const std::string& mode, const std::string& a, const std::string& b = "") {
+  std::vector<std::string> argv = {VISVOL_DDS_PEER, mode, std::to_string(kDomain), test::process_namespace(), a};
   if (!b.empty()) argv.push_back(b);
   return argv;
 }
@@ -98,14 +96,16 @@ TEST(Interprocess, OfflinePublisherLingersUntilDelivered) {
   // the planner has exited: what it published is here, the final path last
   std::vector<std::uint64_t> seqs;
   bool converged = false;
-  wait_until([&] {
-    (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
-        [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
-          seqs.push_back(m.sequence_number);
-          converged = m.converged;
-        });
-    return !seqs.empty() && seqs.back() == 20;
-  }, 2.0);
+  wait_until(
+      [&] {
+        (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
+            [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
+              seqs.push_back(m.sequence_number);
+              converged = m.converged;
+            });
+        return !seqs.empty() && seqs.back() == 20;
+      },
+      2.0);
   ASSERT_FALSE(seqs.empty());
   EXPECT_EQ(seqs.back(), 20u);
   EXPECT_TRUE(converged);
@@ -125,13 +125,9 @@ TEST(Interprocess, CommandsFromAnotherProcessAreValidatedAndAnswered) {
   ASSERT_TRUE(sender.started());
   ASSERT_EQ(sender.wait(30.0), 0) << sender.output();
   const std::string out = sender.output();
-  EXPECT_NE(out.find("ack 1 rejected start_m.x: nan is not a finite number"), std::string::npos)
-      << out;
-  EXPECT_NE(out.find("ack 2 rejected segment_count: 1000000 is outside the 2..511"),
-            std::string::npos)
-      << out;
-  EXPECT_NE(out.find("ack 3 rejected kind: 250 is not a known command"), std::string::npos)
-      << out;
+  EXPECT_NE(out.find("ack 1 rejected start_m.x: nan is not a finite number"), std::string::npos) << out;
+  EXPECT_NE(out.find("ack 2 rejected segment_count: 1000000 is outside the 2..511"), std::string::npos) << out;
+  EXPECT_NE(out.find("ack 3 rejected kind: 250 is not a known command"), std::string::npos) << out;
   EXPECT_NE(out.find("ack 4 accepted"), std::string::npos) << out;
 
   msg::Command c{};

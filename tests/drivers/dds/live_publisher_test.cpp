@@ -118,18 +118,19 @@ TEST(LivePublisher, PathRateIsAtMostTheConfiguredRate) {
     (*pub)->path().publish();
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_TRUE((*pub)->stop().ok());
 
   std::vector<std::uint64_t> sequences;
-  wait_until([&] {
-    (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
-        [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
-          sequences.push_back(m.sequence_number);
-        });
-    return !sequences.empty() && sequences.back() == seq;
-  }, 5.0);
+  wait_until(
+      [&] {
+        (void)reader->take<visvol_msgs_msg_dds__PathUpdate_>(
+            [&](const visvol_msgs_msg_dds__PathUpdate_& m, const dds_sample_info_t&) {
+              sequences.push_back(m.sequence_number);
+            });
+        return !sequences.empty() && sequences.back() == seq;
+      },
+      5.0);
   // at most one per 50 ms, plus the last pass on stop
   EXPECT_LE(sequences.size(), static_cast<std::size_t>(elapsed_s * 20.0) + 2);
   EXPECT_GE(sequences.size(), 5u);
@@ -187,10 +188,12 @@ TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
   fill_path(fresh, 2, 4);
   fresh.stamp_ns = msg::now_stamp_ns();
   (*pub)->path().publish();
-  ASSERT_TRUE(wait_until([&] {
-    collect();
-    return !seen.empty();
-  }, 5.0));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        collect();
+        return !seen.empty();
+      },
+      5.0));
   EXPECT_EQ(seen, std::vector<std::uint64_t>{2});
 
   // with no newer one, the kept path goes out when the wait is over
@@ -199,10 +202,12 @@ TEST(LivePublisher, StalePathWaitsBrieflyForANewerOne) {
   fill_path(alone, 3, 4);
   alone.stamp_ns = msg::now_stamp_ns() - 10000000;
   (*pub)->path().publish();
-  ASSERT_TRUE(wait_until([&] {
-    collect();
-    return seen.size() == 2;
-  }, 5.0));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        collect();
+        return seen.size() == 2;
+      },
+      5.0));
   EXPECT_EQ(seen.back(), 3u);
   EXPECT_EQ((*pub)->stats().paths_held, 2u);
   EXPECT_EQ((*pub)->stats().paths, 2u);
@@ -223,10 +228,12 @@ TEST(LivePublisher, AStalePathFromASlowProducerGoesOutAtOnce) {
     fill_path(s, seq, 4);
     s.stamp_ns = msg::now_stamp_ns();
     (*pub)->path().publish();
-    ASSERT_TRUE(wait_until([&] {
-      collect();
-      return seen.size() == seq;
-    }, 5.0));
+    ASSERT_TRUE(wait_until(
+        [&] {
+          collect();
+          return seen.size() == seq;
+        },
+        5.0));
     std::this_thread::sleep_for(std::chrono::milliseconds(60));
   }
   // path 3, stamped 5 ms before its hand-off: stale, but nothing newer is due
@@ -237,10 +244,12 @@ TEST(LivePublisher, AStalePathFromASlowProducerGoesOutAtOnce) {
   fill_path(late, 3, 4);
   late.stamp_ns = msg::now_stamp_ns() - 5000000;
   (*pub)->path().publish();
-  ASSERT_TRUE(wait_until([&] {
-    collect();
-    return seen.size() == 3;
-  }, 5.0));
+  ASSERT_TRUE(wait_until(
+      [&] {
+        collect();
+        return seen.size() == 3;
+      },
+      5.0));
   EXPECT_EQ(seen, (std::vector<std::uint64_t>{1, 2, 3}));
   EXPECT_EQ((*pub)->stats().paths_held, held_before);
 }
@@ -270,13 +279,15 @@ TEST(LivePublisher, ThumbnailAtMostOncePerIntervalAndTheLastOnStop) {
   }
   ASSERT_TRUE((*pub)->stop().ok());
   std::vector<int> seen;
-  wait_until([&] {
-    (void)reader->take<sensor_msgs_msg_dds__CompressedImage_>(
-        [&](const sensor_msgs_msg_dds__CompressedImage_& m, const dds_sample_info_t&) {
-          seen.push_back(m.data._buffer[8]);
-        });
-    return !seen.empty() && seen.back() == 10;
-  }, 5.0);
+  wait_until(
+      [&] {
+        (void)reader->take<sensor_msgs_msg_dds__CompressedImage_>(
+            [&](const sensor_msgs_msg_dds__CompressedImage_& m, const dds_sample_info_t&) {
+              seen.push_back(m.data._buffer[8]);
+            });
+        return !seen.empty() && seen.back() == 10;
+      },
+      5.0);
   ASSERT_FALSE(seen.empty());
   EXPECT_EQ(seen.back(), 10);
   EXPECT_LE(seen.size(), 3u);

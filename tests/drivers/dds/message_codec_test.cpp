@@ -110,8 +110,7 @@ TEST(DecodePathUpdate, RoundTripAndInconsistentLengths) {
 
   visvol_msgs_msg_dds__PathUpdate_ broken = m->update();
   broken.visibility._length = 3;
-  EXPECT_NE(decode_path_update(broken, *back).message().find("4 positions but 3 visibility"),
-            std::string::npos);
+  EXPECT_NE(decode_path_update(broken, *back).message().find("4 positions but 3 visibility"), std::string::npos);
 }
 
 TEST(ThumbnailMessage, ChecksTheBytesArePng) {

@@ -9,9 +9,9 @@
 #include <sstream>
 #include <string>
 
+#include "dds_test_support.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/topics.hpp"
-#include "dds_test_support.hpp"
 #include "test_domains.hpp"
 
 namespace visvol::dds {
@@ -51,8 +51,7 @@ TEST(ParticipantConfig, RejectsBadValuesWithReasons) {
   // Cyclone would silently fall back to its defaults (multicast everywhere).
   c.cyclone_xml = "<CycloneDDS><Domain Id=\"7\"><General/></Domain></CycloneDDS>";
   s = validate(c);
-  EXPECT_NE(s.message().find("no <Domain> applies to domain 211 (ids: 7)"), std::string::npos)
-      << s.message();
+  EXPECT_NE(s.message().find("no <Domain> applies to domain 211 (ids: 7)"), std::string::npos) << s.message();
   c.cyclone_xml = "<CycloneDDS><Domain><Id>7</Id></Domain></CycloneDDS>";
   EXPECT_FALSE(validate(c).ok());
   c.cyclone_xml = "<CycloneDDS><Domain Id=\"7\"/><Domain Id=\"211\"/></CycloneDDS>";
@@ -112,8 +111,7 @@ TEST(Participant, LoopbackConfigurationKeepsEveryAddressOn127) {
   ::close(fd);
   ParticipantConfig c = loopback(kDomain);
   c.cyclone_xml += std::string("<CycloneDDS><Domain Id=\"any\"><Tracing><Verbosity>config") +
-                   "</Verbosity><OutputFile>" + path + "</OutputFile></Tracing></Domain>" +
-                   "</CycloneDDS>";
+                   "</Verbosity><OutputFile>" + path + "</OutputFile></Tracing></Domain>" + "</CycloneDDS>";
   {
     auto p = make_participant(c);
     ASSERT_NE(p, nullptr);
@@ -153,12 +151,12 @@ TEST(Participant, OneConfigurationPerDomainPerProcess) {
 
 TEST(Participant, BadXmlFailsCleanly) {
   ParticipantConfig c = loopback(kDomain);
-  c.cyclone_xml = "<CycloneDDS><Domain Id=\"any\"><General><NoSuchSetting>1</NoSuchSetting>"
-                  "</General></Domain></CycloneDDS>";
+  c.cyclone_xml =
+      "<CycloneDDS><Domain Id=\"any\"><General><NoSuchSetting>1</NoSuchSetting>"
+      "</General></Domain></CycloneDDS>";
   Result<std::unique_ptr<Participant>> p = Participant::create(c);
   ASSERT_FALSE(p.ok());
-  EXPECT_NE(p.status().message().find("creating DDS domain 211"), std::string::npos)
-      << p.status().message();
+  EXPECT_NE(p.status().message().find("creating DDS domain 211"), std::string::npos) << p.status().message();
   // The failure leaves nothing behind: a good configuration works afterwards.
   EXPECT_NE(make_participant(loopback(kDomain)), nullptr);
 }

@@ -67,20 +67,19 @@ TEST(PathPublisher, PathAndUpdateArriveWithTheSameHeader) {
 
   ASSERT_TRUE(*path_reader->wait(5.0));
   int paths = 0;
-  (void)path_reader->take<nav_msgs_msg_dds__Path_>(
-      [&](const nav_msgs_msg_dds__Path_& msg, const dds_sample_info_t&) {
-        ++paths;
-        EXPECT_STREQ(msg.header.frame_id, kDefaultFrameId);
-        EXPECT_EQ(from_ros_time(msg.header.stamp), sample->stamp_ns);
-        ASSERT_EQ(msg.poses._length, 5u);
-        for (std::uint32_t i = 0; i < 5; ++i) {
-          const auto& pose = msg.poses._buffer[i];
-          EXPECT_STREQ(pose.header.frame_id, kDefaultFrameId);
-          EXPECT_EQ(pose.pose.position.x, sample->vertices[i].position.x_m);
-          EXPECT_EQ(pose.pose.position.z, sample->vertices[i].position.z_m);
-          EXPECT_EQ(pose.pose.orientation.w, 1.0);  // identity, not C's zero
-        }
-      });
+  (void)path_reader->take<nav_msgs_msg_dds__Path_>([&](const nav_msgs_msg_dds__Path_& msg, const dds_sample_info_t&) {
+    ++paths;
+    EXPECT_STREQ(msg.header.frame_id, kDefaultFrameId);
+    EXPECT_EQ(from_ros_time(msg.header.stamp), sample->stamp_ns);
+    ASSERT_EQ(msg.poses._length, 5u);
+    for (std::uint32_t i = 0; i < 5; ++i) {
+      const auto& pose = msg.poses._buffer[i];
+      EXPECT_STREQ(pose.header.frame_id, kDefaultFrameId);
+      EXPECT_EQ(pose.pose.position.x, sample->vertices[i].position.x_m);
+      EXPECT_EQ(pose.pose.position.z, sample->vertices[i].position.z_m);
+      EXPECT_EQ(pose.pose.orientation.w, 1.0);  // identity, not C's zero
+    }
+  });
   EXPECT_EQ(paths, 1);
 }
 
@@ -224,12 +223,12 @@ TEST(WireFormat, SmallPathIsPlainCdrByHand) {
       0x00, 0x01, 0x00, 0x00,                          // CDR_LE, options 0
       0x01, 0x00, 0x00, 0x00,                          //  0 header.stamp.sec = 1
       0x02, 0x00, 0x00, 0x00,                          //  4 header.stamp.nanosec = 2
-      0x02, 0x00, 0x00, 0x00, 'w', 0x00,               //  8 header.frame_id = "w"
+      0x02, 0x00, 0x00, 0x00, 'w',  0x00,              //  8 header.frame_id = "w"
       0x00, 0x00,                                      // 14 pad to 4
       0x01, 0x00, 0x00, 0x00,                          // 16 poses: 1 element
       0x01, 0x00, 0x00, 0x00,                          // 20 poses[0].header.stamp.sec
       0x02, 0x00, 0x00, 0x00,                          // 24 nanosec
-      0x02, 0x00, 0x00, 0x00, 'w', 0x00,               // 28 frame_id = "w"
+      0x02, 0x00, 0x00, 0x00, 'w',  0x00,              // 28 frame_id = "w"
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00,              // 34 pad to 8 (XCDR1 aligns doubles to 8)
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xf8, 0x3f,  // 40 position.x = 1.5
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xc0,  // 48 position.y = -2

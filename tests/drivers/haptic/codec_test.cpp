@@ -3,11 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <random>
-#include <cstdio>
 #include <sstream>
 #include <string>
 
@@ -228,8 +228,8 @@ TEST(Codec, ForeignFramesAreNotMessages) {
   can::CanFrame err = frame_of(can::err::kBusOff, {0, 0, 0, 0, 0, 0, 0, 0});
   err.flags = can::CanFrame::kError;
   EXPECT_EQ(decode(err, m), DecodeError::not_data_frame);
-  for (std::uint32_t id : {0x001u, 0x07Fu, 0x080u, 0x100u, 0x105u, 0x180u, 0x300u, 0x385u, 0x580u, 0x605u,
-                           0x680u, 0x7FFu}) {
+  for (std::uint32_t id :
+       {0x001u, 0x07Fu, 0x080u, 0x100u, 0x105u, 0x180u, 0x300u, 0x385u, 0x580u, 0x605u, 0x680u, 0x7FFu}) {
     EXPECT_EQ(decode(frame_of(id, {0, 0, 0, 0, 0, 0, 0, 0}), m), DecodeError::unknown_id) << std::hex << id;
   }
   const std::uint8_t bytes[8] = {};
@@ -249,10 +249,17 @@ TEST(Codec, RandomFramesNeverCrashAndValidOnesAreCanonical) {
     if (rng() % 2 == 0) {  // often make reserved fields legal, to reach deeper
       if ((f.id & 0x780) == 0x180) f.data[6] &= 0x03;
       if ((f.id & 0x780) == 0x200) f.data[6] &= 0x01;
-      if ((f.id & 0x780) == 0x280) { f.data[0] = 0x05; f.data[1] &= 0x07; f.data[6] = 0; }
+      if ((f.id & 0x780) == 0x280) {
+        f.data[0] = 0x05;
+        f.data[1] &= 0x07;
+        f.data[6] = 0;
+      }
       if ((f.id & 0x780) == 0x700) f.data[0] = 0x7F;
       if ((f.id & 0x780) == 0x080) f.data[3] = 0xFF;
-      if (f.id == 0) { f.data[0] = 0x01; f.data[1] &= 0x7F; }
+      if (f.id == 0) {
+        f.data[0] = 0x01;
+        f.data[1] &= 0x7F;
+      }
       f.len = frame_spec(f.id == 0 ? MessageKind::nmt : MessageKind::position).dlc;
       if ((f.id & 0x780) == 0x700) f.len = 1;
     }
@@ -282,22 +289,32 @@ TEST(Codec, SignalTableMatchesTheEncoder) {
     }
   };
   m.position = {{-1.5, 2.25, 100.0}, kButtonClutch, 42};
-  expect = {{"Pos_X", -1.5}, {"Pos_Y", 2.25}, {"Pos_Z", 100.0}, {"Pos_ButtonGrasp", 0},
-            {"Pos_ButtonClutch", 1}, {"Pos_ButtonsReserved", 0}, {"Pos_Sequence", 42}};
+  expect = {{"Pos_X", -1.5},        {"Pos_Y", 2.25},         {"Pos_Z", 100.0},
+            {"Pos_ButtonGrasp", 0}, {"Pos_ButtonClutch", 1}, {"Pos_ButtonsReserved", 0},
+            {"Pos_Sequence", 42}};
   check(MessageKind::position);
   m.command = {{0.5, -1.25, 3.0}, true, 200};
-  expect = {{"Cmd_ForceX", 0.5}, {"Cmd_ForceY", -1.25}, {"Cmd_ForceZ", 3.0}, {"Cmd_Enable", 1},
-            {"Cmd_FlagsReserved", 0}, {"Cmd_Sequence", 200}};
+  expect = {{"Cmd_ForceX", 0.5}, {"Cmd_ForceY", -1.25},    {"Cmd_ForceZ", 3.0},
+            {"Cmd_Enable", 1},   {"Cmd_FlagsReserved", 0}, {"Cmd_Sequence", 200}};
   check(MessageKind::command);
   m.status = {NmtState::pre_operational, kStatusWatchdog, static_cast<std::uint16_t>(kFaultEncoder | 0x0120), 45.6, 3};
-  expect = {{"St_NmtState", 127}, {"St_ForceEnabled", 0}, {"St_Watchdog", 1}, {"St_Saturated", 0},
-            {"St_FlagsReserved", 0}, {"St_FaultOverCurrent", 0}, {"St_FaultOverTemperature", 0},
-            {"St_FaultAmplifier", 0}, {"St_FaultEncoder", 1}, {"St_FaultOther", 0x012},
-            {"St_MotorTemperature", 45.6}, {"St_Reserved", 0}, {"St_Sequence", 3}};
+  expect = {{"St_NmtState", 127},
+            {"St_ForceEnabled", 0},
+            {"St_Watchdog", 1},
+            {"St_Saturated", 0},
+            {"St_FlagsReserved", 0},
+            {"St_FaultOverCurrent", 0},
+            {"St_FaultOverTemperature", 0},
+            {"St_FaultAmplifier", 0},
+            {"St_FaultEncoder", 1},
+            {"St_FaultOther", 0x012},
+            {"St_MotorTemperature", 45.6},
+            {"St_Reserved", 0},
+            {"St_Sequence", 3}};
   check(MessageKind::status);
   m.emergency = {0x2310, 0x03, 1, -5.5, 1.5};
-  expect = {{"Emcy_Code", 0x2310}, {"Emcy_Register", 3}, {"Emcy_Axis", 1}, {"Emcy_Temperature", -5.5},
-            {"Emcy_Current", 1.5}};
+  expect = {
+      {"Emcy_Code", 0x2310}, {"Emcy_Register", 3}, {"Emcy_Axis", 1}, {"Emcy_Temperature", -5.5}, {"Emcy_Current", 1.5}};
   check(MessageKind::emergency);
   m.heartbeat = {NmtState::stopped};
   expect = {{"Hb_State", 4}};
@@ -348,7 +365,7 @@ bool parse_signal(const std::string& line, DbcSignal& s) {
 TEST(Codec, DbcFileMatchesTheProtocolTables) {
   std::ifstream in(VISVOL_HAPTIC_DBC);
   ASSERT_TRUE(in) << VISVOL_HAPTIC_DBC;
-  std::map<std::string, DbcFrame> frames;                      // by name
+  std::map<std::string, DbcFrame> frames;                            // by name
   std::map<std::string, std::pair<std::string, DbcSignal>> signals;  // name -> (frame, signal)
   std::map<std::uint32_t, int> cycle_ms;
   std::string line, current;

@@ -28,8 +28,7 @@ struct StandInRope {
   Eigen::Vector3d grad_fp_per_m = Eigen::Vector3d(0.05, 0.0, 0.2);  // more visible up and east
 
   void step(const Eigen::Vector3d& force_n, double dt_s) {
-    const Eigen::Vector3d f =
-        force_n - stiffness_n_per_m * (pos_m - anchor_m) - damping_n_s_per_m * vel_m_per_s;
+    const Eigen::Vector3d f = force_n - stiffness_n_per_m * (pos_m - anchor_m) - damping_n_s_per_m * vel_m_per_s;
     vel_m_per_s += f / mass_kg * dt_s;
     pos_m += vel_m_per_s * dt_s;
   }
@@ -47,15 +46,14 @@ struct ConsoleTick {
 };
 
 inline servo::ServoConfig test_servo_config() {
-  servo::ServoConfig c;     // 0.01 m/mm, K 40 N/m (400 N/m in the hand), 1.4 N, 100 N/s, 0.3 s
-  c.cue_gain_n_m = -0.5;    // hide: pushed down the visibility gradient
+  servo::ServoConfig c;   // 0.01 m/mm, K 40 N/m (400 N/m in the hand), 1.4 N, 100 N/s, 0.3 s
+  c.cue_gain_n_m = -0.5;  // hide: pushed down the visibility gradient
   return c;
 }
 
 class Console {
  public:
-  Console(haptic::DeviceDriver driver, servo::Servo servo)
-      : driver_(std::move(driver)), servo_(std::move(servo)) {}
+  Console(haptic::DeviceDriver driver, servo::Servo servo) : driver_(std::move(driver)), servo_(std::move(servo)) {}
 
   // One tick at now_ns: poll, servo, rope, command. Real-time safe (no allocation).
   ConsoleTick tick(std::int64_t now_ns) {
@@ -107,10 +105,10 @@ struct BusFrame {
 
 struct TrafficLimits {
   std::uint8_t node = 1;
-  double max_force_n = 1.4;               // the servo's clamp
+  double max_force_n = 1.4;  // the servo's clamp
   double slew_n_per_s = 100.0;
   std::int64_t position_timeout_ns = 10'000'000;
-  std::int64_t slack_ns = 0;              // timing tolerance (0 in simulated time)
+  std::int64_t slack_ns = 0;  // timing tolerance (0 in simulated time)
 };
 
 using haptic::norm3;

@@ -347,7 +347,7 @@ TEST_F(DriverTest, RecoversAfterADeviceReboot) {
   EXPECT_EQ(count(sent, MessageKind::nmt), 1);
   advance(kMs);
   heartbeat(NmtState::operational);
-  pos_seq_ = 0;  // a rebooted device counts from 0 again
+  pos_seq_ = 0;          // a rebooted device counts from 0 again
   position({40, 2, 3});  // and may report any position
   tick();
   EXPECT_EQ(driver().state(), DeviceState::operational);

@@ -11,10 +11,10 @@
 #include <sstream>
 
 #include "drivers/can/memory_bus.hpp"
-#include "tests/drivers/haptic/console_harness.hpp"
-#include "rt/base/alloc_counter.hpp"
 #include "drivers/hapticsim/script.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
+#include "rt/base/alloc_counter.hpp"
+#include "tests/drivers/haptic/console_harness.hpp"
 
 namespace visvol::testing {
 namespace {

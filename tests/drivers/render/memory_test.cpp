@@ -79,8 +79,8 @@ TEST(RendererMemory, FlatOverThreeHundredFramesOnARendererThread) {
       for (std::size_t i = 0; i < count; ++i) {
         const double t = static_cast<double>(i) / static_cast<double>(count - 1);
         const double a = 5.0 * t + 0.01 * n;
-        sample->vertices[i] = {{cx + 200 * std::cos(a), cy + 180 * std::sin(a), 80 + 20 * std::sin(0.1 * n + t)},
-                               t * 0.1, 50.0};
+        sample->vertices[i] = {
+            {cx + 200 * std::cos(a), cy + 180 * std::sin(a), 80 + 20 * std::sin(0.1 * n + t)}, t * 0.1, 50.0};
       }
       Frame f;
       f.view = views[n % 4];

@@ -47,7 +47,8 @@ TEST(PngEncoder, RoundTripsExactlyAsRgbWithAnyStride) {
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       for (int c = 0; c < 3; ++c) {
-        ASSERT_EQ(d.rgb[(static_cast<std::size_t>(y) * w + x) * 3 + c], px[static_cast<std::size_t>(y) * stride + x * 4 + c])
+        ASSERT_EQ(d.rgb[(static_cast<std::size_t>(y) * w + x) * 3 + c],
+                  px[static_cast<std::size_t>(y) * stride + x * 4 + c])
             << "pixel (" << x << ", " << y << ") channel " << c;
       }
     }

@@ -22,8 +22,8 @@ namespace visvol::render {
 namespace {
 
 using testing::blue_fraction;
-using testing::rgb_at;
 using testing::Rgb8;
+using testing::rgb_at;
 
 class RendererTest : public ::testing::Test {
  protected:
@@ -51,7 +51,9 @@ class RendererTest : public ::testing::Test {
     delete path_;
   }
 
-  static fields::FieldSampler<storage::PackLevel> sampler() { return fields::FieldSampler<storage::PackLevel>(*level_); }
+  static fields::FieldSampler<storage::PackLevel> sampler() {
+    return fields::FieldSampler<storage::PackLevel>(*level_);
+  }
   static const fields::VolumeGeometry& geometry() { return level_->geometry(); }
   static double fp_max() { return renderer_->scene_info().fp_max; }
 
@@ -139,8 +141,8 @@ TEST_F(RendererTest, TerrainIsColouredByFpAtTheChosenHeight) {
     }
   }
   std::sort(errors.begin(), errors.end());
-  EXPECT_LT(errors[errors.size() / 2], 0.02);        // median
-  EXPECT_LT(errors[errors.size() * 9 / 10], 0.06);   // 90th percentile (steep spots near the ridges)
+  EXPECT_LT(errors[errors.size() / 2], 0.02);       // median
+  EXPECT_LT(errors[errors.size() * 9 / 10], 0.06);  // 90th percentile (steep spots near the ridges)
 }
 
 TEST_F(RendererTest, TerrainAboveThePathsAltitudeIsGreyBelowItColoured) {
@@ -176,7 +178,8 @@ void expect_path_pixels(Renderer& r, const Frame& frame, const std::vector<PathP
   other.path = reversed.data();
   ASSERT_TRUE(r.render(other).ok());
   const Image first = r.image();
-  const std::vector<std::uint8_t> reversed_pixels(first.rgba, first.rgba + first.stride_bytes * static_cast<std::size_t>(first.height_px));
+  const std::vector<std::uint8_t> reversed_pixels(
+      first.rgba, first.rgba + first.stride_bytes * static_cast<std::size_t>(first.height_px));
   ASSERT_TRUE(r.render(frame).ok());
   const Image im = r.image();
   const PixelPoint start = *r.project(path.front().x_m, path.front().y_m, path.front().z_m);
@@ -190,10 +193,11 @@ void expect_path_pixels(Renderer& r, const Frame& frame, const std::vector<PathP
     ASSERT_LT(p->x, im.width_px);
     ++checked;
     const Rgb8 c = rgb_at(im, p->x, p->y);
-    const std::uint8_t* b = reversed_pixels.data() + static_cast<std::size_t>(p->y) * im.stride_bytes +
-                            static_cast<std::size_t>(p->x) * 4;
+    const std::uint8_t* b =
+        reversed_pixels.data() + static_cast<std::size_t>(p->y) * im.stride_bytes + static_cast<std::size_t>(p->x) * 4;
     const Rgb8 rc{b[0], b[1], b[2]};
-    const std::string where = "vertex " + std::to_string(i) + " at " + std::to_string(p->x) + ", " + std::to_string(p->y);
+    const std::string where =
+        "vertex " + std::to_string(i) + " at " + std::to_string(p->x) + ", " + std::to_string(p->y);
     EXPECT_LE(c.g, 3) << where;
     EXPECT_GT(c.r + c.b, 60) << where;  // lit, not the dark outline
     EXPECT_NEAR(blue_fraction(c), path[i].fp / fp_max, 0.05) << where;
@@ -379,8 +383,9 @@ TEST_F(RendererTest, PngOfTheFrameDecodesToItsPixelsAndFitsAThumbnailSample) {
   for (int y = 0; y < 192; ++y) {
     for (int x = 0; x < 256; ++x) {
       for (int c = 0; c < 3; ++c) {
-        ASSERT_EQ(d.rgb[(static_cast<std::size_t>(y) * 256 + static_cast<std::size_t>(x)) * 3 + static_cast<std::size_t>(c)],
-                  im.pixel(x, y)[c]);
+        ASSERT_EQ(
+            d.rgb[(static_cast<std::size_t>(y) * 256 + static_cast<std::size_t>(x)) * 3 + static_cast<std::size_t>(c)],
+            im.pixel(x, y)[c]);
       }
     }
   }
@@ -472,7 +477,8 @@ void compare_with_reference(Renderer& r, const std::string& name) {
   ASSERT_TRUE(n.ok()) << n.status().message();
   const char* update = std::getenv("VISVOL_UPDATE_RENDER_REFERENCE");
   if (update != nullptr && std::string(update) == "1") {
-    std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(*n));
+    std::ofstream(file, std::ios::binary)
+        .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(*n));
     GTEST_SKIP() << "rewrote " << file;
   }
   const std::vector<std::uint8_t> bytes = testing::read_file(file);
@@ -487,9 +493,11 @@ void compare_with_reference(Renderer& r, const std::string& name) {
   for (int y = 0; y < im.height_px; ++y) {
     for (int x = 0; x < im.width_px; ++x) {
       for (int c = 0; c < 3; ++c) {
-        const int diff = std::abs(im.pixel(x, y)[c] -
-                                  ref.rgb[(static_cast<std::size_t>(y) * static_cast<std::size_t>(im.width_px) +
-                                           static_cast<std::size_t>(x)) * 3 + static_cast<std::size_t>(c)]);
+        const int diff =
+            std::abs(im.pixel(x, y)[c] - ref.rgb[(static_cast<std::size_t>(y) * static_cast<std::size_t>(im.width_px) +
+                                                  static_cast<std::size_t>(x)) *
+                                                     3 +
+                                                 static_cast<std::size_t>(c)]);
         far += diff > 8;
         sum += diff;
       }

@@ -20,8 +20,8 @@ Box test_box() {
 std::array<Vec3, 8> corners_of(const Box& b) {
   std::array<Vec3, 8> c;
   for (int n = 0; n < 8; ++n) {
-    c[static_cast<std::size_t>(n)] = Vec3((n & 1) ? b.max.x() : b.min.x(), (n & 2) ? b.max.y() : b.min.y(),
-                                          (n & 4) ? b.max.z() : b.min.z());
+    c[static_cast<std::size_t>(n)] =
+        Vec3((n & 1) ? b.max.x() : b.min.x(), (n & 2) ? b.max.y() : b.min.y(), (n & 4) ? b.max.z() : b.min.z());
   }
   return c;
 }
@@ -173,10 +173,10 @@ TEST(TerrainMesh, ChoosesAboutOneVertexPerTwoPixels) {
   const std::vector<int> steps = {1, 2, 4, 8};
   EXPECT_EQ(choose_mesh_step(steps, 0.25), 8);  // 4 posts a pixel: a vertex every 2 pixels
   EXPECT_EQ(choose_mesh_step(steps, 0.5), 4);
-  EXPECT_EQ(choose_mesh_step(steps, 0.3), 4);   // 6.7 posts per 2 pixels: not 8
-  EXPECT_EQ(choose_mesh_step(steps, 2.0), 1);   // magnified: every post
-  EXPECT_EQ(choose_mesh_step({2, 4}, 10.0), 2);  // never finer than prepared
-  EXPECT_EQ(choose_mesh_step(steps, 0.0), 1);   // no scale known: the finest
+  EXPECT_EQ(choose_mesh_step(steps, 0.3), 4);       // 6.7 posts per 2 pixels: not 8
+  EXPECT_EQ(choose_mesh_step(steps, 2.0), 1);       // magnified: every post
+  EXPECT_EQ(choose_mesh_step({2, 4}, 10.0), 2);     // never finer than prepared
+  EXPECT_EQ(choose_mesh_step(steps, 0.0), 1);       // no scale known: the finest
   EXPECT_EQ(choose_mesh_step(steps, 0.5, 4.0), 8);  // a vertex per 4 x 4 pixels
 }
 
@@ -205,7 +205,7 @@ TEST(Tube, RingsAreRoundAroundThePathAndIndexedBetweenRings) {
 TEST(Overlay, CountsWhatDoesNotFitAndDrawsKnownGlyphs) {
   std::vector<float> buffer(12 * kOverlayFloats);
   OverlayBuilder o(buffer.data(), 12);
-  o.rect(0, 0, 10, 10, Rgba{1, 1, 1, 1});  // 6
+  o.rect(0, 0, 10, 10, Rgba{1, 1, 1, 1});                  // 6
   o.line(0, 0, 10, 0, 2, Rgba{1, 0, 0, 1}, 0.25f, 0.75f);  // 6
   EXPECT_EQ(o.vertex_count(), 12u);
   EXPECT_EQ(o.dropped(), 0u);

@@ -53,8 +53,8 @@ TEST(TransferFunction, OpacityPerStepComposesToOpacityPerUnit) {
 TEST(TransferFunction, DefaultIsValidRedToBlue) {
   const TransferFunction tf = default_transfer_function();
   ASSERT_TRUE(validate(tf, "default").ok());
-  EXPECT_GT(colour_at(tf, 0).r, colour_at(tf, 0).b);  // hidden: red
-  EXPECT_GT(colour_at(tf, 1).b, colour_at(tf, 1).r);  // seen: blue
+  EXPECT_GT(colour_at(tf, 0).r, colour_at(tf, 0).b);    // hidden: red
+  EXPECT_GT(colour_at(tf, 1).b, colour_at(tf, 1).r);    // seen: blue
   EXPECT_GT(opacity_at(tf, 0.1), opacity_at(tf, 0.9));  // hidden air is the denser fog
 }
 

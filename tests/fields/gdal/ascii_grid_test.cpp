@@ -13,9 +13,7 @@ namespace {
 
 using namespace visvol::fields::testing;
 
-bool mentions(const Status& st, const std::string& text) {
-  return st.message().find(text) != std::string::npos;
-}
+bool mentions(const Status& st, const std::string& text) { return st.message().find(text) != std::string::npos; }
 
 TEST(AsciiGrid, ANonNumericCellIsRefusedNamingItsColumnAndRow) {
   // GDAL reads "abc" as 0 m without a word: the red team's "a typo becomes sea level".
@@ -41,8 +39,7 @@ TEST(AsciiGrid, NumbersInEveryFormGdalReadsStillRead) {
 }
 
 TEST(AsciiGrid, AWordTooLongForANumberIsShownCut) {
-  const std::string path =
-      write_text("long_cell", ".asc", asc_text(12, "30", "500000", "1" + std::string(100, '0')));
+  const std::string path = write_text("long_cell", ".asc", asc_text(12, "30", "500000", "1" + std::string(100, '0')));
   const Status st = gdal::check_ascii_grid_cells(path, 12, 12);
   ASSERT_FALSE(st.ok());
   EXPECT_TRUE(mentions(st, "...', not a number")) << st.message();

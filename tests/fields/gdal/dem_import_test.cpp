@@ -75,8 +75,7 @@ TEST(DemImport, GridWithoutCrsInDegreesNeedsAssumeSrs) {
   EXPECT_NE(hf.status().message().find("--assume-srs"), std::string::npos) << hf.status().message();
 }
 
-std::string write_test_raster(const std::string& stem, const Heightfield& hf, const char* unit,
-                              double pixel_y = 0) {
+std::string write_test_raster(const std::string& stem, const Heightfield& hf, const char* unit, double pixel_y = 0) {
   const std::string path = ::testing::TempDir() + "/" + stem + "_" + std::to_string(getpid()) + ".tif";
   GDALAllRegister();
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
@@ -89,8 +88,8 @@ std::string write_test_raster(const std::string& stem, const Heightfield& hf, co
   ds->SetSpatialRef(&srs);
   GDALRasterBand* band = ds->GetRasterBand(1);
   if (unit) band->SetUnitType(unit);
-  EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, hf.nx, hf.ny, const_cast<float*>(hf.height_m.data()), hf.nx,
-                           hf.ny, GDT_Float32, 0, 0),
+  EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, hf.nx, hf.ny, const_cast<float*>(hf.height_m.data()), hf.nx, hf.ny,
+                           GDT_Float32, 0, 0),
             CE_None);
   GDALClose(ds);
   return path;
@@ -192,8 +191,7 @@ TEST(DemImport, ANegativeCellSizeIsRefusedNotWarpedUpsideDown) {
   const Result<Heightfield> hf = import_dem(path, o);
   ASSERT_FALSE(hf.ok());
   EXPECT_EQ(hf.status().code(), Errc::invalid_argument);
-  EXPECT_NE(hf.status().message().find(path + ": pixel size -30 x 30"), std::string::npos)
-      << hf.status().message();
+  EXPECT_NE(hf.status().message().find(path + ": pixel size -30 x 30"), std::string::npos) << hf.status().message();
   EXPECT_NE(hf.status().message().find("not north-up"), std::string::npos);
   // --area asks for the same grid first: refused the same way.
   EXPECT_FALSE(import_grid(path, o).ok());
@@ -248,9 +246,9 @@ TEST(DemImport, RotatedAndAbsurdGridsAreRefusedBeforeAnyWarp) {
 TEST(DemImport, GeographicGridsOffTheEarthAreRefused) {
   TiffSpec spec;
   spec.epsg = 4326;
-  const double off_earth[][6] = {{8, 0.001, 0, 95, 0, -0.001},      // north of the pole
-                                 {8, 5, 0, 50, 0, -5},              // 5 degree pixels
-                                 {8, 1e-9, 0, 50, 0, -1e-9}};       // nanodegree pixels
+  const double off_earth[][6] = {{8, 0.001, 0, 95, 0, -0.001},  // north of the pole
+                                 {8, 5, 0, 50, 0, -5},          // 5 degree pixels
+                                 {8, 1e-9, 0, 50, 0, -1e-9}};   // nanodegree pixels
   for (const auto& gt : off_earth) {
     std::copy(gt, gt + 6, spec.gt);
     const std::string path = write_hostile_tiff("off_earth", spec);
@@ -272,8 +270,7 @@ TEST(DemImport, AnOversizedWarpIsRefusedBeforeWarping) {
   o.spacing_m = 0.01;
   const Result<Heightfield> hf = import_dem(path, o);
   ASSERT_FALSE(hf.ok());
-  EXPECT_NE(hf.status().message().find("would be 120000 x 120000 posts at 0.01 m spacing"),
-            std::string::npos)
+  EXPECT_NE(hf.status().message().find("would be 120000 x 120000 posts at 0.01 m spacing"), std::string::npos)
       << hf.status().message();
   o.spacing_m = 1;  // 1200 x 1200, over a small post budget
   o.max_posts = 1000000;

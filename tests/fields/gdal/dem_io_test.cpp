@@ -22,13 +22,11 @@ std::string temp_name(const std::string& stem) {
 TEST(DemIo, RefusesNodataByDefaultCountingThePosts) {
   const Result<Heightfield> hf = read_heightfield(test_data("sf_north_utm10_30m.tif"));
   ASSERT_FALSE(hf.ok());
-  EXPECT_NE(hf.status().message().find("2863 posts are nodata"), std::string::npos)
-      << hf.status().message();
+  EXPECT_NE(hf.status().message().find("2863 posts are nodata"), std::string::npos) << hf.status().message();
 }
 
 TEST(DemIo, ReadsSanFranciscoNorthWithPixelCentres) {
-  const Result<Heightfield> hf =
-      read_heightfield(test_data("sf_north_utm10_30m.tif"), {NodataPolicy::fill});
+  const Result<Heightfield> hf = read_heightfield(test_data("sf_north_utm10_30m.tif"), {NodataPolicy::fill});
   ASSERT_TRUE(hf.ok()) << hf.status().message();
   EXPECT_EQ(hf->nx, 370);
   EXPECT_EQ(hf->ny, 466);
@@ -84,10 +82,9 @@ TEST(DemIo, ArchivesReadLocalFilesOnlyAndTheArchiveIsChecked) {
   const std::string fifo = temp_name("fifo") + ".gz";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
   // braced names nest: the innermost archive is the one checked
-  for (const std::string& virtual_path : {"/vsigzip/" + fifo, "/vsizip/{" + fifo + "}/dem.tif",
-                                          "/vsitar//vsigzip/" + fifo + "/dem.tif",
-                                          "/vsizip/{/vsigzip/" + fifo + "}/dem.tif",
-                                          "/vsizip/{/vsizip/{" + fifo + "}/inner.zip}/dem.tif"}) {
+  for (const std::string& virtual_path :
+       {"/vsigzip/" + fifo, "/vsizip/{" + fifo + "}/dem.tif", "/vsitar//vsigzip/" + fifo + "/dem.tif",
+        "/vsizip/{/vsigzip/" + fifo + "}/dem.tif", "/vsizip/{/vsizip/{" + fifo + "}/inner.zip}/dem.tif"}) {
     const Result<Heightfield> f = read_heightfield(virtual_path);
     ASSERT_FALSE(f.ok()) << virtual_path;
     EXPECT_NE(f.status().message().find(fifo + ": is a FIFO"), std::string::npos) << f.status().message();
@@ -248,8 +245,7 @@ TEST(DemIo, RefusesGeotransformsNoDemShouldHaveSayingWhatWasFound) {
     ASSERT_FALSE(hf.ok()) << bad.what;
     EXPECT_EQ(hf.status().code(), Errc::invalid_argument) << bad.what;
     EXPECT_EQ(hf.status().message().rfind(path + ": ", 0), 0u) << bad.what << ": " << hf.status().message();
-    EXPECT_NE(hf.status().message().find(bad.message), std::string::npos)
-        << bad.what << ": " << hf.status().message();
+    EXPECT_NE(hf.status().message().find(bad.message), std::string::npos) << bad.what << ": " << hf.status().message();
     std::remove(path.c_str());
   }
 }

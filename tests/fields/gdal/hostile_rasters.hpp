@@ -20,10 +20,10 @@ inline std::string hostile_path(const std::string& stem, const std::string& ext)
 }
 
 struct TiffSpec {
-  int n = 12;                                              // posts a side
-  double gt[6] = {500000, 30, 0, 4001000, 0, -30};         // GDAL order
-  const char* unit = nullptr;                              // band unit; none when null
-  int epsg = 32633;                                        // 0: no CRS
+  int n = 12;                                       // posts a side
+  double gt[6] = {500000, 30, 0, 4001000, 0, -30};  // GDAL order
+  const char* unit = nullptr;                       // band unit; none when null
+  int epsg = 32633;                                 // 0: no CRS
 };
 
 // A float GeoTIFF of gently sloping heights (100 m and up) as `spec` says.
@@ -46,8 +46,7 @@ inline std::string write_hostile_tiff(const std::string& stem, const TiffSpec& s
   if (spec.unit) band->SetUnitType(spec.unit);
   std::vector<float> h(static_cast<std::size_t>(spec.n) * static_cast<std::size_t>(spec.n));
   for (std::size_t k = 0; k < h.size(); ++k) h[k] = 100.0f + static_cast<float>(k % 7);
-  EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, spec.n, spec.n, h.data(), spec.n, spec.n, GDT_Float32, 0, 0),
-            CE_None);
+  EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, spec.n, spec.n, h.data(), spec.n, spec.n, GDT_Float32, 0, 0), CE_None);
   GDALClose(GDALDataset::ToHandle(ds));
   return path;
 }
@@ -57,8 +56,8 @@ inline std::string write_hostile_tiff(const std::string& stem, const TiffSpec& s
 inline std::string asc_text(int n, const std::string& cellsize = "30", const std::string& xll = "500000",
                             const std::string& cell = "") {
   std::ostringstream s;
-  s << "ncols " << n << "\nnrows " << n << "\nxllcorner " << xll << "\nyllcorner 4000000\ncellsize "
-    << cellsize << "\nNODATA_value -9999\n";
+  s << "ncols " << n << "\nnrows " << n << "\nxllcorner " << xll << "\nyllcorner 4000000\ncellsize " << cellsize
+    << "\nNODATA_value -9999\n";
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       s << (i ? " " : "");

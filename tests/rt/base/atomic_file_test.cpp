@@ -104,8 +104,7 @@ TEST_F(AtomicFile, DeviceFifoAndDirectoryDestinationsAreRefusedAndLeftAsTheyAre)
   const std::string fifo = dir_ + "/fifo", folder = dir_ + "/folder";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
   ASSERT_EQ(::mkdir(folder.c_str(), 0755), 0);
-  const std::pair<std::string, mode_t> cases[] = {
-      {device_node(dir_), S_IFCHR}, {fifo, S_IFIFO}, {folder, S_IFDIR}};
+  const std::pair<std::string, mode_t> cases[] = {{device_node(dir_), S_IFCHR}, {fifo, S_IFIFO}, {folder, S_IFDIR}};
   for (const auto& [path, type] : cases) {
     const Status st = write_file_atomically(path, "x");
     ASSERT_FALSE(st.ok()) << path;

@@ -257,7 +257,8 @@ TEST(ConstraintHullsBudget, ReservesThreeSetsOfTwoFoldedHullsAndStatesWhatABuild
   EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 1), 3u * 2 * 370 * 466 * 4);
   EXPECT_EQ(ConstraintHulls::reserved_bytes(g, 0), 0u);
   // all observers where the sets fit, none where they do not
-  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 1)), ConstraintHulls::kMaxObservers);
+  EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 1)),
+            ConstraintHulls::kMaxObservers);
   EXPECT_EQ(ConstraintHulls::observers_within(g, ConstraintHulls::reserved_bytes(g, 1) - 1), 0);
   EXPECT_EQ(ConstraintHulls::observers_within(g, std::uint64_t{1} << 40), ConstraintHulls::kMaxObservers);
   // heightfield and hull, horizon 931^2, and the terrain padded by a few posts

@@ -269,7 +269,8 @@ TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
   ASSERT_TRUE(e);
   auto full_set = [&](std::uint64_t sequence, double clearance_m) {
     msg::Command c = command(msg::CommandKind::set_constraints, sequence);
-    while (c.constraints.count < msg::kMaxConstraints) add(c, msg::ConstraintKind::clearance, Vec3::Zero(), clearance_m);
+    while (c.constraints.count < msg::kMaxConstraints)
+      add(c, msg::ConstraintKind::clearance, Vec3::Zero(), clearance_m);
     return c;
   };
   msg::Command show = command(msg::CommandKind::set_objective, 1);
@@ -299,7 +300,8 @@ TEST_F(ExecutiveTest, ABurstOfLargeConstraintSetsIsSpreadOverTicks) {
   EXPECT_FALSE(acks_.try_pop(extra)) << "a command acknowledged twice: " << extra.sequence;
   EXPECT_FALSE(e->counters().running);
   // two partial sets within one full set's items go in one tick
-  msg::Command part_a = command(msg::CommandKind::set_constraints, 6), part_b = command(msg::CommandKind::set_constraints, 7);
+  msg::Command part_a = command(msg::CommandKind::set_constraints, 6),
+               part_b = command(msg::CommandKind::set_constraints, 7);
   while (part_a.constraints.count < 200) add(part_a, msg::ConstraintKind::clearance, Vec3::Zero(), 33);
   while (part_b.constraints.count < 300) add(part_b, msg::ConstraintKind::clearance, Vec3::Zero(), 35);
   ASSERT_TRUE(commands_.try_push(part_a) && commands_.try_push(part_b));

@@ -18,7 +18,7 @@ TEST(DurationHistogram, PercentilesAreTheUpperEdgeOfTheirBin) {
   DurationHistogram h;
   for (int us = 1; us <= 100; ++us) h.add(us * 1000 + 300);  // 1.3 us .. 100.3 us
   EXPECT_EQ(h.count(), 100u);
-  EXPECT_DOUBLE_EQ(h.percentile_us(0.5), 51.0);   // the 50th sample is 50.3 us: bin [50, 51)
+  EXPECT_DOUBLE_EQ(h.percentile_us(0.5), 51.0);  // the 50th sample is 50.3 us: bin [50, 51)
   EXPECT_DOUBLE_EQ(h.percentile_us(0.99), 100.0);
   EXPECT_DOUBLE_EQ(h.percentile_us(1.0), 100.3);  // capped at the exact maximum
   EXPECT_DOUBLE_EQ(h.min_us(), 1.3);
@@ -38,7 +38,8 @@ TEST(DurationHistogram, NeverUnderstatesAPercentile) {
   std::sort(samples.begin(), samples.end());
   for (double p : {0.5, 0.9, 0.99, 0.999}) {
     const double exact_us =
-        static_cast<double>(samples[static_cast<std::size_t>(std::ceil(p * static_cast<double>(samples.size()))) - 1]) * 1e-3;
+        static_cast<double>(samples[static_cast<std::size_t>(std::ceil(p * static_cast<double>(samples.size()))) - 1]) *
+        1e-3;
     const double got = h.percentile_us(p);
     EXPECT_GE(got, exact_us) << p;
     // within one bin: 1 us below 1 ms, 10 us below 10 ms, 100 us below 100 ms
@@ -49,8 +50,8 @@ TEST(DurationHistogram, NeverUnderstatesAPercentile) {
 
 TEST(DurationHistogram, LongAndNegativeDurations) {
   DurationHistogram h;
-  h.add(-5);            // a clock step backwards counts as zero
-  h.add(250'000'000);   // 250 ms: the overflow bin, exact maximum kept
+  h.add(-5);           // a clock step backwards counts as zero
+  h.add(250'000'000);  // 250 ms: the overflow bin, exact maximum kept
   EXPECT_EQ(h.count(), 2u);
   EXPECT_DOUBLE_EQ(h.min_us(), 0.0);
   EXPECT_DOUBLE_EQ(h.max_us(), 250000.0);

@@ -53,7 +53,7 @@ LoopConfig test_config() {
   c.period_ns = 1'000'000;
   c.overrun_limit = 3;
   c.report_ticks = 50;
-  c.realtime.priority = 0;        // tests run unprivileged too
+  c.realtime.priority = 0;  // tests run unprivileged too
   c.realtime.lock_memory = false;
   return c;
 }
@@ -98,7 +98,7 @@ TEST(PeriodicLoop, TicksAtAbsoluteDeadlinesAndReports) {
 TEST(PeriodicLoop, OverrunsInARowCallTheSafeStateOnce) {
   CountingTask task;
   task.slow_from = 20;
-  task.slow_ticks = 6;        // six ticks of 1.6 ms: each ends after its period
+  task.slow_ticks = 6;  // six ticks of 1.6 ms: each ends after its period
   task.slow_ns = 1'600'000;
   PeriodicLoop loop(task);
   ASSERT_TRUE(loop.start(test_config()).ok());
@@ -116,7 +116,7 @@ TEST(PeriodicLoop, SkippedDeadlinesAreNotRunLate) {
   CountingTask task;
   task.slow_from = 10;
   task.slow_ticks = 1;
-  task.slow_ns = 5'500'000;   // one tick of 5.5 ms: five deadlines pass
+  task.slow_ns = 5'500'000;  // one tick of 5.5 ms: five deadlines pass
   PeriodicLoop loop(task);
   ASSERT_TRUE(loop.start(test_config()).ok());
   std::this_thread::sleep_for(std::chrono::milliseconds(100));

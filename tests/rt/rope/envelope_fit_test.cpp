@@ -72,7 +72,8 @@ TEST_F(FitOnRelief, RandomWigglesBecomeFlyableAndKeepTheirEnds) {
     if (!fit.feasible) continue;
     ++feasible;
     const PathCheck c = judge(fit.path, envelope());
-    for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << "trial " << trial << ": " << l.name << " worst " << l.worst;
+    for (const LimitResult& l : c.envelope)
+      EXPECT_TRUE(l.met) << "trial " << trial << ": " << l.name << " worst " << l.worst;
   }
   EXPECT_GE(feasible, 15);
 }
@@ -129,7 +130,8 @@ TEST_F(FitOnRelief, TurnsHoldWhereTheHeightsSplitSegments) {
     if (!fit.feasible) continue;
     ++feasible;
     const PathCheck c = judge(fit.path, e);
-    for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << "trial " << trial << ": " << l.name << " worst " << l.worst;
+    for (const LimitResult& l : c.envelope)
+      EXPECT_TRUE(l.met) << "trial " << trial << ": " << l.name << " worst " << l.worst;
   }
   EXPECT_GE(split, 4) << "the band should make the fit split segments";
   // 10 of 12 when a split could fall at a segment's end and the turns were

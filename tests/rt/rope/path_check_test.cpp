@@ -63,7 +63,8 @@ TEST_F(WallTerrain, FractionsAreShareOfLengthAndAgreeWithR3) {
       const Vec3 p = path[k - 1] + (path[k] - path[k - 1]) * ((q + 0.5) / n);
       const Vec3 eye = s.constraints[0].eye_m();
       seen += fields::r3_visible(terrain, terrain.i_of(eye.x()), terrain.j_of(eye.y()), eye.z(), terrain.i_of(p.x()),
-                                 terrain.j_of(p.y()), p.z(), 0.0) * len / n;
+                                 terrain.j_of(p.y()), p.z(), 0.0) *
+              len / n;
       total += len / n;
     }
   }

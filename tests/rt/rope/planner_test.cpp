@@ -74,9 +74,9 @@ class PrismExperiment : public ::testing::Test {
     const Vec3 mid = res->final_path[res->final_path.size() / 2];
     const double mid_x = terrain_->i_of(mid.x());
     std::cout << name << " (" << to_string(model) << "): F_c straight " << res->initial.fc << ", rope "
-              << res->final_metrics.fc << ", graph search " << graph_fc << "; middle of the path over post x "
-              << mid_x << " at " << mid.z() << " m; equilibrium after " << res->equilibrium_s
-              << " s on the finest level (" << res->simulated_s << " s in all)\n";
+              << res->final_metrics.fc << ", graph search " << graph_fc << "; middle of the path over post x " << mid_x
+              << " at " << mid.z() << " m; equilibrium after " << res->equilibrium_s << " s on the finest level ("
+              << res->simulated_s << " s in all)\n";
     EXPECT_GT(res->final_metrics.fc, res->initial.fc) << name;
     EXPECT_GE(res->final_metrics.fc, 0.9 * graph_fc) << name;
     // The paper: "the visibility maximizing path always passed over the valley
@@ -93,7 +93,9 @@ class PrismExperiment : public ::testing::Test {
 fields::Heightfield* PrismExperiment::terrain_ = nullptr;
 std::vector<DenseLevel>* PrismExperiment::levels_ = nullptr;
 
-TEST_F(PrismExperiment, EndsTenUnitsUp) { run("ends 10 units up", at(16, 4, 100), at(16, 59, 100), RopeModel::articulated); }
+TEST_F(PrismExperiment, EndsTenUnitsUp) {
+  run("ends 10 units up", at(16, 4, 100), at(16, 59, 100), RopeModel::articulated);
+}
 TEST_F(PrismExperiment, DiagonalDestination) {
   run("diagonal destination", at(16, 4, 100), at(56, 59, 100), RopeModel::articulated);
 }
@@ -224,7 +226,7 @@ TEST(PlannerLevels, AStartFromAMiddleLevelSettlesFromThereToTheFinest) {
   r.segments = 32;
   r.max_seconds_per_level = 1.0;  // what is tested is the order of the levels, not where the rope ends
   r.max_search_voxels = (*levels)[1].geometry().voxel_count();  // the middle level, not the finest
-  std::vector<int> order;  // the levels in the order the rope settled on them
+  std::vector<int> order;                                       // the levels in the order the rope settled on them
   const Result<PlanResult> res = plan(pointers(*levels), r, [&](const PlanProgress& p) {
     if (order.empty() || order.back() != p.level) order.push_back(p.level);
   });
@@ -245,8 +247,9 @@ double seen_share_r3(const fields::Heightfield& t, const Vec3& eye, const std::v
     const int n = std::max(1, static_cast<int>(std::ceil(len)));
     for (int q = 0; q < n; ++q) {
       const Vec3 p = path[k - 1] + (path[k] - path[k - 1]) * ((q + 0.5) / n);
-      seen += fields::r3_visible(t, t.i_of(eye.x()), t.j_of(eye.y()), eye.z(), t.i_of(p.x()), t.j_of(p.y()), p.z(),
-                                 0.0) * len / n;
+      seen +=
+          fields::r3_visible(t, t.i_of(eye.x()), t.j_of(eye.y()), eye.z(), t.i_of(p.x()), t.j_of(p.y()), p.z(), 0.0) *
+          len / n;
       total += len / n;
     }
   }
@@ -290,9 +293,9 @@ TEST_F(RealTerrain, Fig10HiddenFromAndVisibleToHoldByExactSightLines) {
             << free_seen << " -> " << shown_seen << " (planner says "
             << shown->final_check.constraints[0].satisfied_fraction << ", " << shown->chosen << ")\n";
   std::cout << "  ends seen by p1: " << held->final_check.per_vertex.front().seen_by[0] << " "
-            << held->final_check.per_vertex.back().seen_by[0] << ", by p2: "
-            << shown->final_check.per_vertex.front().seen_by[0] << " " << shown->final_check.per_vertex.back().seen_by[0]
-            << "\n";
+            << held->final_check.per_vertex.back().seen_by[0]
+            << ", by p2: " << shown->final_check.per_vertex.front().seen_by[0] << " "
+            << shown->final_check.per_vertex.back().seen_by[0] << "\n";
   for (const auto* res : {&free, &held, &shown}) {
     for (const std::string& u : (*res)->final_check.unmet()) std::cout << "  unmet: " << u << "\n";
   }
@@ -407,7 +410,8 @@ TEST_F(RealTerrain, TheStepDoesNotChangeTheAnswer) {
   const Result<PlanResult> fine_step = plan(pointers(*levels_), fine);
   ASSERT_TRUE(coarse_step.ok() && fine_step.ok());
   std::cout << "F_c from " << fine_step->initial.fc << ": at 4 ms " << coarse_step->final_metrics.fc << " ("
-            << coarse_step->chosen << "), at 1 ms " << fine_step->final_metrics.fc << " (" << fine_step->chosen << ")\n";
+            << coarse_step->chosen << "), at 1 ms " << fine_step->final_metrics.fc << " (" << fine_step->chosen
+            << ")\n";
   // the rope's answer in both, not the start's
   EXPECT_EQ(coarse_step->chosen, "rope");
   EXPECT_EQ(fine_step->chosen, "rope");
@@ -564,7 +568,8 @@ TEST(PlanValidate, ObserversAreBoundedOnlyByTheTimeToBuildTheirHulls) {
   r.constraints.assign(kMaxPlanObservers, c);
   EXPECT_TRUE(validate(r).ok()) << validate(r).message();
   r.constraints.push_back(c);
-  EXPECT_NE(validate(r).message().find("more than 256 --visible-to points"), std::string::npos) << validate(r).message();
+  EXPECT_NE(validate(r).message().find("more than 256 --visible-to points"), std::string::npos)
+      << validate(r).message();
 }
 
 // The planner's step: the 4 ms asked for the articulated ropes it lays on
@@ -588,8 +593,9 @@ TEST(PlanValidate, InitialPathPointsOutsideThePlanningBoundsAreRefusedByIndex) {
   r.planning_bounds = fields::Bounds2D{0, 0, 5000, 1000};
   r.init = InitialPath::polyline;
   r.polyline = {r.from, Vec3(500, 1.0e7, 50), r.to};
-  EXPECT_NE(validate(r).message().find("initial path point 1 (500.0, 10000000.0) is outside the pack's planning bounds"),
-            std::string::npos)
+  EXPECT_NE(
+      validate(r).message().find("initial path point 1 (500.0, 10000000.0) is outside the pack's planning bounds"),
+      std::string::npos)
       << validate(r).message();
   r.polyline[1].y() = 500;
   EXPECT_TRUE(validate(r).ok()) << validate(r).message();

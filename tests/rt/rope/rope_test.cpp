@@ -87,8 +87,11 @@ TEST(Rope, ResetRefusesBadPaths) {
 // message form on every case and refuses segments shorter than kMinSegmentM.
 TEST(Rope, CheckPolylineAgreesWithItsDescription) {
   const double inf = std::numeric_limits<double>::infinity();
-  const Vec3 paths[][2] = {{{0, 0, 0}, {100, 0, 0}}, {{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {0, 0, 0}},
-                           {{0, 0, 0}, {inf, 0, 0}}, {{std::nan(""), 0, 0}, {1, 0, 0}}};
+  const Vec3 paths[][2] = {{{0, 0, 0}, {100, 0, 0}},
+                           {{0, 0, 0}, {1, 0, 0}},
+                           {{0, 0, 0}, {0, 0, 0}},
+                           {{0, 0, 0}, {inf, 0, 0}},
+                           {{std::nan(""), 0, 0}, {1, 0, 0}}};
   for (const auto& path : paths) {
     for (int segments : {0, 1, 2, 8, 200, 201, 1000}) {
       const Errc e = check_polyline(path, 2, segments, 1, 500);
@@ -107,7 +110,7 @@ TEST(Rope, ResampleSpacesPointsEquallyAlongThePath) {
   ASSERT_TRUE(resample_polyline(path, 3, 7, out).ok());
   EXPECT_EQ(out[0], path[0]);
   EXPECT_EQ(out[7], path[2]);
-  EXPECT_NEAR((out[3] - Vec3(30, 0, 0)).norm(), 0.0, 1e-9);  // 30 m along
+  EXPECT_NEAR((out[3] - Vec3(30, 0, 0)).norm(), 0.0, 1e-9);   // 30 m along
   EXPECT_NEAR((out[5] - Vec3(30, 20, 0)).norm(), 0.0, 1e-9);  // 50 m along
 }
 
@@ -171,7 +174,8 @@ TEST(Rope, RandomEndsAndSegmentsNeverGiveANonFinitePosition) {
     if (!rope.reset(line.data(), static_cast<int>(line.size()), segments).ok()) {
       ++refused;
       ASSERT_EQ(rope.segments(), 8) << "trial " << trial;
-      for (int i = 0; i <= 8; ++i) ASSERT_EQ(rope.vertices()[i], kept[static_cast<std::size_t>(i)]) << "trial " << trial;
+      for (int i = 0; i <= 8; ++i)
+        ASSERT_EQ(rope.vertices()[i], kept[static_cast<std::size_t>(i)]) << "trial " << trial;
       continue;
     }
     rope.set_ends(ends);
@@ -285,7 +289,7 @@ TEST(Rope, PaysOutLengthAtTheSpool) {
       rope->step(0.001, drag);
     }
     for (int i = 0; i <= rope->segments(); ++i) ASSERT_TRUE(rope->vertices()[i].allFinite());
-    EXPECT_LT((rope->vertices()[0] - ends.start_m).norm(), 1e-3);  // still held at the spool
+    EXPECT_LT((rope->vertices()[0] - ends.start_m).norm(), 1e-3);   // still held at the spool
     EXPECT_GT(rope->length_m(), before + 5.0) << to_string(model);  // the paid-out length is used
   }
   RopeParams p = scaled_rope_params(RopeModel::articulated, 8, 10.0, 1.0, 1000.0);

@@ -27,8 +27,8 @@ double ramp_ground(double x, double) { return 0.1 * x; }
 std::vector<Vec3> lay(const Vec3& a, const Vec3& b, int n, int half_waves, double length_m, double floor_m,
                       double* laid_m) {
   std::vector<Vec3> out(static_cast<std::size_t>(n) + 1);
-  *laid_m = lay_with_slack([&](int i) { return Vec3(a + (double(i) / n) * (b - a)); }, n, half_waves, length_m,
-                           floor_m, field(), ramp_ground, out.data());
+  *laid_m = lay_with_slack([&](int i) { return Vec3(a + (double(i) / n) * (b - a)); }, n, half_waves, length_m, floor_m,
+                           field(), ramp_ground, out.data());
   return out;
 }
 

@@ -63,16 +63,14 @@ TEST(ServoConfig, DefaultsAreValidAndBadFieldsAreNamed) {
   EXPECT_NE(message([](ServoConfig& c) { c.slew_n_per_s = 0.0; }).find("slew_n_per_s"), std::string::npos);
   EXPECT_NE(message([](ServoConfig& c) { c.world_m_per_device_mm = std::nan(""); }).find("world_m_per_device_mm"),
             std::string::npos);
-  EXPECT_NE(message([](ServoConfig& c) { c.device_to_world(0, 0) = -1.0; }).find("device_to_world"),
-            std::string::npos)
+  EXPECT_NE(message([](ServoConfig& c) { c.device_to_world(0, 0) = -1.0; }).find("device_to_world"), std::string::npos)
       << "a reflection is no rotation";
   EXPECT_NE(message([](ServoConfig& c) { c.coupling_stiffness_n_per_m = 100.0; }).find("above the device's stable"),
             std::string::npos)
       << "100 N/m x 0.01 m/mm x 1000 = 1000 N/m in the hand";
   EXPECT_NE(message([](ServoConfig& c) { c.coupling_damping_n_s_per_m = 1.0; }).find("coupling_damping"),
             std::string::npos);
-  EXPECT_NE(message([](ServoConfig& c) { c.world_offset_m.x() = INFINITY; }).find("world_offset_m"),
-            std::string::npos);
+  EXPECT_NE(message([](ServoConfig& c) { c.world_offset_m.x() = INFINITY; }).find("world_offset_m"), std::string::npos);
 }
 
 TEST(Servo, MapsTheHandleIntoTheWorld) {

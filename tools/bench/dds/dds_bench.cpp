@@ -159,13 +159,11 @@ void latency(const LatencyRun& run, std::size_t samples) {
   int ready[2], out[2];
   if (::pipe(ready) != 0 || ::pipe(out) != 0) return;
   // a fresh process (this binary again), not a fork of one with DDS threads
-  const std::string domain = std::to_string(g_domain), rfd = std::to_string(ready[1]),
-                    ofd = std::to_string(out[1]);
+  const std::string domain = std::to_string(g_domain), rfd = std::to_string(ready[1]), ofd = std::to_string(out[1]);
   const char* args[] = {"/proc/self/exe", "--subscriber", ns.c_str(), domain.c_str(),
-                        rfd.c_str(), ofd.c_str(), nullptr};
+                        rfd.c_str(),      ofd.c_str(),    nullptr};
   pid_t child = -1;
-  if (posix_spawn(&child, "/proc/self/exe", nullptr, nullptr, const_cast<char**>(args),
-                  environ) != 0) {
+  if (posix_spawn(&child, "/proc/self/exe", nullptr, nullptr, const_cast<char**>(args), environ) != 0) {
     std::printf("%-44s  cannot start the subscriber process\n", run.label);
     return;
   }
@@ -179,8 +177,7 @@ void latency(const LatencyRun& run, std::size_t samples) {
   Result<std::unique_ptr<PathPublisher>> direct = PathPublisher::create(*p);
   if (!live.ok() || !direct.ok()) return;
   const auto deadline = Clock::now() + std::chrono::seconds(10);
-  while (((*live)->path_subscribers() < 1 || (*direct)->path_update_subscribers() < 1) &&
-         Clock::now() < deadline) {
+  while (((*live)->path_subscribers() < 1 || (*direct)->path_update_subscribers() < 1) && Clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
 
@@ -223,12 +220,11 @@ void latency(const LatencyRun& run, std::size_t samples) {
     std::printf("%-44s  no result from the subscriber\n", run.label);
     return;
   }
-  std::printf("%-44s  p50 %7.1f us  p99 %7.1f us  max %8.1f us  (%zu samples, p99 %s 1 ms)\n",
-              run.label, s.p50_us, s.p99_us, s.max_us, s.count, s.p99_us < 1000.0 ? "<" : ">=");
+  std::printf("%-44s  p50 %7.1f us  p99 %7.1f us  max %8.1f us  (%zu samples, p99 %s 1 ms)\n", run.label, s.p50_us,
+              s.p99_us, s.max_us, s.count, s.p99_us < 1000.0 ? "<" : ">=");
   if (!run.direct) {
     std::printf("%-44s  publisher thread %.2f%% of a core (%llu paths in %.1f s)\n", "",
-                cpu_s >= 0.0 ? 100.0 * cpu_s / wall_s : -1.0,
-                static_cast<unsigned long long>(published), wall_s);
+                cpu_s >= 0.0 ? 100.0 * cpu_s / wall_s : -1.0, static_cast<unsigned long long>(published), wall_s);
   }
   for (int fd : {ready[0], ready[1], out[0], out[1]}) ::close(fd);
 }
@@ -333,13 +329,16 @@ int main(int argc, char** argv) {
     }
   }
   if (run_latency) {
-    std::printf("Latency, real-time hand-off to a subscriber in another process "
-                "(loopback, domain %u, 64-vertex paths):\n", g_domain);
+    std::printf(
+        "Latency, real-time hand-off to a subscriber in another process "
+        "(loopback, domain %u, 64-vertex paths):\n",
+        g_domain);
     latency({"DDS alone: dds_write to the subscriber", 40.0, 50.0, true}, samples);
     latency({"events every 25 ms (each published at once)", 40.0, 50.0, false}, samples);
     latency({"1 kHz producer, 50 Hz path rate", 1000.0, 50.0, false}, samples);
-    std::printf("Executive timing with and without publishing: visvol-rtbench --compare-dds N "
-                "(alternating runs of the 1 kHz loop, medians side by side).\n\n");
+    std::printf(
+        "Executive timing with and without publishing: visvol-rtbench --compare-dds N "
+        "(alternating runs of the 1 kHz loop, medians side by side).\n\n");
   }
   int bench_argc = static_cast<int>(rest.size());
   benchmark::Initialize(&bench_argc, rest.data());

@@ -14,8 +14,8 @@
 #include "drivers/can/memory_bus.hpp"
 #include "drivers/haptic/codec.hpp"
 #include "drivers/haptic/device_driver.hpp"
-#include "rt/servo/servo.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
+#include "rt/servo/servo.hpp"
 
 namespace {
 
@@ -26,8 +26,7 @@ constexpr double kBitRate = 1e6;
 void print_bus_load() {
   std::printf("Bus load at 1 Mbit/s, classic CAN, 11-bit identifiers\n");
   std::printf("(frame bits = 47 + 8 x DLC; worst-case stuffing adds (34 + 8 x DLC - 1) / 4)\n\n");
-  std::printf("%-13s %3s %8s %5s %8s %9s %10s\n", "frame", "dlc", "rate/s", "bits", "stuffed", "kbit/s",
-              "stuffed");
+  std::printf("%-13s %3s %8s %5s %8s %9s %10s\n", "frame", "dlc", "rate/s", "bits", "stuffed", "kbit/s", "stuffed");
   double nominal = 0.0, stuffed = 0.0;
   for (const haptic::FrameSpec& f : haptic::kFrames) {
     if (f.rate_hz <= 0.0) continue;
@@ -38,9 +37,10 @@ void print_bus_load() {
                 haptic::frame_bits_stuffed(f.dlc), n / 1e3, s / 1e3);
   }
   std::printf("%-13s %3s %8s %5s %8s %9.1f %10.1f\n", "total", "", "", "", "", nominal / 1e3, stuffed / 1e3);
-  std::printf("\nload: %.1f %% nominal, %.1f %% with worst-case stuffing "
-              "(emergency and NMT are rare events, not counted)\n\n",
-              100.0 * nominal / kBitRate, 100.0 * stuffed / kBitRate);
+  std::printf(
+      "\nload: %.1f %% nominal, %.1f %% with worst-case stuffing "
+      "(emergency and NMT are rare events, not counted)\n\n",
+      100.0 * nominal / kBitRate, 100.0 * stuffed / kBitRate);
 }
 
 void BM_DecodePosition(benchmark::State& state) {

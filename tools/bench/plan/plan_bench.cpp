@@ -96,9 +96,10 @@ Result<std::unique_ptr<World>> build_world(std::string name, fields::Heightfield
   w->levels = std::move(*levels);
   w->build_s = std::chrono::duration<double>(Clock::now() - t0).count();
   const fields::VolumeGeometry& g = w->levels[0].geometry();
-  std::printf("%-10s %d x %d posts of %.0f m, %d levels %.1f m apart, cube range %d posts, %d levels of detail, "
-              "built in %.1f s\n",
-              w->name.c_str(), g.nx, g.ny, g.spacing_m, g.nz, g.dz_m, spec.range_posts, spec.levels, w->build_s);
+  std::printf(
+      "%-10s %d x %d posts of %.0f m, %d levels %.1f m apart, cube range %d posts, %d levels of detail, "
+      "built in %.1f s\n",
+      w->name.c_str(), g.nx, g.ny, g.spacing_m, g.nz, g.dz_m, spec.range_posts, spec.levels, w->build_s);
   return w;
 }
 
@@ -108,8 +109,8 @@ struct Case {
   std::string name;
   const World* world = nullptr;
   PlanRequest request;
-  std::string constraints;     // as printed
-  bool reference_ok = false;   // a reference path of ours met every requirement (exact check)
+  std::string constraints;    // as printed
+  bool reference_ok = false;  // a reference path of ours met every requirement (exact check)
 };
 
 PlanRequest base_request(const World& w, const VehicleEnvelope& envelope, Objective objective, Vec3 from, Vec3 to) {
@@ -146,8 +147,9 @@ double end_agl_m(double wanted_m, const VehicleEnvelope& e) {
 std::vector<Case> sf_north_cases(const World& w, const VehicleEnvelope& envelope, const Options& o) {
   std::vector<Case> cases;
   const Vec3 from = w.above(8, 8, 40), to = w.above(87, 87, 40);
-  if (!o.quick) cases.push_back({w.name, &w, base_request(w, envelope, Objective::hide, from, to),
-                                 clearance_text(envelope), false});
+  if (!o.quick)
+    cases.push_back(
+        {w.name, &w, base_request(w, envelope, Objective::hide, from, to), clearance_text(envelope), false});
   // observers on the ground, eyes 2 m up: p1 on a hill east of the route, p2 in the north-east
   Case fig10{w.name, &w, base_request(w, envelope, Objective::hide, from, to), "hidden-from p1, visible-to p2", false};
   fig10.request.constraints = {{ConstraintKind::hidden_from, w.above(64, 78, 0), 2.0},
@@ -157,8 +159,7 @@ std::vector<Case> sf_north_cases(const World& w, const VehicleEnvelope& envelope
     VehicleEnvelope ceiling = envelope;
     ceiling.max_agl_m = o.max_agl_m;
     const double agl = end_agl_m(40, ceiling);
-    cases.push_back({w.name, &w,
-                     base_request(w, ceiling, Objective::show, w.above(8, 8, agl), w.above(87, 87, agl)),
+    cases.push_back({w.name, &w, base_request(w, ceiling, Objective::show, w.above(8, 8, agl), w.above(87, 87, agl)),
                      ceiling_text(o.max_agl_m), false});
   }
   return cases;
@@ -172,8 +173,7 @@ std::vector<Case> taunus_cases(const World& w, const VehicleEnvelope& envelope, 
   VehicleEnvelope ceiling = envelope;
   ceiling.max_agl_m = o.max_agl_m;
   const double agl = end_agl_m(100, ceiling);
-  cases.push_back({w.name, &w,
-                   base_request(w, ceiling, Objective::show, w.above(20, 30, agl), w.above(235, 220, agl)),
+  cases.push_back({w.name, &w, base_request(w, ceiling, Objective::show, w.above(20, 30, agl), w.above(235, 220, agl)),
                    ceiling_text(o.max_agl_m), false});
   return cases;
 }
@@ -200,7 +200,7 @@ constexpr double kRidgeRow = 24.0;
 constexpr double kObserverRow = 6.0;
 
 struct Bump {
-  double ci = 0, cj = 0;           // centre, posts
+  double ci = 0, cj = 0;  // centre, posts
   double amplitude_m = 0;
   double sigma_i = 1, sigma_j = 1;  // posts
   double at(double i, double j) const {
@@ -264,8 +264,8 @@ Relief seeded_relief(unsigned seed, double clearance_m) {
   const double blocker_i = uniform(30, 50), blocker_sigma = uniform(2.5, 3.5);
   const double blocker_j = a.y() + (b.y() - a.y()) * (blocker_i - a.x()) / (b.x() - a.x());
   const double detour_j = blocker_j - 3.5 * blocker_sigma - 1;
-  const std::vector<Eigen::Vector2d> plan{a, {blocker_i - 3 * blocker_sigma - 2, detour_j},
-                                          {blocker_i + 3 * blocker_sigma + 2, detour_j}, b};
+  const std::vector<Eigen::Vector2d> plan{
+      a, {blocker_i - 3 * blocker_sigma - 2, detour_j}, {blocker_i + 3 * blocker_sigma + 2, detour_j}, b};
   // the shadow's height at the lower end's row, and the eye that casts it
   const double corridor_m = highest_post_under(relief_terrain(bumps), plan) + clearance_m + 8;
   const double ends_row = std::max(a.y(), b.y()) + 0.5;
@@ -277,8 +277,8 @@ Relief seeded_relief(unsigned seed, double clearance_m) {
   };
   const double observer_i = std::round(uniform(20, 60));
   bumps.push_back({observer_i, kObserverRow, eye_m - 2 - kReliefBase_m, 5, 5});
-  bumps.push_back({blocker_i, blocker_j, shadow_at(blocker_j) + uniform(30, 60) - kReliefBase_m, blocker_sigma,
-                   blocker_sigma});
+  bumps.push_back(
+      {blocker_i, blocker_j, shadow_at(blocker_j) + uniform(30, 60) - kReliefBase_m, blocker_sigma, blocker_sigma});
 
   Relief out;
   out.terrain = relief_terrain(bumps);
@@ -287,8 +287,8 @@ Relief seeded_relief(unsigned seed, double clearance_m) {
     out.reference.push_back({out.terrain.x_of(p.x()), out.terrain.y_of(p.y()), z_m});
   out.straight = {out.reference.front(), out.reference.back()};
   const double ground_m = out.terrain.at(static_cast<int>(observer_i), static_cast<int>(kObserverRow));
-  out.observer = {ConstraintKind::hidden_from,
-                  {out.terrain.x_of(observer_i), out.terrain.y_of(kObserverRow), ground_m}, 2.0};
+  out.observer = {
+      ConstraintKind::hidden_from, {out.terrain.x_of(observer_i), out.terrain.y_of(kObserverRow), ground_m}, 2.0};
   return out;
 }
 
@@ -308,8 +308,8 @@ Result<PathChecker> make_checker(const World& w, const PlanRequest& r, const Fie
 // every requirement by the exact check (then a feasible path is known).
 struct Optimum {
   bool found = false;
-  double fc = 0;          // of the voxel path
-  double fitted_fc = 0;   // of it fitted into the envelope
+  double fc = 0;           // of the voxel path
+  double fitted_fc = 0;    // of it fitted into the envelope
   bool meets_all = false;  // fitted
   double search_s = 0;
 };
@@ -403,8 +403,8 @@ bool run_case(const Case& c, std::vector<Row>& rows) {
   }
   const FieldForces<DenseLevel> field(c.world->levels[0], ForceGains{});
   Result<PathChecker> checker = make_checker(*c.world, c.request, field);
-  Result<Optimum> optimum = checker.ok() ? lattice_optimum(*c.world, c.request, field, *checker)
-                                         : Result<Optimum>(checker.status());
+  Result<Optimum> optimum =
+      checker.ok() ? lattice_optimum(*c.world, c.request, field, *checker) : Result<Optimum>(checker.status());
   if (!optimum.ok()) {
     std::printf("%-10s lattice optimum failed: %s\n", c.name.c_str(), optimum.status().message().c_str());
     return false;
@@ -438,13 +438,15 @@ void print_summary(const std::vector<Row>& rows, int seeds_tried, int seeds_veri
   }
   std::printf("\nseeded reliefs: %d of %d references proven feasible by exact sight lines (the others not planned)\n",
               seeds_verified, seeds_tried);
-  std::printf("runs with a feasible path proven apart from the plan: %d; meeting every requirement: %d "
-              "(%.0f%%; goal: all)\n",
-              feasible, feasible_met, feasible ? 100.0 * feasible_met / feasible : 0.0);
+  std::printf(
+      "runs with a feasible path proven apart from the plan: %d; meeting every requirement: %d "
+      "(%.0f%%; goal: all)\n",
+      feasible, feasible_met, feasible ? 100.0 * feasible_met / feasible : 0.0);
   std::printf("runs with no such proof: %d; meeting every requirement: %d\n", other, other_met);
-  std::printf("equilibrium on the finest level: median %.2f simulated s (goal <= 2 s; the paper 3-4 s); "
-              "%d of %zu runs converged (the others count at their %.0f s cap)\n",
-              median(eq_s), converged, rows.size(), PlanRequest{}.max_seconds_per_level);
+  std::printf(
+      "equilibrium on the finest level: median %.2f simulated s (goal <= 2 s; the paper 3-4 s); "
+      "%d of %zu runs converged (the others count at their %.0f s cap)\n",
+      median(eq_s), converged, rows.size(), PlanRequest{}.max_seconds_per_level);
   std::printf("wall time of a whole plan: median %.2f s, longest %.2f s\n", median(wall_s),
               wall_s.empty() ? 0.0 : *std::max_element(wall_s.begin(), wall_s.end()));
   std::printf("finest-lattice search alone (for Fc opt): median %.2f s, longest %.2f s\n", median(search_s),
@@ -484,10 +486,11 @@ bool add_seed_case(unsigned seed, const VehicleEnvelope& envelope, std::vector<s
   const PathCheck ref = checker->check(relief.reference);
   const PathCheck straight = checker->check(fit_to_envelope(relief.straight, fit, checker->terrain()).path);
   c.reference_ok = ref.all_met;
-  std::printf("           reference corridor at %.0f m: %s (hidden %.3f of its length, F_c %.4f); straight line "
-              "in the envelope: hidden %.3f\n",
-              relief.reference.front().z(), ref.all_met ? "every requirement met" : "NOT feasible",
-              ref.constraints[0].satisfied_fraction, ref.fc, straight.constraints[0].satisfied_fraction);
+  std::printf(
+      "           reference corridor at %.0f m: %s (hidden %.3f of its length, F_c %.4f); straight line "
+      "in the envelope: hidden %.3f\n",
+      relief.reference.front().z(), ref.all_met ? "every requirement met" : "NOT feasible",
+      ref.constraints[0].satisfied_fraction, ref.fc, straight.constraints[0].satisfied_fraction);
   for (const std::string& u : ref.unmet()) std::printf("           unmet: %s\n", u.c_str());
   worlds.push_back(std::move(*w));
   if (c.reference_ok) cases.push_back(std::move(c));
@@ -532,7 +535,7 @@ int parse_options(int argc, char** argv, Options& o) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    if (e.get_exit_code() == 0) return app.exit(e);            // --help
     std::fprintf(stderr, "visvol-planbench: %s\n", e.what());  // CLI11 names the option
     return 2;
   }
@@ -573,8 +576,8 @@ int main(int argc, char** argv) {
   worlds.push_back(std::move(*sf));
   for (Case& c : sf_north_cases(*worlds.back(), *envelope, o)) cases.push_back(std::move(c));
   if (!o.quick) {
-    Result<std::unique_ptr<World>> taunus = dem_world("taunus", "taunus_utm32n_90m_512.tif", 128, 128, 256,
-                                                      LevelSpec{96, 300.0, 32, 3, 100.0, 24});
+    Result<std::unique_ptr<World>> taunus =
+        dem_world("taunus", "taunus_utm32n_90m_512.tif", 128, 128, 256, LevelSpec{96, 300.0, 32, 3, 100.0, 24});
     if (!taunus.ok()) {
       std::fprintf(stderr, "visvol-planbench: Taunus: %s\n", taunus.status().message().c_str());
       return 1;

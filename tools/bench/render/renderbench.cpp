@@ -161,13 +161,14 @@ bool memory_report(int frames) {
   const bool flat = news == 0 && heap1 - heap0 < kFlatHeapInUseMib && growth < kFlatRssMib;
   const char* criterion = "no operator new, heap in use grown under 64 KiB, RSS under 4 MiB";
 #endif
-  std::printf("memory over %d frames (every view; 3 of 4 at 256 x 256, 1 of 4 at 1024 x 768; each with its PNG):\n"
-              "  RSS after the warm-up and each quarter: %.1f, %.1f, %.1f, %.1f, %.1f MiB (largest growth %+.2f MiB)\n"
-              "  heap in use %.2f -> %.2f MiB (%+.3f), malloc's footprint %.2f -> %.2f MiB; operator new calls %llu;\n"
-              "  %.1f ms a frame on average\n"
-              "  flat: %s (%s)\n\n",
-              frames, rss[0], rss[1], rss[2], rss[3], rss[4], growth, heap0, heap1, heap1 - heap0, footprint0, footprint1,
-              static_cast<unsigned long long>(news), ms / frames, flat ? "yes" : "NO", criterion);
+  std::printf(
+      "memory over %d frames (every view; 3 of 4 at 256 x 256, 1 of 4 at 1024 x 768; each with its PNG):\n"
+      "  RSS after the warm-up and each quarter: %.1f, %.1f, %.1f, %.1f, %.1f MiB (largest growth %+.2f MiB)\n"
+      "  heap in use %.2f -> %.2f MiB (%+.3f), malloc's footprint %.2f -> %.2f MiB; operator new calls %llu;\n"
+      "  %.1f ms a frame on average\n"
+      "  flat: %s (%s)\n\n",
+      frames, rss[0], rss[1], rss[2], rss[3], rss[4], growth, heap0, heap1, heap1 - heap0, footprint0, footprint1,
+      static_cast<unsigned long long>(news), ms / frames, flat ? "yes" : "NO", criterion);
   return flat;
 }
 
@@ -199,8 +200,9 @@ void print_summary(const MedianReporter& r) {
     const auto it = m.find(name);
     return it == m.end() ? -1.0 : it->second;
   };
-  std::printf("\nmedians, ms a thumbnail (render: draw + read back; PNG at zlib level 1, level 6 for comparison;\n"
-              "render CPU: all threads; target: render + png1 wall clock)\n");
+  std::printf(
+      "\nmedians, ms a thumbnail (render: draw + read back; PNG at zlib level 1, level 6 for comparison;\n"
+      "render CPU: all threads; target: render + png1 wall clock)\n");
   std::printf("%-8s %-9s %8s %8s %8s %8s %10s  %s\n", "view", "size", "render", "png1", "total", "png6", "render CPU",
               "target");
   for (const char* size : {"256x256", "1024x768"}) {
@@ -265,10 +267,11 @@ int main(int argc, char** argv) {
   std::vector<char*> rest = {argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
-      std::printf("visvol-renderbench [--pack PACK] [--frames N] [Google Benchmark options]\n"
-                  "  Milliseconds per thumbnail (render and PNG separately) for every view at 256 x 256 and\n"
-                  "  1024 x 768, after a memory check over N frames (1000). Without --pack it builds the\n"
-                  "  SF North pack from the bundled DEM into /tmp first.\n");
+      std::printf(
+          "visvol-renderbench [--pack PACK] [--frames N] [Google Benchmark options]\n"
+          "  Milliseconds per thumbnail (render and PNG separately) for every view at 256 x 256 and\n"
+          "  1024 x 768, after a memory check over N frames (1000). Without --pack it builds the\n"
+          "  SF North pack from the bundled DEM into /tmp first.\n");
       return 0;
     }
     if (std::strcmp(argv[i], "--pack") == 0 && i + 1 < argc) {
@@ -329,10 +332,11 @@ int main(int argc, char** argv) {
   const render::SceneInfo& info = bench.renderer->scene_info();
   std::string steps;
   for (int s : info.mesh_steps) steps += (steps.empty() ? "" : ", ") + std::to_string(s);
-  std::printf("pack %s: %d x %d posts; meshes every %s posts; F_p texture %d x %d x %d (%d x %d posts a texel), "
-              "F_p scale top %.3g; exaggeration %.1f\n",
-              pack_path.c_str(), info.terrain_nx, info.terrain_ny, steps.c_str(), info.volume_nx, info.volume_ny,
-              info.volume_nz, info.volume_stride, info.volume_stride, info.fp_max, info.vertical_exaggeration);
+  std::printf(
+      "pack %s: %d x %d posts; meshes every %s posts; F_p texture %d x %d x %d (%d x %d posts a texel), "
+      "F_p scale top %.3g; exaggeration %.1f\n",
+      pack_path.c_str(), info.terrain_nx, info.terrain_ny, steps.c_str(), info.volume_nx, info.volume_ny,
+      info.volume_nz, info.volume_stride, info.volume_stride, info.fp_max, info.vertical_exaggeration);
   std::printf("%s, %s; create (read the pack, build, compile, warm up) %.0f ms\n", info.gl_renderer.c_str(),
               info.gl_version.c_str(), create_ms);
   const bool flat = memory_report(frames);
@@ -354,8 +358,8 @@ int main(int argc, char** argv) {
       for (int zlib : {1, 6}) {
         if (zlib == 6 && v != View::oblique && v != View::volume) continue;
         benchmark::RegisterBenchmark(
-            ("png_level" + std::to_string(zlib) + "/" + render::to_string(v) + "/" + size).c_str(), BM_Png, v, s.w,
-            s.h, zlib)
+            ("png_level" + std::to_string(zlib) + "/" + render::to_string(v) + "/" + size).c_str(), BM_Png, v, s.w, s.h,
+            zlib)
             ->Unit(benchmark::kMillisecond)
             ->MeasureProcessCPUTime()
             ->UseRealTime()

@@ -66,7 +66,8 @@ void BM_RopeStep(benchmark::State& state) {
   ForceGains gains;
   FieldForces<DenseLevel> env(w.levels[0], gains);
   const double straight = (w.to - w.from).norm();
-  const RopeParams p = scaled_rope_params(model, segments, 1.3 * straight / segments, 1.0, env.reference_acceleration());
+  const RopeParams p =
+      scaled_rope_params(model, segments, 1.3 * straight / segments, 1.0, env.reference_acceleration());
   auto rope = make_rope(p);
   std::vector<Vec3> line = with_slack({w.from, w.to}, model == RopeModel::articulated ? 1.3 * straight : straight);
   RopeEnds ends;
@@ -78,17 +79,16 @@ void BM_RopeStep(benchmark::State& state) {
   for (auto _ : state) (*rope)->step(0.001, env);
   state.SetLabel(to_string(model));
 }
-BENCHMARK(BM_RopeStep)
-    ->ArgsProduct({{0, 1}, {32, 64, 128, 256, 512}})
-    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RopeStep)->ArgsProduct({{0, 1}, {32, 64, 128, 256, 512}})->Unit(benchmark::kMicrosecond);
 
 void print_convergence() {
   World& w = world();
   std::vector<const DenseLevel*> levels;
   for (const DenseLevel& l : w.levels) levels.push_back(&l);
   std::printf("\nsettling on the Taunus window (256 x 256 posts, 90 m, range 32, 3 levels of detail):\n");
-  std::printf("model        start     F_c start  F_c final  graph F_c  sim s (finest)  sim s (all)  wall s  converged  "
-              "requirements (fixed-wing, exact check)  answer\n");
+  std::printf(
+      "model        start     F_c start  F_c final  graph F_c  sim s (finest)  sim s (all)  wall s  converged  "
+      "requirements (fixed-wing, exact check)  answer\n");
   GlobalSearchParams gp;
   gp.objective = Objective::hide;
   gp.clearance_m = 30;
@@ -115,7 +115,8 @@ void print_convergence() {
       if (model == RopeModel::articulated && init == InitialPath::global) {
         // After a perturbation: start from the settled path lifted 200 m in its middle.
         std::vector<Vec3> bent = res->final_path;
-        for (std::size_t i = 0; i < bent.size(); ++i) bent[i].z() += 200.0 * std::sin(M_PI * double(i) / double(bent.size() - 1));
+        for (std::size_t i = 0; i < bent.size(); ++i)
+          bent[i].z() += 200.0 * std::sin(M_PI * double(i) / double(bent.size() - 1));
         PlanRequest again = r;
         again.init = InitialPath::polyline;
         again.polyline = bent;

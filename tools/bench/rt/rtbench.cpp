@@ -18,24 +18,24 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <vector>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <vector>
 
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/participant.hpp"
+#include "drivers/haptic/can_device.hpp"
+#include "drivers/hapticsim/simulated_device.hpp"
 #include "fields/gdal/dem_import.hpp"
 #include "rt/base/alloc_counter.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
-#include "drivers/haptic/can_device.hpp"
-#include "drivers/hapticsim/simulated_device.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/resident_pack.hpp"
 
@@ -54,7 +54,7 @@ struct Options {
   int priority = 80;
   int cpu = -1;
   int segments = 128;
-  double tile_ratio = 8;   // pack bytes per tile-budget byte
+  double tile_ratio = 8;  // pack bytes per tile-budget byte
   double budget_mib = 256;
   std::uint32_t domain = 222;
   int compare_rounds = 0;  // --compare-dds: pairs of runs without and with publishing
@@ -114,7 +114,13 @@ struct Cyclictest {
 };
 
 pid_t start_cyclictest(const Options& o, const std::string& json_path) {
-  std::vector<std::string> args = {"cyclictest", "-m", "-q", "-t1", "-i1000", "-h", "10000",
+  std::vector<std::string> args = {"cyclictest",
+                                   "-m",
+                                   "-q",
+                                   "-t1",
+                                   "-i1000",
+                                   "-h",
+                                   "10000",
                                    "-p" + std::to_string(o.priority),
                                    "-D" + std::to_string(static_cast<int>(std::ceil(o.seconds))),
                                    "--json=" + json_path};
@@ -325,10 +331,11 @@ int run(const Options& o, Figures& fig) {
   fig.compute_p999_us = run.compute.percentile_us(0.999);
   fig.cyclictest_p99_us = c.ran ? c.p99_us : 0.0;
   fig.overruns = run.totals.overruns;
-  std::printf("visvol-rtbench: %.0f s at 1 kHz, %d-segment %s rope, servo and simulated device, pack %s "
-              "(%.1f MiB, tiles %.1f MiB = 1/%.0f)%s\n",
-              o.seconds, o.segments, "articulated", pack_path->c_str(), static_cast<double>(ts.pack_bytes) / kMiB,
-              static_cast<double>(ts.budget_bytes) / kMiB, o.tile_ratio, o.dds ? ", DDS publishing" : "");
+  std::printf(
+      "visvol-rtbench: %.0f s at 1 kHz, %d-segment %s rope, servo and simulated device, pack %s "
+      "(%.1f MiB, tiles %.1f MiB = 1/%.0f)%s\n",
+      o.seconds, o.segments, "articulated", pack_path->c_str(), static_cast<double>(ts.pack_bytes) / kMiB,
+      static_cast<double>(ts.budget_bytes) / kMiB, o.tile_ratio, o.dds ? ", DDS publishing" : "");
   std::printf("scheduling: SCHED_FIFO %s, memory locked %s%s\n", run.realtime.fifo ? "yes" : "no",
               realtime.memory_locked ? "yes" : "no", run.realtime.pinned ? ", pinned" : "");
   for (const std::string& w : run.realtime.warnings) std::printf("  warning: %s\n", w.c_str());
@@ -418,9 +425,10 @@ int compare_dds(Options o) {
     const char* name;
     double Figures::*field;
   };
-  const Row rows[] = {{"loop wake-up p50", &Figures::wake_p50_us},     {"loop wake-up p99", &Figures::wake_p99_us},
-                      {"loop compute p50", &Figures::compute_p50_us},  {"loop compute p99", &Figures::compute_p99_us},
-                      {"loop compute p99.9", &Figures::compute_p999_us}, {"cyclictest p99", &Figures::cyclictest_p99_us}};
+  const Row rows[] = {
+      {"loop wake-up p50", &Figures::wake_p50_us},       {"loop wake-up p99", &Figures::wake_p99_us},
+      {"loop compute p50", &Figures::compute_p50_us},    {"loop compute p99", &Figures::compute_p99_us},
+      {"loop compute p99.9", &Figures::compute_p999_us}, {"cyclictest p99", &Figures::cyclictest_p99_us}};
   std::printf("\nexecutive with and without DDS publishing: medians of %d alternating runs of %.0f s each\n",
               o.compare_rounds, o.seconds);
   std::printf("%-22s %12s %12s %8s\n", "us", "without DDS", "with DDS", "ratio");
@@ -450,7 +458,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--cpu", o.cpu, "Pin the loop and cyclictest to this CPU (-1: no pinning)")->capture_default_str();
   app.add_option("--segments", o.segments, "Rope segments")->check(CLI::Range(2, 1024))->capture_default_str();
-  app.add_option("--tile-ratio", o.tile_ratio, "Pack size over tile budget")->check(CLI::Range(1.0, 1000.0))
+  app.add_option("--tile-ratio", o.tile_ratio, "Pack size over tile budget")
+      ->check(CLI::Range(1.0, 1000.0))
       ->capture_default_str();
   app.add_option("--budget-mib", o.budget_mib, "Memory budget of the process, MiB")->capture_default_str();
   app.add_option("--domain", o.domain, "DDS domain for --dds")->check(CLI::Range(0u, 232u))->capture_default_str();

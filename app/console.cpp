@@ -444,7 +444,7 @@ Status Console::Impl::start() {
     haptic::DriverConfig dc;
     dc.node_id = static_cast<std::uint8_t>(o.node);
     auto d = haptic::CanDevice::create(dc, *bus);
-    if (!d.ok()) return d.status().with_context("haptic driver");
+    if (!d.ok()) return d.status();  // names the configuration's bad field
     device.emplace(std::move(*d));
   }
 

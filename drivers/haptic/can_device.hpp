@@ -19,6 +19,9 @@ class CanDevice final : public rt::HapticDevice {
  public:
   // Validates the configuration (names the first bad field). Start-up only.
   static Result<CanDevice> create(const DriverConfig& config, can::CanBus& bus);
+  // Movable, not copyable: a copy would be a second driver on the same bus.
+  CanDevice(CanDevice&&) = default;
+  CanDevice& operator=(CanDevice&&) = default;
 
   void poll(std::int64_t now_ns) override;
   const rt::HapticSample& sample() const override { return sample_; }

@@ -65,9 +65,11 @@ TEST_F(CanDeviceTest, RefusesABadConfigurationNamingTheField) {
 // executive reads the hand's position and buttons, and the health counts the
 // bus's frames.
 TEST_F(CanDeviceTest, ComesUpAndReportsTheHandAndTheBus) {
-  start("0.05 move 10 -20 5 0.1\n0.2 grab\n");
+  ASSERT_NO_FATAL_FAILURE(start("0.05 move 10 -20 5 0.1\n0.2 grab\n"));
   EXPECT_EQ(device_->state(), rt::HapticState::boot);
   EXPECT_FALSE(device_->sample().valid);
+  // the executive counts every refusal but this one as a send failure
+  EXPECT_EQ(device_->command(Eigen::Vector3d(1, 0, 0), true), Errc::state);
   run(400);
   EXPECT_EQ(device_->state(), rt::HapticState::operational);
   const rt::HapticSample& s = device_->sample();
@@ -88,16 +90,23 @@ TEST_F(CanDeviceTest, ComesUpAndReportsTheHandAndTheBus) {
 }
 
 // The force reaches the motors only while enabled, and the device's own faults
-// show in the state and the health.
+// show in the state and the health, and zero what is sent.
 TEST_F(CanDeviceTest, CommandsTheForceAndReportsAFault) {
-  start("0.3 emergency over-current 0.2\n");
-  run(250, Eigen::Vector3d(0.5, 0.0, -0.25), true);
+  ASSERT_NO_FATAL_FAILURE(start("0.3 emergency over-current 0.2\n"));
+  run(200, Eigen::Vector3d(0.5, 0.0, -0.25), false);
+  ASSERT_EQ(device_->state(), rt::HapticState::operational);
+  EXPECT_FALSE(device_->driver().last_command().enable);
+  EXPECT_EQ(sim_->device().motor_force_n()[0], 0.0);  // not enabled: no force
+  run(50, Eigen::Vector3d(0.5, 0.0, -0.25), true);
   ASSERT_EQ(device_->state(), rt::HapticState::operational);
   EXPECT_NEAR(sim_->device().motor_force_n()[0], 0.5, 0.01);
   EXPECT_NEAR(sim_->device().motor_force_n()[2], -0.25, 0.01);
   run(100, Eigen::Vector3d(0.5, 0.0, -0.25), true);  // into the emergency
   EXPECT_EQ(device_->state(), rt::HapticState::fault);
   EXPECT_NE(device_->health().fault_bits, 0u);
+  // the driver itself withholds the force, whatever the simulator does
+  EXPECT_FALSE(device_->driver().last_command().enable);
+  EXPECT_EQ(device_->driver().last_command().force_n[0], 0.0);
   EXPECT_EQ(sim_->device().motor_force_n()[0], 0.0);
 }
 

@@ -491,15 +491,44 @@ std::unique_ptr<SimRig> simulated(const char* script, std::int64_t start_ns) {
   hapticsim::SimConfig sc;
   auto s = hapticsim::parse_script(script, "test script", sc.workspace_half_mm);
   EXPECT_TRUE(s.ok()) << s.status().message();
+  if (!s.ok()) return nullptr;
   auto rig = std::make_unique<SimRig>();
   auto sim = hapticsim::SimulatedDevice::create(sc, *s, start_ns);
   EXPECT_TRUE(sim.ok()) << sim.status().message();
+  if (!sim.ok()) return nullptr;
   rig->sim = std::move(*sim);
   auto device = haptic::CanDevice::create(haptic::DriverConfig{}, rig->sim->console_bus());
   EXPECT_TRUE(device.ok()) << device.status().message();
+  if (!device.ok()) return nullptr;
   rig->device.emplace(std::move(*device));
   return rig;
 }
+
+// A device whose every answer the test chooses: what the executive makes of
+// the device's state, health and command results, apart from any bus.
+class FakeDevice final : public HapticDevice {
+ public:
+  void poll(std::int64_t now_ns) override {
+    last_poll_ns = now_ns;
+    ++polls;
+  }
+  const HapticSample& sample() const override { return sample_; }
+  HapticState state() const override { return health_.state; }
+  HapticHealth health() const override { return health_; }
+  Errc command(const Eigen::Vector3d& force_n, bool enable) override {
+    last_force_n = force_n;
+    last_enable = enable;
+    return answer;
+  }
+
+  HapticSample sample_;
+  HapticHealth health_;
+  Errc answer = Errc::ok;
+  std::int64_t last_poll_ns = 0;
+  int polls = 0;
+  Eigen::Vector3d last_force_n = Eigen::Vector3d::Constant(NAN);
+  bool last_enable = true;
+};
 
 // The distance from p to the nearest point of the rope.
 double distance_to(const Rope& r, const Vec3& p) {
@@ -802,6 +831,7 @@ TEST_F(ExecutiveTest, ASwitchTerrainCommandIsHandedToTheConsole) {
 
 TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
   auto still_sim = simulated("", now_ns_);
+  ASSERT_TRUE(still_sim);
   auto still = make(&*still_sim->device, still_sim->sim.get());
   ASSERT_TRUE(still);
   const std::int64_t t0 = now_ns_;
@@ -809,6 +839,7 @@ TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
 
   now_ns_ = t0;
   auto pull_sim = simulated(kPullScript, now_ns_);
+  ASSERT_TRUE(pull_sim);
   auto pulled = make(&*pull_sim->device, pull_sim->sim.get());
   ASSERT_TRUE(pulled);
   run(*pulled, 1500);  // half way through the pull
@@ -828,8 +859,55 @@ TEST_F(ExecutiveTest, TheOperatorPullsTheRopeThroughTheDevice) {
   EXPECT_GT(d->can_rx_frames, 3000u);
 }
 
+// The device-status message says what the device's interface says, and only
+// a command the device refuses for another reason than its state counts as a
+// send failure (the driver refuses every command until the device speaks).
+TEST_F(ExecutiveTest, ReportsTheDeviceAsItsInterfaceSays) {
+  FakeDevice dev;
+  dev.health_ = {HapticState::fault, 0x12, 61.5, 1234, 567, 8, 3};
+  dev.sample_.timestamp_ns = now_ns_;
+  config_.device_every_ticks = 10;
+  auto e = make(&dev);
+  ASSERT_TRUE(e);
+  dev.answer = Errc::state;
+  run(*e, 10);
+  EXPECT_EQ(dev.polls, 10);
+  EXPECT_EQ(dev.last_poll_ns, now_ns_);
+  EXPECT_FALSE(dev.last_enable);  // a faulty device gets no force
+  EXPECT_EQ(dev.last_force_n, Eigen::Vector3d::Zero());
+  EXPECT_EQ(e->counters().send_failures, 0u);
+  EXPECT_EQ(e->counters().device_state, HapticState::fault);
+  const msg::DeviceStatusSample* d = device_.take();
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->state, msg::DeviceState::fault);
+  EXPECT_EQ(d->fault_bits, 0x12u);
+  EXPECT_EQ(d->motor_temperature_c, 61.5);
+  EXPECT_EQ(d->can_rx_frames, 1234u);
+  EXPECT_EQ(d->can_tx_frames, 567u);
+  EXPECT_EQ(d->can_errors, 8u);
+  EXPECT_EQ(d->bus_off_count, 3u);
+  EXPECT_NEAR(d->last_position_age_ms, 10.0, 1e-9);  // the sample is ten ticks old
+
+  dev.answer = Errc::io;  // the bus refused them
+  run(*e, 10);
+  EXPECT_EQ(e->counters().send_failures, 10u);
+
+  // connected, no valid position: no force, so idle; not yet heard: disconnected
+  dev.health_.state = HapticState::operational;
+  run(*e, 10);
+  d = device_.take();
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->state, msg::DeviceState::idle);
+  dev.health_.state = HapticState::boot;
+  run(*e, 10);
+  d = device_.take();
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->state, msg::DeviceState::disconnected);
+}
+
 TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
   auto sim = simulated("0.5 move 0 0 0 0.2\n1.0 pull 60 0 0 1.0\n", now_ns_);
+  ASSERT_TRUE(sim);
   auto e = make(&*sim->device, sim->sim.get());
   ASSERT_TRUE(e);
   run(*e, 1800);  // pulling: force on the hand
@@ -852,6 +930,7 @@ TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
 
 TEST_F(ExecutiveTest, TicksAllocateNothing) {
   auto sim = simulated(kPullScript, now_ns_);
+  ASSERT_TRUE(sim);
   auto e = make(&*sim->device, sim->sim.get());
   ASSERT_TRUE(e);
   run(*e, 500);  // warm
@@ -930,6 +1009,7 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
   out.path = &paths;
   out.acks = &acks;
   auto sim = simulated(kPullScript, monotonic_ns());
+  ASSERT_TRUE(sim);
   auto e = Executive::create(c, **field, &*sim->device, sim->sim.get(), &commands, out);
   ASSERT_TRUE(e.ok()) << e.status().message();
 

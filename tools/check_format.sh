@@ -12,7 +12,11 @@ if [[ -z "$format" ]]; then
   echo "check_format: clang-format not found (tools/deps.sh lint installs it)" >&2
   exit 2
 fi
-mapfile -t files < <(git ls-files -- '*.cpp' '*.hpp' '*.h')
+mapfile -t files < <(git ls-files -- '*.cpp' '*.hpp' '*.h' 2>/dev/null)
+if ((${#files[@]} == 0)); then  # clang-format would read standard input
+  echo "check_format: no C++ files listed by git (run it in a git checkout)" >&2
+  exit 2
+fi
 if [[ "${1:-}" == "--fix" ]]; then
   "$format" -i "${files[@]}"
   exit 0

@@ -184,6 +184,10 @@ struct Console::Impl {
   std::uint64_t rss_peak = 0;
 
   Status start();
+  Status open_pack();
+  Status reserve_and_open_tiles(const fields::VolumeGeometry& g, const rt::RealtimeConfig& rtc);
+  Status start_device();
+  Status start_executive();
   Status open_terrains();
   std::string out_dir() const;
   Status start_dds(const fields::VolumeGeometry& g);
@@ -197,6 +201,12 @@ struct Console::Impl {
   nlohmann::json check_path(std::string& line) const;
   void release_pack_pages();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
+  Status make_output_dirs(const std::string& out) const;
+  static std::string path_csv(const msg::PathSample& fp);
+  nlohmann::json summary_json(const rt::LoopRun& run, double wall_s, const msg::PathSample& fp,
+                              const nlohmann::json& check) const;
+  void print_summary(const rt::LoopRun& run, double wall_s, const msg::PathSample& fp, const std::string& verdict,
+                     const std::string& out) const;
   msg::HealthSample health(const rt::LoopReport& r, const rt::ExecutiveCounters& c, std::uint64_t seq) const;
 };
 
@@ -357,7 +367,33 @@ Status Console::Impl::open_terrains() {
 }
 
 Status Console::Impl::start() {
-  // the pack (mapped, nothing read but its tables)
+  VISVOL_RETURN_IF_ERROR(open_pack());
+  const fields::VolumeGeometry g = pack->geometry(o.level);
+  rt::RealtimeConfig rtc;
+  rtc.priority = o.priority;
+  rtc.cpu = o.cpu;
+  rtc.lock_memory = o.lock_memory;
+  rt::lock_process_memory(rtc, realtime);
+  observers = observers_reserved(g);
+  if (o.dds) VISVOL_RETURN_IF_ERROR(start_dds(pack->geometry(0)));
+  VISVOL_RETURN_IF_ERROR(reserve_and_open_tiles(g, rtc));
+  VISVOL_RETURN_IF_ERROR(start_device());
+  VISVOL_RETURN_IF_ERROR(start_executive());
+
+  // the loop and the pager
+  loop_config.period_ns = static_cast<std::int64_t>(std::llround(o.period_us * 1000));
+  loop_config.overrun_limit = o.overrun_limit;
+  loop_config.report_ticks = static_cast<std::uint32_t>(std::max(1.0, std::round(100000.0 / o.period_us)));
+  loop_config.realtime = rtc;
+  field->set_reader_active(true);
+  field->start_pager();
+  loop = std::make_unique<rt::PeriodicLoop>(*exec);
+  return loop->start(loop_config);
+}
+
+// The pack (mapped, nothing read but its tables), the other terrains, the
+// level and the ends checked against them.
+Status Console::Impl::open_pack() {
   auto p = storage::Pack::open(o.pack);
   if (!p.ok()) return p.status();
   pack = *p;
@@ -369,16 +405,11 @@ Status Console::Impl::start() {
   }
   bounds = storage::planning_bounds(*pack);
   VISVOL_RETURN_IF_ERROR(check_ends_inside(o, bounds));
-  const fields::VolumeGeometry g = pack->geometry(o.level);
-  rt::RealtimeConfig rtc;
-  rtc.priority = o.priority;
-  rtc.cpu = o.cpu;
-  rtc.lock_memory = o.lock_memory;
-  rt::lock_process_memory(rtc, realtime);
-  observers = observers_reserved(g);
-  if (o.dds) VISVOL_RETURN_IF_ERROR(start_dds(pack->geometry(0)));
+  return {};
+}
 
-  // the budget: what runs already, what the loop reserves, the tiles get the rest
+// The budget: what runs already, what the loop reserves; the tiles get the rest.
+Status Console::Impl::reserve_and_open_tiles(const fields::VolumeGeometry& g, const rt::RealtimeConfig& rtc) {
   budget = rt::MemoryBudget(static_cast<std::uint64_t>(o.budget_mib * kMiB));
   budget.reserve(o.dds ? "process (code, libraries, DDS)" : "process (code, libraries)", rt::resident_bytes());
   if (o.thumbnail_view != "none") {
@@ -411,8 +442,12 @@ Status Console::Impl::start() {
   if (!f.ok()) return Status(f.status().code(), f.status().message() + "\n" + budget.table());
   field = std::move(*f);
   budget.reserve("tiles (heights, coarsest level, around the rope)", rc.budget_bytes);
+  return {};
+}
 
-  // the device
+// The haptic device: the simulated one on its in-process bus, or SocketCAN;
+// the CAN driver on either.
+Status Console::Impl::start_device() {
   can::CanBus* bus = nullptr;
   if (o.device == "sim") {
     hapticsim::SimConfig sc;
@@ -447,8 +482,10 @@ Status Console::Impl::start() {
     if (!d.ok()) return d.status();  // names the configuration's bad field
     device.emplace(std::move(*d));
   }
+  return {};
+}
 
-  // the executive
+Status Console::Impl::start_executive() {
   const rt::ExecutiveConfig ec = executive_config();
   rt::ExecutiveOutputs out;
   if (publisher) {
@@ -463,16 +500,7 @@ Status Console::Impl::start() {
   exec = std::move(*e);
   fc_start = exec->counters().fc;
   VISVOL_RETURN_IF_ERROR(start_hulls());
-
-  // the loop and the pager
-  loop_config.period_ns = static_cast<std::int64_t>(std::llround(o.period_us * 1000));
-  loop_config.overrun_limit = o.overrun_limit;
-  loop_config.report_ticks = static_cast<std::uint32_t>(std::max(1.0, std::round(100000.0 / o.period_us)));
-  loop_config.realtime = rtc;
-  field->set_reader_active(true);
-  field->start_pager();
-  loop = std::make_unique<rt::PeriodicLoop>(*exec);
-  return loop->start(loop_config);
+  return {};
 }
 
 // Observers a set may name (each kind is folded into one hull, so the
@@ -701,8 +729,31 @@ std::string Console::Impl::out_dir() const {
   return switch_to.empty() ? o.out : o.out + "/session-" + std::to_string(o.session) + "-" + pack_id;
 }
 
+// The outputs of a session: the flyable path (path.csv), the loop's health
+// (health.csv), the last thumbnail, and summary.json; then a summary on
+// standard output. Each file is written whole or not at all.
 Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   const std::string out = out_dir();
+  VISVOL_RETURN_IF_ERROR(make_output_dirs(out));
+  fit_final_path();
+  auto flyable_sample = std::make_unique<msg::PathSample>();
+  path_fitter().describe(final_path, *flyable_sample);
+  const msg::PathSample& fp = *flyable_sample;
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp)));
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/health.csv", health_csv));
+  if (thumbs) {
+    const Status t = thumbs->write_last(out + "/thumbnail.png");
+    if (!t.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", t.message().c_str());
+  }
+  std::string verdict;
+  const nlohmann::json check = check_path(verdict);
+  VISVOL_RETURN_IF_ERROR(
+      write_file_atomically(out + "/summary.json", summary_json(run, wall_s, fp, check).dump(2) + "\n"));
+  print_summary(run, wall_s, fp, verdict, out);
+  return {};
+}
+
+Status Console::Impl::make_output_dirs(const std::string& out) const {
   for (const std::string& dir : {o.out, out}) {
     ::mkdir(dir.c_str(), 0755);
     struct stat st {};
@@ -710,11 +761,10 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
       return Status(Errc::io, dir + ": cannot create the output directory");
     }
   }
-  const rt::Rope& rope = exec->rope();
-  fit_final_path();
-  auto flyable_sample = std::make_unique<msg::PathSample>();
-  path_fitter().describe(final_path, *flyable_sample);
-  const msg::PathSample& fp = *flyable_sample;
+  return {};
+}
+
+std::string Console::Impl::path_csv(const msg::PathSample& fp) {
   std::string csv = "x_m,y_m,z_m,fp,clearance_m\n";
   char line[192];
   for (std::uint32_t i = 0; i < fp.vertex_count; ++i) {
@@ -723,18 +773,14 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
                   v.visibility, v.clearance_m);
     csv += line;
   }
-  const double lowest = fp.min_clearance_m;
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", csv));
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/health.csv", health_csv));
-  if (thumbs) {
-    const Status t = thumbs->write_last(out + "/thumbnail.png");
-    if (!t.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", t.message().c_str());
-  }
+  return csv;
+}
 
+nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s, const msg::PathSample& fp,
+                                           const nlohmann::json& check) const {
+  const rt::Rope& rope = exec->rope();
   const rt::ExecutiveCounters& c = exec->counters();
   const storage::ResidentStats ts = field->stats();
-  std::string verdict;
-  const nlohmann::json check = check_path(verdict);
   auto timing = [](const rt::DurationHistogram& h) {
     return nlohmann::json{
         {"p50_us", h.percentile_us(0.5)}, {"p99_us", h.percentile_us(0.99)}, {"p999_us", h.percentile_us(0.999)},
@@ -816,7 +862,14 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
         {"view", o.thumbnail_view}, {"size", o.thumbnail_size},           {"rendered", t.rendered},
         {"failed", t.failed},       {"last_render_ms", t.last_render_ms}, {"gl_renderer", thumbs->scene().gl_renderer}};
   }
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/summary.json", j.dump(2) + "\n"));
+  return j;
+}
+
+void Console::Impl::print_summary(const rt::LoopRun& run, double wall_s, const msg::PathSample& fp,
+                                  const std::string& verdict, const std::string& out) const {
+  const rt::ExecutiveCounters& c = exec->counters();
+  const storage::ResidentStats ts = field->stats();
+  const double lowest = fp.min_clearance_m;
   std::printf(
       "visvol-console: %.1f s, %llu ticks; wake-up p50 %.0f us p99 %.0f us max %.0f us; compute p50 %.0f us "
       "p99 %.0f us; overruns %llu; major faults %lld\n",
@@ -848,7 +901,6 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   std::printf("outputs: %s/path.csv, %s/health.csv, %s/summary.json%s\n", out.c_str(), out.c_str(), out.c_str(),
               thumbs ? (", " + out + "/thumbnail.png").c_str() : "");
-  return {};
 }
 
 }  // namespace visvol::app

@@ -329,98 +329,21 @@ void Executive::ack(const msg::Command& c, Errc result, const char* reason) {
   if (!outputs_.acks->try_push(a)) ++counters_.acks_dropped;
 }
 
+// Each command's own function: checks what it is given against the pack and
+// the state in force, changes nothing when it fails, and names why in `reason`
+// (a static string: the tick builds no message).
 Errc Executive::apply(const msg::Command& c, const char*& reason) {
-  const storage::ResidentSampler& s = forces_->sampler();
-  auto copy_vertices = [&] {
-    const int n = rope_->segments() + 1;
-    std::copy(rope_->vertices(), rope_->vertices() + n, scratch_.get());
-    return n;
-  };
   switch (c.kind) {
-    case msg::CommandKind::set_endpoints: {
-      const Vec3 a(c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m);
-      const Vec3 b(c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m);
-      const fields::VolumeGeometry& g = s.level().geometry();
-      if (!inside(a, g) || !inside(b, g)) {
-        reason = "an endpoint is outside the pack or not finite";
-        return Errc::invalid_argument;
-      }
-      if (a.z() < s.height(a.x(), a.y()) || b.z() < s.height(b.x(), b.y())) {
-        reason = "an endpoint is below the terrain";
-        return Errc::invalid_argument;
-      }
-      if ((b - a).norm() < segments_ * kMinSegmentM) {
-        reason = "the endpoints are too close for the rope's segment count (0.5 m a segment at least)";
-        return Errc::invalid_argument;
-      }
-      if (!under_ceiling(a, forces_->gains()) || !under_ceiling(b, forces_->gains())) {
-        reason = "an endpoint is above the ceiling in force (max-agl or max-altitude)";
-        return Errc::invalid_argument;
-      }
-      const Vec3 old_start = start_m_, old_end = end_m_;
-      start_m_ = a;
-      end_m_ = b;
-      if (start_run() != Errc::ok) {
-        start_m_ = old_start;
-        end_m_ = old_end;
-        reason = "the rope could not be laid between the endpoints";
-        return Errc::invalid_argument;
-      }
-      return Errc::ok;
-    }
+    case msg::CommandKind::set_endpoints: return apply_endpoints(c, reason);
     case msg::CommandKind::set_objective:
       objective_ = c.objective == msg::Objective::show ? Objective::show : Objective::hide;
       update_gains();
       equilibrium_.reset();
       return Errc::ok;
-    case msg::CommandKind::set_weights: {
-      k1_ = c.weights.k1_visibility;
-      k3_ = c.weights.k3_user;
-      ForceGains g = forces_->gains();
-      g.k2_terrain = c.weights.k2_terrain;
-      g.k_hull = c.weights.k4_constraint;
-      forces_->set_gains(g);
-      update_gains();
-      equilibrium_.reset();
-      return Errc::ok;
-    }
-    case msg::CommandKind::set_stiffness: {
-      const auto old_stretch = stretch_override_, old_bend = bend_override_;
-      stretch_override_ = c.stiffness.stretch_n_per_m;
-      bend_override_ = c.stiffness.bend_n_m_per_rad;
-      const double segment_m = std::max(rope_->length_m() / rope_->segments(), 1e-3);
-      if (rope_->set_params(params_for(rope_->model(), rope_->segments(), segment_m)) != Errc::ok) {
-        stretch_override_ = old_stretch;  // not kept for later starts either
-        bend_override_ = old_bend;
-        reason = "the rope refused these stiffness values";
-        return Errc::invalid_argument;
-      }
-      equilibrium_.reset();
-      return Errc::ok;
-    }
-    case msg::CommandKind::set_model: {
-      const RopeModel m = c.model == msg::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
-      if (m == rope_->model()) return Errc::ok;
-      const int n = copy_vertices();
-      if (restart_rope(scratch_.get(), n, rope_->segments(), m) != Errc::ok) {
-        reason = "the rope could not be rebuilt in that model";
-        return Errc::invalid_argument;
-      }
-      return Errc::ok;
-    }
-    case msg::CommandKind::set_segment_count: {
-      const int segments = static_cast<int>(c.segment_count);
-      if (segments < 2 || segments > config_.max_segments) {
-        reason = "segment count outside what the console reserved";
-        return Errc::invalid_argument;
-      }
-      const int n = copy_vertices();
-      if (restart_rope(scratch_.get(), n, segments, rope_->model()) != Errc::ok) {
-        reason = "the rope could not be resampled";
-        return Errc::invalid_argument;
-      }
-      return Errc::ok;
-    }
+    case msg::CommandKind::set_weights: return apply_weights(c);
+    case msg::CommandKind::set_stiffness: return apply_stiffness(c, reason);
+    case msg::CommandKind::set_model: return apply_model(c, reason);
+    case msg::CommandKind::set_segment_count: return apply_segment_count(c, reason);
     case msg::CommandKind::set_constraints: return apply_constraints(c, reason);
     case msg::CommandKind::start:
       if (start_run() != Errc::ok) {
@@ -433,27 +356,121 @@ Errc Executive::apply(const msg::Command& c, const char*& reason) {
       counters_.running = false;
       rope_->clear_point_force();
       return Errc::ok;
-    case msg::CommandKind::switch_terrain:
-      if (c.pack_id[0] == '\0') {
-        reason = "switch-terrain names no pack";
-        return Errc::invalid_argument;
-      }
-      if (std::strncmp(c.pack_id, config_.pack_id, sizeof c.pack_id) == 0) {
-        reason = "the console is on that pack already";
-        return Errc::invalid_argument;
-      }
-      if (switch_requested_.load(std::memory_order_relaxed)) {
-        reason = "a terrain switch is already under way";
-        return Errc::invalid_argument;
-      }
-      // the console ends this session and starts one on that pack
-      std::memcpy(switch_pack_id_, c.pack_id, sizeof switch_pack_id_);
-      switch_pack_id_[sizeof switch_pack_id_ - 1] = '\0';
-      switch_requested_.store(true, std::memory_order_release);
-      return Errc::ok;
+    case msg::CommandKind::switch_terrain: return apply_switch_terrain(c, reason);
   }
   reason = "unknown command";
   return Errc::invalid_argument;
+}
+
+Errc Executive::apply_endpoints(const msg::Command& c, const char*& reason) {
+  const storage::ResidentSampler& s = forces_->sampler();
+  const Vec3 a(c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m);
+  const Vec3 b(c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m);
+  const fields::VolumeGeometry& g = s.level().geometry();
+  if (!inside(a, g) || !inside(b, g)) {
+    reason = "an endpoint is outside the pack or not finite";
+    return Errc::invalid_argument;
+  }
+  if (a.z() < s.height(a.x(), a.y()) || b.z() < s.height(b.x(), b.y())) {
+    reason = "an endpoint is below the terrain";
+    return Errc::invalid_argument;
+  }
+  if ((b - a).norm() < segments_ * kMinSegmentM) {
+    reason = "the endpoints are too close for the rope's segment count (0.5 m a segment at least)";
+    return Errc::invalid_argument;
+  }
+  if (!under_ceiling(a, forces_->gains()) || !under_ceiling(b, forces_->gains())) {
+    reason = "an endpoint is above the ceiling in force (max-agl or max-altitude)";
+    return Errc::invalid_argument;
+  }
+  const Vec3 old_start = start_m_, old_end = end_m_;
+  start_m_ = a;
+  end_m_ = b;
+  if (start_run() != Errc::ok) {
+    start_m_ = old_start;
+    end_m_ = old_end;
+    reason = "the rope could not be laid between the endpoints";
+    return Errc::invalid_argument;
+  }
+  return Errc::ok;
+}
+
+Errc Executive::apply_weights(const msg::Command& c) {
+  k1_ = c.weights.k1_visibility;
+  k3_ = c.weights.k3_user;
+  ForceGains g = forces_->gains();
+  g.k2_terrain = c.weights.k2_terrain;
+  g.k_hull = c.weights.k4_constraint;
+  forces_->set_gains(g);
+  update_gains();
+  equilibrium_.reset();
+  return Errc::ok;
+}
+
+Errc Executive::apply_stiffness(const msg::Command& c, const char*& reason) {
+  const auto old_stretch = stretch_override_, old_bend = bend_override_;
+  stretch_override_ = c.stiffness.stretch_n_per_m;
+  bend_override_ = c.stiffness.bend_n_m_per_rad;
+  const double segment_m = std::max(rope_->length_m() / rope_->segments(), 1e-3);
+  if (rope_->set_params(params_for(rope_->model(), rope_->segments(), segment_m)) != Errc::ok) {
+    stretch_override_ = old_stretch;  // not kept for later starts either
+    bend_override_ = old_bend;
+    reason = "the rope refused these stiffness values";
+    return Errc::invalid_argument;
+  }
+  equilibrium_.reset();
+  return Errc::ok;
+}
+
+int Executive::copy_vertices() {
+  const int n = rope_->segments() + 1;
+  std::copy(rope_->vertices(), rope_->vertices() + n, scratch_.get());
+  return n;
+}
+
+Errc Executive::apply_model(const msg::Command& c, const char*& reason) {
+  const RopeModel m = c.model == msg::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
+  if (m == rope_->model()) return Errc::ok;
+  const int n = copy_vertices();
+  if (restart_rope(scratch_.get(), n, rope_->segments(), m) != Errc::ok) {
+    reason = "the rope could not be rebuilt in that model";
+    return Errc::invalid_argument;
+  }
+  return Errc::ok;
+}
+
+Errc Executive::apply_segment_count(const msg::Command& c, const char*& reason) {
+  const int segments = static_cast<int>(c.segment_count);
+  if (segments < 2 || segments > config_.max_segments) {
+    reason = "segment count outside what the console reserved";
+    return Errc::invalid_argument;
+  }
+  const int n = copy_vertices();
+  if (restart_rope(scratch_.get(), n, segments, rope_->model()) != Errc::ok) {
+    reason = "the rope could not be resampled";
+    return Errc::invalid_argument;
+  }
+  return Errc::ok;
+}
+
+Errc Executive::apply_switch_terrain(const msg::Command& c, const char*& reason) {
+  if (c.pack_id[0] == '\0') {
+    reason = "switch-terrain names no pack";
+    return Errc::invalid_argument;
+  }
+  if (std::strncmp(c.pack_id, config_.pack_id, sizeof c.pack_id) == 0) {
+    reason = "the console is on that pack already";
+    return Errc::invalid_argument;
+  }
+  if (switch_requested_.load(std::memory_order_relaxed)) {
+    reason = "a terrain switch is already under way";
+    return Errc::invalid_argument;
+  }
+  // the console ends this session and starts one on that pack
+  std::memcpy(switch_pack_id_, c.pack_id, sizeof switch_pack_id_);
+  switch_pack_id_[sizeof switch_pack_id_ - 1] = '\0';
+  switch_requested_.store(true, std::memory_order_release);
+  return Errc::ok;
 }
 
 Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {

@@ -206,6 +206,13 @@ class Executive final : public PeriodicTask {
   Errc read_constraints(const msg::Command& c, ForceGains& gains, HullRequest& r, const char*& reason) const;
   Errc apply_constraints(const msg::Command& c, const char*& reason);
   Errc apply(const msg::Command& c, const char*& reason);
+  Errc apply_endpoints(const msg::Command& c, const char*& reason);
+  Errc apply_weights(const msg::Command& c);
+  Errc apply_stiffness(const msg::Command& c, const char*& reason);
+  Errc apply_model(const msg::Command& c, const char*& reason);
+  Errc apply_segment_count(const msg::Command& c, const char*& reason);
+  Errc apply_switch_terrain(const msg::Command& c, const char*& reason);
+  int copy_vertices();  // the rope's vertices into scratch_; their count
   void ack(const msg::Command& c, Errc result, const char* reason);
   Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
   Errc start_run();

@@ -330,8 +330,9 @@ void Executive::ack(const msg::Command& c, Errc result, const char* reason) {
 }
 
 // Each command's own function: checks what it is given against the pack and
-// the state in force, changes nothing when it fails, and names why in `reason`
-// (a static string: the tick builds no message).
+// the state in force and names why it failed in `reason` (a static string:
+// the tick builds no message). A refused value leaves the state as it was; a
+// rope that cannot be rebuilt (model, segments) may keep new parameters.
 Errc Executive::apply(const msg::Command& c, const char*& reason) {
   switch (c.kind) {
     case msg::CommandKind::set_endpoints: return apply_endpoints(c, reason);

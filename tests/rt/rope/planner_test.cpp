@@ -29,6 +29,20 @@ std::vector<const DenseLevel*> pointers(const std::vector<DenseLevel>& levels) {
   return out;
 }
 
+// The prisms' field (cube range of 16 posts, 48 levels up to 150 m) with
+// `count` levels of detail.
+Result<std::vector<DenseLevel>> prism_levels(const fields::Heightfield& terrain, int count) {
+  fields::FieldParams fp;
+  fp.nz = 48;
+  fp.ceiling_m = 150;
+  fp.range_shape = fields::RangeShape::cube;
+  fp.range_posts = 16;
+  fields::TffParams tp;
+  tp.band_offset_m = 30;
+  tp.band_levels = 12;
+  return fields::build_dense_levels(terrain, fp, count, tp);
+}
+
 // The paper's synthetic terrain (Fig. 7): two parallel prisms on a flat
 // square, 10 m posts, ridges 60 m high near x = 24 and x = 40 posts, running
 // north-south. A "unit" of the paper is a post here.
@@ -36,15 +50,7 @@ class PrismExperiment : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     terrain_ = new fields::Heightfield(two_prisms(64, 10.0, 60.0f));
-    fields::FieldParams fp;
-    fp.nz = 48;
-    fp.ceiling_m = 150;
-    fp.range_shape = fields::RangeShape::cube;
-    fp.range_posts = 16;
-    fields::TffParams tp;
-    tp.band_offset_m = 30;
-    tp.band_levels = 12;
-    auto levels = fields::build_dense_levels(*terrain_, fp, 2, tp);
+    auto levels = prism_levels(*terrain_, 2);
     ASSERT_TRUE(levels.ok()) << levels.status().message();
     levels_ = new std::vector<DenseLevel>(std::move(*levels));
   }
@@ -206,15 +212,7 @@ TEST_F(RealTerrain, AStartFromTheCoarsestLevelIsSettledCoarseToFine) {
 // the rope started on the coarsest or skipped the middle level).
 TEST(PlannerLevels, AStartFromAMiddleLevelSettlesFromThereToTheFinest) {
   const fields::Heightfield terrain = two_prisms(64, 10.0, 60.0f);
-  fields::FieldParams fp;
-  fp.nz = 48;
-  fp.ceiling_m = 150;
-  fp.range_shape = fields::RangeShape::cube;
-  fp.range_posts = 16;
-  fields::TffParams tp;
-  tp.band_offset_m = 30;
-  tp.band_levels = 12;
-  auto levels = fields::build_dense_levels(terrain, fp, 3, tp);
+  auto levels = prism_levels(terrain, 3);
   ASSERT_TRUE(levels.ok()) << levels.status().message();
   ASSERT_EQ(levels->size(), 3u);
   PlanRequest r;

@@ -18,7 +18,7 @@
 #include "drivers/dds/participant.hpp"
 #include "drivers/haptic/can_device.hpp"
 #include "drivers/hapticsim/simulated_device.hpp"
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"

@@ -30,7 +30,7 @@
 #include <string>
 
 #include "app/console_options.hpp"
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::app {
 

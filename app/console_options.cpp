@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::app {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "app/mission_options.hpp"
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 #include "rt/rope/vehicle.hpp"
 
 namespace CLI {

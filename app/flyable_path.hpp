@@ -31,9 +31,9 @@
 #include <thread>
 #include <vector>
 
+#include "base/handoff.hpp"
 #include "fields/heightfield.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/handoff.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/rope/envelope_fit.hpp"
 #include "rt/rope/field_forces.hpp"

@@ -5,7 +5,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::cli {
 

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/vehicle.hpp"
 

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "drivers/render/thumbnail.hpp"
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 namespace visvol::app {
 

@@ -14,10 +14,10 @@
 #include <string>
 #include <thread>
 
+#include "base/handoff.hpp"
+#include "base/status.hpp"
 #include "drivers/render/renderer.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/handoff.hpp"
-#include "rt/base/status.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::app {

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/heightfield.hpp"
 #include "fields/volume.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

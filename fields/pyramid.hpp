@@ -9,11 +9,11 @@
 
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/field_params.hpp"
 #include "fields/heightfield.hpp"
 #include "fields/visibility_builder.hpp"
 #include "fields/volume.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

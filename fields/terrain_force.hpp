@@ -15,8 +15,8 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/heightfield.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/heightfield.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

@@ -20,10 +20,10 @@
 #include <cstdint>
 #include <functional>
 
+#include "base/status.hpp"
 #include "fields/field_params.hpp"
 #include "fields/heightfield.hpp"
 #include "fields/volume.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

@@ -5,7 +5,7 @@
 // and from the wire.
 //
 // Every struct here is trivially copyable with a fixed capacity, so it travels
-// through LatestValue / SpscQueue (rt/base/handoff.hpp) with one memcpy and no
+// through LatestValue / SpscQueue (base/handoff.hpp) with one memcpy and no
 // allocation. Filling one is real-time safe. Conversion to and from the DDS
 // message types happens on the DDS layer's own threads
 // (drivers/dds/message_codec.hpp, command_codec.hpp), never on the real-time
@@ -26,7 +26,7 @@
 #include <string_view>
 #include <type_traits>
 
-#include "rt/base/handoff.hpp"
+#include "base/handoff.hpp"
 
 namespace visvol::msg {
 

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/field_params.hpp"
 #include "fields/heightfield.hpp"
 #include "fields/terrain_force.hpp"
 #include "fields/visibility_builder.hpp"
-#include "rt/base/status.hpp"
 #include "storage/pack_format.hpp"
 #include "storage/planning_bounds.hpp"
 

@@ -13,7 +13,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 #include "storage/pack_format.hpp"
 
 namespace visvol::storage {

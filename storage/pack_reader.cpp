@@ -14,7 +14,7 @@
 #include <immintrin.h>
 #endif
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 #include "storage/crc32c.hpp"
 #include "storage/pack_checks.hpp"
 

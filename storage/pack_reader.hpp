@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/terrain_force.hpp"
 #include "fields/volume.hpp"
-#include "rt/base/status.hpp"
 #include "storage/pack_format.hpp"
 #include "storage/planning_bounds.hpp"
 

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 #include "storage/crc32c.hpp"
 #include "storage/pack_checks.hpp"
 

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "rt/base/atomic_file.hpp"
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
+#include "io/atomic_file.hpp"
 #include "storage/pack_format.hpp"
 
 namespace visvol::storage {

@@ -35,11 +35,11 @@
 #include <thread>
 #include <vector>
 
+#include "base/handoff.hpp"
+#include "base/status.hpp"
 #include "fields/sampler.hpp"
 #include "fields/terrain_force.hpp"
 #include "fields/volume.hpp"
-#include "rt/base/handoff.hpp"
-#include "rt/base/status.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::storage {

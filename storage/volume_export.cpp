@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "fields/sampler.hpp"
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 namespace visvol::storage {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::storage {

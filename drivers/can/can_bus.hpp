@@ -16,8 +16,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "base/status.hpp"
 #include "drivers/can/can_frame.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::can {
 

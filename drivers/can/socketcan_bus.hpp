@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "drivers/can/can_bus.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::can {
 

@@ -16,8 +16,8 @@
 #include <cstdint>
 #include <string_view>
 
+#include "base/status.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/status.hpp"
 #include "visvol_msgs.h"
 
 namespace visvol::dds {

@@ -26,10 +26,10 @@
 #include <string>
 #include <thread>
 
+#include "base/status.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/command_processor.hpp"
 #include "drivers/dds/participant.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::dds {
 

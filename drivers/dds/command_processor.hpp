@@ -11,10 +11,10 @@
 #include <cstdint>
 #include <string_view>
 
+#include "base/handoff.hpp"
+#include "base/status.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/handoff.hpp"
-#include "rt/base/status.hpp"
 #include "visvol_msgs.h"
 
 namespace visvol::dds {

@@ -6,7 +6,7 @@
 //   PathSample& p = pub.path().back();     take() the newest of each hand-off
 //   ... fill p ...;  pub.path().publish();  when its rate allows, convert, write
 //
-// Each hand-off is a LatestValue (rt/base/handoff.hpp): the producer never
+// Each hand-off is a LatestValue (base/handoff.hpp): the producer never
 // waits and never fails, newer values replace older ones, and nothing is
 // allocated after start. Each has exactly one producer thread:
 //
@@ -47,12 +47,12 @@
 #include <string>
 #include <thread>
 
+#include "base/handoff.hpp"
+#include "base/status.hpp"
 #include "drivers/dds/message_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/path_publisher.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/handoff.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::dds {
 

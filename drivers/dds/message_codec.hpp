@@ -17,9 +17,9 @@
 #include <cstdint>
 #include <string>
 
+#include "base/status.hpp"
 #include "msg/samples.hpp"
 #include "ros2.h"
-#include "rt/base/status.hpp"
 #include "visvol_msgs.h"
 
 namespace visvol::dds {

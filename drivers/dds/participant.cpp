@@ -11,7 +11,7 @@
 
 #include <dds/ddsi/ddsi_serdata.h>
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::dds {
 namespace {

@@ -24,8 +24,8 @@
 #include <string_view>
 #include <vector>
 
+#include "base/status.hpp"
 #include "drivers/dds/topics.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::dds {
 

@@ -22,10 +22,10 @@
 #include <memory>
 #include <string>
 
+#include "base/status.hpp"
 #include "drivers/dds/message_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::dds {
 

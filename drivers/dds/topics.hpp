@@ -36,7 +36,7 @@
 #include <string>
 #include <string_view>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::dds {
 

@@ -38,10 +38,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/status.hpp"
 #include "drivers/can/can_bus.hpp"
 #include "drivers/haptic/codec.hpp"
 #include "drivers/haptic/protocol.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::haptic {
 

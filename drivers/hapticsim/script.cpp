@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::hapticsim {
 namespace {

@@ -36,8 +36,8 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::hapticsim {
 

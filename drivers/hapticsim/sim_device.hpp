@@ -22,10 +22,10 @@
 #include <cstdint>
 #include <random>
 
+#include "base/status.hpp"
 #include "drivers/can/can_bus.hpp"
 #include "drivers/haptic/codec.hpp"
 #include "drivers/haptic/protocol.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::hapticsim {
 

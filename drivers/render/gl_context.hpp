@@ -19,7 +19,7 @@
 #include <memory>
 #include <string>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::render {
 

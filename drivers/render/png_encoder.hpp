@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::render {
 

@@ -44,8 +44,8 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "drivers/render/transfer_function.hpp"
-#include "rt/base/status.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::render {

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::render {
 

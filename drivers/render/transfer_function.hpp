@@ -22,7 +22,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::render {
 

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::fields::gdal {
 

@@ -12,9 +12,9 @@
 #include <optional>
 #include <string>
 
+#include "base/status.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/heightfield.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

@@ -21,8 +21,8 @@
 
 #include "fields/gdal/ascii_grid.hpp"
 #include "fields/gdal/gdal_dataset.hpp"
-#include "rt/base/atomic_file.hpp"
-#include "rt/base/input_file.hpp"
+#include "io/atomic_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::fields {
 

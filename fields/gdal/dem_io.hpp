@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/heightfield.hpp"
-#include "rt/base/status.hpp"
 
 namespace visvol::fields {
 

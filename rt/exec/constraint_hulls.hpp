@@ -9,7 +9,7 @@
 //   request(points)   --latest-->   builds every hull into a free set
 //   take() at a tick's start <--    publishes the set
 //
-// Both hand-offs are triple buffers (rt/base/handoff.hpp): wait-free for the
+// Both hand-offs are triple buffers (base/handoff.hpp): wait-free for the
 // loop, the newest value wins, and a set the loop has taken is never written
 // until the loop takes another. The three sets are sized at create(): each
 // holds the two folded hulls of the level's posts. A request for more than
@@ -38,8 +38,8 @@
 #include <thread>
 #include <vector>
 
-#include "rt/base/handoff.hpp"
-#include "rt/base/status.hpp"
+#include "base/handoff.hpp"
+#include "base/status.hpp"
 #include "rt/rope/field_forces.hpp"
 #include "storage/resident_pack.hpp"
 

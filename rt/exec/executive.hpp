@@ -43,8 +43,8 @@
 #include <memory>
 #include <optional>
 
+#include "base/handoff.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/handoff.hpp"
 #include "rt/exec/constraint_hulls.hpp"
 #include "rt/exec/haptic_device.hpp"
 #include "rt/exec/periodic_loop.hpp"

@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::rt {
 

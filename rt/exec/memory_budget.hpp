@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::rt {
 

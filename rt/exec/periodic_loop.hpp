@@ -27,8 +27,8 @@
 #include <cstdint>
 #include <thread>
 
-#include "rt/base/handoff.hpp"
-#include "rt/base/status.hpp"
+#include "base/handoff.hpp"
+#include "base/status.hpp"
 #include "rt/exec/histogram.hpp"
 #include "rt/exec/realtime.hpp"
 

@@ -19,7 +19,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::rt {
 

@@ -19,7 +19,7 @@
 #include <limits>
 #include <string>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::rt {
 

@@ -45,7 +45,7 @@
 #include <atomic>
 #include <cstdint>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::servo {
 

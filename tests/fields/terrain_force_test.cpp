@@ -55,12 +55,12 @@ TEST(TerrainForce, BandMatchesBruteForceNearestPoints) {
   TffParams p;
   p.band_offset_m = 80.0;
   p.band_levels = 12;
-  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny) * p.band_levels * hf.nx);
+  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny * p.band_levels * hf.nx));
   terrain_force_rows(hf, p, 0, hf.ny, band.data(), nullptr);
   for (int j = 0; j < hf.ny; ++j) {
     for (int b = 0; b < p.band_levels; ++b) {
       for (int i = 0; i < hf.nx; ++i) {
-        const TffSample& s = band[(static_cast<std::size_t>(j) * p.band_levels + b) * hf.nx + i];
+        const TffSample& s = band[static_cast<std::size_t>((j * p.band_levels + b) * hf.nx + i)];
         const double z = hf.at(i, j) - p.band_offset_m + b * p.step_m();
         const Eigen::Vector3d q{hf.x_of(i), hf.y_of(j), z};
         const NearestTerrainPoint brute = nearest_terrain_point(hf, q, 1e9);
@@ -81,12 +81,12 @@ TEST(TerrainForce, InsideTheTerrainPointsOut) {
   TffParams p;
   p.band_offset_m = 50.0;
   p.band_levels = 10;
-  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny) * p.band_levels * hf.nx);
+  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny * p.band_levels * hf.nx));
   terrain_force_rows(hf, p, 0, hf.ny, band.data(), nullptr);
-  const TffSample& deep = band[(static_cast<std::size_t>(5) * p.band_levels + 0) * hf.nx + 5];
+  const TffSample& deep = band[static_cast<std::size_t>((5 * p.band_levels + 0) * hf.nx + 5)];
   EXPECT_NEAR(deep.signed_distance_m, -50.0, 1e-4);
   EXPECT_NEAR(deep.dz_m, 50.0, 1e-4);  // up, out of the ground
-  const TffSample& high = band[(static_cast<std::size_t>(5) * p.band_levels + 9) * hf.nx + 5];
+  const TffSample& high = band[static_cast<std::size_t>((5 * p.band_levels + 9) * hf.nx + 5)];
   EXPECT_NEAR(high.signed_distance_m, 50.0, 1e-4);
   EXPECT_NEAR(high.dz_m, 50.0, 1e-4);  // up, away from the ground
 }
@@ -94,7 +94,7 @@ TEST(TerrainForce, InsideTheTerrainPointsOut) {
 TEST(TerrainForce, ThreadedRowsEqualSerialRows) {
   const Heightfield hf = fractal(33, 2);
   TffParams p;
-  std::vector<TffSample> a(static_cast<std::size_t>(hf.ny) * p.band_levels * hf.nx), b(a.size());
+  std::vector<TffSample> a(static_cast<std::size_t>(hf.ny * p.band_levels * hf.nx)), b(a.size());
   terrain_force_rows(hf, p, 0, hf.ny, a.data(), nullptr);
   WorkerPool pool(3);
   terrain_force_rows(hf, p, 0, hf.ny, b.data(), &pool);

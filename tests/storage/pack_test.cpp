@@ -111,12 +111,12 @@ TEST_F(PackFile, TerrainForceBandMatchesDirectComputation) {
   Result<PackLevel> level = PackLevel::open(*pack, 0);
   ASSERT_TRUE(level.ok());
   const fields::TffParams tp = level->tff_params();
-  std::vector<fields::TffSample> band(static_cast<std::size_t>(terrain_->ny) * tp.band_levels * terrain_->nx);
+  std::vector<fields::TffSample> band(static_cast<std::size_t>(terrain_->ny * tp.band_levels * terrain_->nx));
   fields::terrain_force_rows(*terrain_, tp, 0, terrain_->ny, band.data(), nullptr);
   for (int j = 0; j < terrain_->ny; ++j)
     for (int b = 0; b < tp.band_levels; ++b)
       for (int i = 0; i < terrain_->nx; ++i) {
-        const fields::TffSample& want = band[(static_cast<std::size_t>(j) * tp.band_levels + b) * terrain_->nx + i];
+        const fields::TffSample& want = band[static_cast<std::size_t>((j * tp.band_levels + b) * terrain_->nx + i)];
         const fields::TffSample got = level->tff(i, j, b);
         ASSERT_NEAR(got.dx_m, want.dx_m, 0.006);  // stored in centimetres
         ASSERT_NEAR(got.dz_m, want.dz_m, 0.006);

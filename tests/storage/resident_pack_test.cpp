@@ -212,8 +212,10 @@ void expect_columns_match(const PackLevel& level) {
   const int band = level.tff_params().band_levels;
   std::mt19937 rng(3);
   for (int n = 0; n < 300; ++n) {
-    const int i = n < 40 ? std::min(g.nx - 1, 16 * (n % 8) + (n % 2 ? 15 : 0)) : static_cast<int>(rng() % g.nx);
-    const int j = n < 40 ? std::min(g.ny - 1, 16 * (n / 8) + (n % 3 ? 0 : 15)) : static_cast<int>(rng() % g.ny);
+    const int i = n < 40 ? std::min(g.nx - 1, 16 * (n % 8) + (n % 2 ? 15 : 0))
+                         : static_cast<int>(rng() % static_cast<unsigned>(g.nx));
+    const int j = n < 40 ? std::min(g.ny - 1, 16 * (n / 8) + (n % 3 ? 0 : 15))
+                         : static_cast<int>(rng() % static_cast<unsigned>(g.ny));
     const PackLevel::Column c = level.column(i, j);
     for (int k = 0; k < g.nz; ++k) ASSERT_EQ(c.voxel(k), level.voxel(i, j, k)) << i << " " << j << " " << k;
     for (int b = 0; b < band; ++b) {

@@ -16,7 +16,7 @@
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/hapticsim/script.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 namespace {
 

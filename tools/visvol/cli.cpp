@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <fstream>
 
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 namespace visvol::cli {
 

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <string>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol::cli {
 

@@ -15,8 +15,8 @@
 #include "fields/gdal/dem_io.hpp"
 #include "fields/sampler.hpp"
 #include "import_cli.hpp"
-#include "rt/base/atomic_file.hpp"
-#include "rt/base/input_file.hpp"
+#include "io/atomic_file.hpp"
+#include "io/input_file.hpp"
 #include "storage/pack_reader.hpp"
 #include "storage/volume_export.hpp"
 

@@ -15,8 +15,8 @@
 #include "drivers/render/png_encoder.hpp"
 #include "drivers/render/renderer.hpp"
 #include "fields/sampler.hpp"
+#include "io/atomic_file.hpp"
 #include "path_io.hpp"
-#include "rt/base/atomic_file.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::cli {

@@ -9,7 +9,7 @@
 #include "fields/gdal/dem_io.hpp"
 #include "fields/viewshed.hpp"
 #include "import_cli.hpp"
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 namespace visvol::cli {
 

@@ -9,7 +9,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::cli {
 

@@ -20,7 +20,7 @@
 
 #include "cli.hpp"
 #include "commands.hpp"
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 namespace {
 

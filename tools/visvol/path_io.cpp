@@ -17,8 +17,8 @@
 #include <sstream>
 #include <utility>
 
-#include "rt/base/atomic_file.hpp"
-#include "rt/base/input_file.hpp"
+#include "io/atomic_file.hpp"
+#include "io/input_file.hpp"
 
 namespace visvol::cli {
 

@@ -43,7 +43,7 @@
 #include <string>
 #include <vector>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/vehicle.hpp"
 

@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/path_publisher.hpp"
 #include "msg/samples.hpp"
-#include "rt/base/status.hpp"
 #include "rt/rope/path_metrics.hpp"
 
 namespace visvol::cli {

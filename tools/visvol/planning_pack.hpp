@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "base/status.hpp"
 #include "fields/volume.hpp"
-#include "rt/base/status.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::cli {

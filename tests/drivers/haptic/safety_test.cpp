@@ -13,8 +13,8 @@
 #include "drivers/can/memory_bus.hpp"
 #include "drivers/hapticsim/script.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
-#include "rt/base/alloc_counter.hpp"
 #include "tests/drivers/haptic/console_harness.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::testing {
 namespace {

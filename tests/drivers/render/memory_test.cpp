@@ -16,7 +16,7 @@
 #include "drivers/render/thumbnail.hpp"
 #include "msg/samples.hpp"
 #include "render_test_util.hpp"
-#include "rt/base/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::render {
 namespace {

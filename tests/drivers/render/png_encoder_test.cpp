@@ -7,7 +7,7 @@
 
 #include "msg/samples.hpp"
 #include "render_test_util.hpp"
-#include "rt/base/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::render {
 namespace {
@@ -23,7 +23,7 @@ std::vector<std::uint8_t> test_card(int w, int h, std::size_t stride) {
       noise = noise * 1664525u + 1013904223u;
       std::uint8_t* p = px.data() + static_cast<std::size_t>(y) * stride + static_cast<std::size_t>(x) * 4;
       p[0] = static_cast<std::uint8_t>(x * 255 / w);
-      p[1] = static_cast<std::uint8_t>(((x / 8 + y / 8) % 2) * 200 + (noise >> 29));
+      p[1] = static_cast<std::uint8_t>(static_cast<std::uint32_t>(((x / 8 + y / 8) % 2) * 200) + (noise >> 29));
       p[2] = static_cast<std::uint8_t>(y * 255 / h);
       p[3] = 0x7F;  // alpha is dropped: thumbnails are opaque
     }
@@ -47,8 +47,8 @@ TEST(PngEncoder, RoundTripsExactlyAsRgbWithAnyStride) {
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       for (int c = 0; c < 3; ++c) {
-        ASSERT_EQ(d.rgb[(static_cast<std::size_t>(y) * w + x) * 3 + c],
-                  px[static_cast<std::size_t>(y) * stride + x * 4 + c])
+        ASSERT_EQ(d.rgb[static_cast<std::size_t>((y * w + x) * 3 + c)],
+                  px[static_cast<std::size_t>(y) * stride + static_cast<std::size_t>(x * 4 + c)])
             << "pixel (" << x << ", " << y << ") channel " << c;
       }
     }

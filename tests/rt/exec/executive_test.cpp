@@ -14,9 +14,9 @@
 #include "../../fields/terrains.hpp"
 #include "drivers/haptic/can_device.hpp"
 #include "drivers/hapticsim/simulated_device.hpp"
-#include "rt/base/alloc_counter.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "storage/pack_build.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::rt {
 namespace {

@@ -8,7 +8,7 @@
 #include <chrono>
 #include <thread>
 
-#include "rt/base/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::rt {
 namespace {

@@ -6,10 +6,10 @@
 #include <limits>
 #include <random>
 
-#include "rt/base/alloc_counter.hpp"
 #include "rt/rope/articulated_rope.hpp"
 #include "rt/rope/planner.hpp"
 #include "rt/rope/spring_mass_rope.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::rt {
 namespace {

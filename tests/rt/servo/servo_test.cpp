@@ -7,7 +7,7 @@
 #include <random>
 #include <thread>
 
-#include "rt/base/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace visvol::servo {
 namespace {

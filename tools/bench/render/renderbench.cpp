@@ -36,9 +36,9 @@
 #include "drivers/render/renderer.hpp"
 #include "fields/gdal/dem_import.hpp"
 #include "fields/sampler.hpp"
-#include "rt/base/alloc_counter.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 namespace {
 

@@ -31,13 +31,13 @@
 #include "drivers/haptic/can_device.hpp"
 #include "drivers/hapticsim/simulated_device.hpp"
 #include "fields/gdal/dem_import.hpp"
-#include "rt/base/alloc_counter.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/resident_pack.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 extern char** environ;
 

@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <string>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol {
 

@@ -1,4 +1,4 @@
-#include "rt/base/input_file.hpp"
+#include "io/input_file.hpp"
 
 #include <dirent.h>
 #include <fcntl.h>

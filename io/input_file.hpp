@@ -17,7 +17,7 @@
 
 #include <string>
 
-#include "rt/base/status.hpp"
+#include "base/status.hpp"
 
 namespace visvol {
 

@@ -1,5 +1,5 @@
 // Replaces the global operator new/delete with counting versions over malloc.
-#include "rt/base/alloc_counter.hpp"
+#include "tests/support/alloc_counter.hpp"
 
 #include <atomic>
 #include <cstdlib>

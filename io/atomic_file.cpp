@@ -1,5 +1,5 @@
-#include "rt/base/atomic_file.hpp"
-#include "rt/base/input_file.hpp"
+#include "io/atomic_file.hpp"
+#include "io/input_file.hpp"
 
 #include <dirent.h>
 #include <fcntl.h>

@@ -1,4 +1,4 @@
-#include "rt/base/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

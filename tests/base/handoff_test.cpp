@@ -1,4 +1,4 @@
-#include "rt/base/handoff.hpp"
+#include "base/handoff.hpp"
 
 #include <gtest/gtest.h>
 

@@ -19,6 +19,7 @@
 #include "drivers/haptic/can_device.hpp"
 #include "drivers/hapticsim/simulated_device.hpp"
 #include "io/atomic_file.hpp"
+#include "io/json_text.hpp"
 #include "rt/exec/executive.hpp"
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"
@@ -180,6 +181,7 @@ struct Console::Impl {
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
   std::string health_csv;
+  rt::ExecutiveCounters counters_at_start;  // before the loop started (then: snapshot())
   double fc_start = 0;
   std::uint64_t rss_peak = 0;
 
@@ -498,7 +500,10 @@ Status Console::Impl::start_executive() {
   auto e = rt::Executive::create(ec, *field, device ? &*device : nullptr, sim.get(), &commands, out);
   if (!e.ok()) return e.status();
   exec = std::move(*e);
-  fc_start = exec->counters().fc;
+  // Copied here, before the loop thread starts: from then on only that
+  // thread may read counters(); others take snapshot()s.
+  counters_at_start = exec->counters();
+  fc_start = counters_at_start.fc;
   VISVOL_RETURN_IF_ERROR(start_hulls());
   return {};
 }
@@ -670,7 +675,7 @@ Status Console::run(const std::atomic<bool>& stop) {
       "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"
       "resident_tiles_mib,rss_mib,fallbacks\n";
   rt::LoopReport last{};
-  rt::ExecutiveCounters counters = m.exec->counters();
+  rt::ExecutiveCounters counters = m.counters_at_start;
   std::uint64_t health_seq = 0;
   double next_line_s = 1.0;
   while (!stop.load() && (m.o.seconds <= 0 || seconds_since(t0) < m.o.seconds)) {
@@ -748,7 +753,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   std::string verdict;
   const nlohmann::json check = check_path(verdict);
   VISVOL_RETURN_IF_ERROR(
-      write_file_atomically(out + "/summary.json", summary_json(run, wall_s, fp, check).dump(2) + "\n"));
+      write_file_atomically(out + "/summary.json", json_text(summary_json(run, wall_s, fp, check), 2) + "\n"));
   print_summary(run, wall_s, fp, verdict, out);
   return {};
 }
@@ -855,6 +860,12 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
                 {"health", ps.health},
                 {"thumbnails", ps.thumbnails},
                 {"errors", ps.errors}};
+  }
+  if (intake) {
+    const dds::IntakeStats is = intake->stats();
+    j["commands"]["received"] = is.commands.received;
+    j["commands"]["rejected"] = is.commands.rejected;  // by the intake, with a reason in their acks
+    j["commands"]["rate_limited"] = is.commands.rate_limited;
   }
   if (thumbs) {
     const ThumbnailStats t = thumbs->stats();

@@ -17,30 +17,11 @@
 namespace {
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop.store(true); }
-}  // namespace
 
-int main(int argc, char** argv) {
+// One session per pack: a switch-terrain command ends a session and the next
+// one starts on the other pack, everything made anew. Returns the exit status.
+int run_sessions(const visvol::app::ConsoleOptions& options) {
   using namespace visvol;
-  CLI::App cli{
-      "visvol-console: interactive path optimisation in a visibility field (Srikanth et al.), with the rope and "
-      "the haptic servo at 1 kHz and the path on DDS.\n"
-      "Example: visvol-console --pack out/sf_north.vvp --seconds 20 --out out/console"};
-  app::ConsoleOptions options;
-  app::add_console_options(cli, options);
-  try {
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) {
-      std::printf("%s", cli.help().c_str());
-      return 0;
-    }
-    std::fprintf(stderr, "visvol-console: %s (try --help)\n", e.what());
-    return 2;
-  }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  // one session per pack: a switch-terrain command ends a session and the
-  // next one starts on the other pack, everything made anew
   std::optional<app::ConsoleOptions> session = options;
   while (session) {
     auto console = app::Console::start(*session);
@@ -64,4 +45,37 @@ int main(int argc, char** argv) {
     session = g_stop.load() ? std::nullopt : (*console)->next_session();
   }
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace visvol;
+  CLI::App cli{
+      "visvol-console: interactive path optimisation in a visibility field (Srikanth et al.), with the rope and "
+      "the haptic servo at 1 kHz and the path on DDS.\n"
+      "Example: visvol-console --pack out/sf_north.vvp --seconds 20 --out out/console"};
+  app::ConsoleOptions options;
+  app::add_console_options(cli, options);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) {
+      std::printf("%s", cli.help().c_str());
+      return 0;
+    }
+    std::fprintf(stderr, "visvol-console: %s (try --help)\n", e.what());
+    return 2;
+  }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  // Nothing should throw past a session (errors are Status values); if
+  // something does, say so and exit 1 rather than abort without a word.
+  try {
+    return run_sessions(options);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "visvol-console: internal error: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "visvol-console: internal error (unknown exception)\n");
+  }
+  return 1;
 }

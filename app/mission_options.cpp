@@ -3,7 +3,9 @@
 #include <toml++/toml.h>
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
+#include <tuple>
 
 #include "io/input_file.hpp"
 
@@ -67,6 +69,13 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
       v->name = s->get();
       continue;
     }
+    if (k == "autopilot") {
+      const auto* s = node.as_string();
+      if (!s || !rt::parse_autopilot(s->get(), v->autopilot)) {
+        return invalid_argument(path + ": autopilot must be \"px4\" or \"ardupilot\"");
+      }
+      continue;
+    }
     bool known = false;
     for (const auto& n : numbers) {
       if (k != n.key) continue;
@@ -75,8 +84,8 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
     }
     if (!known) {
       return invalid_argument(path + ": unknown key '" + k +
-                              "' (known: name, type, speed, max-climb, max-descent, min-turn-radius, clearance, "
-                              "max-agl, max-altitude)");
+                              "' (known: name, type, autopilot, speed, max-climb, max-descent, min-turn-radius, "
+                              "clearance, max-agl, max-altitude)");
     }
   }
   const Status valid = rt::validate(*v);
@@ -96,6 +105,9 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--clearance", o.clearance_m, "Least height above the terrain, m (default 30)");
   c.add_option("--max-agl", o.max_agl_m, "Highest height above the terrain, m (default: the field's top bounds it)");
   c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
+  c.add_option("--autopilot", o.autopilot,
+               "Flight stack of the .plan mission: px4 or ardupilot (default: the vehicle's)")
+      ->check(CLI::IsMember({"px4", "ardupilot"}));
 }
 
 void add_constraint_options(CLI::App& c, ConstraintOptions& o) {
@@ -126,17 +138,28 @@ Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& o) {
   for (const auto& x : overrides) {
     if (x.value) (*v).*(x.field) = *x.value;
   }
+  if (o.autopilot && !rt::parse_autopilot(*o.autopilot, v->autopilot)) {
+    return invalid_argument("--autopilot: '" + *o.autopilot + "' is neither px4 nor ardupilot");
+  }
   const Status valid = rt::validate(*v);
   if (!valid.ok()) return invalid_argument(valid.message());
   return v;
 }
 
-std::vector<rt::ConstraintPoint> constraint_points(const ConstraintOptions& o) {
+Result<std::vector<rt::ConstraintPoint>> constraint_points(const ConstraintOptions& o) {
+  // checked with or without observers: a bad value is a mistake either way
+  if (!(std::isfinite(o.eye_height_m) && o.eye_height_m >= 0 && o.eye_height_m <= 10000)) {
+    return invalid_argument("--eye-height " + std::to_string(o.eye_height_m) + " is outside 0..10000 m");
+  }
   std::vector<rt::ConstraintPoint> out;
-  for (const auto& [points, kind] : {std::pair{&o.hidden_from, rt::ConstraintKind::hidden_from},
-                                     std::pair{&o.visible_to, rt::ConstraintKind::visible_to}}) {
+  for (const auto& [points, kind, option] :
+       {std::tuple{&o.hidden_from, rt::ConstraintKind::hidden_from, "--hidden-from"},
+        std::tuple{&o.visible_to, rt::ConstraintKind::visible_to, "--visible-to"}}) {
     for (const std::vector<double>& p : *points) {
-      if (p.size() == 3) out.push_back({kind, rt::Vec3(p[0], p[1], p[2]), o.eye_height_m});
+      if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+        return invalid_argument(std::string(option) + ": a point is three finite numbers X Y Z (m)");
+      }
+      out.push_back({kind, rt::Vec3(p[0], p[1], p[2]), o.eye_height_m});
     }
   }
   return out;

@@ -5,6 +5,7 @@
 // envelope's keys, spelled as the options are:
 //   name = "survey plane"        # shown in reports
 //   type = "fixed-wing"          # or "multirotor"
+//   autopilot = "px4"            # or "ardupilot": the .plan's firmware
 //   speed = 22.0                 # m/s
 //   max-climb = 12.0             # deg
 //   max-descent = 10.0           # deg
@@ -35,6 +36,7 @@ struct EnvelopeOptions {
   std::string vehicle = "fixed-wing";
   std::optional<double> speed_mps, max_climb_deg, max_descent_deg, min_turn_radius_m, clearance_m, max_agl_m,
       max_altitude_m;
+  std::optional<std::string> autopilot;  // px4, ardupilot
 };
 
 struct ConstraintOptions {
@@ -47,7 +49,8 @@ void add_constraint_options(CLI::App& command, ConstraintOptions& options);
 
 // The preset or file, then the overrides; validated.
 Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& options);
-std::vector<rt::ConstraintPoint> constraint_points(const ConstraintOptions& options);
+// The observers named, each checked (finite), with --eye-height (0..10000 m).
+Result<std::vector<rt::ConstraintPoint>> constraint_points(const ConstraintOptions& options);
 
 // A vehicle file (see above). Refuses anything but a regular file of at most 64 KiB.
 Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path);

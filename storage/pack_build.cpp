@@ -10,6 +10,7 @@
 
 #include "fields/pyramid.hpp"
 #include "fields/worker_pool.hpp"
+#include "io/json_text.hpp"
 #include "storage/pack_writer.hpp"
 
 #ifndef VISVOL_VERSION
@@ -231,7 +232,7 @@ std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std:
                            {"spacing_m", in.terrain.spacing_m},
                            {"range_m", f.range_posts * in.terrain.spacing_m}});
   }
-  return j.dump(2);
+  return json_text(j, 2);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "fields/heightfield.hpp"
+#include "io/json_text.hpp"
 
 namespace visvol::storage {
 
@@ -212,7 +213,7 @@ Status check_members(const Json& object, const Expect (&expected)[N], const std:
   for (const Expect& e : expected) {
     const auto it = object.find(e.key);
     if (it == object.end() || e.ok(*it)) continue;
-    std::string value = it->dump(-1, ' ', false, Json::error_handler_t::replace);
+    std::string value = json_text(*it);
     if (value.size() > 40) value = value.substr(0, 40) + "...";
     return corrupt(where + e.key + " is " + value + ", not " + e.what);
   }

@@ -35,7 +35,8 @@ nlohmann::json vehicle_json(const VehicleEnvelope& v) {
           {"min_turn_radius_m", v.min_turn_radius_m},
           {"clearance_m", v.clearance_m},
           {"max_agl_m", finite_or_null(v.max_agl_m)},
-          {"max_altitude_m", finite_or_null(v.max_altitude_m)}};
+          {"max_altitude_m", finite_or_null(v.max_altitude_m)},
+          {"autopilot", to_string(v.autopilot)}};
 }
 
 }  // namespace visvol::rt

@@ -9,7 +9,8 @@ const char* to_string(Objective objective) { return objective == Objective::hide
 
 Status validate(const PlanRequest& r) {
   std::ostringstream msg;
-  if (!r.from.allFinite() || !r.to.allFinite()) return invalid_argument("plan: endpoints must be finite");
+  if (!r.from.allFinite() || !r.to.allFinite())
+    return invalid_argument("plan: --from and --to must be finite X Y Z (m)");
   if ((r.from - r.to).norm() < 1e-6) return invalid_argument("plan: --from and --to are the same point");
   if (r.segments < 2 || r.segments > kMaxPlanSegments) {
     msg << "plan: " << r.segments << " segments is outside 2.." << kMaxPlanSegments;
@@ -32,13 +33,13 @@ Status validate(const PlanRequest& r) {
     const char* name;
     double lo, hi;
   } ranges[] = {{r.candidate_interval_s, "candidate interval", 1.0e-3, 1.0e3},
-                {r.visibility_gain, "visibility gain", 0.0, 1.0e3},
-                {r.terrain_gain, "terrain gain", 0.0, 1.0e3},
-                {r.stiffness, "stiffness", 1.0e-3, 1.0e3},
-                {r.slack < 0 ? 0.0 : r.slack, "slack", 0.0, 10.0},
-                {r.length_weight, "length weight", 0.0, 1.0e3},
+                {r.visibility_gain, "visibility gain (--k1)", 0.0, 1.0e3},
+                {r.terrain_gain, "terrain gain (--k2)", 0.0, 1.0e3},
+                {r.stiffness, "stiffness (--stiffness)", 1.0e-3, 1.0e3},
+                {r.slack < 0 ? 0.0 : r.slack, "slack (--slack)", 0.0, 10.0},
+                {r.length_weight, "length weight (--length-weight)", 0.0, 1.0e3},
                 {r.dt_s, "time step", 1.0e-5, 0.01},
-                {r.max_seconds_per_level, "seconds per level", 1.0e-3, 1.0e5}};
+                {r.max_seconds_per_level, "seconds per level (--max-seconds)", 1.0e-3, 1.0e5}};
   for (const auto& c : ranges) {
     if (!(std::isfinite(c.v) && c.v >= c.lo && c.v <= c.hi)) {
       msg << "plan: " << c.name << " " << c.v << " is outside " << c.lo << ".." << c.hi;

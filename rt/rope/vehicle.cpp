@@ -7,6 +7,18 @@ namespace visvol::rt {
 
 const char* to_string(VehicleType type) { return type == VehicleType::multirotor ? "multirotor" : "fixed-wing"; }
 
+const char* to_string(Autopilot autopilot) { return autopilot == Autopilot::ardupilot ? "ardupilot" : "px4"; }
+
+bool parse_autopilot(const std::string& text, Autopilot& out) {
+  for (Autopilot a : {Autopilot::px4, Autopilot::ardupilot}) {
+    if (text == to_string(a)) {
+      out = a;
+      return true;
+    }
+  }
+  return false;
+}
+
 Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
   VehicleEnvelope v;
   if (name == "fixed-wing") return v;

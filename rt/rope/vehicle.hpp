@@ -26,6 +26,13 @@ namespace visvol::rt {
 enum class VehicleType : std::uint8_t { fixed_wing = 0, multirotor = 1 };
 const char* to_string(VehicleType type);  // "fixed-wing", "multirotor"
 
+// The flight stack a mission is written for (a QGroundControl .plan's
+// firmwareType): PX4 or ArduPilot.
+enum class Autopilot : std::uint8_t { px4 = 0, ardupilot = 1 };
+const char* to_string(Autopilot autopilot);  // "px4", "ardupilot"
+// "px4" or "ardupilot"; false for anything else.
+bool parse_autopilot(const std::string& text, Autopilot& out);
+
 struct VehicleEnvelope {
   static constexpr double kNone = std::numeric_limits<double>::infinity();
 
@@ -38,6 +45,7 @@ struct VehicleEnvelope {
   double clearance_m = 30.0;        // least height above the finest terrain
   double max_agl_m = kNone;         // highest height above the finest terrain
   double max_altitude_m = kNone;    // highest height above the datum
+  Autopilot autopilot = Autopilot::px4;
 };
 
 // The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m

@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
@@ -312,6 +314,22 @@ TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   EXPECT_NE(r.out.find(", inside the envelope"), std::string::npos) << r.out;
 }
 
+// A pack whose file name is not UTF-8 (once an uncaught exception: SIGABRT
+// and no summary): the session runs, and summary.json names the pack with
+// U+FFFD for the bad byte.
+TEST_F(Console, APackNameThatIsNotUtf8EndsWithItsSummary) {
+  const std::string copy = ::testing::TempDir() + "/console_latin1_\xff_" + std::to_string(getpid()) + ".vvp";
+  std::ifstream src(*pack_, std::ios::binary);
+  std::ofstream(copy, std::ios::binary) << src.rdbuf();
+  const std::string out = out_dir("latin1");
+  const Outcome r = console_limited("--pack '" + copy + "' --seconds 1 --no-dds --priority 0 --no-lock --segments 16 " +
+                                    "--script none --thumbnail-view none --out " + out);
+  std::remove(copy.c_str());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_NE(s["pack"].get<std::string>().find("latin1_\xEF\xBF\xBD_"), std::string::npos) << s["pack"];
+}
+
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   const std::string out = out_dir("run");
   const Outcome r =
@@ -480,6 +498,107 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
   EXPECT_EQ(s["check"]["constraints"][2]["kind"], "hidden-from");
   EXPECT_EQ(s["check"]["constraints"][3]["kind"], "visible-to");
   EXPECT_TRUE(s["check"]["all_met"].is_boolean());
+}
+
+// The red team's commands (issue 14), sent as an operator's tool would over
+// DDS to a running console: ends 1 m apart (once a SIGSEGV), coincident, not
+// finite, off the pack, absurd stiffness, segment counts and weights. Each is
+// answered with a reason and changes nothing; the one good command after them
+// is applied; the console runs to the end and writes its summary.
+TEST_F(Console, SurvivesHostileCommandsToTheEndOfItsSession) {
+  using namespace visvol::dds;
+  using namespace visvol::msg;
+  ParticipantConfig pc;
+  pc.domain_id = 224;
+  pc.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(pc);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto acks = Reader::create(**participant, Topic::command_ack);
+  auto commands = Writer::create(**participant, Topic::command);
+  ASSERT_TRUE(acks.ok() && commands.ok());
+
+  const std::string out = out_dir("hostile");
+  Outcome r;
+  std::thread run([&] {
+    r = console_limited("--pack " + *pack_ +
+                        " --seconds 3 --domain 224 --priority 0 --no-lock --segments 32 --script none --out " + out);
+  });
+  ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";
+
+  const double nan = std::nan("");
+  const std::vector<double> a = post(20, 20, 100), b = post(70, 70, 100);
+  auto ends = [](const std::vector<double>& p, const std::vector<double>& q) {
+    Command c{};
+    c.kind = CommandKind::set_endpoints;
+    c.endpoints.start = {p[0], p[1], p[2]};
+    c.endpoints.end = {q[0], q[1], q[2]};
+    return c;
+  };
+  std::vector<Command> hostile;
+  hostile.push_back(ends(a, {a[0] + 1.0, a[1], a[2]}));  // 1 m apart, 32 segments
+  hostile.push_back(ends(a, a));                         // coincident
+  hostile.push_back(ends({nan, a[1], a[2]}, b));
+  hostile.push_back(ends(a, {b[0] + 1e7, b[1], b[2]}));  // 10 000 km off the pack
+  hostile.push_back(ends(a, {b[0], b[1], -1e300}));
+  Command stiff{};
+  stiff.kind = CommandKind::set_stiffness;
+  stiff.stiffness = {-5.0, 1.0};
+  hostile.push_back(stiff);
+  stiff.stiffness = {nan, 1e308};
+  hostile.push_back(stiff);
+  Command segments{};
+  segments.kind = CommandKind::set_segment_count;
+  segments.segment_count = 4000000000u;
+  hostile.push_back(segments);
+  Command weights{};
+  weights.kind = CommandKind::set_weights;
+  weights.weights = {std::numeric_limits<double>::infinity(), 1.0, 1.0, 1.0};
+  hostile.push_back(weights);
+  std::uint64_t seq = 100;
+  CommandMessage msg;
+  for (Command& c : hostile) {
+    c.sequence = seq++;
+    copy_text(c.source, "red_team");
+    ASSERT_EQ(commands->write(&msg.fill(c)), DDS_RETCODE_OK);
+  }
+  Command good = ends(a, b);
+  good.sequence = seq;
+  copy_text(good.source, "red_team");
+  ASSERT_EQ(commands->write(&msg.fill(good)), DDS_RETCODE_OK);
+  run.join();
+  ASSERT_EQ(r.status, 0) << r.err;
+
+  // the last answer to each command: rejected by the intake, or accepted and
+  // then applied or failed by the executive
+  std::map<std::uint64_t, CommandAck> last;
+  auto taken = acks->take<visvol_msgs_msg_dds__CommandAck_>(
+      [&](const visvol_msgs_msg_dds__CommandAck_& m, const dds_sample_info_t&) {
+        const CommandAck ack = decode_ack(m);
+        auto it = last.find(ack.sequence);
+        if (it == last.end() || ack.result != AckResult::accepted) last[ack.sequence] = ack;
+      },
+      64);
+  ASSERT_TRUE(taken.ok());
+  for (std::uint64_t s = 100; s < seq; ++s) {
+    ASSERT_EQ(last.count(s), 1u) << "command " << s << " was never answered";
+    const CommandAck& ack = last[s];
+    EXPECT_TRUE(ack.result == AckResult::rejected || ack.result == AckResult::failed)
+        << "command " << s << " ended " << static_cast<int>(ack.result);
+    EXPECT_GT(std::string(ack.reason).size(), 5u) << "command " << s << " was refused without a reason";
+  }
+  ASSERT_EQ(last.count(seq), 1u);
+  EXPECT_EQ(last[seq].result, AckResult::applied) << last[seq].reason;
+
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(s["commands"]["applied"].get<int>(), 1);
+  EXPECT_EQ(s["commands"]["received"].get<int>(), static_cast<int>(hostile.size()) + 1);
+  EXPECT_EQ(
+      s["commands"]["failed"].get<int>() + s["commands"]["applied"].get<int>() + s["commands"]["rejected"].get<int>(),
+      static_cast<int>(hostile.size()) + 1);
+  // nothing left a rope that stopped being finite (JSON writes NaN as null)
+  EXPECT_EQ(s["path"]["rope_resets"].get<int>(), 0);
+  EXPECT_TRUE(s["path"]["length_m"].is_number_float() && s["path"]["fc_end"].is_number_float()) << s["path"].dump();
 }
 
 // switch-terrain to a --terrain pack: the session on the first pack ends

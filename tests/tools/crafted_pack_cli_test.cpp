@@ -65,6 +65,26 @@ TEST_F(CraftedCli, TheUncraftedPackPassesEveryCommand) {
   std::remove(copy.c_str());
 }
 
+// A file name is bytes, not always UTF-8 (a pack copied from an old file
+// system): every command takes it, and the JSON that names it stays JSON
+// (the bad byte written as U+FFFD) instead of aborting.
+TEST_F(CraftedCli, APackNameThatIsNotUtf8IsTakenAndItsJsonStaysValid) {
+  const std::string copy = ::testing::TempDir() + "/crafted_cli_latin1_\xff_" + std::to_string(getpid()) + ".vvp";
+  CraftedPack(*valid_).write(copy);
+  for (const Command& c : commands()) {
+    const std::string name = c.name;
+    const bool json = name == "info" || name == "plan";
+    const std::string args = c.args.find("--json") == std::string::npos && json ? c.args + " --json" : c.args;
+    const Outcome r = visvol(name + " '" + copy + "' " + args, c.input);
+    EXPECT_EQ(r.status, 0) << name << " " << args << ": " << r.err;
+    if (json) {
+      const nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
+      EXPECT_FALSE(j.is_discarded()) << name << " " << args << " wrote no JSON: " << r.out;
+    }
+  }
+  std::remove(copy.c_str());
+}
+
 TEST_F(CraftedCli, EveryCommandRefusesAHostilePackWithStatus2) {
   struct Case {
     const char* what;

@@ -354,7 +354,7 @@ TEST_F(PathIo, FixedWingPlanLoitersOverTheEndThenLands) {
   v.speed_mps = 23.5;  // the envelope's, not a constant
   v.min_turn_radius_m = 95.0;
   PathReport r = report(v);
-  r.autopilot = Autopilot::ardupilot;
+  r.vehicle.autopilot = rt::Autopilot::ardupilot;
   const nlohmann::json plan = nlohmann::json::parse(slurp(write(r) + ".plan"));
   Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, wkt_);
   ASSERT_TRUE(geo.ok());

@@ -59,6 +59,9 @@ TEST_F(PlanCheck, AHiddenPathStatesEveryRequirementAndItsCheckAgrees) {
     if (c.status != 0) continue;
     const nlohmann::json j = nlohmann::json::parse(c.out);
     EXPECT_TRUE(j["all_met"].get<bool>()) << ext;
+    for (const char* key : {"fc_start", "fc_end", "constraints", "envelope", "inside_planning_bounds"}) {
+      EXPECT_TRUE(j.contains(key)) << ext << ": " << key;
+    }
     EXPECT_NEAR(j["length_m"].get<double>(), s["length_m"].get<double>(), 1.0) << ext;
     EXPECT_GT(j["per_vertex"].size(), 2u);
   }
@@ -164,6 +167,8 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   const std::string b = base("bad");
   const std::string vehicle = ::testing::TempDir() + "/vehicle_" + std::to_string(getpid()) + ".toml";
   std::ofstream(vehicle) << "type = \"fixed-wing\"\nmax-climb = 10\nwingspan = 3\n";
+  const std::string autopilot = ::testing::TempDir() + "/vehicle_inav_" + std::to_string(getpid()) + ".toml";
+  std::ofstream(autopilot) << "type = \"multirotor\"\nautopilot = \"inav\"\n";
   struct Case {
     std::string args, names;
   } cases[] = {
@@ -174,6 +179,13 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
       {kEnds + " --vehicle " + vehicle, "wingspan"},
       {kEnds + " --vehicle /nonexistent.toml", "--vehicle"},
       {kEnds + " --visible-to 1 2 3", "--visible-to"},
+      {kEnds + " --visible-to 550500 nan 330", "--visible-to"},
+      {" --from nan 4182450 320 --to 550850 4181850 320", "--from"},
+      {kEnds + " --eye-height nan", "--eye-height"},
+      {kEnds + " --k1 nan", "--k1"},
+      {kEnds + " --stiffness inf", "--stiffness"},
+      {kEnds + " --autopilot inav", "--autopilot"},
+      {kEnds + " --vehicle " + autopilot, "autopilot"},
   };
   for (const Case& c : cases) {
     const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);
@@ -181,6 +193,34 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
     EXPECT_NE(r.err.find(c.names), std::string::npos) << c.args << ": " << r.err;
   }
   EXPECT_NE(access((b + ".csv").c_str(), F_OK), 0);
+  std::remove(vehicle.c_str());
+  std::remove(autopilot.c_str());
+}
+
+// The .plan is written for the flight stack the vehicle flies: PX4 unless the
+// vehicle file or --autopilot says ArduPilot (MAV_AUTOPILOT 12 and 3).
+TEST_F(PlanCheck, TheMissionIsWrittenForTheVehiclesAutopilot) {
+  const std::string vehicle = ::testing::TempDir() + "/vehicle_apm_" + std::to_string(getpid()) + ".toml";
+  std::ofstream(vehicle) << "name = \"survey quad\"\ntype = \"multirotor\"\nautopilot = \"ardupilot\"\n";
+  const struct {
+    std::string args;
+    int firmware;
+  } cases[] = {{" --vehicle multirotor", 12},
+               {" --vehicle " + vehicle, 3},
+               {" --vehicle multirotor --autopilot ardupilot", 3},
+               {" --vehicle " + vehicle + " --autopilot px4", 12}};
+  for (const auto& c : cases) {
+    const std::string b = base("autopilot");
+    const Outcome r = visvol("plan " + *pack_ + kEnds + c.args +
+                             " --objective hide --init straight --segments 16 --max-seconds 1 --json -o " + b);
+    ASSERT_LT(r.status, 2) << c.args << ": " << r.err;  // 1: a requirement unmet, still written
+    const nlohmann::json plan = nlohmann::json::parse(slurp(b + ".plan"));
+    EXPECT_EQ(plan["mission"]["firmwareType"], c.firmware) << c.args;
+    EXPECT_EQ(plan["mission"]["vehicleType"], 2) << c.args;  // MAV_TYPE_QUADROTOR
+    const nlohmann::json s = nlohmann::json::parse(r.out);
+    EXPECT_EQ(s["vehicle"]["autopilot"], c.firmware == 3 ? "ardupilot" : "px4") << c.args;
+    remove_outputs(b);
+  }
   std::remove(vehicle.c_str());
 }
 

@@ -18,7 +18,7 @@ nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e) 
   }
   j["envelope"] = nlohmann::json::array();
   for (const rt::LimitResult& l : c.envelope) j["envelope"].push_back(rt::limit_json(l));
-  j["vehicle"] = {{"name", e.name}, {"type", rt::to_string(e.type)}, {"speed_mps", e.speed_mps}};
+  j["vehicle"] = rt::vehicle_json(e);
   j["inside_planning_bounds"] = c.inside_planning_bounds;
   j["inside_bounds_fraction"] = c.inside_bounds_fraction;
   j["all_met"] = c.all_met;

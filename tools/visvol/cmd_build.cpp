@@ -12,6 +12,7 @@
 #include "fields/pyramid.hpp"
 #include "fields/sampler.hpp"
 #include "import_cli.hpp"
+#include "io/json_text.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/planning_bounds.hpp"
 
@@ -199,7 +200,7 @@ Status check_area_inside(const BuildOptions& o, const BuildInput& in, const Heig
 std::string build_source_json(const BuildOptions& o, const BuildInput& in, const fields::ImportReport& imported) {
   nlohmann::json j = nlohmann::json::parse(source_json(o.dem, in.import, imported));
   if (!o.area.empty()) j["import"]["area"] = o.area;
-  return j.dump();
+  return json_text(j);
 }
 
 void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams& p, const std::vector<LodLevel>& levels,
@@ -281,7 +282,7 @@ std::string summary_json(const BuildOptions& o, const Heightfield& hf, const Fie
                             {"f", s.f},
                             {"gradient_per_m", {s.gradient.x(), s.gradient.y(), s.gradient.z()}}});
   }
-  return j.dump(2) + "\n";
+  return json_text(j, 2) + "\n";
 }
 
 void print_pack_summary(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,

@@ -10,6 +10,7 @@
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "io/json_text.hpp"
 #include "path_io.hpp"
 #include "planning_pack.hpp"
 #include "rt/rope/field_forces.hpp"
@@ -56,7 +57,9 @@ int run_check(const CheckOptions& o) {
   const rt::FieldForces<storage::PackLevel> field(p.levels.front(), rt::ForceGains{});
   rt::PathCheckSpec spec;
   spec.envelope = *envelope;
-  spec.constraints = constraint_points(o.constraints);
+  Result<std::vector<rt::ConstraintPoint>> observers = constraint_points(o.constraints);
+  if (!observers.ok()) return fail("check", observers.status());
+  spec.constraints = std::move(*observers);
   spec.planning_bounds = p.bounds;
   spec.curvature_coeff = p.curvature_coeff;
   Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
@@ -68,7 +71,11 @@ int run_check(const CheckOptions& o) {
     j["pack"] = o.pack;
     j["path"] = o.path;
     j["per_vertex"] = vertices_json(c, file->points);
-    std::printf("%s\n", j.dump(2).c_str());
+    // the keys plan's summary has: a path checked had no rope run, so both
+    // are its own F_c
+    j["fc_start"] = c.fc;
+    j["fc_end"] = c.fc;
+    std::printf("%s\n", json_text(j, 2).c_str());
   } else {
     std::printf("path       %s: %zu vertices, %.0f m, %.0f s at %.1f m/s (vehicle %s)\n", o.path.c_str(),
                 file->points.size(), c.length_m, c.duration_s, envelope->speed_mps, envelope->name.c_str());

@@ -17,6 +17,7 @@
 #include "import_cli.hpp"
 #include "io/atomic_file.hpp"
 #include "io/input_file.hpp"
+#include "io/json_text.hpp"
 #include "storage/pack_reader.hpp"
 #include "storage/volume_export.hpp"
 
@@ -116,8 +117,8 @@ void print_pack_info(const Pack& pack) {
               l0.z0_m + (l0.nz - 1) * l0.dz_m);
   std::printf("tff band   +-%.1f m, %u samples a column\n", pack.header().band_offset_m, pack.header().band_levels);
   print_planning(pack.metadata().planning);
-  std::printf("build      %s\n", j["build"].dump().c_str());
-  std::printf("source     %s\n", j["source"].dump().c_str());
+  std::printf("build      %s\n", json_text(j["build"]).c_str());
+  std::printf("source     %s\n", json_text(j["source"]).c_str());
   std::printf("levels of detail:\n");
   for (int l = 0; l < pack.level_count(); ++l) {
     const storage::LevelEntry& e = pack.level(l);
@@ -136,7 +137,7 @@ int run_info(const InfoOptions& o) {
     Result<std::shared_ptr<const Pack>> pack = Pack::open(o.path);
     if (!pack.ok()) return fail("info", pack.status());
     if (o.json) {
-      std::printf("%s\n", pack_info_json(**pack).dump(2).c_str());
+      std::printf("%s\n", json_text(pack_info_json(**pack), 2).c_str());
     } else {
       print_pack_info(**pack);
     }
@@ -168,7 +169,7 @@ int run_info(const InfoOptions& o) {
                      {"height_min_m", hr.min_m},
                      {"height_max_m", hr.max_m},
                      {"steps", rep.steps}};
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", json_text(j, 2).c_str());
     return kExitOk;
   }
   std::printf("DEM        %s (%s)\n", o.path.c_str(), rep.source.driver.c_str());

@@ -12,6 +12,7 @@
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "io/json_text.hpp"
 #include "path_io.hpp"
 #include "plan_publish.hpp"
 #include "planning_pack.hpp"
@@ -107,7 +108,9 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   Result<rt::VehicleEnvelope> envelope = resolve_envelope(o.envelope);
   if (!envelope.ok()) return envelope.status();
   r.envelope = *envelope;
-  r.constraints = constraint_points(o.constraints);
+  Result<std::vector<rt::ConstraintPoint>> observers = constraint_points(o.constraints);
+  if (!observers.ok()) return observers.status();
+  r.constraints = std::move(*observers);
   r.planning_bounds = p.bounds;
   r.curvature_coeff = p.curvature_coeff;
   r.visibility_gain = o.k1;
@@ -240,7 +243,7 @@ int run_plan(const PlanOptions& o) {
                   {"subscribers", publisher->subscribers()},
                   {"delivered", delivery.ok()}};
     }
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", json_text(j, 2).c_str());
   } else {
     std::printf("%s path, %s rope of %d segments, start: %s, vehicle %s\n", report.objective.c_str(),
                 report.model.c_str(), r.segments, o.init.c_str(), r.envelope.name.c_str());

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/input_file.hpp"
+#include "io/json_text.hpp"
 
 namespace visvol::cli {
 
@@ -81,7 +82,7 @@ std::string source_json(const std::string& path, const ImportCli& o, const field
   j["import"] = {{"fill_nodata", o.fill_nodata}, {"t_srs", o.t_srs}, {"assume_srs", o.assume_srs},
                  {"spacing_m", o.spacing_m},     {"crop", o.crop},   {"resampling", o.resampling},
                  {"steps", report.steps}};
-  return j.dump();
+  return json_text(j);
 }
 
 }  // namespace visvol::cli

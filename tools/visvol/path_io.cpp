@@ -19,6 +19,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/input_file.hpp"
+#include "io/json_text.hpp"
 
 namespace visvol::cli {
 
@@ -369,7 +370,7 @@ bool integer_of(const nlohmann::json& j, long long& v) {
   return true;
 }
 
-std::string json_brief(const nlohmann::json& j) { return quoted(j.dump()); }
+std::string json_brief(const nlohmann::json& j) { return quoted(json_text(j)); }
 
 // mission.plannedHomePosition: [latitude, longitude, altitude above mean sea level].
 Status read_home_altitude(const nlohmann::json& mission, const std::string& where, double& altitude_m) {
@@ -854,7 +855,7 @@ nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
           {"groundStation", "QGroundControl"},
           {"mission",
            {{"cruiseSpeed", r.vehicle.speed_mps},
-            {"firmwareType", r.autopilot == Autopilot::ardupilot ? kAutopilotArduPilotMega : kAutopilotPx4},
+            {"firmwareType", r.vehicle.autopilot == rt::Autopilot::ardupilot ? kAutopilotArduPilotMega : kAutopilotPx4},
             {"globalPlanAltitudeMode", qgc::kAltitudeModeAbsolute},
             {"hoverSpeed", r.vehicle.speed_mps},
             {"items", items},
@@ -928,9 +929,11 @@ Status write_path_outputs(const std::string& base, const PathReport& r, std::vec
   if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
   VISVOL_RETURN_IF_ERROR(write_output(base + ".kml", kml_text(r, *geo), written));
   const Status plan_ground = check_plan_ground(r);
-  if (plan_ground.ok()) VISVOL_RETURN_IF_ERROR(write_output(base + ".plan", qgc_plan(r, *geo).dump(1) + "\n", written));
+  if (plan_ground.ok())
+    VISVOL_RETURN_IF_ERROR(write_output(base + ".plan", json_text(qgc_plan(r, *geo), 1) + "\n", written));
   if (ellipsoidal.ok()) {
-    VISVOL_RETURN_IF_ERROR(write_output(base + ".geojson", geojson(r, *geo, *ellipsoidal).dump(1) + "\n", written));
+    VISVOL_RETURN_IF_ERROR(
+        write_output(base + ".geojson", json_text(geojson(r, *geo, *ellipsoidal), 1) + "\n", written));
   }
   if (!plan_ground.ok()) return plan_ground.with_context(".plan not written");
   if (!ellipsoidal.ok()) return ellipsoidal.status().with_context("GeoJSON not written");

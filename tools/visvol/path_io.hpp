@@ -99,9 +99,6 @@ struct VertexInfo {
   double clearance_m = 0;  // height above the terrain
 };
 
-// The autopilot a .plan is for (its mission.firmwareType).
-enum class Autopilot { px4, ardupilot };
-
 struct PathReport {
   std::vector<Vec3> vertices;          // pack CRS, metres
   std::vector<VertexInfo> per_vertex;  // one per vertex
@@ -112,8 +109,7 @@ struct PathReport {
   // each not above its vertex.
   double home_ground_m = std::numeric_limits<double>::quiet_NaN();
   double land_ground_m = std::numeric_limits<double>::quiet_NaN();
-  rt::VehicleEnvelope vehicle;  // the .plan's vehicle type, speeds, takeoff pitch, loiter radius
-  Autopilot autopilot = Autopilot::px4;
+  rt::VehicleEnvelope vehicle;  // the .plan's firmware, vehicle type, speeds, takeoff pitch, loiter radius
   // The exact check's verdict (rt::PathCheck), written into the GeoJSON's
   // properties so that a path that breaks a requirement says so where it goes.
   bool requirements_met = true;

@@ -1,0 +1,98 @@
+// visvol-console's threads, run as a user runs them (the 1 kHz loop, the
+// monitor on the main thread, the DDS publisher and command intake, the hull
+// builder, the path fitter, the thumbnail renderer), with a grasp from the
+// simulated device and a constraint set over DDS. Labelled `threaded`: the
+// ThreadSanitizer stage runs it, where a data race between them (the monitor
+// once read the loop's counters directly) stops the console with a report.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "../fields/terrains.hpp"
+#include "drivers/dds/command_codec.hpp"
+#include "drivers/dds/participant.hpp"
+#include "storage/pack_build.hpp"
+#include "storage/pack_reader.hpp"
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(ConsoleThreads, ASessionWithCommandsRunsItsThreadsWithoutARace) {
+  using namespace visvol::dds;
+  using namespace visvol::msg;
+  const std::string tag = std::to_string(getpid());
+  const std::string pack = ::testing::TempDir() + "/console_threads_" + tag + ".vvp";
+  visvol::storage::PackBuildParams p;
+  p.field.nz = 24;
+  p.field.ceiling_m = 200;
+  p.field.range_posts = 8;
+  p.lod_levels = 2;
+  p.tff.band_offset_m = 60;
+  p.tff.band_levels = 8;
+  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), p, "", pack).ok());
+  const std::string script = ::testing::TempDir() + "/console_threads_script_" + tag + ".txt";
+  std::ofstream(script) << "0.2 move 0 0 0 0.1\n0.4 pull 20 0 -20 0.6\n1.2 release\n";
+
+  ParticipantConfig pc;
+  pc.domain_id = 225;
+  pc.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(pc);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto commands = Writer::create(**participant, Topic::command);
+  ASSERT_TRUE(commands.ok());
+
+  const std::string out = ::testing::TempDir() + "/console_threads_" + tag;
+  const std::string err = out + ".err";
+  int status = -1;
+  std::thread run([&] {
+    const std::string cmd = std::string("timeout -k 5 120 ") + VISVOL_CONSOLE + " --pack " + pack +
+                            " --seconds 3 --domain 225 --priority 0 --no-lock --segments 24 --script " + script +
+                            " --out " + out + " </dev/null >/dev/null 2>" + err;
+    const int rc = std::system(cmd.c_str());
+    status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  });
+  // a set of observers for the hull builder, once the intake is there
+  if (commands->wait_for_readers(1, 60.0).ok()) {
+    auto opened = visvol::storage::Pack::open(pack);
+    ASSERT_TRUE(opened.ok());
+    auto level = visvol::storage::PackLevel::open(*opened, 0);
+    ASSERT_TRUE(level.ok());
+    const visvol::fields::VolumeGeometry g = level->geometry();
+    Command hide{};
+    hide.kind = CommandKind::set_constraints;
+    hide.sequence = 1;
+    copy_text(hide.source, "console_threads_test");
+    hide.constraints.count = 1;
+    hide.constraints.items[0] = {
+        ConstraintKind::hidden_from,
+        {g.origin_x + 32 * g.spacing_m, g.origin_y - 32 * g.spacing_m, level->post(32, 32) + 20.0},
+        0.0};
+    CommandMessage msg;
+    EXPECT_EQ(commands->write(&msg.fill(hide)), DDS_RETCODE_OK);
+  }
+  run.join();
+  const std::string report = slurp(err);
+  EXPECT_EQ(status, 0) << report;
+  EXPECT_EQ(report.find("ThreadSanitizer"), std::string::npos) << report;
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"), nullptr, false);
+  ASSERT_FALSE(s.is_discarded()) << "no summary.json: " << report;
+  EXPECT_GT(s["loop"]["ticks"].get<int>(), 100);
+  std::remove(pack.c_str());
+  std::remove(script.c_str());
+  std::remove(err.c_str());
+}
+
+}  // namespace

@@ -862,10 +862,14 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
                 {"errors", ps.errors}};
   }
   if (intake) {
-    const dds::IntakeStats is = intake->stats();
-    j["commands"]["received"] = is.commands.received;
-    j["commands"]["rejected"] = is.commands.rejected;  // by the intake, with a reason in their acks
-    j["commands"]["rate_limited"] = is.commands.rate_limited;
+    // commands.applied and .failed are the executive's; the intake's own
+    // counts (rejected includes rate_limited and queue_full)
+    const dds::CommandCounts& ic = intake->stats().commands;
+    j["commands"]["intake"] = {{"received", ic.received},
+                               {"accepted", ic.accepted},
+                               {"rejected", ic.rejected},
+                               {"rate_limited", ic.rate_limited},
+                               {"queue_full", ic.queue_full}};
   }
   if (thumbs) {
     const ThumbnailStats t = thumbs->stats();

@@ -53,7 +53,7 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
   const struct {
     const char* key;
     double rt::VehicleEnvelope::*field;
-  } numbers[] = {{"speed", &rt::VehicleEnvelope::speed_mps},
+  } numbers[] = {{"speed", &rt::VehicleEnvelope::speed_m_per_s},
                  {"max-climb", &rt::VehicleEnvelope::max_climb_deg},
                  {"max-descent", &rt::VehicleEnvelope::max_descent_deg},
                  {"min-turn-radius", &rt::VehicleEnvelope::min_turn_radius_m},
@@ -98,7 +98,7 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
                "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m), multirotor (8 m/s, climb 60 deg, "
                "descent 45 deg) or a TOML file of the keys below")
       ->capture_default_str();
-  c.add_option("--speed", o.speed_mps, "Cruise speed, m/s (exposure time, mission speeds)");
+  c.add_option("--speed", o.speed_m_per_s, "Cruise speed, m/s (exposure time, mission speeds)");
   c.add_option("--max-climb", o.max_climb_deg, "Steepest climb of a segment, deg");
   c.add_option("--max-descent", o.max_descent_deg, "Steepest descent of a segment, deg");
   c.add_option("--min-turn-radius", o.min_turn_radius_m, "Tightest turn at a waypoint, m (0: none)");
@@ -106,8 +106,7 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--max-agl", o.max_agl_m, "Highest height above the terrain, m (default: the field's top bounds it)");
   c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
   c.add_option("--autopilot", o.autopilot,
-               "Flight stack of the .plan mission: px4 or ardupilot (default: the vehicle's)")
-      ->check(CLI::IsMember({"px4", "ardupilot"}));
+               "The vehicle's flight stack, px4 or ardupilot: a .plan mission's firmware (default: the vehicle's)");
 }
 
 void add_constraint_options(CLI::App& c, ConstraintOptions& o) {
@@ -128,7 +127,7 @@ Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& o) {
   const struct {
     const std::optional<double>& value;
     double rt::VehicleEnvelope::*field;
-  } overrides[] = {{o.speed_mps, &rt::VehicleEnvelope::speed_mps},
+  } overrides[] = {{o.speed_m_per_s, &rt::VehicleEnvelope::speed_m_per_s},
                    {o.max_climb_deg, &rt::VehicleEnvelope::max_climb_deg},
                    {o.max_descent_deg, &rt::VehicleEnvelope::max_descent_deg},
                    {o.min_turn_radius_m, &rt::VehicleEnvelope::min_turn_radius_m},

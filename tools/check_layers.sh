@@ -13,10 +13,13 @@
 #   drivers/         devices and transports; drivers/render/ has no DDS
 #   app/, tools/     wire everything; tools/bench/ may use tests/support/
 #   tests/           anything
-# Quoted and angle-bracket includes both count; Cyclone DDS's headers and the
-# ones idlc generates (the transport) are allowed in drivers/dds/ and tests/ only.
+# Quoted and angle-bracket includes both count, however spaced; a path that
+# climbs (`..`) or starts at `./` is refused outside tests/ (it would dodge the
+# rules). Cyclone DDS's headers and the ones idlc generates (the transport) are
+# allowed in drivers/dds/ and tests/ only. VISVOL_LAYERS_ROOT checks another
+# tree (tests/tools/check_layers_test.sh plants breaks in one).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "${VISVOL_LAYERS_ROOT:-$(dirname "$0")/..}"
 
 # The project's top-level folders: an include that starts with one of them is
 # the project's own (anything else is a system or library header).
@@ -29,11 +32,11 @@ rules=(
   "io/:base/|io/"
   "msg/:base/|msg/"
   "fields/gdal/:base/|io/|fields/"
-  "fields/:base/|fields/"
+  "fields/:base/|fields/[a-z0-9_]+\.hpp$"
   "storage/:base/|io/|fields/|storage/"
   "rt/servo/:base/|rt/servo/"
   "rt/rope/:base/|fields/|rt/rope/"
-  "rt/exec/:base/|msg/|fields/|storage/|rt/"
+  "rt/exec/:base/|msg/|fields/|storage/resident_pack\.hpp$|rt/"
   "drivers/can/:base/|io/|drivers/can/"
   "drivers/haptic/:base/|io/|rt/exec/haptic_device\.hpp|drivers/can/|drivers/haptic/"
   "drivers/hapticsim/:base/|io/|rt/exec/haptic_device\.hpp|drivers/can/|drivers/haptic/|drivers/hapticsim/"
@@ -57,12 +60,13 @@ rule_for() {  # the allowed pattern of the longest folder that prefixes $1
   [[ -n $best ]] && printf '%s' "$allowed"
 }
 
-sources() {  # the tracked C++ files, or every one outside build trees in an export
-  if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
-    git ls-files -- '*.cpp' '*.hpp' '*.h' '*.cc'
+sources() {  # the C++ files of a checkout (tracked or new, not ignored), or of an export
+  local globs=('*.cpp' '*.hpp' '*.h' '*.cc' '*.c' '*.inl' '*.ipp')
+  if [[ $(git rev-parse --show-toplevel 2>/dev/null) == "$(pwd -P)" ]]; then
+    git ls-files -co --exclude-standard -- "${globs[@]}"
   else
-    find . -mindepth 1 \( -path './build*' -o -name '.*' \) -prune -o -type f \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' -o -name '*.cc' \) -print |
-      sed 's|^\./||' | sort
+    find . -mindepth 1 \( -path './build*' -o -name '.*' \) -prune -o -type f \( -name '*.cpp' -o -name '*.hpp' \
+      -o -name '*.h' -o -name '*.cc' -o -name '*.c' -o -name '*.inl' -o -name '*.ipp' \) -print | sed 's|^\./||' | sort
   fi
 }
 
@@ -77,14 +81,20 @@ while IFS= read -r file; do
   checked=$((checked + 1))
   while IFS= read -r included; do
     [[ -n $included ]] || continue
-    if [[ ! $included =~ ^($allowed) ]]; then
+    if [[ $file != tests/* && ($included == *..* || $included == ./*) ]]; then
+      echo "layers: $file includes $included: a relative path dodges the layer rules (name it from the root)" >&2
+      status=1
+    elif [[ $included =~ ^(($project)/|$cyclone) && ! $included =~ ^($allowed) ]]; then
       echo "layers: $file includes $included, which its folder's rule does not allow" >&2
       status=1
     fi
-  done < <(grep -Eo "^#include [<\"](($project)/|$cyclone)[^\">]*[\">]" "$file" |
-             sed -E 's/^#include [<"]([^">]+)[">]$/\1/')
+  done < <(sed -nE 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*[<"]([^">]+)[">].*/\1/p' "$file")
 done < <(sources)
 
+if ((checked == 0)); then
+  echo "layers: no C++ file found under $(pwd): nothing checked" >&2
+  status=1
+fi
 if ((status == 0)); then
   echo "layers: ${#rules[@]} rules hold over $checked files"
 fi

@@ -29,21 +29,21 @@ Result<std::unique_ptr<CommandIntake>> CommandIntake::start(const Participant& p
   if (!reader.ok()) return reader.status();
   Result<Writer> writer = Writer::create(participant, Topic::command_ack);
   if (!writer.ok()) return writer.status();
-  std::unique_ptr<CommandIntake> intake(new CommandIntake(config, std::move(*processor), std::move(*reader),
-                                                          std::move(*writer), commands, executive_acks));
+  std::unique_ptr<CommandIntake> intake(
+      new CommandIntake(config, *processor, std::move(*reader), std::move(*writer), commands, executive_acks));
   intake->thread_ = std::thread([raw = intake.get()] { raw->run(); });
   return intake;
 }
 
-CommandIntake::CommandIntake(const IntakeConfig& config, CommandProcessor processor, Reader reader, Writer ack_writer,
-                             msg::CommandQueue& commands, msg::AckQueue* executive_acks)
+CommandIntake::CommandIntake(const IntakeConfig& config, const CommandProcessor& processor, Reader reader,
+                             Writer ack_writer, msg::CommandQueue& commands, msg::AckQueue* executive_acks)
     : config_(config),
       commands_(commands),
       executive_acks_(executive_acks),
       reader_(std::move(reader)),
       ack_writer_(std::move(ack_writer)),
       ack_msg_(config.frame_id),
-      processor_(std::move(processor)) {}
+      processor_(processor) {}
 
 CommandIntake::~CommandIntake() { stop(); }
 

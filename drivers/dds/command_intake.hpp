@@ -67,7 +67,7 @@ class CommandIntake {
   void stop();
 
  private:
-  CommandIntake(const IntakeConfig& config, CommandProcessor processor, Reader reader, Writer ack_writer,
+  CommandIntake(const IntakeConfig& config, const CommandProcessor& processor, Reader reader, Writer ack_writer,
                 msg::CommandQueue& commands, msg::AckQueue* executive_acks);
   void run();
   void handle_commands();

@@ -30,7 +30,7 @@ Result<std::unique_ptr<PathPublisher>> PathPublisher::create(const Participant& 
       new PathPublisher(frame_id, std::move(*path), std::move(*update), std::move(*thumbnail), std::move(*terrain)));
 }
 
-PathPublisher::PathPublisher(std::string frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain)
+PathPublisher::PathPublisher(const std::string& frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain)
     : path_writer_(std::move(path)),
       update_writer_(std::move(update)),
       thumbnail_writer_(std::move(thumbnail)),

@@ -54,7 +54,7 @@ class PathPublisher {
   std::uint32_t path_update_subscribers() const;
 
  private:
-  PathPublisher(std::string frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain);
+  PathPublisher(const std::string& frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain);
 
   Writer path_writer_;
   Writer update_writer_;

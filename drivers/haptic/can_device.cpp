@@ -17,7 +17,7 @@ rt::HapticState haptic_state(DeviceState s) {
 Result<CanDevice> CanDevice::create(const DriverConfig& config, can::CanBus& bus) {
   Result<DeviceDriver> driver = DeviceDriver::create(config, bus);
   if (!driver.ok()) return driver.status();
-  return CanDevice(std::move(*driver), bus);
+  return CanDevice(*driver, bus);
 }
 
 void CanDevice::poll(std::int64_t now_ns) {

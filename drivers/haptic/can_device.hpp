@@ -32,7 +32,7 @@ class CanDevice final : public rt::HapticDevice {
   const DeviceDriver& driver() const { return driver_; }
 
  private:
-  CanDevice(DeviceDriver driver, can::CanBus& bus) : driver_(std::move(driver)), bus_(&bus) {}
+  CanDevice(const DeviceDriver& driver, can::CanBus& bus) : driver_(driver), bus_(&bus) {}
 
   DeviceDriver driver_;
   can::CanBus* bus_;

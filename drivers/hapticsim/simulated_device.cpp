@@ -19,7 +19,7 @@ Result<std::unique_ptr<SimulatedDevice>> SimulatedDevice::create(const SimConfig
       {{haptic::frame_id(haptic::MessageKind::command, node), 0x7FF}, {haptic::kNmtId, 0x7FF}}, false);
   Result<SimDevice> device = SimDevice::create(config, s->bus_.endpoint(1), start_ns);
   if (!device.ok()) return device.status().with_context("simulated device");
-  s->device_.emplace(std::move(*device));
+  s->device_.emplace(*device);
   s->player_.emplace(s->script_);
   return s;
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <utility>
 
 #include "drivers/render/renderer.hpp"
 #include "drivers/render/renderer_impl.hpp"
@@ -558,7 +559,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage
   std::unique_ptr<Renderer> r(new Renderer());
   r->config_ = config;
   r->impl_ = std::make_unique<Impl>();
-  r->impl_->pack = pack;
+  r->impl_->pack = std::move(pack);
   r->impl_->load_terrain(*level, config.vertical_exaggeration);
   VISVOL_RETURN_IF_ERROR(r->impl_->build_gl(*level, config, r->info_));
   VISVOL_RETURN_IF_ERROR(r->warm_up());

@@ -1,61 +1,23 @@
+// The executive's tick core: creation, the rope's runs, the hull hand-over and the tick. The command
+// applier is in executive_commands.cpp, the reports to other threads in executive_reports.cpp.
 #include "rt/exec/executive.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
+#include "rt/exec/executive_detail.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/planner.hpp"
 #include "rt/rope/slack.hpp"
 
 namespace visvol::rt {
 
+using detail::check_point;
+using detail::finite_rope;
+
 namespace {
 
-static_assert(kMaxPlanObservers == kMaxObserversPerKind, "the console takes as many observers as the planner");
-static_assert(msg::kMaxObserversPerKind == static_cast<std::size_t>(kMaxObserversPerKind),
-              "a command's observers of a kind are what a hull request holds");
-
-constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt::PathChecker)
-
 std::size_t index_of(RopeModel m) { return m == RopeModel::articulated ? 1 : 0; }
-
-msg::DeviceState device_state_of(HapticState s, bool forces) {
-  switch (s) {
-    case HapticState::boot: return msg::DeviceState::disconnected;
-    case HapticState::pre_operational: return msg::DeviceState::idle;
-    case HapticState::operational: return forces ? msg::DeviceState::active : msg::DeviceState::idle;
-    case HapticState::fault: return msg::DeviceState::fault;
-  }
-  return msg::DeviceState::unknown;
-}
-
-// Finite and over the grid: what every endpoint must be (real-time safe).
-bool inside(const Vec3& p, const fields::VolumeGeometry& g) {
-  const double x1 = g.origin_x + (g.nx - 1) * g.spacing_m, y0 = g.origin_y - (g.ny - 1) * g.spacing_m;
-  return p.allFinite() && p.x() >= g.origin_x && p.x() <= x1 && p.y() >= y0 && p.y() <= g.origin_y;
-}
-
-// Whether every vertex of a rope is finite (real-time safe, O(vertices)).
-bool finite_rope(const Rope& rope) {
-  const Vec3* v = rope.vertices();
-  double sum = 0;
-  for (int i = 0; i <= rope.segments(); ++i) sum += v[i].x() + v[i].y() + v[i].z();
-  return std::isfinite(sum);
-}
-
-Status check_point(const char* name, const Vec3& p, const fields::VolumeGeometry& g, double ground_m) {
-  const double x1 = g.origin_x + (g.nx - 1) * g.spacing_m, y0 = g.origin_y - (g.ny - 1) * g.spacing_m;
-  if (!inside(p, g)) {
-    return invalid_argument(std::string(name) + ": (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
-                            ") is outside the pack (x " + std::to_string(g.origin_x) + ".." + std::to_string(x1) +
-                            ", y " + std::to_string(y0) + ".." + std::to_string(g.origin_y) + ")");
-  }
-  if (p.z() < ground_m) {
-    return invalid_argument(std::string(name) + ": " + std::to_string(ground_m - p.z()) + " m below the terrain");
-  }
-  return {};
-}
 
 // The clearance and ceiling themselves: finite where they must be, a ceiling
 // above the clearance.
@@ -151,7 +113,7 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
   update_gains();
   EquilibriumCriteria criteria;
   criteria.check_interval_s = c.fc_every_ticks * c.period_s;
-  criteria.max_rms_speed_mps = 0.1 * g.spacing_m;
+  criteria.max_rms_speed_m_per_s = 0.1 * g.spacing_m;
   equilibrium_.configure(criteria);
 
   for (RopeModel m : {RopeModel::spring, RopeModel::articulated}) {
@@ -165,7 +127,12 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
   scratch_ = std::make_unique<Vec3[]>(static_cast<std::size_t>(c.max_segments) + 1);
   path_sample_ = std::make_unique<msg::PathSample>();
   held_ = std::make_unique<msg::Command>();
-  if (start_run() != Errc::ok) return invalid_argument("executive: the rope could not be laid between the endpoints");
+  const Errc laid = start_run();
+  if (laid == Errc::unsupported) {
+    return invalid_argument("executive: the rope would not step stably at the " + std::to_string(c.period_s * 1e3) +
+                            " ms period with these gains and stiffness (lower them)");
+  }
+  if (laid != Errc::ok) return invalid_argument("executive: the rope could not be laid between the endpoints");
   counters_.running = c.start_running;
   counters_.fc = path_fc(rope_->vertices(), rope_->segments() + 1, *forces_, c.fc_samples);
   counters_.length_m = rope_->length_m();
@@ -216,6 +183,13 @@ RopeParams Executive::params_for(RopeModel model, int segments, double segment_m
   return p;
 }
 
+bool Executive::steps_stably(const RopeParams& p, const ForceGains& g) const {
+  if (!config_.refuse_unstable) return true;
+  const double gain = std::max({1.0, std::fabs(g.k1_visibility), g.k2_terrain, g.k_hull});
+  const double margin_m = std::max(0.2 * g.clearance_m, 1.0);
+  return stable_step_s(p, gain * forces_->reference_acceleration(), margin_m) >= config_.period_s;
+}
+
 void Executive::update_gains() {
   ForceGains g = forces_ ? forces_->gains() : config_.gains;
   g.k1_visibility = (objective_ == Objective::hide ? -1.0 : 1.0) * k1_;
@@ -236,7 +210,9 @@ Errc Executive::start_run() {
                  s.level().geometry(), [&](double x, double y) { return s.height(x, y); }, scratch_.get());
   // checked first: a refusal from reset() would build a message on this thread
   if (check_polyline(scratch_.get(), n + 1, n, 2, config_.max_segments) != Errc::ok) return Errc::invalid_argument;
-  const Errc e = rope_->set_params(params_for(rope_->model(), n, std::max(length / n, 1e-3)));
+  const RopeParams p = params_for(rope_->model(), n, std::max(length / n, 1e-3));
+  if (!steps_stably(p, forces_->gains())) return Errc::unsupported;
+  const Errc e = rope_->set_params(p);
   if (e != Errc::ok) return e;
   if (!rope_->reset(scratch_.get(), n + 1, n).ok()) return Errc::invalid_argument;
   set_ends(start_m_, end_m_);
@@ -254,7 +230,9 @@ Errc Executive::restart_rope(const Vec3* polyline, int points, int segments, Rop
   Rope* next = ropes_[index_of(model)].get();
   if (check_polyline(polyline, points, segments, 2, config_.max_segments) != Errc::ok) return Errc::invalid_argument;
   const double length = polyline_length_m(polyline, points);
-  const Errc e = next->set_params(params_for(model, segments, std::max(length / segments, 1e-3)));
+  const RopeParams p = params_for(model, segments, std::max(length / segments, 1e-3));
+  if (!steps_stably(p, forces_->gains())) return Errc::unsupported;
+  const Errc e = next->set_params(p);
   if (e != Errc::ok) return e;
   if (!next->reset(polyline, points, segments).ok()) return Errc::invalid_argument;
   rope_ = next;
@@ -272,206 +250,6 @@ void Executive::set_ends(const Vec3& start, const Vec3& end) {
   ends.start_m = start;
   ends.end_m = end;
   rope_->set_ends(ends);
-}
-
-// ---- commands -------------------------------------------------------------
-
-// The work a command makes the loop do, in items: a set-constraints command's
-// constraints (up to msg::kMaxConstraints); a command that lays the rope
-// again (start, set-endpoints, set-segments, set-model), its vertices (at
-// most kMaxConstraints: a rope of more takes a tick of its own); one for any
-// other command.
-int Executive::command_items(const msg::Command& c) const {
-  auto bounded = [](std::int64_t n) { return static_cast<int>(std::clamp<std::int64_t>(n, 1, msg::kMaxConstraints)); };
-  switch (c.kind) {
-    case msg::CommandKind::set_constraints: return bounded(c.constraints.count);
-    case msg::CommandKind::set_segment_count: return bounded(std::int64_t{c.segment_count} + 1);
-    case msg::CommandKind::start:
-    case msg::CommandKind::set_endpoints:
-    case msg::CommandKind::set_model: return bounded(rope_->segments() + 1);
-    default: return 1;
-  }
-}
-
-// A tick's work on commands is bounded: at most kMaxCommandsPerTick of them,
-// and their items at most one full set-constraints command's. The command
-// that would pass that bound waits, taken from the queue, for the next tick,
-// so a burst of large sets or of rope rebuilds is spread over ticks.
-void Executive::apply_commands() {
-  if (commands_ == nullptr) return;
-  int items = 0;
-  for (int n = 0; n < kMaxCommandsPerTick; ++n) {
-    msg::Command& c = *held_;
-    if (!holding_ && !commands_->try_pop(c)) return;
-    const int cost = command_items(c);
-    holding_ = n > 0 && items + cost > static_cast<int>(msg::kMaxConstraints);
-    if (holding_) return;
-    items += cost;
-    const char* reason = "";
-    const Errc e = apply(c, reason);
-    if (e == Errc::ok) {
-      ++counters_.commands_applied;
-    } else {
-      ++counters_.commands_failed;
-    }
-    ack(c, e, reason);
-  }
-}
-
-void Executive::ack(const msg::Command& c, Errc result, const char* reason) {
-  if (outputs_.acks == nullptr) return;
-  msg::CommandAck a{};
-  std::memcpy(a.source, c.source, sizeof a.source);
-  a.sequence = c.sequence;
-  a.kind = static_cast<std::uint8_t>(c.kind);
-  a.result = result == Errc::ok ? msg::AckResult::applied : msg::AckResult::failed;
-  msg::copy_text(a.reason, reason);
-  if (!outputs_.acks->try_push(a)) ++counters_.acks_dropped;
-}
-
-// Each command's own function: checks what it is given against the pack and
-// the state in force and names why it failed in `reason` (a static string:
-// the tick builds no message). A refused value leaves the state as it was; a
-// rope that cannot be rebuilt (model, segments) may keep new parameters.
-Errc Executive::apply(const msg::Command& c, const char*& reason) {
-  switch (c.kind) {
-    case msg::CommandKind::set_endpoints: return apply_endpoints(c, reason);
-    case msg::CommandKind::set_objective:
-      objective_ = c.objective == msg::Objective::show ? Objective::show : Objective::hide;
-      update_gains();
-      equilibrium_.reset();
-      return Errc::ok;
-    case msg::CommandKind::set_weights: return apply_weights(c);
-    case msg::CommandKind::set_stiffness: return apply_stiffness(c, reason);
-    case msg::CommandKind::set_model: return apply_model(c, reason);
-    case msg::CommandKind::set_segment_count: return apply_segment_count(c, reason);
-    case msg::CommandKind::set_constraints: return apply_constraints(c, reason);
-    case msg::CommandKind::start:
-      if (start_run() != Errc::ok) {
-        reason = "the rope could not be laid between the endpoints";
-        return Errc::invalid_argument;
-      }
-      counters_.running = true;
-      return Errc::ok;
-    case msg::CommandKind::stop:
-      counters_.running = false;
-      rope_->clear_point_force();
-      return Errc::ok;
-    case msg::CommandKind::switch_terrain: return apply_switch_terrain(c, reason);
-  }
-  reason = "unknown command";
-  return Errc::invalid_argument;
-}
-
-Errc Executive::apply_endpoints(const msg::Command& c, const char*& reason) {
-  const storage::ResidentSampler& s = forces_->sampler();
-  const Vec3 a(c.endpoints.start.x_m, c.endpoints.start.y_m, c.endpoints.start.z_m);
-  const Vec3 b(c.endpoints.end.x_m, c.endpoints.end.y_m, c.endpoints.end.z_m);
-  const fields::VolumeGeometry& g = s.level().geometry();
-  if (!inside(a, g) || !inside(b, g)) {
-    reason = "an endpoint is outside the pack or not finite";
-    return Errc::invalid_argument;
-  }
-  if (a.z() < s.height(a.x(), a.y()) || b.z() < s.height(b.x(), b.y())) {
-    reason = "an endpoint is below the terrain";
-    return Errc::invalid_argument;
-  }
-  if ((b - a).norm() < segments_ * kMinSegmentM) {
-    reason = "the endpoints are too close for the rope's segment count (0.5 m a segment at least)";
-    return Errc::invalid_argument;
-  }
-  if (!under_ceiling(a, forces_->gains()) || !under_ceiling(b, forces_->gains())) {
-    reason = "an endpoint is above the ceiling in force (max-agl or max-altitude)";
-    return Errc::invalid_argument;
-  }
-  const Vec3 old_start = start_m_, old_end = end_m_;
-  start_m_ = a;
-  end_m_ = b;
-  if (start_run() != Errc::ok) {
-    start_m_ = old_start;
-    end_m_ = old_end;
-    reason = "the rope could not be laid between the endpoints";
-    return Errc::invalid_argument;
-  }
-  return Errc::ok;
-}
-
-Errc Executive::apply_weights(const msg::Command& c) {
-  k1_ = c.weights.k1_visibility;
-  k3_ = c.weights.k3_user;
-  ForceGains g = forces_->gains();
-  g.k2_terrain = c.weights.k2_terrain;
-  g.k_hull = c.weights.k4_constraint;
-  forces_->set_gains(g);
-  update_gains();
-  equilibrium_.reset();
-  return Errc::ok;
-}
-
-Errc Executive::apply_stiffness(const msg::Command& c, const char*& reason) {
-  const auto old_stretch = stretch_override_, old_bend = bend_override_;
-  stretch_override_ = c.stiffness.stretch_n_per_m;
-  bend_override_ = c.stiffness.bend_n_m_per_rad;
-  const double segment_m = std::max(rope_->length_m() / rope_->segments(), 1e-3);
-  if (rope_->set_params(params_for(rope_->model(), rope_->segments(), segment_m)) != Errc::ok) {
-    stretch_override_ = old_stretch;  // not kept for later starts either
-    bend_override_ = old_bend;
-    reason = "the rope refused these stiffness values";
-    return Errc::invalid_argument;
-  }
-  equilibrium_.reset();
-  return Errc::ok;
-}
-
-int Executive::copy_vertices() {
-  const int n = rope_->segments() + 1;
-  std::copy(rope_->vertices(), rope_->vertices() + n, scratch_.get());
-  return n;
-}
-
-Errc Executive::apply_model(const msg::Command& c, const char*& reason) {
-  const RopeModel m = c.model == msg::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
-  if (m == rope_->model()) return Errc::ok;
-  const int n = copy_vertices();
-  if (restart_rope(scratch_.get(), n, rope_->segments(), m) != Errc::ok) {
-    reason = "the rope could not be rebuilt in that model";
-    return Errc::invalid_argument;
-  }
-  return Errc::ok;
-}
-
-Errc Executive::apply_segment_count(const msg::Command& c, const char*& reason) {
-  const int segments = static_cast<int>(c.segment_count);
-  if (segments < 2 || segments > config_.max_segments) {
-    reason = "segment count outside what the console reserved";
-    return Errc::invalid_argument;
-  }
-  const int n = copy_vertices();
-  if (restart_rope(scratch_.get(), n, segments, rope_->model()) != Errc::ok) {
-    reason = "the rope could not be resampled";
-    return Errc::invalid_argument;
-  }
-  return Errc::ok;
-}
-
-Errc Executive::apply_switch_terrain(const msg::Command& c, const char*& reason) {
-  if (c.pack_id[0] == '\0') {
-    reason = "switch-terrain names no pack";
-    return Errc::invalid_argument;
-  }
-  if (std::strncmp(c.pack_id, config_.pack_id, sizeof c.pack_id) == 0) {
-    reason = "the console is on that pack already";
-    return Errc::invalid_argument;
-  }
-  if (switch_requested_.load(std::memory_order_relaxed)) {
-    reason = "a terrain switch is already under way";
-    return Errc::invalid_argument;
-  }
-  // the console ends this session and starts one on that pack
-  std::memcpy(switch_pack_id_, c.pack_id, sizeof switch_pack_id_);
-  switch_pack_id_[sizeof switch_pack_id_ - 1] = '\0';
-  switch_requested_.store(true, std::memory_order_release);
-  return Errc::ok;
 }
 
 Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
@@ -495,143 +273,6 @@ Status Executive::set_constraint_hulls(ConstraintHulls* hulls) {
     hulls_->request(first);
   }
   return Status::ok_status();
-}
-
-// The configured observers: at most kMaxObserversPerKind of a kind, each
-// inside the pack and at or above the finest terrain.
-Status Executive::check_observers(const HullRequest& r) const {
-  if (r.hidden_count < 0 || r.visible_count < 0 || r.hidden_count > kMaxObserversPerKind ||
-      r.visible_count > kMaxObserversPerKind) {
-    return invalid_argument("executive: at most " + std::to_string(kMaxObserversPerKind) +
-                            " hidden-from and as many visible-to points");
-  }
-  const fields::VolumeGeometry& g = field_.level(0).geometry();
-  for (int k = 0; k < r.observers(); ++k) {
-    const bool hidden = k < r.hidden_count;
-    const Vec3 p = HullRequest::point(hidden ? r.hidden_from_m[k] : r.visible_to_m[k - r.hidden_count]);
-    const std::string name = std::string(hidden ? "hidden-from point " : "visible-to point ") +
-                             std::to_string(1 + (hidden ? k : k - r.hidden_count));
-    VISVOL_RETURN_IF_ERROR(check_point(name.c_str(), p, g, finest_.height(p.x(), p.y()) - kHeightTolM));
-    int pi = 0, pj = 0;
-    if (!hull_post(field_.level(config_.level).geometry(), p, pi, pj)) {
-      return invalid_argument("executive: " + name + " is outside level " + std::to_string(config_.level) +
-                              ", where its hull is built");
-    }
-  }
-  return {};
-}
-
-// An endpoint under the ceiling of `g` (on the finest terrain).
-bool Executive::under_ceiling(const Vec3& p, const ForceGains& g) const {
-  const double agl = p.z() - finest_.height(p.x(), p.y());
-  return agl <= g.max_agl_m + kHeightTolM && p.z() <= g.max_altitude_m + kHeightTolM;
-}
-
-Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGains& g) const {
-  if (under_ceiling(p, g)) return {};
-  const double agl = p.z() - finest_.height(p.x(), p.y());
-  return invalid_argument(std::string(name) + ": " + std::to_string(agl) + " m above the terrain and " +
-                          std::to_string(p.z()) + " m high, above the ceiling (max-agl " + std::to_string(g.max_agl_m) +
-                          " m, max-altitude " + std::to_string(g.max_altitude_m) + " m)");
-}
-
-// Why an observer of a command cannot be had (null: it can). Real-time safe.
-const char* Executive::observer_problem(const msg::Constraint& k) const {
-  const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
-  int pi = 0, pj = 0;
-  // on the finest level and on the one the hulls are built on (a coarser
-  // level's posts stop up to half a post short of the finest's edge)
-  if (!p.allFinite() || !hull_post(field_.level(0).geometry(), p, pi, pj) ||
-      !hull_post(field_.level(config_.level).geometry(), p, pi, pj)) {
-    return "a hidden-from or visible-to point is outside the pack";
-  }
-  if (p.z() < finest_.height(p.x(), p.y()) - kHeightTolM)
-    return "a hidden-from or visible-to point is below the terrain";
-  return nullptr;
-}
-
-// set-constraints: the observers are replaced (none given clears them; in
-// force once the builder has their hulls); the clearance and the ceiling
-// change, at once, where the command gives them. All or nothing: a command
-// refused for any item changes nothing.
-Errc Executive::apply_constraints(const msg::Command& c, const char*& reason) {
-  ForceGains gains = forces_->gains();
-  HullRequest r;
-  r.eye_height_m = config_.eye_height_m;
-  const Errc e = read_constraints(c, gains, r, reason);
-  if (e != Errc::ok) return e;
-  if (const char* problem = constraints_problem(gains, r)) {
-    reason = problem;
-    return Errc::invalid_argument;
-  }
-  forces_->set_gains(gains);
-  if (hulls_ != nullptr) {
-    // until the hulls are in force (or refused) the path is not at rest under them
-    r.sequence = ++hull_requests_;
-    hull_pending_ = r.sequence;
-    hulls_->request(r);
-  }
-  equilibrium_.reset();
-  counters_.converged = false;
-  return Errc::ok;
-}
-
-// The command's items into `gains` (clearance, ceiling) and `r` (observers,
-// each checked on its own).
-Errc Executive::read_constraints(const msg::Command& c, ForceGains& gains, HullRequest& r, const char*& reason) const {
-  const std::uint32_t n =
-      std::min<std::uint32_t>(c.constraints.count, static_cast<std::uint32_t>(msg::kMaxConstraints));
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const msg::Constraint& k = c.constraints.items[i];
-    switch (k.kind) {
-      case msg::ConstraintKind::clearance: gains.clearance_m = k.height_m; continue;
-      case msg::ConstraintKind::max_agl: gains.max_agl_m = k.height_m; continue;
-      case msg::ConstraintKind::max_altitude: gains.max_altitude_m = k.height_m; continue;
-      case msg::ConstraintKind::hidden_from:
-      case msg::ConstraintKind::visible_to: break;
-    }
-    if (hulls_ == nullptr) {
-      reason =
-          "hidden-from and visible-to constraints are not supported without the console's hull builder "
-          "(visvol plan --hidden-from/--visible-to)";
-      return Errc::unsupported;
-    }
-    if (const char* problem = observer_problem(k)) {
-      reason = problem;
-      return Errc::invalid_argument;
-    }
-    const Vec3 p(k.position.x_m, k.position.y_m, k.position.z_m);
-    if (!(k.kind == msg::ConstraintKind::hidden_from ? r.add_hidden_from(p) : r.add_visible_to(p))) {
-      static_assert(kMaxObserversPerKind == 256, "the reason names the number");
-      reason = "more than 256 hidden-from or 256 visible-to points";
-      return Errc::invalid_argument;
-    }
-  }
-  return Errc::ok;
-}
-
-// Why a whole set cannot be had (null: it can): more observers than
-// reserved, a clearance or ceiling that is no height, a ceiling not above
-// the clearance or under the rope's ends. Real-time safe.
-const char* Executive::constraints_problem(const ForceGains& g, const HullRequest& r) const {
-  if (hulls_ != nullptr && r.observers() > hulls_->max_observers()) {
-    return "more hidden-from and visible-to points than the console takes (--max-observers)";
-  }
-  if (!(std::isfinite(g.clearance_m) && g.clearance_m >= 0) || std::isnan(g.max_agl_m) ||
-      std::isnan(g.max_altitude_m)) {
-    return "a clearance or ceiling is not a height";
-  }
-  if (!(g.max_agl_m > g.clearance_m)) return "max-agl is not above the clearance: no height is allowed";
-  if (!under_ceiling(start_m_, g) || !under_ceiling(end_m_, g)) {
-    return "the rope's ends are above that ceiling (move them with set-endpoints first)";
-  }
-  return nullptr;
-}
-
-bool Executive::terrain_switch(char (&pack_id)[msg::kPackIdCapacity]) const {
-  if (!switch_requested_.load(std::memory_order_acquire)) return false;
-  std::memcpy(pack_id, switch_pack_id_, sizeof pack_id);
-  return true;
 }
 
 void Executive::install_hulls() {
@@ -778,83 +419,6 @@ void Executive::measure() {
   const bool at_rest = equilibrium_.add(rms, fc) && hull_pending_ == 0;
   if (at_rest && !counters_.converged && counters_.equilibrium_s == 0) counters_.equilibrium_s = counters_.run_s;
   counters_.converged = at_rest;
-}
-
-void Executive::hand_off_path(std::int64_t stamp_ns) {
-  if (outputs_.path == nullptr && outputs_.path_render == nullptr && outputs_.limited_path == nullptr) return;
-  if (!finite_rope(*rope_)) return;  // a rope that could not be recovered is not published
-  msg::PathSample& p = *path_sample_;
-  const storage::ResidentSampler& s = forces_->sampler();
-  p.sequence = ++path_sequence_;
-  p.stamp_ns = stamp_ns;
-  std::memcpy(p.pack_id, config_.pack_id, sizeof p.pack_id);
-  p.objective = objective_ == Objective::show ? msg::Objective::show : msg::Objective::hide;
-  p.converged = counters_.converged;
-  p.inside_envelope = false;  // the rope's own path: the flyable-path thread fits it
-  p.f_c = counters_.fc;
-  p.length_m = rope_->length_m();
-  const int count = rope_->segments() + 1;
-  const int keep = std::min(count, static_cast<int>(msg::kMaxPathVertices));
-  const Vec3* v = rope_->vertices();
-  double lowest = INFINITY;
-  for (int k = 0; k < keep; ++k) {
-    // evenly spaced, both ends kept
-    const int i = keep == count ? k : static_cast<int>(std::lround(static_cast<double>(k) * (count - 1) / (keep - 1)));
-    const Vec3& x = v[i];
-    msg::PathVertex& out = p.vertices[k];
-    out.position = {x.x(), x.y(), x.z()};
-    out.visibility = s.visibility(x.x(), x.y(), x.z());
-    out.clearance_m = x.z() - s.height(x.x(), x.y());
-    lowest = std::min(lowest, out.clearance_m);
-  }
-  p.vertex_count = static_cast<std::uint32_t>(keep);
-  p.min_clearance_m = lowest;
-  if (outputs_.limited_path != nullptr) {
-    LimitedPath& l = outputs_.limited_path->back();
-    std::memcpy(&l.path, &p, sizeof p);
-    l.limits.gains = forces_->gains();
-    l.limits.observers = in_force_ != nullptr ? in_force_->request : HullRequest{};
-    outputs_.limited_path->publish();
-  }
-  for (LatestValue<msg::PathSample>* sink : {outputs_.path, outputs_.path_render}) {
-    if (sink == nullptr) continue;
-    std::memcpy(&sink->back(), &p, sizeof p);
-    sink->publish();
-  }
-  ++counters_.paths;
-}
-
-void Executive::hand_off_device(std::int64_t stamp_ns) {
-  if (outputs_.device == nullptr || device_ == nullptr) return;
-  msg::DeviceStatusSample& d = outputs_.device->back();
-  d.sequence = ++device_sequence_;
-  d.stamp_ns = stamp_ns;
-  msg::copy_text(d.device, "haptic");
-  const HapticHealth health = device_->health();
-  d.state = device_state_of(health.state, out_.forces_enabled);
-  d.fault_bits = health.fault_bits;
-  d.motor_temperature_c = health.motor_temperature_c;
-  const HapticSample& sample = device_->sample();
-  d.last_position_age_ms =
-      sample.timestamp_ns > 0 ? static_cast<double>(device_now_ns_ - sample.timestamp_ns) * 1e-6 : INFINITY;
-  d.can_rx_frames = health.rx_frames;
-  d.can_tx_frames = health.tx_frames;
-  d.can_errors = health.errors;
-  d.bus_off_count = static_cast<std::uint32_t>(health.bus_off_count);
-  outputs_.device->publish();
-}
-
-void Executive::hand_off_focus() {
-  const Vec3* v = rope_->vertices();
-  storage::WorldBox b{INFINITY, INFINITY, -INFINITY, -INFINITY};
-  for (int i = 0; i <= rope_->segments(); ++i) {
-    b.x0_m = std::min(b.x0_m, v[i].x());
-    b.y0_m = std::min(b.y0_m, v[i].y());
-    b.x1_m = std::max(b.x1_m, v[i].x());
-    b.y1_m = std::max(b.y1_m, v[i].y());
-  }
-  const double lead = config_.focus_lead_m;
-  field_.set_focus({b.x0_m - lead, b.y0_m - lead, b.x1_m + lead, b.y1_m + lead});
 }
 
 }  // namespace visvol::rt

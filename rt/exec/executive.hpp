@@ -99,6 +99,10 @@ struct ExecutiveConfig {
   double cue_n = 0.5;  // visibility cue at one reference gradient, N
   char pack_id[msg::kPackIdCapacity] = "pack";
   double period_s = 0.001;  // the loop's period: the rope's time step
+  // Springs and gains the step cannot integrate are refused (steps_stably).
+  // False only in the test that drives a rope unstable on purpose, to check
+  // the finite-state guard behind this check.
+  bool refuse_unstable = true;
 };
 
 // What the loop thread counts (plain values; copied out through snapshot()).
@@ -207,7 +211,7 @@ class Executive final : public PeriodicTask {
   Errc apply_constraints(const msg::Command& c, const char*& reason);
   Errc apply(const msg::Command& c, const char*& reason);
   Errc apply_endpoints(const msg::Command& c, const char*& reason);
-  Errc apply_weights(const msg::Command& c);
+  Errc apply_weights(const msg::Command& c, const char*& reason);
   Errc apply_stiffness(const msg::Command& c, const char*& reason);
   Errc apply_model(const msg::Command& c, const char*& reason);
   Errc apply_segment_count(const msg::Command& c, const char*& reason);
@@ -219,7 +223,6 @@ class Executive final : public PeriodicTask {
   void set_ends(const Vec3& start, const Vec3& end);
   void update_gains();
   void haptics(std::int64_t now_ns, double t_s);
-  void step_rope();
   void measure();
   void recover_rope();
   void hand_off_path(std::int64_t stamp_ns);
@@ -227,6 +230,10 @@ class Executive final : public PeriodicTask {
   void hand_off_focus();
   int nearest_point(const Vec3& p, double& fraction) const;
   RopeParams params_for(RopeModel model, int segments, double segment_m) const;
+  // Whether a rope with these springs steps stably at the loop's period under
+  // these gains (rt::stable_step_s, the planner's rule). Commands that would
+  // break it are refused (Errc::unsupported) rather than left to diverge.
+  bool steps_stably(const RopeParams& p, const ForceGains& g) const;
 
   ExecutiveConfig config_;
   storage::ResidentPack& field_;

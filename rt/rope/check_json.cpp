@@ -29,7 +29,7 @@ nlohmann::json limit_json(const LimitResult& l) {
 nlohmann::json vehicle_json(const VehicleEnvelope& v) {
   return {{"name", v.name},
           {"type", to_string(v.type)},
-          {"speed_mps", v.speed_mps},
+          {"speed_m_per_s", v.speed_m_per_s},
           {"max_climb_deg", v.max_climb_deg},
           {"max_descent_deg", v.max_descent_deg},
           {"min_turn_radius_m", v.min_turn_radius_m},

@@ -19,7 +19,7 @@ nlohmann::json point_json(const Vec3& p_m);
 nlohmann::json constraint_json(const ConstraintResult& r);
 // name, unit, limit, worst (null where not finite), satisfied_fraction, met.
 nlohmann::json limit_json(const LimitResult& l);
-// The vehicle's envelope: name, type, speed_mps, max_climb_deg,
+// The vehicle's envelope: name, type, speed_m_per_s, max_climb_deg,
 // max_descent_deg, min_turn_radius_m, clearance_m, max_agl_m, max_altitude_m
 // (null: none).
 nlohmann::json vehicle_json(const VehicleEnvelope& v);

@@ -15,10 +15,10 @@
 namespace visvol::rt {
 
 struct EquilibriumCriteria {
-  double check_interval_s = 0.02;  // how often add() is called
-  double window_s = 0.5;           // the span every check must hold over
-  double max_rms_speed_mps = 1.0;  // the planner uses a tenth of a post spacing per second
-  double max_fc_rate = 2e-3;       // |dF_c/dt| / F_c, per second
+  double check_interval_s = 0.02;      // how often add() is called
+  double window_s = 0.5;               // the span every check must hold over
+  double max_rms_speed_m_per_s = 1.0;  // the planner uses a tenth of a post spacing per second
+  double max_fc_rate = 2e-3;           // |dF_c/dt| / F_c, per second
 };
 
 class EquilibriumDetector {
@@ -39,8 +39,8 @@ class EquilibriumDetector {
   }
 
   // One check: the rope's RMS speed (m/s) and F_c now. True at rest.
-  bool add(double rms_speed_mps, double fc) {
-    speed_[static_cast<std::size_t>(head_)] = rms_speed_mps;
+  bool add(double rms_speed_m_per_s, double fc) {
+    speed_[static_cast<std::size_t>(head_)] = rms_speed_m_per_s;
     fc_[static_cast<std::size_t>(head_)] = fc;
     head_ = (head_ + 1) % window_;
     count_ = std::min(count_ + 1, window_);
@@ -50,7 +50,7 @@ class EquilibriumDetector {
     const double oldest = fc_[static_cast<std::size_t>(head_)];  // head_ now points at the oldest
     const double span_s = (window_ - 1) * criteria_.check_interval_s;
     const double rate = std::fabs(fc - oldest) / span_s;
-    return max_speed < criteria_.max_rms_speed_mps && rate < criteria_.max_fc_rate * std::fabs(fc) + 1e-6;
+    return max_speed < criteria_.max_rms_speed_m_per_s && rate < criteria_.max_fc_rate * std::fabs(fc) + 1e-6;
   }
 
   const EquilibriumCriteria& criteria() const { return criteria_; }

@@ -193,7 +193,7 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
   }
 
   out.fc = field_ ? path_fc(v, count, *field_, 256) : 0.0;
-  out.duration_s = out.length_m / e.speed_mps;
+  out.duration_s = out.length_m / e.speed_m_per_s;
   for (std::size_t c = 0; c < nc; ++c) {
     ConstraintResult r;
     r.constraint = spec_.constraints[c];

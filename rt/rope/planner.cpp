@@ -1,5 +1,6 @@
 #include "rt/rope/planner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -189,7 +190,9 @@ RopeParams scaled_rope_params(RopeModel model, int segments, double segment_m, d
 double stable_step_s(const RopeParams& p, double accel_ref, double clearance_margin_m) {
   double omega2 = 0;  // 1/s^2
   if (p.model == RopeModel::spring) {
-    omega2 = 4.0 * p.stretch_stiffness_n_per_m / p.mass_kg;  // a chain's highest mode: twice one spring's frequency
+    // a chain's highest mode: twice one spring's frequency (the stiffer of the
+    // stretch springs and the i..i+2 bending springs)
+    omega2 = 4.0 * std::max(p.stretch_stiffness_n_per_m, p.bend_spring_n_per_m) / p.mass_kg;
   } else {
     const double r = p.capsule_radius_m, l = 4.0 * r;  // scaled_rope_params: r = l / 4
     const double i_perp = p.mass_kg * (3 * r * r + l * l) / 12.0;

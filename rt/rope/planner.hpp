@@ -98,8 +98,8 @@ Status validate(const PlanRequest& request);
 struct PlanProgress {
   int level = 0;  // level of detail being refined
   double simulated_s = 0;
-  double fc = 0;             // on that level
-  double rms_speed_mps = 0;  // of the rope's vertices
+  double fc = 0;                 // on that level
+  double rms_speed_m_per_s = 0;  // of the rope's vertices
   const Vec3* vertices = nullptr;
   int vertex_count = 0;
 };
@@ -348,7 +348,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     const double spacing = levels[static_cast<std::size_t>(level)]->geometry().spacing_m;
     EquilibriumCriteria criteria;
     criteria.check_interval_s = steps_per_check * dt;
-    criteria.max_rms_speed_mps = 0.1 * spacing;
+    criteria.max_rms_speed_m_per_s = 0.1 * spacing;
     EquilibriumDetector equilibrium(criteria);
     double level_s = 0;
     bool settled = false;

@@ -25,7 +25,7 @@ Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
   if (name == "multirotor") {
     v.name = name;
     v.type = VehicleType::multirotor;
-    v.speed_mps = 8.0;
+    v.speed_m_per_s = 8.0;
     v.max_climb_deg = 60.0;
     v.max_descent_deg = 45.0;
     v.min_turn_radius_m = 0.0;
@@ -40,8 +40,8 @@ Status validate(const VehicleEnvelope& v) {
     msg << "vehicle " << v.name << ": " << key << " " << value << " " << what;
     return invalid_argument(msg.str());
   };
-  if (!(std::isfinite(v.speed_mps) && v.speed_mps > 0 && v.speed_mps <= 1000)) {
-    return bad("speed", v.speed_mps, "is outside (0, 1000] m/s");
+  if (!(std::isfinite(v.speed_m_per_s) && v.speed_m_per_s > 0 && v.speed_m_per_s <= 1000)) {
+    return bad("speed", v.speed_m_per_s, "is outside (0, 1000] m/s");
   }
   if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90))
     return bad("max-climb", v.max_climb_deg, "is outside (0, 90] deg");

@@ -38,7 +38,7 @@ struct VehicleEnvelope {
 
   std::string name = "fixed-wing";  // preset or file it came from
   VehicleType type = VehicleType::fixed_wing;
-  double speed_mps = 20.0;          // cruise ground speed (exposure time, .plan speeds)
+  double speed_m_per_s = 20.0;      // cruise ground speed (exposure time, .plan speeds)
   double max_climb_deg = 15.0;      // steepest climb of a segment
   double max_descent_deg = 15.0;    // steepest descent of a segment (positive)
   double min_turn_radius_m = 80.0;  // tightest fillet at a waypoint, 0 for none

@@ -269,7 +269,7 @@ TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   EXPECT_EQ(s["vehicle"]["max_climb_deg"].get<double>(), 12.0);
   EXPECT_EQ(s["vehicle"]["max_descent_deg"].get<double>(), 10.0);
   EXPECT_EQ(s["vehicle"]["min_turn_radius_m"].get<double>(), 150.0);
-  EXPECT_EQ(s["vehicle"]["speed_mps"].get<double>(), 25.0);
+  EXPECT_EQ(s["vehicle"]["speed_m_per_s"].get<double>(), 25.0);
   const nlohmann::json& f = s["path"]["flyable"];
   ASSERT_TRUE(f["inside_envelope"].get<bool>()) << f.dump();
   const nlohmann::json& c = s["check"];
@@ -501,10 +501,13 @@ TEST_F(Console, PublishesOnDdsAndTakesCommands) {
 }
 
 // The red team's commands (issue 14), sent as an operator's tool would over
-// DDS to a running console: ends 1 m apart (once a SIGSEGV), coincident, not
-// finite, off the pack, absurd stiffness, segment counts and weights. Each is
-// answered with a reason and changes nothing; the one good command after them
-// is applied; the console runs to the end and writes its summary.
+// DDS to a running console. Refused, each with a reason: ends 1 m apart (once
+// a SIGSEGV), coincident, not finite, off the pack; absurd stiffness, segment
+// counts and weights. Accepted, and applied or failed with a reason: the
+// extremes the intake allows (ends just far enough apart, the largest weights
+// and stiffness, every segment reserved, ends at the pack's corners and top,
+// a model switch). The console runs to the end, its rope never stops being
+// finite, and the last good command is applied.
 TEST_F(Console, SurvivesHostileCommandsToTheEndOfItsSession) {
   using namespace visvol::dds;
   using namespace visvol::msg;
@@ -521,8 +524,16 @@ TEST_F(Console, SurvivesHostileCommandsToTheEndOfItsSession) {
   Outcome r;
   std::thread run([&] {
     r = console_limited("--pack " + *pack_ +
-                        " --seconds 3 --domain 224 --priority 0 --no-lock --segments 32 --script none --out " + out);
+                        " --seconds 4 --domain 224 --priority 0 --no-lock --segments 32 --max-segments 128"
+                        " --script none --thumbnail-view none --out " +
+                        out);
   });
+  struct Join {
+    std::thread& t;
+    ~Join() {
+      if (t.joinable()) t.join();  // an ASSERT below must not destroy a running thread
+    }
+  } join{run};
   ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
   ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";
 
@@ -555,12 +566,53 @@ TEST_F(Console, SurvivesHostileCommandsToTheEndOfItsSession) {
   weights.kind = CommandKind::set_weights;
   weights.weights = {std::numeric_limits<double>::infinity(), 1.0, 1.0, 1.0};
   hostile.push_back(weights);
+  // accepted by the intake: the extremes it allows
+  auto pack = visvol::storage::Pack::open(*pack_);
+  ASSERT_TRUE(pack.ok());
+  auto level = visvol::storage::PackLevel::open(*pack, 0);
+  ASSERT_TRUE(level.ok());
+  const visvol::fields::VolumeGeometry g = level->geometry();
+  const double top = g.z0_m + (g.nz - 1) * g.dz_m;
+  std::vector<Command> extreme;
+  extreme.push_back(ends(a, {a[0] + 16.5, a[1], a[2]}));  // 32 segments of 0.52 m
+  Command heavy{};
+  heavy.kind = CommandKind::set_weights;
+  heavy.weights = {1e6, 1e6, 1e6, 1e6};
+  extreme.push_back(heavy);
+  Command stiffest{};
+  stiffest.kind = CommandKind::set_stiffness;
+  stiffest.stiffness = {1e6, 1e6};
+  extreme.push_back(stiffest);
+  Command every{};
+  every.kind = CommandKind::set_segment_count;
+  every.segment_count = 128;
+  extreme.push_back(every);
+  // corner to corner of the planning bounds (the pack less the 8-post range), at the field's top
+  const int in = 9;
+  extreme.push_back(
+      ends({g.origin_x + in * g.spacing_m, g.origin_y - in * g.spacing_m, top},
+           {g.origin_x + (g.nx - 1 - in) * g.spacing_m, g.origin_y - (g.ny - 1 - in) * g.spacing_m, top}));
+  Command spring{};
+  spring.kind = CommandKind::set_model;
+  spring.model = RopeModel::spring_mass;
+  extreme.push_back(spring);
+  Command calm = heavy;
+  calm.weights = {1.0, 1.0, 1.0, 1.0};
+  extreme.push_back(calm);
+
   std::uint64_t seq = 100;
   CommandMessage msg;
   for (Command& c : hostile) {
     c.sequence = seq++;
     copy_text(c.source, "red_team");
     ASSERT_EQ(commands->write(&msg.fill(c)), DDS_RETCODE_OK);
+  }
+  const std::uint64_t first_extreme = seq;
+  for (Command& c : extreme) {
+    c.sequence = seq++;
+    copy_text(c.source, "red_team");
+    ASSERT_EQ(commands->write(&msg.fill(c)), DDS_RETCODE_OK);
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));  // a few hundred ticks of each
   }
   Command good = ends(a, b);
   good.sequence = seq;
@@ -580,22 +632,32 @@ TEST_F(Console, SurvivesHostileCommandsToTheEndOfItsSession) {
       },
       64);
   ASSERT_TRUE(taken.ok());
-  for (std::uint64_t s = 100; s < seq; ++s) {
+  for (std::uint64_t s = 100; s < first_extreme; ++s) {
     ASSERT_EQ(last.count(s), 1u) << "command " << s << " was never answered";
     const CommandAck& ack = last[s];
     EXPECT_TRUE(ack.result == AckResult::rejected || ack.result == AckResult::failed)
         << "command " << s << " ended " << static_cast<int>(ack.result);
     EXPECT_GT(std::string(ack.reason).size(), 5u) << "command " << s << " was refused without a reason";
   }
+  for (std::uint64_t s = first_extreme; s < seq; ++s) {
+    ASSERT_EQ(last.count(s), 1u) << "command " << s << " was never answered";
+    const CommandAck& ack = last[s];
+    EXPECT_TRUE(ack.result == AckResult::applied || ack.result == AckResult::failed)
+        << "command " << s << " (accepted by the intake) ended " << static_cast<int>(ack.result) << ": " << ack.reason;
+    if (ack.result == AckResult::failed) {
+      EXPECT_GT(std::string(ack.reason).size(), 5u) << "command " << s;
+    }
+  }
   ASSERT_EQ(last.count(seq), 1u);
   EXPECT_EQ(last[seq].result, AckResult::applied) << last[seq].reason;
 
   const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
-  EXPECT_EQ(s["commands"]["applied"].get<int>(), 1);
-  EXPECT_EQ(s["commands"]["received"].get<int>(), static_cast<int>(hostile.size()) + 1);
-  EXPECT_EQ(
-      s["commands"]["failed"].get<int>() + s["commands"]["applied"].get<int>() + s["commands"]["rejected"].get<int>(),
-      static_cast<int>(hostile.size()) + 1);
+  const int sent = static_cast<int>(hostile.size() + extreme.size()) + 1;
+  EXPECT_GE(s["commands"]["applied"].get<int>(), 1);
+  EXPECT_EQ(s["commands"]["intake"]["received"].get<int>(), sent);
+  EXPECT_EQ(s["commands"]["failed"].get<int>() + s["commands"]["applied"].get<int>() +
+                s["commands"]["intake"]["rejected"].get<int>(),
+            sent);
   // nothing left a rope that stopped being finite (JSON writes NaN as null)
   EXPECT_EQ(s["path"]["rope_resets"].get<int>(), 0);
   EXPECT_TRUE(s["path"]["length_m"].is_number_float() && s["path"]["fc_end"].is_number_float()) << s["path"].dump();

@@ -55,7 +55,8 @@ TEST(TerrainForce, BandMatchesBruteForceNearestPoints) {
   TffParams p;
   p.band_offset_m = 80.0;
   p.band_levels = 12;
-  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny * p.band_levels * hf.nx));
+  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny) * static_cast<std::size_t>(p.band_levels) *
+                              static_cast<std::size_t>(hf.nx));
   terrain_force_rows(hf, p, 0, hf.ny, band.data(), nullptr);
   for (int j = 0; j < hf.ny; ++j) {
     for (int b = 0; b < p.band_levels; ++b) {
@@ -81,7 +82,8 @@ TEST(TerrainForce, InsideTheTerrainPointsOut) {
   TffParams p;
   p.band_offset_m = 50.0;
   p.band_levels = 10;
-  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny * p.band_levels * hf.nx));
+  std::vector<TffSample> band(static_cast<std::size_t>(hf.ny) * static_cast<std::size_t>(p.band_levels) *
+                              static_cast<std::size_t>(hf.nx));
   terrain_force_rows(hf, p, 0, hf.ny, band.data(), nullptr);
   const TffSample& deep = band[static_cast<std::size_t>((5 * p.band_levels + 0) * hf.nx + 5)];
   EXPECT_NEAR(deep.signed_distance_m, -50.0, 1e-4);
@@ -94,7 +96,9 @@ TEST(TerrainForce, InsideTheTerrainPointsOut) {
 TEST(TerrainForce, ThreadedRowsEqualSerialRows) {
   const Heightfield hf = fractal(33, 2);
   TffParams p;
-  std::vector<TffSample> a(static_cast<std::size_t>(hf.ny * p.band_levels * hf.nx)), b(a.size());
+  std::vector<TffSample> a(static_cast<std::size_t>(hf.ny) * static_cast<std::size_t>(p.band_levels) *
+                           static_cast<std::size_t>(hf.nx)),
+      b(a.size());
   terrain_force_rows(hf, p, 0, hf.ny, a.data(), nullptr);
   WorkerPool pool(3);
   terrain_force_rows(hf, p, 0, hf.ny, b.data(), &pool);

@@ -111,7 +111,9 @@ TEST_F(PackFile, TerrainForceBandMatchesDirectComputation) {
   Result<PackLevel> level = PackLevel::open(*pack, 0);
   ASSERT_TRUE(level.ok());
   const fields::TffParams tp = level->tff_params();
-  std::vector<fields::TffSample> band(static_cast<std::size_t>(terrain_->ny * tp.band_levels * terrain_->nx));
+  std::vector<fields::TffSample> band(static_cast<std::size_t>(terrain_->ny) *
+                                      static_cast<std::size_t>(tp.band_levels) *
+                                      static_cast<std::size_t>(terrain_->nx));
   fields::terrain_force_rows(*terrain_, tp, 0, terrain_->ny, band.data(), nullptr);
   for (int j = 0; j < terrain_->ny; ++j)
     for (int b = 0; b < tp.band_levels; ++b)

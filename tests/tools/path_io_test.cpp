@@ -351,7 +351,7 @@ TEST_F(PathIo, MultirotorPlanTakesOffAtHomeFliesTheWaypointsAndLandsAtTheEnd) {
 
 TEST_F(PathIo, FixedWingPlanLoitersOverTheEndThenLands) {
   rt::VehicleEnvelope v = preset("fixed-wing");
-  v.speed_mps = 23.5;  // the envelope's, not a constant
+  v.speed_m_per_s = 23.5;  // the envelope's, not a constant
   v.min_turn_radius_m = 95.0;
   PathReport r = report(v);
   r.vehicle.autopilot = rt::Autopilot::ardupilot;
@@ -481,7 +481,7 @@ TEST_F(PathIo, AReportThatDoesNotHoldTogetherWritesNothing) {
   PathReport short_info = report(preset("multirotor"));
   short_info.per_vertex.pop_back();
   PathReport slow = report(preset("multirotor"));
-  slow.vehicle.speed_mps = 0;
+  slow.vehicle.speed_m_per_s = 0;
   const struct {
     const PathReport* report;
     const char* message;

@@ -184,8 +184,8 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
       {kEnds + " --eye-height nan", "--eye-height"},
       {kEnds + " --k1 nan", "--k1"},
       {kEnds + " --stiffness inf", "--stiffness"},
-      {kEnds + " --autopilot inav", "--autopilot"},
-      {kEnds + " --vehicle " + autopilot, "autopilot"},
+      {kEnds + " --autopilot inav", "--autopilot: 'inav' is neither px4 nor ardupilot"},
+      {kEnds + " --vehicle " + autopilot, "autopilot must be \"px4\" or \"ardupilot\""},
   };
   for (const Case& c : cases) {
     const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);

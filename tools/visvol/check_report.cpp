@@ -13,7 +13,7 @@ nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e) 
   j["constraints"] = nlohmann::json::array();
   for (const rt::ConstraintResult& r : c.constraints) {
     nlohmann::json o = rt::constraint_json(r);
-    o["exposure_s"] = r.seen_m / e.speed_mps;
+    o["exposure_s"] = r.seen_m / e.speed_m_per_s;
     j["constraints"].push_back(std::move(o));
   }
   j["envelope"] = nlohmann::json::array();
@@ -53,7 +53,7 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
     const rt::Vec3& p = r.constraint.point_m;
     std::printf("constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the length, in sight %.0f m (%.0f s) %s\n",
                 rt::to_string(r.constraint.kind), p.x(), p.y(), p.z(), r.satisfied_fraction, r.seen_m,
-                r.seen_m / e.speed_mps, r.met ? "met" : "NOT MET");
+                r.seen_m / e.speed_m_per_s, r.met ? "met" : "NOT MET");
   }
   for (const rt::LimitResult& l : c.envelope) {
     if (!std::isfinite(l.limit)) {

@@ -78,7 +78,7 @@ int run_check(const CheckOptions& o) {
     std::printf("%s\n", json_text(j, 2).c_str());
   } else {
     std::printf("path       %s: %zu vertices, %.0f m, %.0f s at %.1f m/s (vehicle %s)\n", o.path.c_str(),
-                file->points.size(), c.length_m, c.duration_s, envelope->speed_mps, envelope->name.c_str());
+                file->points.size(), c.length_m, c.duration_s, envelope->speed_m_per_s, envelope->name.c_str());
     std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
     print_vertices(c, file->points);
     print_check(c, *envelope);

@@ -253,7 +253,7 @@ int run_plan(const PlanOptions& o) {
       std::printf("           the global search (level %d) had %.5f\n", res->global_level, res->global.fc);
     }
     std::printf("length     %.0f m, %zu waypoints, %.0f s at %.1f m/s\n", b.length_m, res->final_path.size(),
-                check.duration_s, r.envelope.speed_mps);
+                check.duration_s, r.envelope.speed_m_per_s);
     std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %d levels), %.2f s wall\n",
                 res->diverged    ? "NO (the rope diverged; the best path before stands)"
                 : res->converged ? "at equilibrium"

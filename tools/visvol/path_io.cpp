@@ -747,8 +747,8 @@ Status validate_report(const PathReport& r) {
   if (v.type != rt::VehicleType::fixed_wing && v.type != rt::VehicleType::multirotor) {
     return invalid_argument(vehicle + "type " + std::to_string(static_cast<int>(v.type)) + " is unknown");
   }
-  if (!(std::isfinite(v.speed_mps) && v.speed_mps > 0)) {
-    return invalid_argument(vehicle + "speed " + std::to_string(v.speed_mps) + " m/s is not above 0");
+  if (!(std::isfinite(v.speed_m_per_s) && v.speed_m_per_s > 0)) {
+    return invalid_argument(vehicle + "speed " + std::to_string(v.speed_m_per_s) + " m/s is not above 0");
   }
   if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90)) {
     return invalid_argument(vehicle + "max-climb " + std::to_string(v.max_climb_deg) + " deg is outside (0, 90]");
@@ -854,10 +854,10 @@ nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
             {"version", qgc::kGeoFenceVersion}}},
           {"groundStation", "QGroundControl"},
           {"mission",
-           {{"cruiseSpeed", r.vehicle.speed_mps},
+           {{"cruiseSpeed", r.vehicle.speed_m_per_s},
             {"firmwareType", r.vehicle.autopilot == rt::Autopilot::ardupilot ? kAutopilotArduPilotMega : kAutopilotPx4},
             {"globalPlanAltitudeMode", qgc::kAltitudeModeAbsolute},
-            {"hoverSpeed", r.vehicle.speed_mps},
+            {"hoverSpeed", r.vehicle.speed_m_per_s},
             {"items", items},
             {"plannedHomePosition", {start.y(), start.x(), r.home_ground_m}},
             {"vehicleType", fixed_wing ? kTypeFixedWing : kTypeQuadrotor},

@@ -13,7 +13,10 @@
 //   216  dds_echo_test            visvol-echo against this process
 //   219  visvol-dds-bench         tools/bench/dds (its default; --domain to change)
 //
-// Other suites that use DDS: take ids outside 211..219.
+//   223..226  app_console_test        a console per case (one case at a time)
+//   227  app_console_threads_test a console under ThreadSanitizer
+//
+// Other suites that use DDS: take ids outside 211..219 and 223..227.
 #pragma once
 
 #include <cstdint>

@@ -386,6 +386,46 @@ TEST_F(ExecutiveTest, EndpointsTooCloseOrNotFiniteAreRefusedAndChangeNothing) {
   EXPECT_EQ(e->rope().ends().end_m, config_.end_m);
 }
 
+// Weights and stiffness the loop's 1 ms step cannot integrate (the intake
+// accepts up to 1e6, and a console rope of 0.5 m segments diverged within
+// ticks at that, until the finite-state guard laid it again): refused with a
+// reason, nothing changed, and a model switch that the kept values would make
+// unstable is refused too.
+TEST_F(ExecutiveTest, SpringsAndGainsTheStepCannotIntegrateAreRefused) {
+  auto e = make();
+  ASSERT_TRUE(e);
+  msg::Command heavy = command(msg::CommandKind::set_weights, 1);
+  heavy.weights = {1e6, 1.0, 1.0, 1.0};
+  ASSERT_TRUE(commands_.try_push(heavy));
+  msg::Command stiff = command(msg::CommandKind::set_stiffness, 2);
+  stiff.stiffness = {1e6, 1e9};  // past the intake's limit: the executive checks on its own
+  ASSERT_TRUE(commands_.try_push(stiff));
+  msg::Command soft = command(msg::CommandKind::set_stiffness, 3);
+  soft.stiffness = {1e6, 1.0};  // the bend is stable; the spring model's stretch would not be
+  ASSERT_TRUE(commands_.try_push(soft));
+  msg::Command spring = command(msg::CommandKind::set_model, 4);
+  spring.model = msg::RopeModel::spring_mass;
+  ASSERT_TRUE(commands_.try_push(spring));
+  msg::Command fair = command(msg::CommandKind::set_weights, 5);
+  fair.weights = {2.0, 1.0, 1.0, 1.0};
+  ASSERT_TRUE(commands_.try_push(fair));
+  run(*e, 4);
+  for (int k = 0; k < 2; ++k) {
+    const msg::CommandAck ack = next_ack();
+    EXPECT_EQ(ack.result, msg::AckResult::failed) << ack.sequence;
+    EXPECT_NE(std::string(ack.reason).find("would not step stably"), std::string::npos) << ack.reason;
+  }
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);  // the articulated rope has no stretch spring
+  const msg::CommandAck model = next_ack();
+  EXPECT_EQ(model.result, msg::AckResult::failed);
+  EXPECT_NE(std::string(model.reason).find("would not step stably"), std::string::npos) << model.reason;
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
+  EXPECT_EQ(e->rope().model(), RopeModel::articulated);
+  run(*e, 2000);
+  EXPECT_EQ(e->counters().rope_resets, 0u);
+  for (int i = 0; i <= e->rope().segments(); ++i) ASSERT_TRUE(e->rope().vertices()[i].allFinite()) << i;
+}
+
 // Property (issue 14): whatever a set-endpoints or set-segment-count command
 // names (ends coincident, sub-metre apart, far off the pack, not finite; any
 // count), each is answered applied or failed with a reason, and the rope the
@@ -443,6 +483,7 @@ TEST_F(ExecutiveTest, RandomEndpointsAndSegmentCountsNeverGiveANonFiniteRope) {
 // again whenever its state stops being finite: nothing non-finite is ever
 // handed off, and the resets are counted.
 TEST_F(ExecutiveTest, ARopeWhoseStateStopsBeingFiniteIsLaidAgain) {
+  config_.refuse_unstable = false;  // the guard behind the check: let the springs through
   auto e = make();
   ASSERT_TRUE(e);
   msg::Command spring = command(msg::CommandKind::set_model, 1);

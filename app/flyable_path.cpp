@@ -9,6 +9,7 @@
 
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 
 namespace visvol::app {
 

@@ -104,6 +104,7 @@ Result<DatasetPtr> open_raster(const std::string& path, const std::vector<std::s
     VISVOL_RETURN_IF_ERROR(check_side_files(path));
   }
   std::vector<const char*> allowed;
+  allowed.reserve(drivers.size() + 1);
   for (const std::string& d : drivers) allowed.push_back(d.c_str());
   allowed.push_back(nullptr);
   CPLErrorReset();

@@ -41,6 +41,7 @@
 #include "base/handoff.hpp"
 #include "base/status.hpp"
 #include "rt/rope/field_forces.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 #include "storage/resident_pack.hpp"
 
 namespace visvol::rt {

@@ -36,9 +36,9 @@
 #include <limits>
 #include <vector>
 
-#include "fields/hull_kernel.hpp"
 #include "fields/sampler.hpp"
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/point_hull.hpp"
 #include "rt/rope/rope.hpp"
 
 namespace visvol::rt {
@@ -58,89 +58,6 @@ struct ForceGains {
 
 // Hulls of each kind (hidden-from, visible-to) the forces hold at most.
 inline constexpr int kMaxConstraintHulls = 8;
-
-// The lowest visible height over every post of a level from one point: the
-// constraint surface of "stay hidden from" and "stay visible to".
-struct PointHull {
-  int nx = 0, ny = 0;
-  double origin_x = 0, origin_y = 0, spacing_m = 1;
-  std::vector<float> height_m;          // ny rows of nx
-  double at(double x, double y) const;  // bilinear, clamped to the grid
-};
-
-// A level's terrain as a heightfield (a copy: allocates).
-template <class Level>
-fields::Heightfield level_terrain(const Level& level) {
-  const fields::VolumeGeometry& g = level.geometry();
-  fields::Heightfield hf;
-  hf.nx = g.nx;
-  hf.ny = g.ny;
-  hf.spacing_m = g.spacing_m;
-  hf.origin_x = g.origin_x;
-  hf.origin_y = g.origin_y;
-  hf.height_m.resize(hf.size());
-  for (int j = 0; j < g.ny; ++j)
-    for (int i = 0; i < g.nx; ++i) hf.at(i, j) = level.post(i, j);
-  return hf;
-}
-
-// Builds the hulls of points over one level's terrain (copied and padded once,
-// so many observers pay for that once): every column's lowest height that
-// sees the point (the point's own column and its neighbours see it from the
-// ground up). A hull costs the horizon of the level's grid around the point
-// (grid-only rings: 0.013 s for SF North's 370 x 466 posts). Refuses a point
-// outside the grid or below the terrain, naming it. Offline: allocates.
-class PointHullMaker {
- public:
-  template <class Level>
-  explicit PointHullMaker(const Level& level);
-  Result<PointHull> operator()(const Vec3& p, const char* name) const;
-  // Bytes held for a level of nx x ny posts (the terrain and its padding).
-  static std::size_t bytes(int nx, int ny);
-
- private:
-  fields::VolumeGeometry g_;
-  fields::Heightfield hf_;
-  fields::PaddedTerrain padded_;
-};
-
-// One point's hull (a PointHullMaker for one use).
-template <class Level>
-Result<PointHull> point_hull(const Level& level, const Vec3& p, const char* name) {
-  return PointHullMaker(level)(p, name);
-}
-
-// The post a hull's point stands on: the nearest post of grid g to (x, y);
-// false when there is none (outside the grid, or x or y not finite).
-// point_hull's rule, for callers that check a point before asking for its hull.
-inline bool hull_post(const fields::VolumeGeometry& g, const Vec3& p, int& i, int& j) {
-  const double fi = std::floor((p.x() - g.origin_x) / g.spacing_m + 0.5);
-  const double fj = std::floor((g.origin_y - p.y()) / g.spacing_m + 0.5);
-  if (!(fi >= 0 && fj >= 0 && fi < g.nx && fj < g.ny)) return false;
-  i = static_cast<int>(fi);
-  j = static_cast<int>(fj);
-  return true;
-}
-
-// An observer's eye on a level: at least a centimetre above the post it
-// stands on there (a coarser level's post may stand higher than the finest
-// terrain the point was accepted on).
-template <class Level>
-Vec3 eye_on_level(const Level& level, Vec3 eye) {
-  int i = 0, j = 0;
-  if (hull_post(level.geometry(), eye, i, j)) eye.z() = std::max(eye.z(), double(level.post(i, j)) + 0.01);
-  return eye;
-}
-
-// Folds `hull` into `into` (the same grid) post by post: for hidden-from
-// hulls the lowest (below it, hidden from all of them), for visible-to hulls
-// the highest (above it, visible to all). Writes in place, never reallocates.
-inline void fold_hull(PointHull& into, const PointHull& hull, bool hidden_from) {
-  std::vector<float>& to = into.height_m;
-  for (std::size_t k = 0; k < to.size(); ++k) {
-    to[k] = hidden_from ? std::min(to[k], hull.height_m[k]) : std::max(to[k], hull.height_m[k]);
-  }
-}
 
 // `Sampler` answers the queries (fields::FieldSampler<Level>, or one that
 // picks the level per query, like storage::ResidentSampler).
@@ -310,23 +227,5 @@ class FieldForces final : public RopeEnvironment, public PathField {
 };
 
 // ---- implementation of the templates ------------------------------------------
-
-inline double PointHull::at(double x, double y) const {
-  const double gi = fields::clamp_index((x - origin_x) / spacing_m, 0.0, double(nx - 1));
-  const double gj = fields::clamp_index((origin_y - y) / spacing_m, 0.0, double(ny - 1));
-  const int i = std::min(static_cast<int>(gi), nx - 2), j = std::min(static_cast<int>(gj), ny - 2);
-  const double fi = gi - i, fj = gj - j;
-  auto h = [&](int a, int b) {
-    return static_cast<double>(
-        height_m[static_cast<std::size_t>(b) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(a)]);
-  };
-  return (1 - fj) * ((1 - fi) * h(i, j) + fi * h(i + 1, j)) + fj * ((1 - fi) * h(i, j + 1) + fi * h(i + 1, j + 1));
-}
-
-// Grid-only horizons (fields::observer_horizon) reach at most a post past
-// the grid: a padding of a few posts is enough.
-template <class Level>
-PointHullMaker::PointHullMaker(const Level& level)
-    : g_(level.geometry()), hf_(level_terrain(level)), padded_(fields::pad_terrain(hf_, g_, 2)) {}
 
 }  // namespace visvol::rt

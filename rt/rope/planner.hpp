@@ -41,6 +41,7 @@
 #include "rt/rope/global_search.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 #include "rt/rope/rope.hpp"
 #include "rt/rope/slack.hpp"
 #include "rt/rope/vehicle.hpp"

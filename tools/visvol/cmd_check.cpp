@@ -15,6 +15,7 @@
 #include "planning_pack.hpp"
 #include "rt/rope/field_forces.hpp"
 #include "rt/rope/path_check.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 
 namespace visvol::cli {
 

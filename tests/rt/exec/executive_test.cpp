@@ -15,6 +15,7 @@
 #include "drivers/haptic/can_device.hpp"
 #include "drivers/hapticsim/simulated_device.hpp"
 #include "rt/exec/periodic_loop.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 #include "storage/pack_build.hpp"
 #include "tests/support/alloc_counter.hpp"
 

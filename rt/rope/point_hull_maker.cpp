@@ -1,7 +1,7 @@
+#include "rt/rope/point_hull_maker.hpp"
+
 #include <cmath>
 #include <string>
-
-#include "rt/rope/field_forces.hpp"
 
 namespace visvol::rt {
 

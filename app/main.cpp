@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "app/console.hpp"
+#include "base/version.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -49,11 +50,13 @@ int run_sessions(const visvol::app::ConsoleOptions& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-console")) return 0;
   using namespace visvol;
   CLI::App cli{
       "visvol-console: interactive path optimisation in a visibility field (Srikanth et al.), with the rope and "
       "the haptic servo at 1 kHz and the path on DDS.\n"
       "Example: visvol-console --pack out/sf_north.vvp --seconds 20 --out out/console"};
+  cli.set_version_flag("--version", visvol::version_line("visvol-console"));  // listed in --help; handled first in main
   app::ConsoleOptions options;
   app::add_console_options(cli, options);
   try {

@@ -302,6 +302,15 @@ void Executive::safe_state() {
   if (servo_) servo_->force_safe_state();
 }
 
+void Executive::stopping() {
+  if (servo_) servo_->force_safe_state();
+  rope_->clear_point_force();
+  grasping_ = false;
+  if (device_ == nullptr) return;
+  const Errc sent = device_->command(Eigen::Vector3d::Zero(), false);
+  if (sent != Errc::ok && sent != Errc::state) ++counters_.send_failures;  // the tick's rule
+}
+
 int Executive::nearest_point(const Vec3& p, double& fraction) const {
   const Vec3* v = rope_->vertices();
   int best = 0;

@@ -165,6 +165,9 @@ class Executive final : public PeriodicTask {
   void warm_up() override;
   void tick(const TickTime& time) override;
   void safe_state() override;
+  // The loop is ending: the servo to its safe state and the device commanded
+  // to zero force, disabled (counted in send_failures when the bus refuses).
+  void stopping() override;
 
   // Hidden-from and visible-to constraints (set-constraints) need a hull
   // builder on the executive's level; without one they are refused as

@@ -75,6 +75,7 @@ void PeriodicLoop::run() {
     end_tick(done - woke, woke - deadline, overran);
     deadline = next;
   }
+  task_.stopping();
   if (run_.totals.ticks >= config_.settle_ticks) {
     const ThreadFaults now = thread_faults();
     run_.totals.faults_after_settle = {now.minor - faults_at_start_.minor, now.major - faults_at_start_.major};

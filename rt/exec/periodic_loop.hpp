@@ -51,6 +51,10 @@ class PeriodicTask {
   virtual void tick(const TickTime& time) = 0;
   // `overrun_limit` overruns in a row: go to the safe state.
   virtual void safe_state() = 0;
+  // Once on the loop thread after the last tick, when stop() was asked (a
+  // supervisor's SIGTERM, Ctrl-C, the end of a session): leave the hardware
+  // safe (for the executive: zero force, disabled). Real-time rules apply.
+  virtual void stopping() {}
 };
 
 struct LoopConfig {

@@ -330,6 +330,28 @@ TEST_F(Console, APackNameThatIsNotUtf8EndsWithItsSummary) {
   EXPECT_NE(s["pack"].get<std::string>().find("latin1_\xEF\xBF\xBD_"), std::string::npos) << s["pack"];
 }
 
+// A supervisor's stop (SIGTERM) or Ctrl-C (SIGINT) in the middle of a long
+// session: the loop stops (its last act commands zero force, disabled:
+// ExecutiveTest.StoppingLeavesTheDeviceAtZeroForceDisabled), the outputs are
+// written whole, and the exit status is 0, within seconds.
+TEST_F(Console, SigtermAndSigintEndTheSessionWithItsOutputs) {
+  for (const char* sig : {"TERM", "INT"}) {
+    const std::string out = out_dir(std::string("signal_") + sig);
+    const auto t0 = std::chrono::steady_clock::now();
+    const Outcome r = console("--pack " + *pack_ + " --seconds 60 --no-dds --priority 0 --no-lock --segments 16 " +
+                                  "--script " + *script_ + " --thumbnail-view none --out " + out,
+                              std::string("timeout --preserve-status -k 20 -s ") + sig + " 3 ");
+    const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ASSERT_EQ(r.status, 0) << sig << ": " << r.err;
+    EXPECT_LT(took_s, 15.0) << sig;
+    const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"), nullptr, false);
+    ASSERT_FALSE(s.is_discarded()) << sig << ": no summary.json";
+    EXPECT_LT(s["wall_s"].get<double>(), 10.0) << sig;
+    EXPECT_GT(s["loop"]["ticks"].get<int>(), 100) << sig;
+    EXPECT_NE(slurp(out + "/path.csv").find('\n'), std::string::npos) << sig;
+  }
+}
+
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   const std::string out = out_dir("run");
   const Outcome r =

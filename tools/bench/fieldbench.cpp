@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "base/version.hpp"
 #include "fields/exact_visibility.hpp"
 #include "fields/gdal/dem_import.hpp"
 #include "fields/gdal/dem_io.hpp"
@@ -342,7 +343,10 @@ StreamFigures bench_stream(const std::string& dem, int threads) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-fieldbench")) return 0;
   CLI::App app{"visvol-fieldbench: speed and memory of the visibility field build"};
+  app.set_version_flag("--version",
+                       visvol::version_line("visvol-fieldbench"));  // listed in --help; handled first in main
   std::string dem = std::string(VISVOL_TEST_DATA) + "/taunus_utm32n_90m_512.tif";
   int repeat = 3;
   int threads = 0;

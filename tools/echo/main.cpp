@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/version.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/topics.hpp"
@@ -399,6 +400,7 @@ void add_command_kinds(CLI::App& command, CommandOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-echo")) return 0;
   Common common;
   WatchOptions watch;
   CommandOptions command;
@@ -408,6 +410,7 @@ int main(int argc, char** argv) {
       "and sends it commands.\n"
       "Uses the built-in loopback configuration (127.0.0.1 only) unless --config names "
       "another; never CYCLONEDDS_URI."};
+  app.set_version_flag("--version", visvol::version_line("visvol-echo"));  // listed in --help; handled first in main
   app.footer(
       "\nExamples:\n"
       "  visvol-echo path --count 1          the latest path (kept for late joiners), then exit\n"

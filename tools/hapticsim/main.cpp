@@ -13,6 +13,7 @@
 #include <fstream>
 #include <string>
 
+#include "base/version.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/hapticsim/script.hpp"
 #include "drivers/hapticsim/sim_device.hpp"
@@ -129,10 +130,13 @@ std::string summary_json(const Options& o, const SimDevice& d, const visvol::can
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-hapticsim")) return 0;
   CLI::App app{
       "visvol-hapticsim: a simulated 3-DOF haptic device (Phantom Premium 1.5 stand-in) on a CAN\n"
       "interface: handle dynamics, 0.01 mm encoder, 8.5 N saturation, 10 ms command watchdog,\n"
       "scripted operator motions and fault injection. Protocol: drivers/haptic/protocol.md."};
+  app.set_version_flag("--version",
+                       visvol::version_line("visvol-hapticsim"));  // listed in --help; handled first in main
   Options o;
   add_options(app, o);
   try {

@@ -18,6 +18,7 @@
 #include <new>
 #include <string>
 
+#include "base/version.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "io/atomic_file.hpp"
@@ -42,12 +43,14 @@ int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol")) return 0;
   using namespace visvol::cli;
   // Ctrl-C or a kill during a build leaves no PACK.tmp.<pid> behind
   visvol::install_output_cleanup_on_signals();
   CLI::App app{
       "visvol: visibility volumes above terrain (the field F_p of Srikanth et al., "
       "\"Visibility Volumes for Interactive Path Optimization\")"};
+  app.set_version_flag("--version", visvol::version_line("visvol"));  // listed in --help; handled first in main
   app.require_subcommand(1);
   std::map<std::string, Runner> runners;
   runners["build"] = add_build_command(app);

@@ -947,6 +947,25 @@ TEST_F(ExecutiveTest, ReportsTheDeviceAsItsInterfaceSays) {
   EXPECT_EQ(d->state, msg::DeviceState::disconnected);
 }
 
+// A session's end (SIGTERM, Ctrl-C, time up): the loop's last act leaves the
+// device at zero force, disabled; a bus that refuses it is counted.
+TEST_F(ExecutiveTest, StoppingLeavesTheDeviceAtZeroForceDisabled) {
+  FakeDevice dev;
+  dev.health_.state = HapticState::operational;
+  auto e = make(&dev);
+  ASSERT_TRUE(e);
+  run(*e, 10);
+  dev.last_force_n = Eigen::Vector3d(0.4, -0.2, 0.9);  // as if the servo were pushing
+  dev.last_enable = true;
+  e->stopping();
+  EXPECT_EQ(dev.last_force_n, Eigen::Vector3d::Zero());
+  EXPECT_FALSE(dev.last_enable);
+  const std::uint64_t failures = e->counters().send_failures;
+  dev.answer = Errc::io;
+  e->stopping();
+  EXPECT_EQ(e->counters().send_failures, failures + 1);
+}
+
 TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
   auto sim = simulated("0.5 move 0 0 0 0.2\n1.0 pull 60 0 0 1.0\n", now_ns_);
   ASSERT_TRUE(sim);

@@ -37,6 +37,10 @@ class CountingTask final : public PeriodicTask {
     allocations_now = visvol::testing::thread_allocation_count();
   }
   void safe_state() override { ++safe_states; }
+  void stopping() override {
+    ++stops;
+    ticks_at_stop = ticks;
+  }
 
   bool warmed = false;
   std::uint64_t ticks = 0;
@@ -45,6 +49,8 @@ class CountingTask final : public PeriodicTask {
   int slow_from = -1, slow_ticks = 0;
   std::int64_t slow_ns = 0;
   int safe_states = 0;
+  int stops = 0;
+  std::uint64_t ticks_at_stop = 0;
   std::uint64_t allocations_at_start = 0, allocations_now = 0;
 };
 
@@ -93,6 +99,11 @@ TEST(PeriodicLoop, TicksAtAbsoluteDeadlinesAndReports) {
   EXPECT_EQ(report->wake_latency.count(), 50u);
   EXPECT_GE(report->sequence, 2u);
   EXPECT_EQ(task.allocations_now, task.allocations_at_start) << "the loop allocated while ticking";
+  // the task heard of the stop once, after its last tick
+  EXPECT_EQ(task.stops, 1);
+  EXPECT_EQ(task.ticks_at_stop, task.ticks);
+  loop.stop();
+  EXPECT_EQ(task.stops, 1) << "a second stop() ran nothing";
 }
 
 TEST(PeriodicLoop, OverrunsInARowCallTheSafeStateOnce) {

@@ -32,6 +32,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/version.hpp"
 #include "drivers/dds/command_processor.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/message_codec.hpp"
@@ -300,6 +301,7 @@ BENCHMARK(BM_ValidateCommand);
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-dds-bench")) return 0;
   // the subscriber side of the latency runs: --subscriber NS DOMAIN READY_FD OUT_FD
   if (argc == 6 && std::string(argv[1]) == "--subscriber") {
     g_domain = static_cast<std::uint32_t>(std::strtoul(argv[3], nullptr, 10));

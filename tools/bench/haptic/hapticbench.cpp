@@ -11,6 +11,7 @@
 #include <cstring>
 #include <optional>
 
+#include "base/version.hpp"
 #include "drivers/can/memory_bus.hpp"
 #include "drivers/haptic/codec.hpp"
 #include "drivers/haptic/device_driver.hpp"
@@ -167,6 +168,7 @@ BENCHMARK(BM_SimDeviceStep);
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-hapticbench")) return 0;
   print_bus_load();
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--load-only") == 0) return 0;

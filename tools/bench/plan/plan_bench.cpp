@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "base/version.hpp"
 #include "fields/dense_level.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "rt/rope/planner.hpp"
@@ -523,6 +524,8 @@ options.)";
 // Returns -1 to go on, or the exit status: 0 after --help, 2 for a bad option.
 int parse_options(int argc, char** argv, Options& o) {
   CLI::App app{"visvol-planbench: the planner's speed and quality on SF North, the Taunus window and seeded reliefs"};
+  app.set_version_flag("--version",
+                       visvol::version_line("visvol-planbench"));  // listed in --help; handled first in main
   app.add_option("--seeds", o.seeds, "Seeded reliefs to plan on")->check(CLI::Range(0, 1000))->capture_default_str();
   app.add_flag("--quick", o.quick, "A smoke run: the SF North Fig. 10 case and at most one seed, no Taunus");
   app.add_option("--max-agl", o.max_agl_m, "Ceiling of the show cases, m above the terrain")
@@ -554,6 +557,7 @@ Result<std::unique_ptr<World>> dem_world(const std::string& name, const std::str
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-planbench")) return 0;
   Options o;
   const int parsed = parse_options(argc, argv, o);
   if (parsed >= 0) return parsed;

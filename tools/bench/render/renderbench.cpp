@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "base/version.hpp"
 #include "drivers/render/png_encoder.hpp"
 #include "drivers/render/renderer.hpp"
 #include "fields/gdal/dem_import.hpp"
@@ -262,6 +263,7 @@ std::vector<render::PathPoint> arc_path(const storage::PackLevel& level) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-renderbench")) return 0;
   std::string pack_path;
   int frames = 1000;
   std::vector<char*> rest = {argv[0]};

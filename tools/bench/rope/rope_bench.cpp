@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "base/version.hpp"
 #include "fields/dense_level.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "rt/rope/planner.hpp"
@@ -137,6 +138,7 @@ void print_convergence() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-ropebench")) return 0;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   benchmark::RunSpecifiedBenchmarks();

@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/version.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/haptic/can_device.hpp"
@@ -446,7 +447,9 @@ int compare_dds(Options o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (visvol::print_version_if_asked(argc, argv, "visvol-rtbench")) return 0;
   CLI::App app{"visvol-rtbench: the console's 1 kHz loop under load, beside cyclictest"};
+  app.set_version_flag("--version", visvol::version_line("visvol-rtbench"));  // listed in --help; handled first in main
   Options o;
   app.add_option("--seconds", o.seconds, "Run time, s")->check(CLI::Range(2.0, 3600.0))->capture_default_str();
   app.add_flag("--json", o.json, "End with one JSON object");

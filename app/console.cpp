@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "app/flyable_path.hpp"
+#include "app/supervisor.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/dds/command_intake.hpp"
@@ -678,14 +679,19 @@ Status Console::run(const std::atomic<bool>& stop) {
   rt::ExecutiveCounters counters = m.counters_at_start;
   std::uint64_t health_seq = 0;
   double next_line_s = 1.0;
+  Supervisor supervisor;  // systemd, when the console runs as its unit
+  supervisor.ready(m.pack_id + ": rope of " + std::to_string(m.o.segments) + " segments, " + m.o.objective);
   while (!stop.load() && (m.o.seconds <= 0 || seconds_since(t0) < m.o.seconds)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     if (const rt::LoopReport* r = m.loop->reports().take()) last = *r;
     if (const rt::ExecutiveCounters* c = m.exec->snapshot().take()) counters = *c;
+    supervisor.monitor(seconds_since(t0), m.loop->ticks(), m.publisher != nullptr,
+                       m.publisher ? m.publisher->passes() : 0);
     char next[msg::kPackIdCapacity];
     if (m.exec->terrain_switch(next)) {
       m.switch_to = next;
       std::fprintf(stderr, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
+      supervisor.status(std::string("switching terrain to ") + next);
       break;
     }
     if (m.publisher && last.sequence > 0) m.publisher->health().write(m.health(last, counters, ++health_seq));
@@ -710,8 +716,15 @@ Status Console::run(const std::atomic<bool>& stop) {
                    last.compute.percentile_us(0.99), static_cast<unsigned long long>(last.totals.overruns),
                    device_text(counters), static_cast<unsigned long long>(counters.grasps),
                    static_cast<double>(rss) / kMiB, m.o.budget_mib);
+      char status[160];
+      std::snprintf(status, sizeof status, "%s: F_c %.4f%s, device %s, overruns %llu", m.pack_id.c_str(), counters.fc,
+                    counters.converged ? " (at rest)" : "", device_text(counters),
+                    static_cast<unsigned long long>(last.totals.overruns));
+      supervisor.status(status);
     }
   }
+  // STOPPING=1 first when the console ends for good (not on a terrain switch)
+  if (m.switch_to.empty()) supervisor.stopping(m.pack_id + ": stopping, writing the outputs");
   const double wall_s = seconds_since(t0);
   m.session_s = wall_s;
   const rt::LoopRun run = m.loop->stop();
@@ -850,8 +863,11 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
         {"lock_failures", ts.lock_failures},
         {"fallbacks", field->fallbacks()}}}};
   if (sim) {
-    j["device"]["simulated"] = {{"max_force_n", sim->device().counters().max_force_n},
-                                {"watchdog_trips", sim->device().counters().watchdog_trips}};
+    const hapticsim::SimCounters& sc = sim->device().counters();
+    j["device"]["simulated"] = {{"max_force_n", sc.max_force_n},
+                                {"watchdog_trips", sc.watchdog_trips},
+                                {"last_command_n", sc.last_command_n},
+                                {"last_command_enabled", sc.last_command_enabled}};
   }
   if (publisher) {
     const dds::PublisherStats ps = publisher->stats();

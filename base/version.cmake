@@ -5,12 +5,25 @@
 set(VISVOL_VERSION_NUMBER "${VERSION}")
 set(VISVOL_VERSION_COMMIT "unknown")
 find_package(Git QUIET)
-if(GIT_FOUND)
-  execute_process(COMMAND "${GIT_EXECUTABLE}" -C "${SOURCE_DIR}" rev-parse --short=10 HEAD
-                  OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET RESULT_VARIABLE rc)
+if(COMMIT)  # given by a packager building from a tarball: -DVISVOL_COMMIT=...
+  set(VISVOL_VERSION_COMMIT "${COMMIT}")
+elseif(GIT_FOUND)
+  # only this project's own checkout (a tarball unpacked inside another
+  # repository must not take that one's commit)
+  execute_process(COMMAND "${GIT_EXECUTABLE}" -C "${SOURCE_DIR}" rev-parse --show-toplevel
+                  OUTPUT_VARIABLE top OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET RESULT_VARIABLE rc_top)
+  get_filename_component(top "${top}" REALPATH)
+  get_filename_component(here "${SOURCE_DIR}" REALPATH)
+  set(rc 1)
+  if(rc_top EQUAL 0 AND top STREQUAL here)
+    execute_process(COMMAND "${GIT_EXECUTABLE}" -C "${SOURCE_DIR}" rev-parse --short=10 HEAD
+                    OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET RESULT_VARIABLE rc)
+  endif()
   if(rc EQUAL 0 AND commit)
     set(VISVOL_VERSION_COMMIT "${commit}")
-    execute_process(COMMAND "${GIT_EXECUTABLE}" -C "${SOURCE_DIR}" status --porcelain --untracked-files=no
+    # --no-optional-locks: a build never takes the index lock from a user's git
+    execute_process(COMMAND "${GIT_EXECUTABLE}" --no-optional-locks -C "${SOURCE_DIR}" status --porcelain
+                            --untracked-files=no
                     OUTPUT_VARIABLE changes ERROR_QUIET)
     if(changes)
       string(APPEND VISVOL_VERSION_COMMIT "-dirty")

@@ -19,7 +19,7 @@ if [[ ! -f $build/compile_commands.json ]]; then
   echo "check_tidy: $build/compile_commands.json not found: configure that tree first" >&2
   exit 2
 fi
-root=$(pwd)
 # the project's own sources: not the tests, not generated or unity files
+root=$(pwd | sed 's/[][\\.^$*+?(){}|]/\\&/g')  # the path, regex-escaped
 files="^$root/(base|io|msg|rt|fields|storage|drivers|app|tools)/.*\\.cpp\$"
 run-clang-tidy -quiet -p "$build" -j "$jobs" "$files"

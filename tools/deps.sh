@@ -14,6 +14,7 @@ build_packages=(
   libgtest-dev libgmock-dev  # unit tests
   libbenchmark-dev       # micro-benchmarks
   libtomlplusplus-dev    # vehicle files (visvol plan --vehicle FILE)
+  libsystemd-dev         # sd_notify: the console as a systemd unit (READY, WATCHDOG, STOPPING)
 )
 
 storage_packages=(libisal-dev libssl-dev)           # CRC32C of pack tiles, SHA-256 of sources

@@ -156,6 +156,7 @@ void LivePublisher::service(Stream& stream, LatestValue<T>& handoff, std::int64_
 }
 
 void LivePublisher::pass(std::int64_t now, bool final) {
+  passes_.fetch_add(1, std::memory_order_relaxed);
   // terrain first: a subscriber learns the CRS before the first path in it
   service(terrain_stream_, terrain_, now, final, [this](const msg::TerrainInfo& t) { return paths_->publish(t); });
   service_path(now, final);

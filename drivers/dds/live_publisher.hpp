@@ -110,6 +110,9 @@ class LivePublisher {
   // return ok at once.
   Status stop();
   PublisherStats stats() const;
+  // The thread's passes so far: advancing while it lives (a supervisor's
+  // watchdog asks for it; at least one every idle_poll_interval_s).
+  std::uint64_t passes() const { return passes_.load(std::memory_order_relaxed); }
   // Readers matched on the path update topic.
   std::uint32_t path_subscribers() const { return paths_->path_update_subscribers(); }
 
@@ -159,6 +162,7 @@ class LivePublisher {
 
   std::atomic<std::uint64_t> errors_{0};
   std::atomic<std::uint64_t> paths_held_{0};
+  std::atomic<std::uint64_t> passes_{0};
   mutable std::mutex mutex_;  // guards last_error_, stopping_, stopped_
   std::condition_variable wake_;
   std::string last_error_;

@@ -153,6 +153,8 @@ void SimDevice::receive(std::int64_t now_ns) {
       last_command_ns_ = now_ns;
       ++counters_.commands;
       if (command_.enable) counters_.max_commanded_n = std::max(counters_.max_commanded_n, norm3(command_.force_n));
+      counters_.last_command_n = norm3(command_.force_n);
+      counters_.last_command_enabled = command_.enable;
     }
   });
 }

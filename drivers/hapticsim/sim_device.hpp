@@ -81,6 +81,8 @@ struct SimCounters {
   std::uint64_t bus_off_events = 0;
   double max_force_n = 0.0;      // largest motor force applied
   double max_commanded_n = 0.0;  // largest enabled force command received
+  double last_command_n = 0.0;   // the last force command received, and whether it enabled the motors
+  bool last_command_enabled = false;
   std::int64_t first_operational_ns = -1;
 };
 

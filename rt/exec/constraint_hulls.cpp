@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "fields/hull_kernel.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 
 namespace visvol::rt {
 

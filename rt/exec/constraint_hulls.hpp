@@ -1,5 +1,5 @@
 // Hidden-from and visible-to constraints for the executive: the hull of each
-// observer (rt/rope/field_forces.hpp, PointHullMaker) is built on a thread of its
+// observer (rt/rope/point_hull_maker.hpp, PointHullMaker) is built on a thread of its
 // own, never the real-time one, and folded by kind into the one hull the
 // forces take (below every hidden-from hull, above every visible-to hull:
 // the lowest and the highest of them post by post), then handed to the loop
@@ -41,7 +41,6 @@
 #include "base/handoff.hpp"
 #include "base/status.hpp"
 #include "rt/rope/field_forces.hpp"
-#include "rt/rope/point_hull_maker.hpp"
 #include "storage/resident_pack.hpp"
 
 namespace visvol::rt {

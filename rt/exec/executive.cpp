@@ -185,9 +185,30 @@ RopeParams Executive::params_for(RopeModel model, int segments, double segment_m
 
 bool Executive::steps_stably(const RopeParams& p, const ForceGains& g) const {
   if (!config_.refuse_unstable) return true;
-  const double gain = std::max({1.0, std::fabs(g.k1_visibility), g.k2_terrain, g.k_hull});
-  const double margin_m = std::max(0.2 * g.clearance_m, 1.0);
-  return stable_step_s(p, gain * forces_->reference_acceleration(), margin_m) >= config_.period_s;
+  // Each stiff term as the square of its angular frequency (1/s^2), and the
+  // planner's rule on the largest (a step of at most 0.4 / omega).
+  double omega2 = 0;
+  if (p.model == RopeModel::spring) {
+    // a chain's highest mode: the stretch and the i..i+2 bending springs together
+    omega2 = 4.0 * (p.stretch_stiffness_n_per_m + p.bend_spring_n_per_m) / p.mass_kg;
+  } else {
+    const double r = p.capsule_radius_m, l = 4.0 * r;  // scaled_rope_params: r = l / 4
+    omega2 = 4.0 * p.bend_stiffness_n_m_per_rad / (p.mass_kg * (3 * r * r + l * l) / 12.0);
+  }
+  const double a = forces_->reference_acceleration();
+  const double sat = FieldForces<storage::ResidentLevel>::kSaturation;
+  const bool ceiling = std::isfinite(g.max_agl_m) || std::isfinite(g.max_altitude_m);
+  if (g.clearance_m > 0 || ceiling) {  // the clearance and ceiling ramps: 2 sat k_c a over their margin
+    omega2 = std::max(omega2, 2.0 * sat * g.k_clearance * a / std::max(0.2 * g.clearance_m, 1.0));
+  }
+  omega2 =
+      std::max(omega2, 2.0 * g.k2_terrain * a / std::max(forces_->sampler().level().tff_params().band_offset_m, 1.0));
+  omega2 = std::max(omega2, sat * g.k_hull * a / std::max(g.hull_margin_m, 1e-3));
+  if (omega2 > 0 && 0.4 / std::sqrt(omega2) < config_.period_s) return false;
+  // The saturated visibility pull is a force, not a spring: one step of it
+  // must not move a vertex more than a metre.
+  const double dt = config_.period_s;
+  return std::fabs(g.k1_visibility) * sat * a * dt * dt <= 1.0;
 }
 
 void Executive::update_gains() {
@@ -197,7 +218,6 @@ void Executive::update_gains() {
 }
 
 Errc Executive::start_run() {
-  relaid_ = false;
   const int n = segments_;
   const double straight = (end_m_ - start_m_).norm();
   const double length = rope_->model() == RopeModel::articulated ? straight * (1.0 + config_.slack) : straight;
@@ -223,6 +243,7 @@ Errc Executive::start_run() {
   counters_.run_s = 0;
   counters_.equilibrium_s = 0;
   ++counters_.runs;
+  relaid_ = false;  // a new run (recover_rope sets it again for a relaid one)
   return Errc::ok;
 }
 
@@ -309,6 +330,8 @@ void Executive::stopping() {
   if (device_ == nullptr) return;
   const Errc sent = device_->command(Eigen::Vector3d::Zero(), false);
   if (sent != Errc::ok && sent != Errc::state) ++counters_.send_failures;  // the tick's rule
+  // an in-process simulated device takes its frames when stepped: once more
+  if (simulation_ != nullptr) simulation_->step(last_tick_ns_ + static_cast<std::int64_t>(config_.period_s * 1e9));
 }
 
 int Executive::nearest_point(const Vec3& p, double& fraction) const {
@@ -369,6 +392,7 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
 
 void Executive::tick(const TickTime& time) {
   const std::int64_t now_ns = time.woke_ns;
+  last_tick_ns_ = now_ns;
   apply_commands();  // 1
   if (hulls_ != nullptr) install_hulls();
   if (simulation_ != nullptr) simulation_->step(now_ns);                        // 2

@@ -257,6 +257,7 @@ class Executive final : public PeriodicTask {
   msg::CommandQueue* commands_ = nullptr;
   ExecutiveOutputs outputs_;
   LatestValue<ExecutiveCounters> snapshot_;
+  std::int64_t last_tick_ns_ = 0;  // the last tick's wake-up (stopping() steps the simulation after it)
 
   // Planning state (loop thread).
   Vec3 start_m_, end_m_;

@@ -26,7 +26,8 @@ constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt:
 // A command whose springs or gains the loop's fixed step could not integrate
 // (the rope would diverge within ticks): refused, nothing changed.
 constexpr const char* kUnstable =
-    "the rope would not step stably at the loop's period with these springs and gains (lower them)";
+    "the rope would step outside its stability margin at the loop's period with these springs, gains and "
+    "margins (lower the stiffness or the weights, or widen the clearance)";
 
 }  // namespace
 
@@ -367,6 +368,7 @@ const char* Executive::constraints_problem(const ForceGains& g, const HullReques
   if (!under_ceiling(start_m_, g) || !under_ceiling(end_m_, g)) {
     return "the rope's ends are above that ceiling (move them with set-endpoints first)";
   }
+  if (!steps_stably(rope_->params(), g)) return kUnstable;  // a thin clearance margin is a stiff push
   return nullptr;
 }
 

@@ -58,10 +58,13 @@ TEST(ConsoleThreads, ASessionWithCommandsRunsItsThreadsWithoutARace) {
   const std::string out = ::testing::TempDir() + "/console_threads_" + tag;
   const std::string err = out + ".err";
   int status = -1;
+  // a budget that ThreadSanitizer's shadow memory fits in (the process alone
+  // is 140 MiB under it)
   std::thread run([&] {
-    const std::string cmd = std::string("timeout -k 5 120 ") + VISVOL_CONSOLE + " --pack " + pack +
-                            " --seconds 3 --domain 227 --priority 0 --no-lock --segments 24 --script " + script +
-                            " --out " + out + " </dev/null >/dev/null 2>" + err;
+    const std::string cmd =
+        std::string("timeout -k 5 120 ") + VISVOL_CONSOLE + " --pack " + pack +
+        " --seconds 5 --domain 227 --priority 0 --no-lock --segments 24 --budget-mib 4096 --script " + script +
+        " --out " + out + " </dev/null >/dev/null 2>" + err;
     const int rc = std::system(cmd.c_str());
     status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
   });

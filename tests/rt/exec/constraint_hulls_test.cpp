@@ -13,6 +13,7 @@
 
 #include "../../fields/terrains.hpp"
 #include "fields/hull_kernel.hpp"
+#include "rt/rope/point_hull_maker.hpp"
 #include "storage/pack_build.hpp"
 
 namespace visvol::rt {

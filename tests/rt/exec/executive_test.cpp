@@ -414,12 +414,12 @@ TEST_F(ExecutiveTest, SpringsAndGainsTheStepCannotIntegrateAreRefused) {
   for (int k = 0; k < 2; ++k) {
     const msg::CommandAck ack = next_ack();
     EXPECT_EQ(ack.result, msg::AckResult::failed) << ack.sequence;
-    EXPECT_NE(std::string(ack.reason).find("would not step stably"), std::string::npos) << ack.reason;
+    EXPECT_NE(std::string(ack.reason).find("outside its stability margin"), std::string::npos) << ack.reason;
   }
   EXPECT_EQ(next_ack().result, msg::AckResult::applied);  // the articulated rope has no stretch spring
   const msg::CommandAck model = next_ack();
   EXPECT_EQ(model.result, msg::AckResult::failed);
-  EXPECT_NE(std::string(model.reason).find("would not step stably"), std::string::npos) << model.reason;
+  EXPECT_NE(std::string(model.reason).find("outside its stability margin"), std::string::npos) << model.reason;
   EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_EQ(e->rope().model(), RopeModel::articulated);
   run(*e, 2000);

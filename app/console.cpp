@@ -682,7 +682,7 @@ Status Console::run(const std::atomic<bool>& stop) {
   Supervisor supervisor;  // systemd, when the console runs as its unit
   supervisor.ready(m.pack_id + ": rope of " + std::to_string(m.o.segments) + " segments, " + m.o.objective);
   while (!stop.load() && (m.o.seconds <= 0 || seconds_since(t0) < m.o.seconds)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::this_thread::sleep_for(std::chrono::duration<double>(supervisor.monitor_period_s()));
     if (const rt::LoopReport* r = m.loop->reports().take()) last = *r;
     if (const rt::ExecutiveCounters* c = m.exec->snapshot().take()) counters = *c;
     supervisor.monitor(seconds_since(t0), m.loop->ticks(), m.publisher != nullptr,
@@ -691,7 +691,8 @@ Status Console::run(const std::atomic<bool>& stop) {
     if (m.exec->terrain_switch(next)) {
       m.switch_to = next;
       std::fprintf(stderr, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
-      supervisor.status(std::string("switching terrain to ") + next);
+      // the next session's start (pack, tiles, DDS) sends no pings: room for it
+      supervisor.extend_watchdog(120.0, std::string("switching terrain to ") + next);
       break;
     }
     if (m.publisher && last.sequence > 0) m.publisher->health().write(m.health(last, counters, ++health_seq));
@@ -723,11 +724,11 @@ Status Console::run(const std::atomic<bool>& stop) {
       supervisor.status(status);
     }
   }
-  // STOPPING=1 first when the console ends for good (not on a terrain switch)
-  if (m.switch_to.empty()) supervisor.stopping(m.pack_id + ": stopping, writing the outputs");
   const double wall_s = seconds_since(t0);
   m.session_s = wall_s;
-  const rt::LoopRun run = m.loop->stop();
+  const rt::LoopRun run = m.loop->stop();  // its last act: zero force, disabled
+  // then STOPPING=1, when the console ends for good (not on a terrain switch)
+  if (m.switch_to.empty()) supervisor.stopping(m.pack_id + ": stopping, writing the outputs");
   if (m.flyable) m.flyable->stop();  // before the publisher and the renderer it feeds
   m.field->set_reader_active(false);
   m.field->stop_pager();

@@ -16,7 +16,8 @@ namespace visvol::app {
 
 // When a WATCHDOG=1 is due: half the watchdog interval after the last one,
 // and only if the loop's ticks and the publisher's passes have both moved
-// since then (no publisher: its passes are not asked for).
+// since the previous call (no publisher: its passes are not asked for), so a
+// stall stops the pings at once. Call it several times an interval.
 class WatchdogGate {
  public:
   explicit WatchdogGate(double interval_s) : half_s_(0.5 * interval_s) {}
@@ -24,9 +25,8 @@ class WatchdogGate {
 
  private:
   double half_s_;
-  double last_s_ = -1e300;
-  std::uint64_t ticks_ = 0, passes_ = 0;
-  bool seen_ = false;
+  double last_ping_s_ = -1e300;
+  std::uint64_t ticks_ = 0, passes_ = 0;  // at the previous call
 };
 
 class Supervisor {
@@ -40,8 +40,14 @@ class Supervisor {
 
   void ready(const std::string& status);
   void status(const std::string& status);
-  // From the monitor, a few times a second.
+  // From the monitor, at least four times a watchdog interval (monitor_period_s).
   void monitor(double now_s, std::uint64_t loop_ticks, bool with_publisher, std::uint64_t publisher_passes);
+  // How often the monitor should call: 100 ms, or a quarter of the interval.
+  double monitor_period_s() const;
+  // A terrain switch stops one session's loop and starts another's: the
+  // watchdog is widened to `seconds` (WATCHDOG_USEC=) until the next ready().
+  void extend_watchdog(double seconds, const std::string& status);
+  // After the loop has stopped (the device left at zero force).
   void stopping(const std::string& status);
 
  private:
@@ -49,6 +55,7 @@ class Supervisor {
 
   bool notifying_ = false;
   double watchdog_s_ = 0;
+  std::uint64_t watchdog_usec_ = 0;  // as the unit gave it
   WatchdogGate gate_{0};
   std::uint64_t pings_ = 0;
 };

@@ -5,9 +5,7 @@
 set(VISVOL_VERSION_NUMBER "${VERSION}")
 set(VISVOL_VERSION_COMMIT "unknown")
 find_package(Git QUIET)
-if(COMMIT)  # given by a packager building from a tarball: -DVISVOL_COMMIT=...
-  set(VISVOL_VERSION_COMMIT "${COMMIT}")
-elseif(GIT_FOUND)
+if(GIT_FOUND)
   # only this project's own checkout (a tarball unpacked inside another
   # repository must not take that one's commit)
   execute_process(COMMAND "${GIT_EXECUTABLE}" -C "${SOURCE_DIR}" rev-parse --show-toplevel
@@ -24,11 +22,19 @@ elseif(GIT_FOUND)
     # --no-optional-locks: a build never takes the index lock from a user's git
     execute_process(COMMAND "${GIT_EXECUTABLE}" --no-optional-locks -C "${SOURCE_DIR}" status --porcelain
                             --untracked-files=no
-                    OUTPUT_VARIABLE changes ERROR_QUIET)
-    if(changes)
+                    OUTPUT_VARIABLE changes ERROR_QUIET RESULT_VARIABLE rc_status)
+    if(changes OR NOT rc_status EQUAL 0)
       string(APPEND VISVOL_VERSION_COMMIT "-dirty")
     endif()
   endif()
+endif()
+# not a checkout of its own: what a packager building from a tarball gives
+# (-DVISVOL_COMMIT=..., a hexadecimal commit)
+if(VISVOL_VERSION_COMMIT STREQUAL "unknown" AND COMMIT)
+  if(NOT COMMIT MATCHES "^[0-9a-f]+$")
+    message(FATAL_ERROR "VISVOL_COMMIT '${COMMIT}' is not a hexadecimal commit")
+  endif()
+  set(VISVOL_VERSION_COMMIT "${COMMIT}")
 endif()
 configure_file("${IN}" "${OUT}.new" @ONLY)
 file(READ "${OUT}.new" new_text)

@@ -129,8 +129,10 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
   held_ = std::make_unique<msg::Command>();
   const Errc laid = start_run();
   if (laid == Errc::unsupported) {
-    return invalid_argument("executive: the rope would not step stably at the " + std::to_string(c.period_s * 1e3) +
-                            " ms period with these gains and stiffness (lower them)");
+    return invalid_argument(
+        "executive: the rope would step outside its stability margin at the " + std::to_string(c.period_s * 1e3) +
+        " ms period with these gains, stiffness and clearance (lower the gains or the stiffness, or "
+        "widen the clearance)");
   }
   if (laid != Errc::ok) return invalid_argument("executive: the rope could not be laid between the endpoints");
   counters_.running = c.start_running;
@@ -204,11 +206,11 @@ bool Executive::steps_stably(const RopeParams& p, const ForceGains& g) const {
   omega2 =
       std::max(omega2, 2.0 * g.k2_terrain * a / std::max(forces_->sampler().level().tff_params().band_offset_m, 1.0));
   omega2 = std::max(omega2, sat * g.k_hull * a / std::max(g.hull_margin_m, 1e-3));
-  if (omega2 > 0 && 0.4 / std::sqrt(omega2) < config_.period_s) return false;
-  // The saturated visibility pull is a force, not a spring: one step of it
-  // must not move a vertex more than a metre.
-  const double dt = config_.period_s;
-  return std::fabs(g.k1_visibility) * sat * a * dt * dt <= 1.0;
+  // the saturated visibility pull turns round within about a post: a spring
+  // of 2 sat |k1| a over the post spacing
+  const double spacing_m = forces_->sampler().level().geometry().spacing_m;
+  omega2 = std::max(omega2, 2.0 * sat * std::fabs(g.k1_visibility) * a / std::max(spacing_m, 1e-3));
+  return !(omega2 > 0 && 0.4 / std::sqrt(omega2) < config_.period_s);
 }
 
 void Executive::update_gains() {
@@ -331,7 +333,9 @@ void Executive::stopping() {
   const Errc sent = device_->command(Eigen::Vector3d::Zero(), false);
   if (sent != Errc::ok && sent != Errc::state) ++counters_.send_failures;  // the tick's rule
   // an in-process simulated device takes its frames when stepped: once more
-  if (simulation_ != nullptr) simulation_->step(last_tick_ns_ + static_cast<std::int64_t>(config_.period_s * 1e9));
+  if (simulation_ != nullptr && last_tick_ns_ > 0) {  // (no tick: nothing was ever commanded)
+    simulation_->step(last_tick_ns_ + static_cast<std::int64_t>(config_.period_s * 1e9));
+  }
 }
 
 int Executive::nearest_point(const Vec3& p, double& fraction) const {

@@ -28,6 +28,20 @@ TEST(WatchdogGate, PingsEveryHalfIntervalWhileBothMove) {
   EXPECT_LE(pings, 7);
 }
 
+TEST(WatchdogGate, AStallStopsThePingsAtOnce) {
+  WatchdogGate g(1.0);
+  EXPECT_TRUE(g.due(0.0, 100, false, 0));
+  EXPECT_FALSE(g.due(0.4, 200, false, 0)) << "too soon";
+  EXPECT_FALSE(g.due(0.5, 200, false, 0)) << "no tick since the last look, though the last ping saw fewer";
+  EXPECT_TRUE(g.due(0.6, 201, false, 0));
+}
+
+TEST(WatchdogGate, NoTickYetNoPing) {
+  WatchdogGate g(1.0);
+  EXPECT_FALSE(g.due(0.0, 0, false, 0));
+  EXPECT_TRUE(g.due(0.1, 1, false, 0));
+}
+
 TEST(WatchdogGate, AStalledLoopOrPublisherStopsThePings) {
   WatchdogGate g(1.0);
   EXPECT_TRUE(g.due(0.0, 100, true, 10));
@@ -85,17 +99,20 @@ TEST(Supervisor, SaysReadyPingsAndStopping) {
   s.ready("pack: rope of 32 segments, hide");
   for (int k = 0; k < 10; ++k) s.monitor(0.1 * k, 100u + static_cast<std::uint64_t>(k), false, 0);
   s.status("pack: F_c 0.01");
+  s.extend_watchdog(120.0, "switching terrain to other");
   s.stopping("pack: stopping");
   unsetenv("NOTIFY_SOCKET");
   unsetenv("WATCHDOG_USEC");
   const std::vector<std::string> got = systemd.received();
   ASSERT_GE(got.size(), 4u);
-  EXPECT_EQ(got.front(), "READY=1\nSTATUS=pack: rope of 32 segments, hide");
+  EXPECT_EQ(got.front(), "READY=1\nSTATUS=pack: rope of 32 segments, hide\nWATCHDOG_USEC=400000");
   EXPECT_EQ(got.back(), "STOPPING=1\nSTATUS=pack: stopping");
   int pings = 0;
   for (const std::string& m : got) pings += m == "WATCHDOG=1";
   EXPECT_EQ(pings, 5);  // at 0, 0.2, 0.4, 0.6, 0.8 s
   EXPECT_EQ(s.pings(), 5u);
+  EXPECT_EQ(got[got.size() - 2], "STATUS=switching terrain to other\nWATCHDOG=1\nWATCHDOG_USEC=120000000");
+  EXPECT_DOUBLE_EQ(s.monitor_period_s(), 0.1);
 }
 
 TEST(Supervisor, WithoutSystemdNothingIsSent) {

@@ -4,7 +4,7 @@
 set -uo pipefail
 out=$("$1" --version)
 status=$?
-re="^$2 $3 \\(commit ([0-9a-f]+(-dirty)?|unknown)\\)\$"
+re="^$2 ${3//./\\.} \\(commit ([0-9a-f]+(-dirty)?|unknown)\\)\$"
 if ((status != 0)); then
   echo "version_test: $2 --version exited $status" >&2
   exit 1

@@ -15,8 +15,9 @@
 //
 //   223..226  app_console_test        a console per case (one case at a time)
 //   227  app_console_threads_test a console under ThreadSanitizer
+//   228  app_console_test         the console under a socket that plays systemd
 //
-// Other suites that use DDS: take ids outside 211..219 and 223..227.
+// Other suites that use DDS: take ids outside 211..219 and 223..228.
 #pragma once
 
 #include <cstdint>

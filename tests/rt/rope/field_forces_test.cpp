@@ -74,7 +74,7 @@ std::vector<Vec3> hostile_points(const fields::VolumeGeometry& g, std::mt19937& 
 
 TEST(FieldForces, AnyQueryOnAnyFieldIsFiniteAndWithinTheField) {
   std::mt19937 rng(20261126);
-  for (int trial = 0; trial < 12; ++trial) {
+  for (int trial = 0; trial < 8; ++trial) {
     const RandomField f = random_field(rng);
     ASSERT_EQ(f.levels.size(), 1u) << f.what;
     ForceGains gains;
@@ -101,7 +101,7 @@ TEST(FieldForces, RopesOnRandomFieldsStayFinite) {
   std::mt19937 rng(4242);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int ran = 0;
-  for (int trial = 0; trial < 8; ++trial) {
+  for (int trial = 0; trial < 6; ++trial) {
     const RandomField f = random_field(rng);
     ASSERT_EQ(f.levels.size(), 1u) << f.what;
     const fields::VolumeGeometry& g = f.level().geometry();
@@ -134,7 +134,7 @@ TEST(FieldForces, RopesOnRandomFieldsStayFinite) {
     ends.end_m = to;
     rope.set_ends(ends);
     ++ran;
-    for (int t = 0; t < 1500; ++t) {
+    for (int t = 0; t < 1000; ++t) {
       rope.step(dt, forces);
       if (t % 50 != 49) continue;
       for (int i = 0; i <= rope.segments(); ++i) {
@@ -142,7 +142,7 @@ TEST(FieldForces, RopesOnRandomFieldsStayFinite) {
       }
     }
   }
-  EXPECT_GE(ran, 6) << "too few random ends were far enough apart to lay a rope";
+  EXPECT_GE(ran, 4) << "too few random ends were far enough apart to lay a rope";
 }
 
 }  // namespace

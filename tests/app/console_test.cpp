@@ -24,6 +24,7 @@
 #include "../fields/terrains.hpp"
 #include "../storage/crafted_pack.hpp"
 #include "../tools/cli_runner.hpp"
+#include "console_packs.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
@@ -53,17 +54,7 @@ Outcome console(const std::string& args, const std::string& prefix = "") {
 // The console under a 30 s limit: a hang exits 124 (or 137) instead of stalling the suite.
 Outcome console_limited(const std::string& args) { return console(args, "timeout -k 5 30 "); }
 
-// The console's test packs: small, two levels of detail.
-visvol::storage::PackBuildParams small_pack_params() {
-  visvol::storage::PackBuildParams p;
-  p.field.nz = 32;
-  p.field.ceiling_m = 200;
-  p.field.range_posts = 8;
-  p.lod_levels = 2;
-  p.tff.band_offset_m = 60;
-  p.tff.band_levels = 8;
-  return p;
-}
+using visvol::app::testing::small_pack_params;
 
 class Console : public ::testing::Test {
  protected:

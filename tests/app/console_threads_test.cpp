@@ -11,11 +11,12 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <thread>
 
 #include "../fields/terrains.hpp"
+#include "../tools/cli_runner.hpp"
+#include "console_packs.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
@@ -23,26 +24,16 @@
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using visvol::test::slurp;
 
 TEST(ConsoleThreads, ASessionWithCommandsRunsItsThreadsWithoutARace) {
   using namespace visvol::dds;
   using namespace visvol::msg;
   const std::string tag = std::to_string(getpid());
   const std::string pack = ::testing::TempDir() + "/console_threads_" + tag + ".vvp";
-  visvol::storage::PackBuildParams p;
-  p.field.nz = 24;
-  p.field.ceiling_m = 200;
-  p.field.range_posts = 8;
-  p.lod_levels = 2;
-  p.tff.band_offset_m = 60;
-  p.tff.band_levels = 8;
-  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), p, "", pack).ok());
+  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9),
+                                          visvol::app::testing::small_pack_params(), "", pack)
+                  .ok());
   const std::string script = ::testing::TempDir() + "/console_threads_script_" + tag + ".txt";
   std::ofstream(script) << "0.2 move 0 0 0 0.1\n0.4 pull 20 0 -20 0.6\n1.2 release\n";
 

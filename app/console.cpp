@@ -40,9 +40,10 @@ namespace {
 
 constexpr std::uint64_t kMiB = 1024 * 1024;
 
-// The simulated operator of the demo: settles, grabs the rope in the middle
-// of the workspace, pulls it north and up, lets go, and does it again later.
-constexpr const char* kBuiltinScript =
+// The simulated operator of the demo, pull mode (A): settles, grabs the rope
+// in the middle of the workspace, pulls it north and up, lets go, and does it
+// again later.
+constexpr const char* kBuiltinPullScript =
     "2.0 move 0 0 0 0.5\n"
     "4.0 pull 0 40 -40 1.5\n"
     "7.0 release\n"
@@ -50,6 +51,27 @@ constexpr const char* kBuiltinScript =
     "12.0 pull 30 -30 0 1.0\n"
     "14.0 release\n"
     "14.5 move 0 0 0 0.5\n";
+
+// Then spool mode (B): presses the mode button at 15.5 s, takes the lead's
+// free end where it leaves the start, and drags it in one stroke over 4 s to a
+// tenth of the way past the end (the free end trails the hand), then lets go
+// at 21.5 s. Placed from the scene through the mapping the executive derives.
+std::string builtin_script(const rt::ExecutiveConfig& ec, double spacing_m) {
+  const servo::ServoConfig sc = rt::scene_servo_config(ec, spacing_m);
+  const rt::Vec3 dir = (ec.end_m - ec.start_m).normalized();
+  const double lead_m =
+      rt::kSpoolLeadSegments * rt::pull_segment_m(ec.start_m, ec.end_m, ec.model, ec.segments, ec.slack);
+  const Eigen::Vector3d from = servo::device_mm_of(sc, ec.start_m + lead_m * dir);
+  const Eigen::Vector3d to = servo::device_mm_of(sc, ec.end_m + 0.1 * (ec.end_m - ec.start_m));
+  const Eigen::Vector3d by = to - from;
+  const double stroke_mm = std::ceil(by.norm()) + 1.0;
+  char spool[512];
+  std::snprintf(spool, sizeof spool,
+                "15.5 mode on\n15.6 mode off\n16.0 move %.1f %.1f %.1f 0.5\n17.0 drag %.1f %.1f %.1f 4.0 %.0f\n"
+                "21.5 release\n",
+                from.x(), from.y(), from.z(), by.x(), by.y(), by.z(), stroke_mm);
+  return std::string(kBuiltinPullScript) + spool;
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -457,7 +479,8 @@ Status Console::Impl::start_device() {
     sc.node_id = static_cast<std::uint8_t>(o.node);
     hapticsim::Script script;
     if (o.script == "builtin") {
-      auto s = hapticsim::parse_script(kBuiltinScript, "built-in script", sc.workspace_half_mm);
+      const std::string text = builtin_script(executive_config(), field->level(o.level).geometry().spacing_m);
+      auto s = hapticsim::parse_script(text, "built-in script", sc.workspace_half_mm);
       if (!s.ok()) return s.status();
       script = std::move(*s);
     } else if (o.script != "none") {
@@ -844,6 +867,15 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
         {"rope_resets", c.rope_resets},
         {"flyable", flyable_json(fp, final_flyable, flyable ? flyable->stats() : FlyableStats{})}}},
       {"vehicle", rt::vehicle_json(vehicle)},
+      {"mode", msg::to_string(c.mode)},
+      {"mode_switches", c.mode_switches},
+      {"mode_refusals", c.mode_refusals},
+      {"spool",
+       {{"paid_out_m", c.spool_paid_out_m},
+        {"segments", c.spool_segments},
+        {"gap_m", c.spool_gap_m},
+        {"arrived", c.spool_arrived},
+        {"at_capacity", c.spool_at_capacity}}},
       {"device",
        {{"kind", o.device}, {"state", device_text(c)}, {"grasps", c.grasps}, {"send_failures", c.send_failures}}},
       {"commands", {{"applied", c.commands_applied}, {"failed", c.commands_failed}}},

@@ -19,11 +19,24 @@ std::string regular_file_problem(const std::string& path) {
 
 }  // namespace
 
+std::string config_error_text(const std::string& message) {
+  const std::string prefix = "INI was not able to parse ";
+  if (message.rfind(prefix, 0) != 0) return message;
+  std::string key = message.substr(prefix.size());
+  const std::string section_marker = ".++";
+  if (key.size() > section_marker.size() && key.compare(key.size() - 3, 3, section_marker) == 0) {
+    return "unknown section [" + key.substr(0, key.size() - 3) + "] (keys are the long option names, at the top level)";
+  }
+  return "unknown key '" + key + "' (keys are the long option names without the dashes)";
+}
+
 void add_console_options(CLI::App& app, ConsoleOptions& o) {
   // checked as soon as it is parsed: CLI11 reads it before any other check
   app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)")
       ->check(CLI::Validator([](std::string& path) { return regular_file_problem(path); }, "FILE"))
       ->trigger_on_parse();
+  // a key the console does not know is a mistake to name, not to skip
+  app.allow_config_extras(CLI::config_extras_mode::error);
   app.add_option("--pack", o.pack, "Field pack to plan in (visvol build ... -o PACK)")
       ->required()
       ->check(CLI::ExistingFile);

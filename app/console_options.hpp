@@ -75,6 +75,11 @@ struct ConsoleOptions {
 Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text);
 
 // Registers the options (with --help texts, units and defaults) on `app`.
+// CLI11's message for a configuration key it does not know ("INI was not
+// able to parse KEY", "SECTION.++" for a [section] line) as a user reads it;
+// any other message unchanged.
+std::string config_error_text(const std::string& message);
+
 void add_console_options(CLI::App& app, ConsoleOptions& o);
 // Checks what CLI11 cannot: combinations and ranges. Names the option.
 Status validate(const ConsoleOptions& o);

@@ -21,6 +21,14 @@ extern "C" void on_signal(int) { g_stop.store(true); }
 
 // One session per pack: a switch-terrain command ends a session and the next
 // one starts on the other pack, everything made anew. Returns the exit status.
+// CLI11 and the option checks name the option (or the key), not the file it
+// came from: " in --config FILE" when one was read.
+std::string config_note(const CLI::App& cli) {
+  const CLI::Option* config = cli.get_config_ptr();
+  // the text as given (as<>() would run the option's checks again, and throw)
+  return config != nullptr && !config->results().empty() ? " in --config " + config->results().front() : "";
+}
+
 int run_sessions(const visvol::app::ConsoleOptions& options) {
   using namespace visvol;
   std::optional<app::ConsoleOptions> session = options;
@@ -66,7 +74,14 @@ int main(int argc, char** argv) {
       std::printf("%s", cli.help().c_str());
       return 0;
     }
-    std::fprintf(stderr, "visvol-console: %s (try --help)\n", e.what());
+    std::fprintf(stderr, "visvol-console: %s%s (try --help)\n", app::config_error_text(e.what()).c_str(),
+                 config_note(cli).c_str());
+    return 2;
+  }
+  // checked here too (each session checks again), so that a bad value names
+  // the configuration file it may have come from
+  if (const visvol::Status v = app::validate(options); !v.ok()) {
+    std::fprintf(stderr, "visvol-console: %s%s\n", v.message().c_str(), config_note(cli).c_str());
     return 2;
   }
   std::signal(SIGINT, on_signal);

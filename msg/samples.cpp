@@ -18,6 +18,13 @@ const char* to_string(RopeModel value) {
   }
   return nullptr;
 }
+const char* to_string(InteractionMode value) {
+  switch (value) {
+    case InteractionMode::pull: return "pull";
+    case InteractionMode::spool: return "spool";
+  }
+  return nullptr;
+}
 const char* to_string(ConstraintKind value) {
   switch (value) {
     case ConstraintKind::hidden_from: return "hidden-from";
@@ -40,6 +47,7 @@ const char* to_string(CommandKind value) {
     case CommandKind::start: return "start";
     case CommandKind::stop: return "stop";
     case CommandKind::switch_terrain: return "switch-terrain";
+    case CommandKind::set_mode: return "set-mode";
   }
   return nullptr;
 }

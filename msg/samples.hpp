@@ -51,6 +51,10 @@ inline constexpr std::size_t kCrsWktCapacity = 4096;  // WKT of a projected CRS
 // by static_assert in the codecs).
 enum class Objective : std::uint8_t { hide = 1, show = 2 };
 enum class RopeModel : std::uint8_t { spring_mass = 1, articulated = 2 };
+// The operator's interaction (paper, section 5): pull (mode A: both ends held,
+// a grasped point pulled) or spool (mode B: the rope pays out of the start end
+// while the operator drags its free end toward the destination).
+enum class InteractionMode : std::uint8_t { pull = 1, spool = 2 };
 enum class ConstraintKind : std::uint8_t {
   hidden_from = 1,
   visible_to = 2,
@@ -69,6 +73,7 @@ enum class CommandKind : std::uint8_t {
   start = 8,
   stop = 9,
   switch_terrain = 10,
+  set_mode = 11,
 };
 enum class AckResult : std::uint8_t { accepted = 1, rejected = 2, applied = 3, failed = 4 };
 enum class DeviceState : std::uint8_t {
@@ -83,6 +88,7 @@ enum class DeviceState : std::uint8_t {
 // nullptr for a value outside the enumeration.
 const char* to_string(Objective value);
 const char* to_string(RopeModel value);
+const char* to_string(InteractionMode value);
 const char* to_string(ConstraintKind value);
 const char* to_string(CommandKind value);
 const char* to_string(AckResult value);
@@ -132,6 +138,8 @@ struct PathSample {
   double f_c;            // path measure F_c (sum of F_p along the path, weighted)
   double length_m;
   double min_clearance_m;
+  InteractionMode mode = InteractionMode::pull;
+  double spool_paid_out_m;     // spool mode: rope paid out since the mode began (0 in pull mode)
   std::uint32_t vertex_count;  // 0..kMaxPathVertices
   PathVertex vertices[kMaxPathVertices];
 };
@@ -234,6 +242,7 @@ struct Command {
     Constraint items[kMaxConstraints];
   } constraints;                  // set_constraints
   char pack_id[kPackIdCapacity];  // switch_terrain
+  InteractionMode mode;           // set_mode
 };
 
 // An acknowledgement. Command intake sends accepted/rejected itself; the

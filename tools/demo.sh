@@ -3,9 +3,10 @@
 # builds its field pack (visibility field F_p with three levels of detail and
 # the terrain force field), checks it, samples it, exports it, writes a
 # viewshed, plans a hidden path offline and draws it, then runs the console
-# for 20 s: the 1 kHz executive with the simulated haptic device (an operator
-# script grabs and pulls the rope), DDS on loopback, thumbnails, and a
-# hidden-from constraint sent to it over DDS by visvol-echo.
+# for 24 s: the 1 kHz executive with the simulated haptic device (the built-in
+# operator script grabs and pulls the rope in pull mode, then switches to spool
+# mode and drags a rope out from the start to the far end), DDS on loopback,
+# thumbnails, and a hidden-from constraint sent to it over DDS by visvol-echo.
 # Outputs go to out/ (or $VISVOL_OUT).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -57,15 +58,17 @@ for view in oblique volume slice; do
     -o "$out/plan_hide_$view.png"
 done
 
-echo "== the console: 20 s at 1 kHz, simulated haptic device, DDS on loopback (domain 0);"
+echo "== the console: 24 s at 1 kHz, simulated haptic device, DDS on loopback (domain 0);"
 echo "   at 8 s a second station tells it over DDS to stay hidden from an observer on the ground"
-echo "   south of the Presidio (a corridor hidden from it exists: visvol plan finds one)"
+echo "   south of the Presidio (a corridor hidden from it exists: visvol plan finds one);"
+echo "   pull mode (A) until 15 s, then spool mode (B): a rope paid out from the start as the"
+echo "   operator drags its free end to the far end (summary.json: mode, spool.paid_out_m)"
 (
   sleep 8
   build/tools/echo/visvol-echo command --wait-applied set-constraints --hidden-from 547250,4182750,109 --clearance 30 \
     >"$out/console_command.txt" 2>&1 || echo "visvol-echo failed: see $out/console_command.txt"
 ) &
-build/app/visvol-console --pack "$pack" --seconds 20 --out "$out/console"
+build/app/visvol-console --pack "$pack" --seconds 24 --out "$out/console"
 wait
 
 echo

@@ -15,6 +15,7 @@ build_packages=(
   libbenchmark-dev       # micro-benchmarks
   libtomlplusplus-dev    # vehicle files (visvol plan --vehicle FILE)
   libsystemd-dev         # sd_notify: the console as a systemd unit (READY, WATCHDOG, STOPPING)
+  dpkg-dev file          # cpack -G DEB: dpkg-shlibdeps for the package's Depends, file to find the ELF programs
 )
 
 storage_packages=(libisal-dev libssl-dev)           # CRC32C of pack tiles, SHA-256 of sources

@@ -21,6 +21,9 @@ static_assert(static_cast<int>(msg::CommandKind::set_constraints) == visvol_msgs
 static_assert(static_cast<int>(msg::CommandKind::start) == visvol_msgs_msg_dds__COMMAND_START);
 static_assert(static_cast<int>(msg::CommandKind::stop) == visvol_msgs_msg_dds__COMMAND_STOP);
 static_assert(static_cast<int>(msg::CommandKind::switch_terrain) == visvol_msgs_msg_dds__COMMAND_SWITCH_TERRAIN);
+static_assert(static_cast<int>(msg::CommandKind::set_mode) == visvol_msgs_msg_dds__COMMAND_SET_MODE);
+static_assert(static_cast<int>(msg::InteractionMode::pull) == visvol_msgs_msg_dds__MODE_PULL);
+static_assert(static_cast<int>(msg::InteractionMode::spool) == visvol_msgs_msg_dds__MODE_SPOOL);
 static_assert(static_cast<int>(msg::RopeModel::spring_mass) == visvol_msgs_msg_dds__MODEL_SPRING_MASS);
 static_assert(static_cast<int>(msg::RopeModel::articulated) == visvol_msgs_msg_dds__MODEL_ARTICULATED);
 static_assert(static_cast<int>(msg::ConstraintKind::hidden_from) == visvol_msgs_msg_dds__CONSTRAINT_HIDDEN_FROM);
@@ -33,7 +36,7 @@ static_assert(static_cast<int>(msg::AckResult::rejected) == visvol_msgs_msg_dds_
 static_assert(static_cast<int>(msg::AckResult::applied) == visvol_msgs_msg_dds__ACK_APPLIED);
 static_assert(static_cast<int>(msg::AckResult::failed) == visvol_msgs_msg_dds__ACK_FAILED);
 
-constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(msg::CommandKind::switch_terrain);
+constexpr std::uint8_t kLastKind = static_cast<std::uint8_t>(msg::CommandKind::set_mode);
 
 std::string number(double v) {
   char buf[32];
@@ -331,6 +334,13 @@ Status decode_command(const visvol_msgs_msg_dds__Command_& wire, msg::Command& o
       VISVOL_RETURN_IF_ERROR(check_pack_id("pack_id", view(wire.pack_id)));
       msg::copy_text(out.pack_id, view(wire.pack_id));
       return Status();
+    case msg::CommandKind::set_mode:
+      if (wire.mode != static_cast<std::uint8_t>(msg::InteractionMode::pull) &&
+          wire.mode != static_cast<std::uint8_t>(msg::InteractionMode::spool)) {
+        return reject("mode", std::to_string(wire.mode) + " is not known (1 pull, 2 spool)");
+      }
+      out.mode = static_cast<msg::InteractionMode>(wire.mode);
+      return Status();
   }
   return reject("kind", "unhandled");  // unreachable: the range was checked
 }
@@ -380,6 +390,7 @@ Status validate_command(const msg::Command& c, const CommandLimits& limits) {
     }
     case msg::CommandKind::set_objective:
     case msg::CommandKind::set_model:
+    case msg::CommandKind::set_mode:
     case msg::CommandKind::start:
     case msg::CommandKind::stop: return Status();  // decode checked their values
   }
@@ -412,6 +423,7 @@ const visvol_msgs_msg_dds__Command_& CommandMessage::fill(const msg::Command& c)
   msg_.bend_stiffness_n_m_per_rad = c.stiffness.bend_n_m_per_rad;
   msg_.model = static_cast<std::uint8_t>(c.model);
   msg_.segment_count = c.segment_count;
+  msg_.mode = static_cast<std::uint8_t>(c.mode);
   const std::uint32_t n = c.constraints.count < msg::kMaxConstraints ? c.constraints.count
                                                                      : static_cast<std::uint32_t>(msg::kMaxConstraints);
   for (std::uint32_t i = 0; i < n; ++i) {

@@ -110,6 +110,8 @@ Status PathMessages::fill(const msg::PathSample& sample) {
   update_.min_clearance_m = sample.min_clearance_m;
   update_.converged = sample.converged;
   update_.inside_envelope = sample.inside_envelope;
+  update_.mode = static_cast<std::uint8_t>(sample.mode);
+  update_.spool_paid_out_m = sample.spool_paid_out_m;
   update_.positions_m._length = n;
   update_.visibility._length = n;
   update_.clearance_m._length = n;
@@ -132,6 +134,12 @@ Status decode_path_update(const visvol_msgs_msg_dds__PathUpdate_& wire, msg::Pat
     return invalid_argument("path update: pack_id longer than " + std::to_string(msg::kPackIdCapacity - 1) +
                             " characters");
   }
+  if (wire.mode != static_cast<std::uint8_t>(msg::InteractionMode::pull) &&
+      wire.mode != static_cast<std::uint8_t>(msg::InteractionMode::spool)) {
+    return invalid_argument("path update: mode " + std::to_string(wire.mode) + " is not known (1 pull, 2 spool)");
+  }
+  out.mode = static_cast<msg::InteractionMode>(wire.mode);
+  out.spool_paid_out_m = wire.spool_paid_out_m;
   out.sequence = wire.sequence_number;
   out.stamp_ns = from_ros_time(wire.header.stamp);
   out.objective = static_cast<msg::Objective>(wire.objective);

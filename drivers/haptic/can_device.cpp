@@ -26,6 +26,7 @@ void CanDevice::poll(std::int64_t now_ns) {
   sample_.position_mm = Eigen::Vector3d(s.pos_mm[0], s.pos_mm[1], s.pos_mm[2]);
   sample_.grasp_button = (s.buttons & kButtonGrasp) != 0;
   sample_.clutch_button = (s.buttons & kButtonClutch) != 0;
+  sample_.mode_button = (s.buttons & kButtonMode) != 0;
   sample_.timestamp_ns = s.timestamp_ns;
   sample_.fresh = s.fresh;
   sample_.valid = s.valid;

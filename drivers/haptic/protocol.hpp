@@ -125,7 +125,8 @@ constexpr bool valid_nmt_command(std::uint8_t v) {
 // Position frame, buttons byte.
 inline constexpr std::uint8_t kButtonGrasp = 0x01;   // stylus button 1: grasp the rope
 inline constexpr std::uint8_t kButtonClutch = 0x02;  // stylus button 2: clutch (re-index)
-inline constexpr std::uint8_t kButtonsReserved = 0xFC;
+inline constexpr std::uint8_t kButtonMode = 0x04;    // button 3 (a foot switch or panel key): pull / spool mode
+inline constexpr std::uint8_t kButtonsReserved = 0xF8;
 
 // Force command, flags byte.
 inline constexpr std::uint8_t kCommandEnable = 0x01;  // apply the force (else zero)
@@ -246,7 +247,7 @@ struct SignalSpec {
   double scale;
   const char* unit;
 };
-inline constexpr std::array<SignalSpec, 34> kSignals = {{
+inline constexpr std::array<SignalSpec, 35> kSignals = {{
     {MessageKind::nmt, "NMT_Command", 0, 8, false, 1.0, ""},
     {MessageKind::nmt, "NMT_Node", 8, 8, false, 1.0, ""},
     {MessageKind::emergency, "Emcy_Code", 0, 16, false, 1.0, ""},
@@ -259,7 +260,8 @@ inline constexpr std::array<SignalSpec, 34> kSignals = {{
     {MessageKind::position, "Pos_Z", 32, 16, true, kPositionMmPerCount, "mm"},
     {MessageKind::position, "Pos_ButtonGrasp", 48, 1, false, 1.0, ""},
     {MessageKind::position, "Pos_ButtonClutch", 49, 1, false, 1.0, ""},
-    {MessageKind::position, "Pos_ButtonsReserved", 50, 6, false, 1.0, ""},
+    {MessageKind::position, "Pos_ButtonMode", 50, 1, false, 1.0, ""},
+    {MessageKind::position, "Pos_ButtonsReserved", 51, 5, false, 1.0, ""},
     {MessageKind::position, "Pos_Sequence", 56, 8, false, 1.0, ""},
     {MessageKind::command, "Cmd_ForceX", 0, 16, true, kForceNPerCount, "N"},
     {MessageKind::command, "Cmd_ForceY", 16, 16, true, kForceNPerCount, "N"},

@@ -204,6 +204,13 @@ Status LineParser::parse(int line, const std::vector<std::string>& tok) {
     push_clutch(time_s_, tok[2] == "on");
     return Status::ok_status();
   }
+  if (a == "mode") {
+    VISVOL_RETURN_IF_ERROR(expect_args(tok, 1, 1));
+    if (tok[2] != "on" && tok[2] != "off") return error("mode takes 'on' or 'off', got '" + tok[2] + "'");
+    e.action = tok[2] == "on" ? Action::mode_on : Action::mode_off;
+    push(e);
+    return Status::ok_status();
+  }
   if (a == "move" || a == "pull" || a == "drag") {
     VISVOL_RETURN_IF_ERROR(expect_args(tok, 4, a == "drag" ? 5 : 4));
     std::array<double, 3> v{};
@@ -337,6 +344,8 @@ void Player::apply(const ScriptEvent& e, std::int64_t now_ns, SimDevice& device)
     case Action::release: hand_.grasp = false; break;
     case Action::clutch_on: hand_.clutch = true; break;
     case Action::clutch_off: hand_.clutch = false; break;
+    case Action::mode_on: hand_.mode = true; break;
+    case Action::mode_off: hand_.mode = false; break;
     case Action::drop: device.inject_drop(e.fraction); break;
     case Action::silent: device.inject_silence(now_ns, dur_ns); break;
     case Action::garbage: device.inject_garbage(e.count); break;

@@ -9,6 +9,8 @@
 //   T move X Y Z DUR            the hand moves to (X, Y, Z) over DUR s
 //   T grab | release            press / release the grasp button (button 1)
 //   T clutch on|off             press / release the clutch button (button 2)
+//   T mode on|off               press / release the mode button (button 3: each
+//                               press switches pull / spool mode)
 //   T pull DX DY DZ DUR         grab, then move by (DX, DY, DZ) over DUR s
 //   T drag DX DY DZ DUR [S]     spool mode: grab and drag by (DX, DY, DZ) over DUR s
 //                               in strokes of at most S mm (default 60): after each
@@ -49,6 +51,8 @@ enum class Action : std::uint8_t {
   release,
   clutch_on,
   clutch_off,
+  mode_on,
+  mode_off,
   drop,
   silent,
   garbage,

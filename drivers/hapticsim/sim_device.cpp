@@ -270,8 +270,9 @@ void SimDevice::transmit(std::int64_t now_ns) {
   if (nmt_ == NmtState::operational) {
     haptic::PositionMsg p;
     p.pos_mm = position_mm();
-    p.buttons = static_cast<std::uint8_t>((hand_.grasp ? haptic::kButtonGrasp : 0) |
-                                          (hand_.clutch ? haptic::kButtonClutch : 0));
+    p.buttons =
+        static_cast<std::uint8_t>((hand_.grasp ? haptic::kButtonGrasp : 0) |
+                                  (hand_.clutch ? haptic::kButtonClutch : 0) | (hand_.mode ? haptic::kButtonMode : 0));
     p.sequence = position_sequence_++;
     last_position_frame_ = haptic::encode(p, config_.node_id);
     send(now_ns < freeze_until_ns_ ? frozen_frame_ : last_position_frame_, true);

@@ -58,6 +58,7 @@ struct Hand {
   std::array<double, 3> target_mm{};  // where the hand pulls the handle
   bool grasp = false;                 // button 1
   bool clutch = false;                // button 2
+  bool mode = false;                  // button 3: pull / spool mode
 };
 
 // What happened, for summaries and test assertions.

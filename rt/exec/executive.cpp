@@ -143,14 +143,7 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
   commands_ = commands;
   outputs_ = outputs;
   if (device != nullptr) {
-    // the rope's extent onto the device's workspace; the soft joint as the hand feels it
-    const double span_m = std::max((c.end_m - c.start_m).head<2>().norm(), 10.0 * g.spacing_m);
-    servo::ServoConfig sc = c.servo;
-    sc.world_m_per_device_mm = span_m / (2.0 * c.workspace_half_mm);
-    sc.world_offset_m = 0.5 * (c.start_m + c.end_m);
-    const double hand_m_per_world_m = 1.0 / (1000.0 * sc.world_m_per_device_mm);
-    sc.coupling_stiffness_n_per_m = c.hand_stiffness_n_per_m * hand_m_per_world_m / sc.hand_per_rope_force;
-    sc.coupling_damping_n_s_per_m = c.hand_damping_n_s_per_m * hand_m_per_world_m / sc.hand_per_rope_force;
+    servo::ServoConfig sc = scene_servo_config(c, g.spacing_m);
     const double ref = forces_->reference_gradient();
     sc.cue_gain_n_m = ref > 0 ? -c.cue_n / ref : 0.0;
     Result<servo::Servo> servo = servo::Servo::create(sc);
@@ -165,9 +158,27 @@ Status Executive::init(HapticDevice* device, DeviceSimulation* simulation, msg::
     const double pull_at_1mm_n = sc.coupling_stiffness_n_per_m * sc.world_m_per_device_mm;
     user_force_per_n_ = saturated_n / pull_at_1mm_n;
     max_user_force_n_ = 10.0 * saturated_n;
+    saturated_n_ = saturated_n;
     counters_.haptics = true;
   }
   return {};
+}
+
+servo::ServoConfig scene_servo_config(const ExecutiveConfig& c, double spacing_m) {
+  const double span_m = std::max((c.end_m - c.start_m).head<2>().norm(), 10.0 * spacing_m);
+  servo::ServoConfig sc = c.servo;
+  sc.world_m_per_device_mm = span_m / (2.0 * c.workspace_half_mm);
+  sc.world_offset_m = 0.5 * (c.start_m + c.end_m);
+  const double hand_m_per_world_m = 1.0 / (1000.0 * sc.world_m_per_device_mm);
+  sc.coupling_stiffness_n_per_m = c.hand_stiffness_n_per_m * hand_m_per_world_m / sc.hand_per_rope_force;
+  sc.coupling_damping_n_s_per_m = c.hand_damping_n_s_per_m * hand_m_per_world_m / sc.hand_per_rope_force;
+  return sc;
+}
+
+double pull_segment_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, int segments, double slack) {
+  const double straight = (end_m - start_m).norm();
+  const double length = model == RopeModel::articulated ? straight * (1.0 + slack) : straight;
+  return std::max(length / std::max(segments, 1), kMinSegmentM);
 }
 
 RopeParams Executive::params_for(RopeModel model, int segments, double segment_m) const {
@@ -221,8 +232,7 @@ void Executive::update_gains() {
 
 Errc Executive::start_run() {
   const int n = segments_;
-  const double straight = (end_m_ - start_m_).norm();
-  const double length = rope_->model() == RopeModel::articulated ? straight * (1.0 + config_.slack) : straight;
+  const double length = pull_segment_m(start_m_, end_m_, rope_->model(), n, config_.slack) * n;
   const storage::ResidentSampler& s = forces_->sampler();
   const Vec3 a = start_m_, b = end_m_;
   // 20 m above the clearance, or half way up to a lower ceiling
@@ -245,7 +255,9 @@ Errc Executive::start_run() {
   counters_.run_s = 0;
   counters_.equilibrium_s = 0;
   ++counters_.runs;
-  relaid_ = false;  // a new run (recover_rope sets it again for a relaid one)
+  relaid_ = false;                     // a new run (recover_rope sets it again for a relaid one)
+  mode_ = msg::InteractionMode::pull;  // between both ends
+  counters_.mode = mode_;
   return Errc::ok;
 }
 
@@ -370,7 +382,11 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
   in.sample_valid = sample.valid;
   in.device_operational = device_->state() == HapticState::operational;
   in.point_valid = true;
-  if (!grasping_) {
+  if (!grasping_ && spooling()) {
+    // the rope's free end
+    grasp_segment_ = rope_->segments() - 1;
+    grasp_fraction_ = 1.0;
+  } else if (!grasping_) {
     // the point a grasp would take: nearest the proxy of the last tick
     grasp_segment_ = nearest_point(last_proxy_m_, grasp_fraction_);
   }
@@ -387,11 +403,21 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
     const double n = pull.norm();
     if (n > max_user_force_n_) pull *= max_user_force_n_ / n;
     rope_->set_point_force(grasp_segment_, grasp_fraction_, pull);
+    pull_n_ = pull;
   } else {
     rope_->clear_point_force();
+    pull_n_ = Vec3::Zero();
   }
   counters_.servo_reason = out_.safe_reason;
   counters_.device_state = device_->state();
+  // each press of the mode button switches pull <-> spool
+  const bool pressed = sample.valid && sample.mode_button;
+  if (pressed && !mode_button_was_) {
+    const msg::InteractionMode other =
+        mode_ == msg::InteractionMode::pull ? msg::InteractionMode::spool : msg::InteractionMode::pull;
+    if (set_mode(other) != Errc::ok) ++counters_.mode_refusals;
+  }
+  mode_button_was_ = pressed;
 }
 
 void Executive::tick(const TickTime& time) {
@@ -402,6 +428,7 @@ void Executive::tick(const TickTime& time) {
   if (simulation_ != nullptr) simulation_->step(now_ns);                        // 2
   if (device_ != nullptr) haptics(now_ns, static_cast<double>(now_ns) * 1e-9);  // 3, 4
   if (counters_.running) {                                                      // 5
+    spool();
     rope_->step(config_.period_s, *forces_);
     counters_.run_s += config_.period_s;
     if (!finite_rope(*rope_)) recover_rope();

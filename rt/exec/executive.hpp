@@ -24,11 +24,26 @@
 // row; the servo then zeroes the device force in the next tick and withholds
 // it until the operator grasps again, while the rope keeps stepping.
 //
-// Operator (the paper's mode A): both ends of the rope are held; the grasp
-// button grabs the rope point nearest the proxy, which then pulls it through
-// the servo's soft joint; the rope side of that force is scaled so that 1 mm
-// of hand travel pulls as hard as k3 times the saturated field (the paper's
-// k3 U1), capped at ten times that.
+// Operator, pull mode (the paper's mode A): both ends of the rope are held;
+// the grasp button grabs the rope point nearest the proxy, which then pulls it
+// through the servo's soft joint; the rope side of that force is scaled so that
+// 1 mm of hand travel pulls as hard as k3 times the saturated field (the
+// paper's k3 U1), capped at ten times that.
+// Spool mode (mode B; a set-mode command or the device's mode button switches):
+// a short rope (kSpoolLeadSegments) leaves the start toward the end, its far
+// end free; the grasp button takes that end, and while the operator pulls it
+// away from the start harder than the saturated field pulls one segment (the
+// pull of 1 mm of hand travel at k3 = 1: a slack rope follows the hand more
+// closely than that) a segment of the pull mode's length pays out at the
+// start, at most one every kSpoolEveryTicks, up to max_segments. The rope settles in the
+// field as it pays out. Once the free end comes within a segment of the end
+// (and the rope is kSpoolArrivalSlack longer than the straight line, paying
+// out more where it is not) it is held there: both ends fixed, the run goes on as in pull mode (the
+// mode stays spool until switched). Switching to pull lays the rope between
+// the ends again, unless the spool had arrived (then the rope is kept).
+// Commands that lay the rope again (endpoints, start, a rope that stopped being
+// finite) return to pull mode; set-model and set-segments are refused while
+// the rope is still being spooled out.
 //
 // Ownership: borrows the resident pack, the haptic device, the simulation and
 // every queue and hand-off (all must outlive it); owns the ropes and the servo.
@@ -59,6 +74,12 @@ namespace visvol::rt {
 
 // Commands a tick applies at most (a burst waits in the queue for later ticks).
 inline constexpr int kMaxCommandsPerTick = 8;
+// Spool mode: the rope laid at the start, in segments; ticks between
+// pay-outs at least.
+inline constexpr int kSpoolLeadSegments = 2;
+inline constexpr int kSpoolEveryTicks = 5;
+// Length over the straight line a spooled rope has at least once its end is held.
+inline constexpr double kSpoolArrivalSlack = 0.02;
 
 struct ExecutiveConfig {
   // The planning problem at start-up (commands change it later).
@@ -118,7 +139,15 @@ struct ExecutiveCounters {
   std::uint64_t runs = 0;           // planning runs started
   std::uint64_t hull_sets = 0;      // hidden-from / visible-to hull sets put in force
   std::uint64_t rope_resets = 0;    // the rope's state stopped being finite and was laid again
-  bool running = false;             // the rope is stepping
+  std::uint64_t mode_switches = 0;  // pull <-> spool, by command or button
+  std::uint64_t mode_refusals = 0;  // mode button presses that could not switch (no device sample, unstable)
+  msg::InteractionMode mode = msg::InteractionMode::pull;
+  double spool_paid_out_m = 0.0;   // rope out of the spool in the last spool run (the lead included)
+  int spool_segments = 0;          // segments of it
+  double spool_gap_m = 0.0;        // from its free end to the end (0 once arrived)
+  bool spool_arrived = false;      // its free end reached the end and is held there
+  bool spool_at_capacity = false;  // it stopped paying out at max_segments
+  bool running = false;            // the rope is stepping
   bool converged = false;
   double fc = 0.0;
   double length_m = 0.0;
@@ -151,6 +180,15 @@ struct ExecutiveOutputs {
   LatestValue<msg::DeviceStatusSample>* device = nullptr;  // DDS publisher
   msg::AckQueue* acks = nullptr;                           // applied/failed, to command intake
 };
+
+// The servo configuration create() derives from a scene: the rope's extent
+// (the ends' horizontal distance, at least ten posts of `spacing_m`) onto
+// +-workspace_half_mm of hand travel around the ends' midpoint, and the soft
+// joint as the hand feels it (the visibility cue is set from the field later).
+servo::ServoConfig scene_servo_config(const ExecutiveConfig& c, double spacing_m);
+// A pull-mode rope segment between these ends (the articulated rope with its
+// slack), m: what spool mode pays out each time.
+double pull_segment_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, int segments, double slack);
 
 class Executive final : public PeriodicTask {
  public:
@@ -219,6 +257,15 @@ class Executive final : public PeriodicTask {
   Errc apply_model(const msg::Command& c, const char*& reason);
   Errc apply_segment_count(const msg::Command& c, const char*& reason);
   Errc apply_switch_terrain(const msg::Command& c, const char*& reason);
+  Errc apply_mode(const msg::Command& c, const char*& reason);
+  // Pull or spool mode (Errc::unsupported: spool without a device, or the
+  // rope would not step stably; the mode and rope unchanged on failure).
+  Errc set_mode(msg::InteractionMode mode);
+  Errc start_spool();
+  void spool();     // spool mode, each tick: pay out, or hold the arrived end
+  void paid_out();  // after a segment paid out
+  // the rope is being spooled out (its far end free)
+  bool spooling() const { return mode_ == msg::InteractionMode::spool && !counters_.spool_arrived; }
   int copy_vertices();  // the rope's vertices into scratch_; their count
   void ack(const msg::Command& c, Errc result, const char* reason);
   Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
@@ -274,7 +321,13 @@ class Executive final : public PeriodicTask {
   bool holding_ = false;                          // held_ waits: the last tick's items were spent
   double user_force_per_n_ = 0.0;                 // rope newtons per servo coupling newton
   double max_user_force_n_ = 0.0;
+  double saturated_n_ = 0.0;    // the saturated field's pull on one segment
+  Vec3 pull_n_ = Vec3::Zero();  // the operator's pull on the rope this tick
   bool grasping_ = false;
+  msg::InteractionMode mode_ = msg::InteractionMode::pull;
+  double spool_segment_m_ = 0.0;  // a pull-mode segment's length: what each pay-out adds
+  int ticks_since_pay_out_ = 0;
+  bool mode_button_was_ = false;  // the mode button's last state (presses are its rising edges)
   int grasp_segment_ = 0;
   double grasp_fraction_ = 0.0;
   std::uint64_t path_sequence_ = 0;

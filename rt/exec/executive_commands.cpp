@@ -28,6 +28,7 @@ constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt:
 constexpr const char* kUnstable =
     "the rope would step outside its stability margin at the loop's period with these springs, gains and "
     "margins (lower the stiffness or the weights, or widen the clearance)";
+constexpr const char* kSpooling = "the rope is being spooled out: switch to pull mode first (set-mode pull)";
 
 }  // namespace
 
@@ -43,6 +44,7 @@ int Executive::command_items(const msg::Command& c) const {
     case msg::CommandKind::set_segment_count: return bounded(std::int64_t{c.segment_count} + 1);
     case msg::CommandKind::start:
     case msg::CommandKind::set_endpoints:
+    case msg::CommandKind::set_mode:
     case msg::CommandKind::set_model: return bounded(rope_->segments() + 1);
     default: return 1;
   }
@@ -113,6 +115,7 @@ Errc Executive::apply(const msg::Command& c, const char*& reason) {
       rope_->clear_point_force();
       return Errc::ok;
     case msg::CommandKind::switch_terrain: return apply_switch_terrain(c, reason);
+    case msg::CommandKind::set_mode: return apply_mode(c, reason);
   }
   reason = "unknown command";
   return Errc::invalid_argument;
@@ -196,6 +199,10 @@ int Executive::copy_vertices() {
 Errc Executive::apply_model(const msg::Command& c, const char*& reason) {
   const RopeModel m = c.model == msg::RopeModel::spring_mass ? RopeModel::spring : RopeModel::articulated;
   if (m == rope_->model()) return Errc::ok;
+  if (spooling()) {
+    reason = kSpooling;
+    return Errc::invalid_argument;
+  }
   const int n = copy_vertices();
   const Errc e = restart_rope(scratch_.get(), n, rope_->segments(), m);
   if (e != Errc::ok) {
@@ -209,6 +216,10 @@ Errc Executive::apply_segment_count(const msg::Command& c, const char*& reason) 
   const int segments = static_cast<int>(c.segment_count);
   if (segments < 2 || segments > config_.max_segments) {
     reason = "segment count outside what the console reserved";
+    return Errc::invalid_argument;
+  }
+  if (spooling()) {
+    reason = kSpooling;
     return Errc::invalid_argument;
   }
   const int n = copy_vertices();

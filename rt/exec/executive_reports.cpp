@@ -39,6 +39,8 @@ void Executive::hand_off_path(std::int64_t stamp_ns) {
   p.inside_envelope = false;  // the rope's own path: the flyable-path thread fits it
   p.f_c = counters_.fc;
   p.length_m = rope_->length_m();
+  p.mode = mode_;
+  p.spool_paid_out_m = mode_ == msg::InteractionMode::spool ? counters_.spool_paid_out_m : 0.0;
   const int count = rope_->segments() + 1;
   const int keep = std::min(count, static_cast<int>(msg::kMaxPathVertices));
   const Vec3* v = rope_->vertices();

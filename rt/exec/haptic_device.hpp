@@ -32,6 +32,7 @@ struct HapticSample {
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // device frame, mm
   bool grasp_button = false;
   bool clutch_button = false;
+  bool mode_button = false;       // each press switches between pull (mode A) and spool (mode B)
   std::int64_t timestamp_ns = 0;  // when it arrived; 0: none yet
   bool fresh = false;             // accepted during the last poll()
   bool valid = false;             // the device is operational and the position recent

@@ -27,6 +27,10 @@ Status check_range(const char* field, double v, double lo, double hi, const char
 
 }  // namespace
 
+Eigen::Vector3d device_mm_of(const ServoConfig& config, const Eigen::Vector3d& world_m) {
+  return config.device_to_world.transpose() * (world_m - config.world_offset_m) / config.world_m_per_device_mm;
+}
+
 Eigen::Matrix3d default_device_to_world() {
   Eigen::Matrix3d r;
   // Columns: where device x (right), y (up), z (toward the operator) point in

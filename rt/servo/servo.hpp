@@ -52,6 +52,11 @@ namespace visvol::servo {
 // Phantom device axes to world axes for an operator facing north.
 Eigen::Matrix3d default_device_to_world();
 
+struct ServoConfig;
+// Where the hand must hold the handle (device frame, mm) for the configured
+// mapping to put the proxy at `world_m` (before any clutch re-indexing).
+Eigen::Vector3d device_mm_of(const ServoConfig& config, const Eigen::Vector3d& world_m);
+
 struct ServoConfig {
   // Workspace mapping.
   double world_m_per_device_mm = 0.01;                          // scale: world metres per device millimetre

@@ -49,11 +49,11 @@ std::string format_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool w
   std::string out;
   add(out,
       "path seq=%llu stamp=%s frame=%s pack=%s objective=%s vertices=%u length_m=%.3f "
-      "f_c=%.6g min_clearance_m=%.3f converged=%s inside_envelope=%s",
+      "f_c=%.6g min_clearance_m=%.3f converged=%s inside_envelope=%s mode=%s spool_paid_out_m=%.3f",
       static_cast<unsigned long long>(m.sequence_number), stamp(m.header.stamp).c_str(),
       quoted(m.header.frame_id).c_str(), quoted(m.pack_id).c_str(), name_of<msg::Objective>(m.objective),
       m.positions_m._length, m.length_m, m.f_c, m.min_clearance_m, m.converged ? "yes" : "no",
-      m.inside_envelope ? "yes" : "no");
+      m.inside_envelope ? "yes" : "no", name_of<msg::InteractionMode>(m.mode), m.spool_paid_out_m);
   if (with_vertices) {
     for (std::uint32_t i = 0; i < m.positions_m._length; ++i) {
       const geometry_msgs_msg_dds__Point_& p = m.positions_m._buffer[i];

@@ -248,6 +248,9 @@ Result<Command> build_command(const CommandOptions& o) {
   } else if (k == "set-model") {
     c.kind = CommandKind::set_model;
     c.model = o.word == "spring" ? RopeModel::spring_mass : RopeModel::articulated;
+  } else if (k == "set-mode") {
+    c.kind = CommandKind::set_mode;
+    c.mode = o.word == "spool" ? InteractionMode::spool : InteractionMode::pull;
   } else if (k == "set-segments") {
     c.kind = CommandKind::set_segment_count;
     c.segment_count = o.segments;
@@ -375,6 +378,10 @@ void add_command_kinds(CLI::App& command, CommandOptions& o) {
       ->add_option("MODEL", o.word, "spring (spring-mass) or articulated")
       ->required()
       ->check(CLI::IsMember({"spring", "articulated"}));
+  kind("set-mode", "interaction: pull (mode A) or spool (mode B: drag the rope out of the start)")
+      ->add_option("MODE", o.word, "pull or spool")
+      ->required()
+      ->check(CLI::IsMember({"pull", "spool"}));
   kind("set-segments", "number of rope segments")
       ->add_option("N", o.segments, "segments (the console says how many it reserved)")
       ->required()

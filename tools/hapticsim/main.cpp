@@ -53,6 +53,7 @@ the operator); '#' starts a comment.
   T move X Y Z DUR           the hand moves to (X, Y, Z) over DUR s
   T grab | release           press / release the grasp button (button 1)
   T clutch on|off            press / release the clutch button (button 2)
+  T mode on|off              press / release the mode button (button 3: pull / spool)
   T pull DX DY DZ DUR        grab, then move by (DX, DY, DZ) over DUR s
   T drag DX DY DZ DUR [S]    spool mode: grab and drag by (DX, DY, DZ) in strokes of
                              at most S mm (60), re-centring with the clutch held

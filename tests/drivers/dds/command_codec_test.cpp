@@ -148,13 +148,21 @@ TEST(DecodeCommand, EachKindDecodesItsFields) {
   Msg o(kind(msg::CommandKind::set_objective));
   o.m.objective = 1;
   EXPECT_EQ(verdict(o), "");
+  for (const msg::InteractionMode mode : {msg::InteractionMode::pull, msg::InteractionMode::spool}) {
+    Msg sm(kind(msg::CommandKind::set_mode));
+    sm.m.mode = static_cast<std::uint8_t>(mode);
+    ASSERT_EQ(verdict(sm), "");
+    msg::Command decoded{};
+    ASSERT_TRUE(decode_and_validate(sm.m, limits(), decoded).ok());
+    EXPECT_EQ(decoded.mode, mode);
+  }
 }
 
 TEST(DecodeCommand, StructuralProblemsNameTheField) {
   Msg k(0);
-  EXPECT_EQ(verdict(k), "kind: 0 is not a known command (1..10)");
-  Msg k2(11);
-  EXPECT_EQ(verdict(k2), "kind: 11 is not a known command (1..10)");
+  EXPECT_EQ(verdict(k), "kind: 0 is not a known command (1..11)");
+  Msg k2(12);
+  EXPECT_EQ(verdict(k2), "kind: 12 is not a known command (1..11)");
 
   Msg s(kind(msg::CommandKind::start));
   s.source = "";
@@ -425,7 +433,7 @@ TEST(AckMessage, CarriesSourceSequenceAndReason) {
   ack.sequence = 5;
   ack.kind = 77;
   ack.result = msg::AckResult::rejected;
-  msg::copy_text(ack.reason, "kind: 77 is not a known command (1..10)");
+  msg::copy_text(ack.reason, "kind: 77 is not a known command (1..11)");
   AckMessage m("visvol_world");
   const visvol_msgs_msg_dds__CommandAck_& msg = m.fill(ack);
   EXPECT_STREQ(msg.header.frame_id, "visvol_world");

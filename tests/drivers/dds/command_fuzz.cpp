@@ -275,7 +275,7 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, msg::Comma
     msg.pack_id = pack.data();
     msg.sequence_number = fdp.ConsumeIntegral<std::uint64_t>();
     msg.kind =
-        fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint8_t>(1, 10) : fdp.ConsumeIntegral<std::uint8_t>();
+        fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint8_t>(1, 11) : fdp.ConsumeIntegral<std::uint8_t>();
     msg.start_m = fuzz_point(fdp);
     msg.end_m = fuzz_point(fdp);
     msg.objective = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 3);
@@ -288,6 +288,7 @@ void structured(FuzzedDataProvider& fdp, CommandProcessor& processor, msg::Comma
     msg.model = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 3);
     msg.segment_count =
         fdp.ConsumeBool() ? fdp.ConsumeIntegralInRange<std::uint32_t>(0, 300) : fdp.ConsumeIntegral<std::uint32_t>();
+    msg.mode = fdp.ConsumeIntegralInRange<std::uint8_t>(0, 3);
     msg.constraints._buffer = constraints.data();
     msg.constraints._length = static_cast<std::uint32_t>(constraints.size());
     msg.constraints._maximum = msg.constraints._length;

@@ -220,7 +220,7 @@ TEST(CommandIntake, BadCommandsAreRejectedWithReasonsAndIntakeGoesOn) {
   visvol_msgs_msg_dds__Command_ raw = m.fill(base(msg::CommandKind::start, 16));
   raw.kind = 77;
   sender.send(raw);
-  expect[16] = "kind: 77 is not a known command (1..10)";
+  expect[16] = "kind: 77 is not a known command (1..11)";
   raw = m.fill(base(msg::CommandKind::set_objective, 17));
   raw.objective = 9;
   sender.send(raw);

@@ -21,6 +21,8 @@ std::unique_ptr<msg::PathSample> path(std::uint32_t n) {
   s->f_c = 3.5;
   s->length_m = 1234.5;
   s->min_clearance_m = 20.0;
+  s->mode = msg::InteractionMode::spool;
+  s->spool_paid_out_m = 861.5;
   s->vertex_count = n;
   for (std::uint32_t i = 0; i < n; ++i) {
     s->vertices[i] = {{1.0 * i, 2.0 * i, 3.0 * i}, 0.01 * i, 20.0 + i};
@@ -105,12 +107,17 @@ TEST(DecodePathUpdate, RoundTripAndInconsistentLengths) {
   EXPECT_EQ(back->stamp_ns, s->stamp_ns);
   EXPECT_EQ(back->objective, s->objective);
   EXPECT_TRUE(back->inside_envelope);
+  EXPECT_EQ(back->mode, msg::InteractionMode::spool);
+  EXPECT_EQ(back->spool_paid_out_m, 861.5);
   EXPECT_EQ(back->vertex_count, 4u);
   EXPECT_EQ(std::memcmp(back->vertices, s->vertices, 4 * sizeof(msg::PathVertex)), 0);
 
   visvol_msgs_msg_dds__PathUpdate_ broken = m->update();
   broken.visibility._length = 3;
   EXPECT_NE(decode_path_update(broken, *back).message().find("4 positions but 3 visibility"), std::string::npos);
+  visvol_msgs_msg_dds__PathUpdate_ bad_mode = m->update();
+  bad_mode.mode = 3;
+  EXPECT_EQ(decode_path_update(bad_mode, *back).message(), "path update: mode 3 is not known (1 pull, 2 spool)");
 }
 
 TEST(ThumbnailMessage, ChecksTheBytesArePng) {

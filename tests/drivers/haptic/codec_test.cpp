@@ -201,7 +201,8 @@ TEST(Codec, EveryWrongLengthIsMalformed) {
 
 TEST(Codec, ReservedBitsAndUnknownValuesAreMalformed) {
   Message m;
-  EXPECT_EQ(decode(frame_of(0x185, {0, 0, 0, 0, 0, 0, 0x04, 0}), m), DecodeError::reserved_bits);
+  EXPECT_EQ(decode(frame_of(0x185, {0, 0, 0, 0, 0, 0, 0x08, 0}), m), DecodeError::reserved_bits);
+  EXPECT_EQ(decode(frame_of(0x185, {0, 0, 0, 0, 0, 0, 0x04, 0}), m), DecodeError::ok) << "bit 2: the mode button";
   EXPECT_EQ(decode(frame_of(0x185, {0, 0, 0, 0, 0, 0, 0x80, 0}), m), DecodeError::reserved_bits);
   EXPECT_EQ(decode(frame_of(0x205, {0, 0, 0, 0, 0, 0, 0x02, 0}), m), DecodeError::reserved_bits);
   EXPECT_EQ(decode(frame_of(0x285, {0x05, 0x08, 0, 0, 0, 0, 0, 0}), m), DecodeError::reserved_bits);
@@ -288,10 +289,9 @@ TEST(Codec, SignalTableMatchesTheEncoder) {
       EXPECT_NEAR(signal_value(f, s), expect[s.name], 1e-9) << s.name;
     }
   };
-  m.position = {{-1.5, 2.25, 100.0}, kButtonClutch, 42};
-  expect = {{"Pos_X", -1.5},        {"Pos_Y", 2.25},         {"Pos_Z", 100.0},
-            {"Pos_ButtonGrasp", 0}, {"Pos_ButtonClutch", 1}, {"Pos_ButtonsReserved", 0},
-            {"Pos_Sequence", 42}};
+  m.position = {{-1.5, 2.25, 100.0}, kButtonClutch | kButtonMode, 42};
+  expect = {{"Pos_X", -1.5},         {"Pos_Y", 2.25},       {"Pos_Z", 100.0},           {"Pos_ButtonGrasp", 0},
+            {"Pos_ButtonClutch", 1}, {"Pos_ButtonMode", 1}, {"Pos_ButtonsReserved", 0}, {"Pos_Sequence", 42}};
   check(MessageKind::position);
   m.command = {{0.5, -1.25, 3.0}, true, 200};
   expect = {{"Cmd_ForceX", 0.5}, {"Cmd_ForceY", -1.25},    {"Cmd_ForceZ", 3.0},

@@ -989,6 +989,116 @@ TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
   EXPECT_TRUE(e->counters().running) << "the rope keeps stepping in the safe state";
 }
 
+// Spool mode (the paper's mode B), driven as an operator would: the mode
+// button, then the grasp of the lead's free end and one drag past the end.
+// The rope pays out as it is pulled taut, settles as it goes, arrives and is
+// held at the end; the path updates say so.
+std::string spool_script(const ExecutiveConfig& c, double spacing_m) {
+  const servo::ServoConfig sc = scene_servo_config(c, spacing_m);
+  const Vec3 dir = (c.end_m - c.start_m).normalized();
+  const double lead_m = kSpoolLeadSegments * pull_segment_m(c.start_m, c.end_m, c.model, c.segments, c.slack);
+  const Eigen::Vector3d from = servo::device_mm_of(sc, c.start_m + lead_m * dir);
+  const Eigen::Vector3d by = servo::device_mm_of(sc, c.end_m + 0.1 * (c.end_m - c.start_m)) - from;
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "0.3 mode on\n0.4 mode off\n0.5 move %.2f %.2f %.2f 0.3\n1.0 drag %.2f %.2f %.2f 3.0 %.0f\n"
+                "4.5 release\n",
+                from.x(), from.y(), from.z(), by.x(), by.y(), by.z(), std::ceil(by.norm()) + 1);
+  return text;
+}
+
+TEST_F(ExecutiveTest, SpoolModePaysOutAsTheOperatorDragsAndArrives) {
+  const std::string script = spool_script(config_, field_->level(0).geometry().spacing_m);
+  auto sim = simulated(script.c_str(), now_ns_);
+  ASSERT_TRUE(sim);
+  auto e = make(&*sim->device, sim->sim.get());
+  ASSERT_TRUE(e);
+  run(*e, 900);  // the button pressed and released, the hand at the lead's end
+  ASSERT_EQ(e->counters().mode, msg::InteractionMode::spool) << script;
+  EXPECT_EQ(e->counters().mode_switches, 1u);
+  EXPECT_EQ(e->rope().segments(), kSpoolLeadSegments);
+  const double segment_m = e->rope().length_m() / kSpoolLeadSegments;
+  EXPECT_NEAR((e->rope().vertices()[0] - config_.start_m).norm(), 0.0, 1e-6) << "held at the start";
+
+  run(*e, 1500);  // half way through the drag
+  const ExecutiveCounters& mid = e->counters();
+  EXPECT_GT(e->rope().segments(), kSpoolLeadSegments + 4) << "paid out while dragged";
+  EXPECT_NEAR(mid.spool_paid_out_m, e->rope().segments() * segment_m, 1e-6 * segment_m * e->rope().segments());
+  EXPECT_FALSE(mid.spool_arrived);
+  EXPECT_NEAR((e->rope().vertices()[0] - config_.start_m).norm(), 0.0, 1e-6);
+  const msg::PathSample* p = paths_.take();
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->mode, msg::InteractionMode::spool);
+  EXPECT_GT(p->spool_paid_out_m, kSpoolLeadSegments * segment_m);
+
+  // set-model and set-segments wait for the spool to end
+  msg::Command spring = command(msg::CommandKind::set_model, 1);
+  spring.model = msg::RopeModel::spring_mass;
+  ASSERT_TRUE(commands_.try_push(spring));
+  run(*e, 1);
+  EXPECT_NE(next_failure().find("switch to pull mode first"), std::string::npos);
+
+  run(*e, 3000);  // the drag ends past the end, the hand lets go
+  const ExecutiveCounters& c = e->counters();
+  EXPECT_TRUE(c.spool_arrived);
+  EXPECT_FALSE(c.spool_at_capacity);
+  EXPECT_EQ(c.mode, msg::InteractionMode::spool);
+  EXPECT_EQ(c.spool_segments, e->rope().segments());
+  const Vec3 last = e->rope().vertices()[e->rope().segments()];
+  EXPECT_LT((last - config_.end_m).norm(), 0.05 * segment_m) << "held at the end";
+  EXPECT_GE(c.spool_paid_out_m, (config_.end_m - config_.start_m).norm()) << "at least as long as the straight line";
+  for (int i = 0; i <= e->rope().segments(); ++i) ASSERT_TRUE(e->rope().vertices()[i].allFinite());
+
+  // back to pull mode: the arrived rope is kept, both ends held
+  const int segments = e->rope().segments();
+  msg::Command pull = command(msg::CommandKind::set_mode, 2);
+  pull.mode = msg::InteractionMode::pull;
+  ASSERT_TRUE(commands_.try_push(pull));
+  run(*e, 1);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
+  EXPECT_EQ(e->counters().mode, msg::InteractionMode::pull);
+  EXPECT_EQ(e->counters().mode_switches, 2u);
+  EXPECT_EQ(e->rope().segments(), segments);
+  run(*e, 20);
+  p = paths_.take();
+  ASSERT_NE(p, nullptr);
+  EXPECT_EQ(p->mode, msg::InteractionMode::pull);
+  EXPECT_EQ(p->spool_paid_out_m, 0.0);
+}
+
+// Spool mode needs the operator's hand; pull mode from spool mode before the
+// rope arrived lays the rope between the ends again.
+TEST_F(ExecutiveTest, SpoolModeWithoutADeviceIsRefusedAndPullLaysTheRopeAgain) {
+  auto bare = make();
+  ASSERT_TRUE(bare);
+  msg::Command spool = command(msg::CommandKind::set_mode, 1);
+  spool.mode = msg::InteractionMode::spool;
+  ASSERT_TRUE(commands_.try_push(spool));
+  run(*bare, 1);
+  EXPECT_NE(next_failure().find("needs the haptic device"), std::string::npos);
+  EXPECT_EQ(bare->counters().mode, msg::InteractionMode::pull);
+  EXPECT_EQ(bare->rope().segments(), config_.segments);
+
+  FakeDevice dev;
+  dev.health_.state = HapticState::operational;
+  auto e = make(&dev);
+  ASSERT_TRUE(e);
+  ASSERT_TRUE(commands_.try_push(spool));
+  run(*e, 1);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
+  EXPECT_EQ(e->rope().segments(), kSpoolLeadSegments);
+  run(*e, 200);  // nobody drags: nothing pays out
+  EXPECT_EQ(e->rope().segments(), kSpoolLeadSegments);
+  msg::Command pull = command(msg::CommandKind::set_mode, 2);
+  pull.mode = msg::InteractionMode::pull;
+  ASSERT_TRUE(commands_.try_push(pull));
+  run(*e, 1);
+  EXPECT_EQ(next_ack().result, msg::AckResult::applied);
+  EXPECT_EQ(e->rope().segments(), config_.segments);
+  EXPECT_NEAR((e->rope().vertices()[config_.segments] - config_.end_m).norm(), 0.0, 1.0);
+  EXPECT_EQ(e->counters().mode_switches, 2u);
+}
+
 TEST_F(ExecutiveTest, TicksAllocateNothing) {
   auto sim = simulated(kPullScript, now_ns_);
   ASSERT_TRUE(sim);

@@ -1,0 +1,126 @@
+// The executive's interaction modes: pull (mode A) and spool (mode B, the
+// paper's second interaction: the rope pays out of the start while the
+// operator drags its free end toward the destination). Loop thread,
+// real-time rules: no allocation, no lock, no logging, no blocking.
+#include <algorithm>
+#include <cmath>
+
+#include "rt/exec/executive.hpp"
+
+namespace visvol::rt {
+
+Errc Executive::apply_mode(const msg::Command& c, const char*& reason) {
+  const Errc e = set_mode(c.mode);
+  if (e == Errc::ok) return Errc::ok;
+  if (c.mode == msg::InteractionMode::spool && device_ == nullptr) {
+    reason = "spool mode needs the haptic device (the operator drags the rope out)";
+  } else if (e == Errc::unsupported) {
+    reason = "the rope would step outside its stability margin at the loop's period";
+  } else {
+    reason = "the rope could not be laid for that mode";
+  }
+  return Errc::invalid_argument;
+}
+
+Errc Executive::set_mode(msg::InteractionMode mode) {
+  if (mode == mode_) return Errc::ok;
+  Errc e = Errc::ok;
+  if (mode == msg::InteractionMode::spool) {
+    e = start_spool();
+  } else if (counters_.spool_arrived) {
+    mode_ = msg::InteractionMode::pull;  // the spooled rope already holds both ends: kept
+  } else {
+    e = start_run();  // lays the rope between the ends again, in pull mode
+  }
+  if (e != Errc::ok) return e;
+  counters_.mode = mode_;
+  ++counters_.mode_switches;
+  counters_.running = true;
+  return Errc::ok;
+}
+
+// A lead of kSpoolLeadSegments from the start toward the end, its far end
+// free, with the pull mode's segment length and springs.
+Errc Executive::start_spool() {
+  if (device_ == nullptr) return Errc::unsupported;
+  const Vec3 dir = (end_m_ - start_m_).normalized();
+  const double segment_m = pull_segment_m(start_m_, end_m_, rope_->model(), segments_, config_.slack);
+  Vec3 lead[kSpoolLeadSegments + 1];
+  for (int i = 0; i <= kSpoolLeadSegments; ++i) lead[i] = start_m_ + (i * segment_m) * dir;
+  if (check_polyline(lead, kSpoolLeadSegments + 1, kSpoolLeadSegments, 1, config_.max_segments) != Errc::ok) {
+    return Errc::invalid_argument;
+  }
+  const RopeParams p = params_for(rope_->model(), segments_, segment_m);
+  if (!steps_stably(p, forces_->gains())) return Errc::unsupported;
+  if (rope_->set_params(p) != Errc::ok) return Errc::invalid_argument;
+  // The far end free before the rope is laid: a straight lead pinned at both
+  // ends is a singular constraint system for the articulated rope.
+  RopeEnds ends;
+  ends.start_m = start_m_;
+  ends.end_m = end_m_;
+  ends.end_fixed = false;
+  rope_->set_ends(ends);
+  if (!rope_->reset(lead, kSpoolLeadSegments + 1, kSpoolLeadSegments).ok()) {
+    set_ends(start_m_, end_m_);
+    return Errc::invalid_argument;
+  }
+  rope_->set_ends(ends);
+  mode_ = msg::InteractionMode::spool;
+  spool_segment_m_ = segment_m;
+  ticks_since_pay_out_ = 0;
+  equilibrium_.reset();
+  grasping_ = false;
+  rope_->clear_point_force();
+  counters_.converged = false;
+  counters_.run_s = 0;
+  counters_.equilibrium_s = 0;
+  counters_.spool_arrived = false;
+  counters_.spool_at_capacity = false;
+  counters_.spool_segments = rope_->segments();
+  counters_.spool_paid_out_m = rope_->length_m();
+  counters_.spool_gap_m = (rope_->vertices()[kSpoolLeadSegments] - end_m_).norm();
+  ++counters_.runs;
+  relaid_ = false;
+  return Errc::ok;
+}
+
+void Executive::spool() {
+  if (!spooling() || !counters_.running) return;
+  const int n = rope_->segments();
+  const Vec3 free_end = rope_->point(n - 1, 1.0);
+  counters_.spool_gap_m = (free_end - end_m_).norm();
+  if (counters_.spool_gap_m <= spool_segment_m_) {
+    // Arrived. Held at the end once the rope has kSpoolArrivalSlack over the
+    // straight line (a rope as long as the line, or shorter, pinned at both
+    // ends pulls itself apart): one more segment a tick until it has.
+    const double straight_m = (end_m_ - start_m_).norm();
+    if (rope_->length_m() < (1.0 + kSpoolArrivalSlack) * straight_m && rope_->pay_out_at_start()) {
+      paid_out();
+      return;
+    }
+    set_ends(start_m_, end_m_);
+    counters_.spool_arrived = true;
+    counters_.spool_gap_m = 0.0;
+    equilibrium_.reset();
+    return;
+  }
+  if (!grasping_ || ++ticks_since_pay_out_ < kSpoolEveryTicks) return;
+  const Vec3 out = free_end - start_m_;
+  const double span = out.norm();
+  if (!(span > 0) || pull_n_.dot(out) <= saturated_n_ * span) return;
+  if (!rope_->pay_out_at_start()) {
+    counters_.spool_at_capacity = true;
+    return;
+  }
+  paid_out();
+}
+
+void Executive::paid_out() {
+  ticks_since_pay_out_ = 0;
+  grasp_segment_ = rope_->segments() - 1;  // the grasp stays on the free end
+  counters_.spool_segments = rope_->segments();
+  counters_.spool_paid_out_m = rope_->length_m();
+  equilibrium_.reset();
+}
+
+}  // namespace visvol::rt

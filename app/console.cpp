@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "app/flyable_path.hpp"
+#include "app/log.hpp"
 #include "app/supervisor.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
@@ -52,24 +53,16 @@ constexpr const char* kBuiltinPullScript =
     "14.0 release\n"
     "14.5 move 0 0 0 0.5\n";
 
-// Then spool mode (B): presses the mode button at 15.5 s, takes the lead's
-// free end where it leaves the start, and drags it in one stroke over 4 s to a
-// tenth of the way past the end (the free end trails the hand), then lets go
-// at 21.5 s. Placed from the scene through the mapping the executive derives.
+// Then spool mode (B): presses the mode button at 15.5 s (the handle, at the
+// workspace's centre, then holds the lead's free end), drags that end from 16
+// to 21 s in strokes of at most 60 mm re-centred with the clutch, to a tenth of
+// the way past the far end (the free end trails the hand), and lets go at
+// 21.5 s. The drag in device millimetres comes from the scene.
 std::string builtin_script(const rt::ExecutiveConfig& ec, double spacing_m) {
-  const servo::ServoConfig sc = rt::scene_servo_config(ec, spacing_m);
-  const rt::Vec3 dir = (ec.end_m - ec.start_m).normalized();
-  const double lead_m =
-      rt::kSpoolLeadSegments * rt::pull_segment_m(ec.start_m, ec.end_m, ec.model, ec.segments, ec.slack);
-  const Eigen::Vector3d from = servo::device_mm_of(sc, ec.start_m + lead_m * dir);
-  const Eigen::Vector3d to = servo::device_mm_of(sc, ec.end_m + 0.1 * (ec.end_m - ec.start_m));
-  const Eigen::Vector3d by = to - from;
-  const double stroke_mm = std::ceil(by.norm()) + 1.0;
-  char spool[512];
-  std::snprintf(spool, sizeof spool,
-                "15.5 mode on\n15.6 mode off\n16.0 move %.1f %.1f %.1f 0.5\n17.0 drag %.1f %.1f %.1f 4.0 %.0f\n"
-                "21.5 release\n",
-                from.x(), from.y(), from.z(), by.x(), by.y(), by.z(), stroke_mm);
+  const Eigen::Vector3d by = rt::spool_drag_mm(ec, spacing_m, 0.1);
+  char spool[256];
+  std::snprintf(spool, sizeof spool, "15.5 mode on\n15.6 mode off\n16.0 drag %.1f %.1f %.1f 5.0 60\n21.5 release\n",
+                by.x(), by.y(), by.z());
   return std::string(kBuiltinPullScript) + spool;
 }
 
@@ -382,8 +375,8 @@ Status Console::Impl::open_terrains() {
     const Status st = o.session == 1 ? check_terrain(path, o.level) : storage::Pack::open(path).status();
     if (!st.ok() && o.session == 1) return Status(st.code(), "--terrain " + path + ": " + st.message());
     if (!st.ok()) {
-      std::fprintf(stderr, "visvol-console: warning: switch-terrain %s is no longer possible: %s\n", id.c_str(),
-                   st.message().c_str());
+      log_printf(LogLevel::warning, "visvol-console: warning: switch-terrain %s is no longer possible: %s\n",
+                 id.c_str(), st.message().c_str());
       continue;
     }
     terrains.emplace_back(id, path);
@@ -691,8 +684,10 @@ msg::HealthSample Console::Impl::health(const rt::LoopReport& r, const rt::Execu
 Status Console::run(const std::atomic<bool>& stop) {
   Impl& m = *impl_;
   const auto t0 = std::chrono::steady_clock::now();
-  for (const std::string& w : m.realtime.warnings) std::fprintf(stderr, "visvol-console: warning: %s\n", w.c_str());
-  std::fprintf(stderr, "visvol-console: %s, rope of %d segments, %s, device %s, DDS %s; memory budget:\n%s",
+  for (const std::string& w : m.realtime.warnings)
+    log_printf(LogLevel::warning, "visvol-console: warning: %s\n", w.c_str());
+  if (!m.o.quiet)
+    log_printf(LogLevel::info, "visvol-console: %s, rope of %d segments, %s, device %s, DDS %s; memory budget:\n%s",
                m.pack_id.c_str(), m.o.segments, m.o.objective.c_str(), m.o.device.c_str(),
                m.o.dds ? ("domain " + std::to_string(m.o.domain)).c_str() : "off", m.budget.table().c_str());
   m.health_csv =
@@ -713,7 +708,7 @@ Status Console::run(const std::atomic<bool>& stop) {
     char next[msg::kPackIdCapacity];
     if (m.exec->terrain_switch(next)) {
       m.switch_to = next;
-      std::fprintf(stderr, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
+      log_printf(LogLevel::info, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
       // the next session's start (pack, tiles, DDS) sends no pings: room for it
       supervisor.extend_watchdog(120.0, std::string("switching terrain to ") + next);
       break;
@@ -733,7 +728,8 @@ Status Console::run(const std::atomic<bool>& stop) {
                     device_text(counters), static_cast<double>(ts.resident_bytes) / kMiB,
                     static_cast<double>(rss) / kMiB, static_cast<unsigned long long>(m.field->fallbacks()));
       m.health_csv += line;
-      std::fprintf(stderr,
+      if (!m.o.quiet)
+        log_printf(LogLevel::info,
                    "%6.1f s  F_c %.4f%s  wake p99 %.0f us  compute p99 %.0f us  overruns %llu  device %s  "
                    "grasps %llu  memory %.0f/%.0f MiB\n",
                    t, counters.fc, counters.converged ? " (at rest)" : "", last.wake_latency.percentile_us(0.99),
@@ -761,7 +757,7 @@ Status Console::run(const std::atomic<bool>& stop) {
   if (m.publisher) delivered = m.publisher->stop();
   if (m.intake) m.intake->stop();
   VISVOL_RETURN_IF_ERROR(m.write_outputs(run, wall_s));
-  if (!delivered.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", delivered.message().c_str());
+  if (!delivered.ok()) log_printf(LogLevel::warning, "visvol-console: warning: %s\n", delivered.message().c_str());
   return {};
 }
 
@@ -785,7 +781,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/health.csv", health_csv));
   if (thumbs) {
     const Status t = thumbs->write_last(out + "/thumbnail.png");
-    if (!t.ok()) std::fprintf(stderr, "visvol-console: warning: %s\n", t.message().c_str());
+    if (!t.ok()) log_printf(LogLevel::warning, "visvol-console: warning: %s\n", t.message().c_str());
   }
   std::string verdict;
   const nlohmann::json check = check_path(verdict);

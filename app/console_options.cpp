@@ -45,6 +45,9 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
                  "extension) may move the console to; repeatable")
       ->check(CLI::ExistingFile);
   app.add_option("--seconds", o.seconds, "Run this long, s (0: until Ctrl-C or SIGTERM)")->capture_default_str();
+  app.add_flag("--quiet", o.quiet,
+               "No progress lines (the memory table at start, a line a second); warnings, errors and the closing "
+               "summary stay");
   app.add_option("-o,--out", o.out, "Directory for the path, health log and summary")->capture_default_str();
   app.add_option("--from", o.from,
                  "Rope start X Y Z (pack CRS, m; inside the pack's planning bounds; default: a tenth in from their "

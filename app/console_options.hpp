@@ -54,6 +54,7 @@ struct ConsoleOptions {
   std::string can_interface;   // socketcan
   int node = 1;
   std::string script = "builtin";  // sim: builtin | none | FILE
+  bool quiet = false;              // no progress lines on standard error
   // DDS.
   bool dds = true;
   std::uint32_t domain = 0;

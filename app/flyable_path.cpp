@@ -190,6 +190,8 @@ void FlyablePath::send(const rt::LimitedPath& limited) {
   std::memcpy(out.pack_id, rope.pack_id, sizeof out.pack_id);
   out.objective = rope.objective;
   out.converged = rope.converged;
+  out.mode = rope.mode;  // spool mode: a rope still being paid out reaches only its free end
+  out.spool_paid_out_m = rope.spool_paid_out_m;
   out.inside_envelope = fit.feasible;
   fitter_->describe(fit.path, out);
   for (LatestValue<msg::PathSample>* sink : {to_publisher_, to_renderer_}) {

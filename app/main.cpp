@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "app/console.hpp"
+#include "app/log.hpp"
 #include "base/version.hpp"
 
 namespace {
@@ -21,12 +22,15 @@ extern "C" void on_signal(int) { g_stop.store(true); }
 
 // One session per pack: a switch-terrain command ends a session and the next
 // one starts on the other pack, everything made anew. Returns the exit status.
-// CLI11 and the option checks name the option (or the key), not the file it
-// came from: " in --config FILE" when one was read.
+// CLI11 and the option checks name the option (or the key), not where its
+// value came from: " (options from the command line and --config FILE)"
+// when a file was read.
 std::string config_note(const CLI::App& cli) {
   const CLI::Option* config = cli.get_config_ptr();
   // the text as given (as<>() would run the option's checks again, and throw)
-  return config != nullptr && !config->results().empty() ? " in --config " + config->results().front() : "";
+  return config != nullptr && !config->results().empty()
+             ? " (options from the command line and --config " + config->results().front() + ")"
+             : "";
 }
 
 int run_sessions(const visvol::app::ConsoleOptions& options) {
@@ -35,11 +39,12 @@ int run_sessions(const visvol::app::ConsoleOptions& options) {
   while (session) {
     auto console = app::Console::start(*session);
     if (!console.ok()) {
-      std::fprintf(stderr, "visvol-console: %s\n", console.status().message().c_str());
+      app::log_printf(app::LogLevel::error, "visvol-console: %s\n", console.status().message().c_str());
       if (!session->switched_from.empty()) {
         // a switch that cannot start ends nothing: back to the pack it left
         session = app::session_after_failed_switch(*session, console.status().message());
-        std::fprintf(stderr, "visvol-console: switch-terrain failed; back on %s\n", session->pack.c_str());
+        app::log_printf(app::LogLevel::warning, "visvol-console: switch-terrain failed; back on %s\n",
+                        session->pack.c_str());
         continue;
       }
       const Errc c = console.status().code();
@@ -48,7 +53,7 @@ int run_sessions(const visvol::app::ConsoleOptions& options) {
     }
     const Status s = (*console)->run(g_stop);
     if (!s.ok()) {
-      std::fprintf(stderr, "visvol-console: %s\n", s.message().c_str());
+      app::log_printf(app::LogLevel::error, "visvol-console: %s\n", s.message().c_str());
       return 1;
     }
     session = g_stop.load() ? std::nullopt : (*console)->next_session();
@@ -74,14 +79,14 @@ int main(int argc, char** argv) {
       std::printf("%s", cli.help().c_str());
       return 0;
     }
-    std::fprintf(stderr, "visvol-console: %s%s (try --help)\n", app::config_error_text(e.what()).c_str(),
-                 config_note(cli).c_str());
+    app::log_printf(app::LogLevel::error, "visvol-console: %s%s (try --help)\n",
+                    app::config_error_text(e.what()).c_str(), config_note(cli).c_str());
     return 2;
   }
   // checked here too (each session checks again), so that a bad value names
   // the configuration file it may have come from
   if (const visvol::Status v = app::validate(options); !v.ok()) {
-    std::fprintf(stderr, "visvol-console: %s%s\n", v.message().c_str(), config_note(cli).c_str());
+    app::log_printf(app::LogLevel::error, "visvol-console: %s%s\n", v.message().c_str(), config_note(cli).c_str());
     return 2;
   }
   std::signal(SIGINT, on_signal);
@@ -91,9 +96,9 @@ int main(int argc, char** argv) {
   try {
     return run_sessions(options);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "visvol-console: internal error: %s\n", e.what());
+    app::log_printf(app::LogLevel::error, "visvol-console: internal error: %s\n", e.what());
   } catch (...) {
-    std::fprintf(stderr, "visvol-console: internal error (unknown exception)\n");
+    app::log_printf(app::LogLevel::error, "visvol-console: internal error (unknown exception)\n");
   }
   return 1;
 }

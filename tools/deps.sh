@@ -15,6 +15,7 @@ build_packages=(
   libbenchmark-dev       # micro-benchmarks
   libtomlplusplus-dev    # vehicle files (visvol plan --vehicle FILE)
   libsystemd-dev         # sd_notify: the console as a systemd unit (READY, WATCHDOG, STOPPING)
+  python3                # tools/ros2/gen_visvol_msgs.py: the ROS 2 messages from the IDL (and its test)
   dpkg-dev file          # cpack -G DEB: dpkg-shlibdeps for the package's Depends, file to find the ELF programs
 )
 

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <thread>
 #include <utility>
 
 namespace visvol::dds {
@@ -78,8 +79,17 @@ Status PathPublisher::wait_for_delivery(double timeout_s) const {
 }
 
 Status PathPublisher::wait_for_subscribers(std::uint32_t count, double timeout_s) const {
-  return update_writer_.wait_for_readers(count, timeout_s)
-      .with_context(std::string("path publisher (") + relative_name(Topic::path_update) + ")");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::nanoseconds(to_duration(timeout_s));
+  while (subscribers() < count) {
+    if (std::chrono::steady_clock::now() >= deadline) {
+      char text[200];
+      std::snprintf(text, sizeof text, "path publisher: %u of %u subscribers (%s and %s readers) after %.1f s",
+                    subscribers(), count, relative_name(Topic::path_update), relative_name(Topic::path), timeout_s);
+      return Status(Errc::timeout, text);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // discovery on loopback takes milliseconds
+  }
+  return Status();
 }
 
 std::uint32_t PathPublisher::path_subscribers() const { return path_writer_.matched_readers(); }

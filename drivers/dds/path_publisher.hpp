@@ -46,12 +46,14 @@ class PathPublisher {
   // published (reliable delivery), at most timeout_s. A timeout says how many
   // subscribers were matched and that they may have missed the last path.
   Status wait_for_delivery(double timeout_s) const;
-  // Waits until `count` subscribers of the path update topic are matched
-  // (an offline planner may want one before it starts), at most timeout_s.
+  // Waits until `count` subscribers are matched (PathUpdate readers and
+  // nav_msgs/Path readers, as ROS 2 nodes take paths, together; an offline
+  // planner may want one before it starts), at most timeout_s.
   Status wait_for_subscribers(std::uint32_t count, double timeout_s) const;
-  // Subscribers matched now: nav_msgs/Path readers and PathUpdate readers.
+  // Subscribers matched now: nav_msgs/Path readers, PathUpdate readers, both.
   std::uint32_t path_subscribers() const;
   std::uint32_t path_update_subscribers() const;
+  std::uint32_t subscribers() const { return path_subscribers() + path_update_subscribers(); }
 
  private:
   PathPublisher(const std::string& frame_id, Writer path, Writer update, Writer thumbnail, Writer terrain);

@@ -181,6 +181,15 @@ double pull_segment_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, i
   return std::max(length / std::max(segments, 1), kMinSegmentM);
 }
 
+Eigen::Vector3d spool_drag_mm(const ExecutiveConfig& c, double spacing_m, double past) {
+  const servo::ServoConfig sc = scene_servo_config(c, spacing_m);
+  const Vec3 dir = (c.end_m - c.start_m).normalized();
+  const Vec3 lead_end =
+      c.start_m + kSpoolLeadSegments * pull_segment_m(c.start_m, c.end_m, c.model, c.segments, c.slack) * dir;
+  const Vec3 target = c.end_m + past * (c.end_m - c.start_m);
+  return sc.device_to_world.transpose() * (target - lead_end) / sc.world_m_per_device_mm;
+}
+
 RopeParams Executive::params_for(RopeModel model, int segments, double segment_m) const {
   RopeParams p = scaled_rope_params(model, segments, segment_m, stiffness_, forces_->reference_acceleration());
   p.max_segments = config_.max_segments;
@@ -255,9 +264,11 @@ Errc Executive::start_run() {
   counters_.run_s = 0;
   counters_.equilibrium_s = 0;
   ++counters_.runs;
-  relaid_ = false;                     // a new run (recover_rope sets it again for a relaid one)
+  relaid_ = false;  // a new run (recover_rope sets it again for a relaid one)
+  if (mode_ != msg::InteractionMode::pull) ++counters_.mode_switches;
   mode_ = msg::InteractionMode::pull;  // between both ends
   counters_.mode = mode_;
+  arrival_ticks_ = -1;
   return Errc::ok;
 }
 
@@ -410,14 +421,18 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
   }
   counters_.servo_reason = out_.safe_reason;
   counters_.device_state = device_->state();
-  // each press of the mode button switches pull <-> spool
-  const bool pressed = sample.valid && sample.mode_button;
-  if (pressed && !mode_button_was_) {
-    const msg::InteractionMode other =
-        mode_ == msg::InteractionMode::pull ? msg::InteractionMode::spool : msg::InteractionMode::pull;
-    if (set_mode(other) != Errc::ok) ++counters_.mode_refusals;
+  // each press of the mode button switches pull <-> spool; its state is kept
+  // through samples that are not valid (a gap is not a release)
+  if (sample.valid) {
+    const bool pressed = sample.mode_button;
+    if (pressed && !mode_button_was_ && now_ns - mode_press_ns_ >= kModePressGuardNs) {
+      mode_press_ns_ = now_ns;
+      const msg::InteractionMode other =
+          mode_ == msg::InteractionMode::pull ? msg::InteractionMode::spool : msg::InteractionMode::pull;
+      if (set_mode(other) != Errc::ok) ++counters_.mode_refusals;
+    }
+    mode_button_was_ = pressed;
   }
-  mode_button_was_ = pressed;
 }
 
 void Executive::tick(const TickTime& time) {

@@ -31,7 +31,9 @@
 // paper's k3 U1), capped at ten times that.
 // Spool mode (mode B; a set-mode command or the device's mode button switches):
 // a short rope (kSpoolLeadSegments) leaves the start toward the end, its far
-// end free; the grasp button takes that end, and while the operator pulls it
+// end free, and the workspace is re-indexed so that the handle, where it is,
+// holds the proxy at that end (as a clutch release re-indexes it: the start
+// may lie at the workspace's edge); the grasp button takes that end, and while the operator pulls it
 // away from the start harder than the saturated field pulls one segment (the
 // pull of 1 mm of hand travel at k3 = 1: a slack rope follows the hand more
 // closely than that) a segment of the pull mode's length pays out at the
@@ -80,6 +82,11 @@ inline constexpr int kSpoolLeadSegments = 2;
 inline constexpr int kSpoolEveryTicks = 5;
 // Length over the straight line a spooled rope has at least once its end is held.
 inline constexpr double kSpoolArrivalSlack = 0.02;
+// Ticks over which the arrived free end's anchor moves onto the end.
+inline constexpr int kSpoolArrivalTicks = 200;
+// A mode button press this soon after the last one that switched is ignored
+// (a bouncing switch, or a held one seen again after a gap).
+inline constexpr std::int64_t kModePressGuardNs = 200'000'000;
 
 struct ExecutiveConfig {
   // The planning problem at start-up (commands change it later).
@@ -140,7 +147,7 @@ struct ExecutiveCounters {
   std::uint64_t hull_sets = 0;      // hidden-from / visible-to hull sets put in force
   std::uint64_t rope_resets = 0;    // the rope's state stopped being finite and was laid again
   std::uint64_t mode_switches = 0;  // pull <-> spool, by command or button
-  std::uint64_t mode_refusals = 0;  // mode button presses that could not switch (no device sample, unstable)
+  std::uint64_t mode_refusals = 0;  // mode button presses that could not switch (unstable, no room to lay the rope)
   msg::InteractionMode mode = msg::InteractionMode::pull;
   double spool_paid_out_m = 0.0;   // rope out of the spool in the last spool run (the lead included)
   int spool_segments = 0;          // segments of it
@@ -189,6 +196,10 @@ servo::ServoConfig scene_servo_config(const ExecutiveConfig& c, double spacing_m
 // A pull-mode rope segment between these ends (the articulated rope with its
 // slack), m: what spool mode pays out each time.
 double pull_segment_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, int segments, double slack);
+// The hand travel (device frame, mm) that takes a spool's lead free end, as
+// the workspace holds it once spool mode begins, to `past` (a fraction of the
+// ends' distance) beyond the end: what an operator script drags.
+Eigen::Vector3d spool_drag_mm(const ExecutiveConfig& c, double spacing_m, double past);
 
 class Executive final : public PeriodicTask {
  public:
@@ -262,10 +273,11 @@ class Executive final : public PeriodicTask {
   // rope would not step stably; the mode and rope unchanged on failure).
   Errc set_mode(msg::InteractionMode mode);
   Errc start_spool();
-  void spool();     // spool mode, each tick: pay out, or hold the arrived end
-  void paid_out();  // after a segment paid out
-  // the rope is being spooled out (its far end free)
-  bool spooling() const { return mode_ == msg::InteractionMode::spool && !counters_.spool_arrived; }
+  void spool();             // spool mode, each tick: pay out, or hold the arrived end
+  void hold_arrived_end();  // the end's anchor on its way onto the end, then held there
+  void paid_out();          // after a segment paid out
+  // the rope is being spooled out (its far end not yet held at the end)
+  bool spooling() const { return mode_ == msg::InteractionMode::spool && arrival_ticks_ < 0; }
   int copy_vertices();  // the rope's vertices into scratch_; their count
   void ack(const msg::Command& c, Errc result, const char* reason);
   Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
@@ -327,7 +339,10 @@ class Executive final : public PeriodicTask {
   msg::InteractionMode mode_ = msg::InteractionMode::pull;
   double spool_segment_m_ = 0.0;  // a pull-mode segment's length: what each pay-out adds
   int ticks_since_pay_out_ = 0;
-  bool mode_button_was_ = false;  // the mode button's last state (presses are its rising edges)
+  int arrival_ticks_ = -1;              // ticks since the free end arrived (-1: not yet)
+  Vec3 arrival_from_m_ = Vec3::Zero();  // where it was then
+  bool mode_button_was_ = false;        // the mode button's last valid state (presses are its rising edges)
+  std::int64_t mode_press_ns_ = 0;      // when a press last switched the mode
   int grasp_segment_ = 0;
   double grasp_fraction_ = 0.0;
   std::uint64_t path_sequence_ = 0;

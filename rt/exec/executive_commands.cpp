@@ -44,8 +44,8 @@ int Executive::command_items(const msg::Command& c) const {
     case msg::CommandKind::set_segment_count: return bounded(std::int64_t{c.segment_count} + 1);
     case msg::CommandKind::start:
     case msg::CommandKind::set_endpoints:
-    case msg::CommandKind::set_mode:
-    case msg::CommandKind::set_model: return bounded(rope_->segments() + 1);
+    case msg::CommandKind::set_mode:  // a spool's rope is short, the pull mode's laid again is not
+    case msg::CommandKind::set_model: return bounded(std::max(rope_->segments(), segments_) + 1);
     default: return 1;
   }
 }

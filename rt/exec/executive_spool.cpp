@@ -29,13 +29,22 @@ Errc Executive::set_mode(msg::InteractionMode mode) {
     e = start_spool();
   } else if (counters_.spool_arrived) {
     mode_ = msg::InteractionMode::pull;  // the spooled rope already holds both ends: kept
+    counters_.mode = mode_;
+    ++counters_.mode_switches;
   } else {
-    e = start_run();  // lays the rope between the ends again, in pull mode
+    e = start_run();  // lays the rope between the ends again, in pull mode (counts the switch)
   }
   if (e != Errc::ok) return e;
-  counters_.mode = mode_;
-  ++counters_.mode_switches;
-  counters_.running = true;
+  if (servo_) {
+    // The hand lets go of the rope it held (forces return with a new grasp),
+    // and pull mode has the scene's mapping again.
+    servo_->release_grasp();
+    if (mode_ == msg::InteractionMode::pull) {
+      servo_->restore_mapping();
+      last_proxy_m_ = servo_->config().world_offset_m;
+    }
+  }
+  counters_.running = true;  // a switch starts the rope stepping, as start does
   return Errc::ok;
 }
 
@@ -65,9 +74,15 @@ Errc Executive::start_spool() {
     return Errc::invalid_argument;
   }
   rope_->set_ends(ends);
+  // the handle, wherever it is, now holds the proxy at the lead's free end
+  if (servo_) {
+    servo_->reindex(lead[kSpoolLeadSegments]);
+    last_proxy_m_ = lead[kSpoolLeadSegments];
+  }
   mode_ = msg::InteractionMode::spool;
   spool_segment_m_ = segment_m;
   ticks_since_pay_out_ = 0;
+  arrival_ticks_ = -1;
   equilibrium_.reset();
   grasping_ = false;
   rope_->clear_point_force();
@@ -77,31 +92,43 @@ Errc Executive::start_spool() {
   counters_.spool_arrived = false;
   counters_.spool_at_capacity = false;
   counters_.spool_segments = rope_->segments();
-  counters_.spool_paid_out_m = rope_->length_m();
-  counters_.spool_gap_m = (rope_->vertices()[kSpoolLeadSegments] - end_m_).norm();
+  counters_.spool_paid_out_m = rope_->segments() * segment_m;
+  counters_.spool_gap_m = (lead[kSpoolLeadSegments] - end_m_).norm();
+  counters_.mode = mode_;
+  ++counters_.mode_switches;
   ++counters_.runs;
   relaid_ = false;
   return Errc::ok;
 }
 
 void Executive::spool() {
-  if (!spooling() || !counters_.running) return;
+  if (mode_ != msg::InteractionMode::spool || !counters_.running) return;
+  if (arrival_ticks_ >= 0) {
+    hold_arrived_end();
+    return;
+  }
   const int n = rope_->segments();
   const Vec3 free_end = rope_->point(n - 1, 1.0);
   counters_.spool_gap_m = (free_end - end_m_).norm();
+  // Rope out of the spool: segments of spool_segment_m_ (the spring model's
+  // rest length; its geometric length stretches).
+  const double out_m = n * spool_segment_m_;
   if (counters_.spool_gap_m <= spool_segment_m_) {
     // Arrived. Held at the end once the rope has kSpoolArrivalSlack over the
     // straight line (a rope as long as the line, or shorter, pinned at both
     // ends pulls itself apart): one more segment a tick until it has.
-    const double straight_m = (end_m_ - start_m_).norm();
-    if (rope_->length_m() < (1.0 + kSpoolArrivalSlack) * straight_m && rope_->pay_out_at_start()) {
-      paid_out();
+    if (out_m < (1.0 + kSpoolArrivalSlack) * (end_m_ - start_m_).norm()) {
+      if (rope_->pay_out_at_start()) {
+        paid_out();
+      } else {
+        counters_.spool_at_capacity = true;  // too short to hold: stays free (switch to pull)
+      }
       return;
     }
-    set_ends(start_m_, end_m_);
-    counters_.spool_arrived = true;
-    counters_.spool_gap_m = 0.0;
-    equilibrium_.reset();
+    // the end anchored where the free end is, then moved onto the end
+    arrival_from_m_ = free_end;
+    arrival_ticks_ = 0;
+    hold_arrived_end();
     return;
   }
   if (!grasping_ || ++ticks_since_pay_out_ < kSpoolEveryTicks) return;
@@ -115,11 +142,30 @@ void Executive::spool() {
   paid_out();
 }
 
+// The arrived end's anchor, moved from where the free end was to the end
+// over kSpoolArrivalTicks (a jump of up to a segment at once would be a hard
+// kick for the joint solver).
+void Executive::hold_arrived_end() {
+  const int k = std::min(arrival_ticks_, kSpoolArrivalTicks);
+  const double t = static_cast<double>(k) / kSpoolArrivalTicks;
+  set_ends(start_m_, arrival_from_m_ + t * (end_m_ - arrival_from_m_));
+  if (arrival_ticks_ < kSpoolArrivalTicks) {
+    ++arrival_ticks_;
+    counters_.spool_gap_m = (1.0 - t) * (end_m_ - arrival_from_m_).norm();
+    return;
+  }
+  if (!counters_.spool_arrived) {
+    counters_.spool_arrived = true;
+    counters_.spool_gap_m = 0.0;
+    equilibrium_.reset();
+  }
+}
+
 void Executive::paid_out() {
   ticks_since_pay_out_ = 0;
   grasp_segment_ = rope_->segments() - 1;  // the grasp stays on the free end
   counters_.spool_segments = rope_->segments();
-  counters_.spool_paid_out_m = rope_->length_m();
+  counters_.spool_paid_out_m = rope_->segments() * spool_segment_m_;
   equilibrium_.reset();
 }
 

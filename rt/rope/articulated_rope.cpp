@@ -51,24 +51,28 @@ Eigen::Matrix3d times_cross(const Eigen::Matrix3d& m, const Vec3& r) {
 
 }  // namespace detail
 
+// Every buffer written whole here (Eigen's types leave their values unset):
+// the pages of the whole capacity are touched at construction, not by the
+// 1 kHz loop the first time a rope grows (spool mode) into them.
 ArticulatedRope::ArticulatedRope(const RopeParams& params) : p_(params) {
   const std::size_t n = static_cast<std::size_t>(p_.max_segments);
-  x_.resize(n);
-  v_.resize(n);
-  w_.resize(n);
-  force_.resize(n);
-  torque_.resize(n);
+  const Vec3 zero = Vec3::Zero();
+  x_.resize(n, zero);
+  v_.resize(n, zero);
+  w_.resize(n, zero);
+  force_.resize(n, zero);
+  torque_.resize(n, zero);
   q_.resize(n, Eigen::Quaterniond::Identity());
   axis_.resize(n, Vec3::UnitZ());
-  inv_inertia_.resize(n);
-  sample_acc_.resize(2 * n + 1);
-  joints_.resize(n + 1);
-  d_inv_.resize(n + 1);
-  upper_.resize(n + 1);
-  lower_.resize(n + 1);
-  rhs_.resize(n + 1);
-  lambda_.resize(n + 1);
-  vertices_.resize(n + 1);
+  inv_inertia_.resize(n, Eigen::Matrix3d::Zero());
+  sample_acc_.resize(2 * n + 1, zero);
+  joints_.resize(n + 1, Joint{{-1, zero, 1.0}, {-1, zero, 1.0}, zero});
+  d_inv_.resize(n + 1, Eigen::Matrix3d::Zero());
+  upper_.resize(n + 1, Eigen::Matrix3d::Zero());
+  lower_.resize(n + 1, Eigen::Matrix3d::Zero());
+  rhs_.resize(n + 1, zero);
+  lambda_.resize(n + 1, zero);
+  vertices_.resize(n + 1, zero);
 }
 
 Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {

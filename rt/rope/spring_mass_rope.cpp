@@ -7,10 +7,11 @@ namespace visvol::rt {
 
 SpringMassRope::SpringMassRope(const RopeParams& params) : p_(params) {
   const std::size_t n = static_cast<std::size_t>(p_.max_segments) + 1;
-  x_.resize(n);
-  x_prev_.resize(n);
-  v_.resize(n);
-  force_.resize(n);
+  // written whole: the capacity's pages touched here, not by the loop (Eigen leaves values unset)
+  x_.resize(n, Vec3::Zero());
+  x_prev_.resize(n, Vec3::Zero());
+  v_.resize(n, Vec3::Zero());
+  force_.resize(n, Vec3::Zero());
 }
 
 Status SpringMassRope::reset(const Vec3* polyline, int points, int segments) {

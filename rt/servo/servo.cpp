@@ -27,10 +27,6 @@ Status check_range(const char* field, double v, double lo, double hi, const char
 
 }  // namespace
 
-Eigen::Vector3d device_mm_of(const ServoConfig& config, const Eigen::Vector3d& world_m) {
-  return config.device_to_world.transpose() * (world_m - config.world_offset_m) / config.world_m_per_device_mm;
-}
-
 Eigen::Matrix3d default_device_to_world() {
   Eigen::Matrix3d r;
   // Columns: where device x (right), y (up), z (toward the operator) point in
@@ -216,6 +212,22 @@ void Servo::track_buttons(const ServoInput& in, bool sample_usable, bool safe) {
     ++counters_.grasps;
   }
   s_.grasp_was_down = in.grasp_button;
+}
+
+void Servo::reindex(const Eigen::Vector3d& proxy_m) {
+  if (!proxy_m.allFinite()) return;
+  s_.offset_m = proxy_m - config_.world_m_per_device_mm * (config_.device_to_world * s_.device_pos_mm);
+  s_.frozen_proxy_m = proxy_m;
+}
+
+void Servo::restore_mapping() {
+  s_.offset_m = config_.world_offset_m;
+  s_.frozen_proxy_m = s_.offset_m + config_.world_m_per_device_mm * (config_.device_to_world * s_.device_pos_mm);
+}
+
+void Servo::release_grasp() {
+  s_.grasping = false;
+  s_.need_regrasp = true;
 }
 
 Eigen::Vector3d Servo::proxy_m() const {

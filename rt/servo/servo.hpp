@@ -52,11 +52,6 @@ namespace visvol::servo {
 // Phantom device axes to world axes for an operator facing north.
 Eigen::Matrix3d default_device_to_world();
 
-struct ServoConfig;
-// Where the hand must hold the handle (device frame, mm) for the configured
-// mapping to put the proxy at `world_m` (before any clutch re-indexing).
-Eigen::Vector3d device_mm_of(const ServoConfig& config, const Eigen::Vector3d& world_m);
-
 struct ServoConfig {
   // Workspace mapping.
   double world_m_per_device_mm = 0.01;                          // scale: world metres per device millimetre
@@ -145,6 +140,17 @@ class Servo {
   // Zeroes the force at the next step() and withholds it until the operator
   // grasps again (the executive calls this after overruns). Any thread.
   void force_safe_state() { safe_requested_.store(true, std::memory_order_release); }
+
+  // Re-indexes the workspace as a clutch release does, so that the handle
+  // where it is now puts the proxy at `proxy_m` (world, m): the executive
+  // hands the operator the spooled rope's free end. The stepping thread.
+  void reindex(const Eigen::Vector3d& proxy_m);
+  // The configured mapping again (world_offset_m at the device origin).
+  void restore_mapping();
+  // Lets go of the grasp and withholds the rope and hand forces until the
+  // operator releases the grasp button and presses it again (the executive
+  // laid another rope under the hand). The stepping thread.
+  void release_grasp();
 
   const ServoConfig& config() const { return config_; }
   const ServoCounters& counters() const { return counters_; }

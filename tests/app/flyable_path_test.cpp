@@ -105,13 +105,17 @@ TEST_F(Flyable, ARopesPathReachesBothSinksInsideTheClimbAndDescentLimits) {
   auto f = FlyablePath::start(fitter(), &publisher, &renderer);
   ASSERT_TRUE(f.ok()) << f.status().message();
   saw((*f)->rope_paths().back(), 42, 9);
-  const msg::PathSample& rope = (*f)->rope_paths().back().path;
+  msg::PathSample& rope = (*f)->rope_paths().back().path;
+  rope.mode = msg::InteractionMode::spool;  // the interaction mode rides along
+  rope.spool_paid_out_m = 1234.5;
   ASSERT_GT(steepest_deg(rope, true), 20.0);  // the rope's own path is far outside
   (*f)->rope_paths().publish();
   const msg::PathSample* sent = wait_for(publisher);
   ASSERT_NE(sent, nullptr);
   EXPECT_EQ(sent->sequence, 42u);
   EXPECT_STREQ(sent->pack_id, "flyable");
+  EXPECT_EQ(sent->mode, msg::InteractionMode::spool);
+  EXPECT_EQ(sent->spool_paid_out_m, 1234.5);
   EXPECT_GE(sent->vertex_count, 2u);
   EXPECT_LE(steepest_deg(*sent, true), 5.0 + 1e-9);
   EXPECT_LE(steepest_deg(*sent, false), 4.0 + 1e-9);

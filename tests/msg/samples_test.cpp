@@ -43,7 +43,11 @@ void expect_named_once(std::initializer_list<E> values) {
 TEST(ToString, NamesEveryValueOnce) {
   expect_named_once({CommandKind::set_endpoints, CommandKind::set_objective, CommandKind::set_weights,
                      CommandKind::set_stiffness, CommandKind::set_model, CommandKind::set_segment_count,
-                     CommandKind::set_constraints, CommandKind::start, CommandKind::stop, CommandKind::switch_terrain});
+                     CommandKind::set_constraints, CommandKind::start, CommandKind::stop, CommandKind::switch_terrain,
+                     CommandKind::set_mode});
+  expect_named_once({InteractionMode::pull, InteractionMode::spool});
+  EXPECT_STREQ(to_string(CommandKind::set_mode), "set-mode");
+  EXPECT_STREQ(to_string(InteractionMode::spool), "spool");
   expect_named_once({Objective::hide, Objective::show});
   expect_named_once({RopeModel::spring_mass, RopeModel::articulated});
   expect_named_once({ConstraintKind::hidden_from, ConstraintKind::visible_to, ConstraintKind::clearance,

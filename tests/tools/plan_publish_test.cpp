@@ -60,7 +60,8 @@ TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
   ASSERT_TRUE(participant.ok()) << participant.status().message();
   auto paths = Reader::create(**participant, Topic::path_update);
   auto terrain = Reader::create(**participant, Topic::terrain);
-  ASSERT_TRUE(paths.ok() && terrain.ok());
+  auto nav_path = Reader::create(**participant, Topic::path);  // as a ROS 2 node (RViz) subscribes
+  ASSERT_TRUE(paths.ok() && terrain.ok() && nav_path.ok());
 
   // 600 segments: more vertices than a path sample holds (512)
   const std::string base = *pack_ + "_pub";
@@ -72,7 +73,8 @@ TEST_F(PlanPublishCli, SubscriberGetsTheFinalPathAndTheTerrain) {
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json summary = nlohmann::json::parse(r.out);
   ASSERT_TRUE(summary.contains("dds")) << r.out;
-  EXPECT_GE(summary["dds"]["subscribers"].get<int>(), 1);
+  EXPECT_GE(summary["dds"]["subscribers"].get<int>(), 2) << "PathUpdate and nav_msgs/Path readers";
+  EXPECT_GE(summary["dds"]["nav_msgs_path_subscribers"].get<int>(), 1);
   EXPECT_TRUE(summary["dds"]["delivered"].get<bool>());
   EXPECT_EQ(summary["dds"]["publish_errors"].get<int>(), 0);
 

@@ -56,6 +56,12 @@ TEST(CliUsage, BadArgumentsExitTwoWithOneLine) {
     EXPECT_EQ(r.status, 2) << args;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
   }
+  const Outcome unknown = visvol("frobnicate x.vvp");
+  EXPECT_NE(unknown.err.find("unknown command 'frobnicate' (commands: build, check, export, info, plan, render, "
+                             "sample, verify, viewshed; try --help)"),
+            std::string::npos)
+      << unknown.err;
+  EXPECT_NE(visvol("").err.find("A subcommand is required"), std::string::npos) << "nothing given: CLI11's words";
 }
 
 TEST(CliUsage, BadInputNamesTheFile) {

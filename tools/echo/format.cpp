@@ -3,6 +3,9 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include <nlohmann/json.hpp>
+
+#include "io/json_text.hpp"
 #include "msg/samples.hpp"
 
 namespace visvol::echo {
@@ -118,6 +121,118 @@ std::string format_ack(const visvol_msgs_msg_dds__CommandAck_& m) {
       name_of<msg::AckResult>(m.result));
   if (m.reason && m.reason[0] != '\0') add(out, " reason=%s", quoted(m.reason).c_str());
   return out;
+}
+
+// JSON ------------------------------------------------------------------------
+
+namespace {
+
+using nlohmann::json;
+
+std::string text(const char* s) { return s ? s : ""; }
+
+std::int64_t stamp_ns(const builtin_interfaces_msg_dds__Time_& t) {
+  return static_cast<std::int64_t>(t.sec) * 1000000000LL + t.nanosec;
+}
+
+json point(const geometry_msgs_msg_dds__Point_& p) { return json::array({p.x, p.y, p.z}); }
+
+json timing(const visvol_msgs_msg_dds__TimingSummary_& t) {
+  return {{"min_us", t.min_us}, {"mean_us", t.mean_us}, {"p99_us", t.p99_us}, {"max_us", t.max_us}, {"count", t.count}};
+}
+
+std::string line_of(const json& j) { return json_text(j); }
+
+}  // namespace
+
+std::string json_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool with_vertices) {
+  json j = {{"topic", "path"},
+            {"sequence_number", m.sequence_number},
+            {"stamp_ns", stamp_ns(m.header.stamp)},
+            {"frame_id", text(m.header.frame_id)},
+            {"pack_id", text(m.pack_id)},
+            {"objective", name_of<msg::Objective>(m.objective)},
+            {"vertices", m.positions_m._length},
+            {"length_m", m.length_m},
+            {"f_c", m.f_c},
+            {"min_clearance_m", m.min_clearance_m},
+            {"converged", m.converged},
+            {"inside_envelope", m.inside_envelope},
+            {"mode", name_of<msg::InteractionMode>(m.mode)},
+            {"spool_paid_out_m", m.spool_paid_out_m}};
+  if (with_vertices) {
+    json positions = json::array(), visibility = json::array(), clearance = json::array();
+    for (std::uint32_t i = 0; i < m.positions_m._length; ++i) {
+      positions.push_back(point(m.positions_m._buffer[i]));
+      visibility.push_back(i < m.visibility._length ? m.visibility._buffer[i] : 0.0);
+      clearance.push_back(i < m.clearance_m._length ? m.clearance_m._buffer[i] : 0.0);
+    }
+    j["positions_m"] = std::move(positions);
+    j["visibility"] = std::move(visibility);
+    j["clearance_m"] = std::move(clearance);
+  }
+  return line_of(j);
+}
+
+std::string json_health(const visvol_msgs_msg_dds__LoopHealth_& m) {
+  return line_of({{"topic", "health"},
+                  {"sequence_number", m.sequence_number},
+                  {"stamp_ns", stamp_ns(m.header.stamp)},
+                  {"period_us", m.period_us},
+                  {"wakeup_latency", timing(m.wakeup_latency)},
+                  {"compute_time", timing(m.compute_time)},
+                  {"overruns", m.overruns},
+                  {"misses", m.misses},
+                  {"safe_state", m.safe_state},
+                  {"safe_state_reason", text(m.safe_state_reason)},
+                  {"commands_accepted", m.commands_accepted},
+                  {"commands_rejected", m.commands_rejected},
+                  {"publish_errors", m.publish_errors}});
+}
+
+std::string json_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m) {
+  return line_of({{"topic", "device"},
+                  {"sequence_number", m.sequence_number},
+                  {"stamp_ns", stamp_ns(m.header.stamp)},
+                  {"device", text(m.device)},
+                  {"state", name_of<msg::DeviceState>(m.state)},
+                  {"fault_bits", m.fault_bits},
+                  {"motor_temperature_c", m.motor_temperature_c},
+                  {"last_position_age_ms", m.last_position_age_ms},
+                  {"can_rx_frames", m.can_rx_frames},
+                  {"can_tx_frames", m.can_tx_frames},
+                  {"can_errors", m.can_errors},
+                  {"bus_off_count", m.bus_off_count}});
+}
+
+std::string json_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m) {
+  return line_of({{"topic", "terrain"},
+                  {"stamp_ns", stamp_ns(m.header.stamp)},
+                  {"frame_id", text(m.header.frame_id)},
+                  {"pack_id", text(m.pack_id)},
+                  {"crs", text(m.crs)},
+                  {"crs_wkt", text(m.crs_wkt)},
+                  {"min_m", point(m.min_m)},
+                  {"max_m", point(m.max_m)},
+                  {"post_spacing_m", m.post_spacing_m},
+                  {"planning_min_m", point(m.planning_min_m)},
+                  {"planning_max_m", point(m.planning_max_m)}});
+}
+
+std::string json_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m) {
+  return line_of({{"topic", "thumbnail"},
+                  {"stamp_ns", stamp_ns(m.header.stamp)},
+                  {"format", text(m.format)},
+                  {"bytes", m.data._length}});
+}
+
+std::string json_ack(const visvol_msgs_msg_dds__CommandAck_& m) {
+  return line_of({{"topic", "acks"},
+                  {"source", text(m.source)},
+                  {"sequence_number", m.sequence_number},
+                  {"kind", name_of<msg::CommandKind>(m.kind)},
+                  {"result", name_of<msg::AckResult>(m.result)},
+                  {"reason", text(m.reason)}});
 }
 
 }  // namespace visvol::echo

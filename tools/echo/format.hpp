@@ -1,5 +1,6 @@
 // One line of text per received message, as visvol-echo prints it: the
-// message name, then key=value fields with units in the keys.
+// message name, then key=value fields with units in the keys; or (--json) one
+// JSON object per line, {"topic": ..., fields with the message's own names}.
 #pragma once
 
 #include <string>
@@ -15,5 +16,16 @@ std::string format_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m);
 std::string format_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m);
 std::string format_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m);
 std::string format_ack(const visvol_msgs_msg_dds__CommandAck_& m);
+
+// The same messages as one line of JSON each (strings that are not UTF-8 get
+// U+FFFD; enumerations by name, "unknown" outside them; stamps in ns since
+// the Unix epoch). with_vertices: "positions_m" [[x, y, z]...],
+// "visibility" and "clearance_m" arrays.
+std::string json_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool with_vertices);
+std::string json_health(const visvol_msgs_msg_dds__LoopHealth_& m);
+std::string json_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m);
+std::string json_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m);
+std::string json_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m);
+std::string json_ack(const visvol_msgs_msg_dds__CommandAck_& m);
 
 }  // namespace visvol::echo

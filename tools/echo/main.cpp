@@ -46,6 +46,7 @@ extern "C" void on_signal(int) { g_interrupted.store(true); }
 
 struct Common {
   std::uint32_t domain = 0;
+  bool json = false;        // one JSON object per line instead of key=value text
   std::string config_file;  // empty: the built-in loopback configuration
   std::string ns;
 };
@@ -138,7 +139,7 @@ const std::map<std::string, Topic>& watchable() {
 }
 
 // Prints each message of one reader; returns how many it printed.
-std::size_t print_all(Topic topic, const Reader& reader, bool vertices) {
+std::size_t print_all(Topic topic, const Reader& reader, bool vertices, bool json) {
   std::size_t printed = 0;
   const auto line = [&](const std::string& text) {
     std::printf("%s\n", text.c_str());
@@ -146,28 +147,32 @@ std::size_t print_all(Topic topic, const Reader& reader, bool vertices) {
   };
   switch (topic) {
     case Topic::path_update:
-      (void)reader.take<visvol_msgs_msg_dds__PathUpdate_>(
-          [&](const auto& m, const dds_sample_info_t&) { line(echo::format_path_update(m, vertices)); });
+      (void)reader.take<visvol_msgs_msg_dds__PathUpdate_>([&](const auto& m, const dds_sample_info_t&) {
+        line(json ? echo::json_path_update(m, vertices) : echo::format_path_update(m, vertices));
+      });
       break;
     case Topic::health:
       (void)reader.take<visvol_msgs_msg_dds__LoopHealth_>(
-          [&](const auto& m, const dds_sample_info_t&) { line(echo::format_health(m)); });
+          [&](const auto& m, const dds_sample_info_t&) { line(json ? echo::json_health(m) : echo::format_health(m)); });
       break;
     case Topic::device_status:
-      (void)reader.take<visvol_msgs_msg_dds__DeviceStatus_>(
-          [&](const auto& m, const dds_sample_info_t&) { line(echo::format_device_status(m)); });
+      (void)reader.take<visvol_msgs_msg_dds__DeviceStatus_>([&](const auto& m, const dds_sample_info_t&) {
+        line(json ? echo::json_device_status(m) : echo::format_device_status(m));
+      });
       break;
     case Topic::terrain:
-      (void)reader.take<visvol_msgs_msg_dds__TerrainInfo_>(
-          [&](const auto& m, const dds_sample_info_t&) { line(echo::format_terrain(m)); });
+      (void)reader.take<visvol_msgs_msg_dds__TerrainInfo_>([&](const auto& m, const dds_sample_info_t&) {
+        line(json ? echo::json_terrain(m) : echo::format_terrain(m));
+      });
       break;
     case Topic::thumbnail:
-      (void)reader.take<sensor_msgs_msg_dds__CompressedImage_>(
-          [&](const auto& m, const dds_sample_info_t&) { line(echo::format_thumbnail(m)); });
+      (void)reader.take<sensor_msgs_msg_dds__CompressedImage_>([&](const auto& m, const dds_sample_info_t&) {
+        line(json ? echo::json_thumbnail(m) : echo::format_thumbnail(m));
+      });
       break;
     case Topic::command_ack:
       (void)reader.take<visvol_msgs_msg_dds__CommandAck_>(
-          [&](const auto& m, const dds_sample_info_t&) { line(echo::format_ack(m)); });
+          [&](const auto& m, const dds_sample_info_t&) { line(json ? echo::json_ack(m) : echo::format_ack(m)); });
       break;
     default: break;
   }
@@ -198,7 +203,7 @@ int run_watch(const Common& common, const WatchOptions& options) {
   std::size_t printed = 0;
   while (!g_interrupted.load()) {
     (void)readers.front().second.wait(0.02);
-    for (const auto& [topic, reader] : readers) printed += print_all(topic, reader, options.vertices);
+    for (const auto& [topic, reader] : readers) printed += print_all(topic, reader, options.vertices, common.json);
     if (options.count > 0 && printed >= options.count) return kExitOk;
     const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (options.timeout_s > 0.0 && elapsed_s >= options.timeout_s) {
@@ -326,7 +331,7 @@ int run_command(const Common& common, const CommandOptions& options) {
           if (result >= 0 || !m.source || source != m.source || m.sequence_number != command->sequence) {
             return;  // someone else's
           }
-          std::printf("%s\n", echo::format_ack(m).c_str());
+          std::printf("%s\n", (common.json ? echo::json_ack(m) : echo::format_ack(m)).c_str());
           std::fflush(stdout);
           const auto r = static_cast<AckResult>(m.result);
           if (r == AckResult::rejected || r == AckResult::failed) result = kExitFailure;
@@ -432,6 +437,7 @@ int main(int argc, char** argv) {
   app.add_option("--domain", common.domain, "DDS domain id (0..232)")->check(CLI::Range(0u, kMaxDomainId));
   app.add_option("--config", common.config_file, "Cyclone DDS XML configuration file")->check(CLI::ExistingFile);
   app.add_option("--namespace", common.ns, "topic namespace of the console (ROS style)");
+  app.add_flag("--json", common.json, "one JSON object per message and line (fields by their message names)");
 
   CLI::App* watch_app = app.add_subcommand("watch", "print messages as they arrive");
   watch_app

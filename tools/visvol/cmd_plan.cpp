@@ -241,6 +241,7 @@ int run_plan(const PlanOptions& o) {
                   {"paths_published", publisher->published()},
                   {"publish_errors", publisher->errors()},
                   {"subscribers", publisher->subscribers()},
+                  {"nav_msgs_path_subscribers", publisher->path_subscribers()},
                   {"delivered", delivery.ok()}};
     }
     std::printf("%s\n", json_text(j, 2).c_str());

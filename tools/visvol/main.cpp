@@ -77,6 +77,13 @@ int main(int argc, char** argv) {
       if (app.get_subcommands().empty()) std::printf("%s", app.help().c_str());
       return kExitOk;
     }
+    // CLI11 reads an unknown first word as a missing subcommand: name it
+    if (argc > 1 && argv[1][0] != '-' && runners.count(argv[1]) == 0) {
+      std::string known;
+      for (const auto& r : runners) known += (known.empty() ? "" : ", ") + r.first;
+      std::fprintf(stderr, "visvol: unknown command '%s' (commands: %s; try --help)\n", argv[1], known.c_str());
+      return kExitUsage;
+    }
     std::fprintf(stderr, "visvol: %s (try --help)\n", e.what());
     return kExitUsage;
   } catch (const std::exception& e) {  // an option's own conversion or check

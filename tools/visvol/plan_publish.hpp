@@ -53,7 +53,9 @@ class PlanPublisher {
 
   std::uint64_t published() const { return sequence_; }
   std::uint64_t errors() const { return errors_; }
-  std::uint32_t subscribers() const { return publisher_->path_update_subscribers(); }
+  // matched now: PathUpdate readers and nav_msgs/Path readers (ROS 2 nodes)
+  std::uint32_t subscribers() const { return publisher_->subscribers(); }
+  std::uint32_t path_subscribers() const { return publisher_->path_subscribers(); }
 
  private:
   PlanPublisher(const PublishOptions& options, std::unique_ptr<dds::Participant> participant,

@@ -142,6 +142,9 @@ void check_accepted(const msg::Command& c, const visvol_msgs_msg_dds__Command_& 
     case msg::CommandKind::switch_terrain:
       check(msg::text_of(c.pack_id) == "sf_north" || msg::text_of(c.pack_id) == "taunus");
       break;
+    case msg::CommandKind::set_mode:
+      check(c.mode == msg::InteractionMode::pull || c.mode == msg::InteractionMode::spool);
+      break;
     case msg::CommandKind::start:
     case msg::CommandKind::stop: break;
     default: check(false);  // an unknown kind reached the queue

@@ -168,6 +168,17 @@ TEST(Echo, PrintsPathUpdatesAndHealth) {
   EXPECT_NE(out.find("path seq=41 "), std::string::npos) << out;
   EXPECT_NE(out.find("frame=\"visvol_world\" pack=\"sf_north\" objective=hide vertices=3"), std::string::npos) << out;
   EXPECT_NE(out.find("  [2] x_m=544020.000 y_m=4189000.000 z_m=191.000"), std::string::npos) << out;
+  EXPECT_NE(out.find(" mode=pull spool_paid_out_m=0.000"), std::string::npos) << out;
+
+  // the same as one JSON object a line, for scripts
+  Child j(echo({"--json", "path", "--count", "1", "--timeout", "20", "--vertices"}));
+  ASSERT_EQ(j.wait(30.0), 0) << j.output();
+  const std::string json = j.output();
+  for (const char* part : {"{\"clearance_m\":[", "\"frame_id\":\"visvol_world\"", "\"mode\":\"pull\"",
+                           "\"objective\":\"hide\"", "\"pack_id\":\"sf_north\"", "[544020.0,4189000.0,191.0]",
+                           "\"sequence_number\":41", "\"topic\":\"path\"", "\"vertices\":3"}) {
+    EXPECT_NE(json.find(part), std::string::npos) << part << " in " << json;
+  }
 
   Child h(echo({"health", "--count", "1", "--timeout", "20"}));
   ASSERT_TRUE(h.wait_for_output("watching", 20.0)) << h.output();

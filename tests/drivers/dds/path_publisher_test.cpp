@@ -185,7 +185,7 @@ TEST(PathPublisher, WaitForDeliveryWithoutSubscribersReturnsAtOnce) {
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(1));
   const Status none = (*pub)->wait_for_subscribers(1, 0.05);
   EXPECT_EQ(none.code(), Errc::timeout);
-  EXPECT_NE(none.message().find("0 of 1 matched"), std::string::npos) << none.message();
+  EXPECT_NE(none.message().find("0 of 1 subscribers"), std::string::npos) << none.message();
 }
 
 // The wire format -----------------------------------------------------------------

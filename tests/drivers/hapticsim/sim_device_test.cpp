@@ -327,6 +327,8 @@ TEST(Script, ErrorsNameTheLineAndTheProblem) {
   EXPECT_EQ(error("0 emergency fire 1\n").find("s.txt:1: unknown emergency 'fire'"), 0u);
   EXPECT_EQ(error("0 garbage 2.5\n").find("s.txt:1: garbage frame count 2.5"), 0u);
   EXPECT_EQ(error("0 clutch maybe\n"), "s.txt:1: clutch takes 'on' or 'off', got 'maybe'");
+  EXPECT_EQ(error("0 mode maybe\n"), "s.txt:1: mode takes 'on' or 'off', got 'maybe'");
+  EXPECT_EQ(error("0 mode\n"), "s.txt:1: 'mode' takes 1 argument(s), got 0");
   EXPECT_EQ(error("x grab\n"), "s.txt:1: time 'x' is not a finite number");
   EXPECT_EQ(error("  # only a comment\n\n0 grab # and another\n"), "(parsed)");
   auto missing = load_script("/nonexistent/script.txt", kHalf);
@@ -380,6 +382,24 @@ TEST(Script, DragIsStrokesReindexedWithTheClutch) {
   EXPECT_NEAR(max_x, 50.0, 1e-9);
   EXPECT_NEAR(last_x, 50.0, 1e-9);
   EXPECT_TRUE(clutch_while_returning);
+}
+
+// `mode on|off` holds the third button (the console's pull / spool switch).
+TEST(Script, ModePressesTheThirdButton) {
+  auto s = parse_script("0.1 mode on\n0.2 mode off\n", "s", kHalf);
+  ASSERT_TRUE(s.ok()) << s.status().message();
+  can::MemoryBus bus(1, 16);
+  auto d = SimDevice::create(SimConfig{}, bus.endpoint(0), 0);
+  ASSERT_TRUE(d.ok());
+  Player player(*s);
+  player.advance(0.05, 50 * kMs, *d);
+  EXPECT_FALSE(d->hand().mode);
+  player.advance(0.15, 150 * kMs, *d);
+  EXPECT_TRUE(d->hand().mode);
+  EXPECT_FALSE(d->hand().grasp);
+  EXPECT_FALSE(d->hand().clutch);
+  player.advance(0.25, 250 * kMs, *d);
+  EXPECT_FALSE(d->hand().mode);
 }
 
 }  // namespace

@@ -994,16 +994,11 @@ TEST_F(ExecutiveTest, TheSafeStateZeroesTheForceUntilTheNextGrasp) {
 // The rope pays out as it is pulled taut, settles as it goes, arrives and is
 // held at the end; the path updates say so.
 std::string spool_script(const ExecutiveConfig& c, double spacing_m) {
-  const servo::ServoConfig sc = scene_servo_config(c, spacing_m);
-  const Vec3 dir = (c.end_m - c.start_m).normalized();
-  const double lead_m = kSpoolLeadSegments * pull_segment_m(c.start_m, c.end_m, c.model, c.segments, c.slack);
-  const Eigen::Vector3d from = servo::device_mm_of(sc, c.start_m + lead_m * dir);
-  const Eigen::Vector3d by = servo::device_mm_of(sc, c.end_m + 0.1 * (c.end_m - c.start_m)) - from;
+  const Eigen::Vector3d by = spool_drag_mm(c, spacing_m, 0.1);
   char text[256];
   std::snprintf(text, sizeof text,
-                "0.3 mode on\n0.4 mode off\n0.5 move %.2f %.2f %.2f 0.3\n1.0 drag %.2f %.2f %.2f 3.0 %.0f\n"
-                "4.5 release\n",
-                from.x(), from.y(), from.z(), by.x(), by.y(), by.z(), std::ceil(by.norm()) + 1);
+                "0.1 move -60 10 20 0.1\n0.3 mode on\n0.4 mode off\n1.0 drag %.2f %.2f %.2f 3.0 60\n4.5 release\n",
+                by.x(), by.y(), by.z());
   return text;
 }
 
@@ -1013,19 +1008,28 @@ TEST_F(ExecutiveTest, SpoolModePaysOutAsTheOperatorDragsAndArrives) {
   ASSERT_TRUE(sim);
   auto e = make(&*sim->device, sim->sim.get());
   ASSERT_TRUE(e);
-  run(*e, 900);  // the button pressed and released, the hand at the lead's end
+  run(*e, 50);                    // warm
+  std::uint64_t allocations = 0;  // by the ticks alone (the test's own checks allocate)
+  const auto ticks = [&](int n) {
+    const std::uint64_t before = visvol::testing::thread_allocation_count();
+    run(*e, n);
+    allocations += visvol::testing::thread_allocation_count() - before;
+  };
+  ticks(850);  // the button pressed and released, the hand at the lead's end
   ASSERT_EQ(e->counters().mode, msg::InteractionMode::spool) << script;
   EXPECT_EQ(e->counters().mode_switches, 1u);
   EXPECT_EQ(e->rope().segments(), kSpoolLeadSegments);
   const double segment_m = e->rope().length_m() / kSpoolLeadSegments;
-  EXPECT_NEAR((e->rope().vertices()[0] - config_.start_m).norm(), 0.0, 1e-6) << "held at the start";
+  // the handle holds the proxy at the lead's free end (the workspace re-indexed)
+  EXPECT_LT((e->proxy_m() - e->rope().point(kSpoolLeadSegments - 1, 1.0)).norm(), 0.5 * segment_m);
 
-  run(*e, 1500);  // half way through the drag
+  ticks(1500);  // half way through the drag
   const ExecutiveCounters& mid = e->counters();
   EXPECT_GT(e->rope().segments(), kSpoolLeadSegments + 4) << "paid out while dragged";
   EXPECT_NEAR(mid.spool_paid_out_m, e->rope().segments() * segment_m, 1e-6 * segment_m * e->rope().segments());
   EXPECT_FALSE(mid.spool_arrived);
-  EXPECT_NEAR((e->rope().vertices()[0] - config_.start_m).norm(), 0.0, 1e-6);
+  EXPECT_GT(mid.spool_gap_m, segment_m);
+  EXPECT_LT((e->rope().point(0, 0.0) - config_.start_m).norm(), 0.01 * segment_m) << "held at the start";
   const msg::PathSample* p = paths_.take();
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->mode, msg::InteractionMode::spool);
@@ -1035,18 +1039,20 @@ TEST_F(ExecutiveTest, SpoolModePaysOutAsTheOperatorDragsAndArrives) {
   msg::Command spring = command(msg::CommandKind::set_model, 1);
   spring.model = msg::RopeModel::spring_mass;
   ASSERT_TRUE(commands_.try_push(spring));
-  run(*e, 1);
+  ticks(1);
   EXPECT_NE(next_failure().find("switch to pull mode first"), std::string::npos);
 
-  run(*e, 3000);  // the drag ends past the end, the hand lets go
+  ticks(3000);  // the drag ends past the end, the hand lets go
   const ExecutiveCounters& c = e->counters();
   EXPECT_TRUE(c.spool_arrived);
   EXPECT_FALSE(c.spool_at_capacity);
   EXPECT_EQ(c.mode, msg::InteractionMode::spool);
   EXPECT_EQ(c.spool_segments, e->rope().segments());
-  const Vec3 last = e->rope().vertices()[e->rope().segments()];
+  EXPECT_EQ(c.spool_gap_m, 0.0);
+  const Vec3 last = e->rope().point(e->rope().segments() - 1, 1.0);  // the capsule's end, not the anchor
   EXPECT_LT((last - config_.end_m).norm(), 0.05 * segment_m) << "held at the end";
-  EXPECT_GE(c.spool_paid_out_m, (config_.end_m - config_.start_m).norm()) << "at least as long as the straight line";
+  EXPECT_LT((e->rope().point(0, 0.0) - config_.start_m).norm(), 0.05 * segment_m) << "and at the start";
+  EXPECT_GE(c.spool_paid_out_m, 1.02 * (config_.end_m - config_.start_m).norm() - 1e-6) << "with some slack";
   for (int i = 0; i <= e->rope().segments(); ++i) ASSERT_TRUE(e->rope().vertices()[i].allFinite());
 
   // back to pull mode: the arrived rope is kept, both ends held
@@ -1054,16 +1060,67 @@ TEST_F(ExecutiveTest, SpoolModePaysOutAsTheOperatorDragsAndArrives) {
   msg::Command pull = command(msg::CommandKind::set_mode, 2);
   pull.mode = msg::InteractionMode::pull;
   ASSERT_TRUE(commands_.try_push(pull));
-  run(*e, 1);
+  ticks(1);
   EXPECT_EQ(next_ack().result, msg::AckResult::applied);
   EXPECT_EQ(e->counters().mode, msg::InteractionMode::pull);
   EXPECT_EQ(e->counters().mode_switches, 2u);
   EXPECT_EQ(e->rope().segments(), segments);
-  run(*e, 20);
+  ticks(20);
+  // the whole course, button, lead, pay-outs, arrival, the switch back, allocated nothing
+  EXPECT_EQ(allocations, 0u);
   p = paths_.take();
   ASSERT_NE(p, nullptr);
   EXPECT_EQ(p->mode, msg::InteractionMode::pull);
   EXPECT_EQ(p->spool_paid_out_m, 0.0);
+}
+
+// A mode switch under a held grasp lets go: the new rope is not pulled until
+// the operator presses the grasp button again; a held mode button seen again
+// after samples that were not valid is not a second press.
+TEST_F(ExecutiveTest, AModeSwitchLetsGoOfTheGraspAndAHeldButtonSwitchesOnce) {
+  FakeDevice dev;
+  dev.health_.state = HapticState::operational;
+  dev.sample_.valid = true;
+  dev.sample_.fresh = true;
+  auto e = make(&dev);
+  ASSERT_TRUE(e);
+  auto tick = [&](int n) {
+    for (int k = 0; k < n; ++k) {
+      dev.sample_.timestamp_ns = now_ns_ + kMs;
+      run(*e, 1);
+    }
+  };
+  tick(20);
+  dev.sample_.grasp_button = true;  // pressed after a release: a grasp
+  dev.sample_.position_mm = Eigen::Vector3d(30, 0, 0);
+  tick(400);
+  const servo::Servo* servo = e->servo();
+  ASSERT_NE(servo, nullptr);
+  ASSERT_EQ(servo->counters().grasps, 1u);
+  dev.sample_.mode_button = true;
+  tick(1);
+  ASSERT_EQ(e->counters().mode, msg::InteractionMode::spool);
+  dev.sample_.mode_button = false;  // a bounce within the guard time
+  tick(1);
+  dev.sample_.mode_button = true;
+  tick(1);
+  EXPECT_EQ(e->counters().mode_switches, 1u);
+  tick(300);  // the grasp button still held
+  EXPECT_EQ(e->rope().segments(), kSpoolLeadSegments) << "nobody pulls the lead out";
+  EXPECT_EQ(servo->counters().grasps, 1u);
+  dev.sample_.valid = false;  // a gap in the samples, the mode button still down
+  tick(5);
+  dev.sample_.valid = true;
+  tick(300);
+  EXPECT_EQ(e->counters().mode, msg::InteractionMode::spool) << "the held button switched once";
+  EXPECT_EQ(e->counters().mode_switches, 1u);
+  dev.sample_.mode_button = false;
+  tick(1);
+  dev.sample_.mode_button = true;  // a press well after the last: pull mode, the rope laid between the ends
+  tick(1);
+  EXPECT_EQ(e->counters().mode, msg::InteractionMode::pull);
+  EXPECT_EQ(e->counters().mode_switches, 2u);
+  EXPECT_EQ(e->rope().segments(), config_.segments);
 }
 
 // Spool mode needs the operator's hand; pull mode from spool mode before the

@@ -105,6 +105,47 @@ TEST(Servo, ClutchFreezesTheProxyAndReindexes) {
   EXPECT_NEAR(out.proxy_pos_m.x() - frozen.x(), 0.1, 1e-12) << "10 mm more = 0.1 m more";
 }
 
+// The executive's spool mode hands the operator the rope's free end: the
+// handle where it is puts the proxy there, and moves it from there on; a
+// non-finite point is ignored.
+TEST(Servo, ReindexPutsTheProxyWhereAskedFromTheHandleAsItIs) {
+  Servo s = make();
+  double t = 0.0;
+  run(s, t, 5, [](double tt) { return healthy(tt, Vector3d(30, -5, 12), false); });
+  const Vector3d there(5000.0, -250.0, 80.0);
+  s.reindex(there);
+  ServoOutput out = s.step(healthy(t += kDt, Vector3d(30, -5, 12), false));
+  EXPECT_TRUE(out.proxy_pos_m.isApprox(there, 1e-12)) << out.proxy_pos_m.transpose();
+  out = s.step(healthy(t += kDt, Vector3d(40, -5, 12), false));
+  EXPECT_NEAR(out.proxy_pos_m.x() - there.x(), 0.1, 1e-9) << "10 mm east = 0.1 m east";
+  s.reindex(Vector3d(NAN, 0, 0));
+  out = s.step(healthy(t += kDt, Vector3d(40, -5, 12), false));
+  EXPECT_NEAR(out.proxy_pos_m.x() - there.x(), 0.1, 1e-9) << "a non-finite point changes nothing";
+  s.restore_mapping();
+  out = s.step(healthy(t += kDt, Vector3d(0, 0, 0), false));
+  EXPECT_TRUE(out.proxy_pos_m.isApprox(ServoConfig{}.world_offset_m, 1e-12)) << "the configured mapping again";
+}
+
+// A rope laid again under the hand: the grasp ends, and forces come back only
+// with a new press of the grasp button.
+TEST(Servo, ReleasingTheGraspWithholdsForcesUntilTheNextPress) {
+  Servo s = make();
+  double t = 0.0;
+  run(s, t, 5, [](double tt) { return healthy(tt, Vector3d::Zero(), false); });
+  ServoOutput out = run(s, t, 400, [](double tt) { return healthy(tt, Vector3d(20, 0, 0), true); });
+  ASSERT_TRUE(out.grasping);
+  ASSERT_GT(out.rope_force_n.norm(), 0.0);
+  s.release_grasp();
+  out = run(s, t, 50, [](double tt) { return healthy(tt, Vector3d(20, 0, 0), true); });
+  EXPECT_FALSE(out.grasping) << "the button still held is not a new grasp";
+  EXPECT_TRUE(out.awaiting_regrasp);
+  EXPECT_EQ(out.rope_force_n.norm(), 0.0);
+  run(s, t, 5, [](double tt) { return healthy(tt, Vector3d(20, 0, 0), false); });
+  out = run(s, t, 5, [](double tt) { return healthy(tt, Vector3d(20, 0, 0), true); });
+  EXPECT_TRUE(out.grasping) << "released and pressed again";
+  EXPECT_EQ(s.counters().grasps, 2u);
+}
+
 TEST(Servo, SoftJointPullsTheRopeAndTheHandFeelsTheReaction) {
   ServoConfig c;
   c.ramp_in_s = 0.0;

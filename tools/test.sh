@@ -4,7 +4,7 @@
 # less the long numerical runs labelled `numeric`), the threaded tests under
 # ThreadSanitizer, then the fuzzers. Prints each
 # stage's time as it ends and all of them at the end, passed or not.
-#   VISVOL_FUZZ_SECONDS   time per fuzz target (default here 10: the seed corpus
+#   VISVOL_FUZZ_SECONDS   time per fuzz target (default here 5: the seed corpus
 #                         replayed and a short run; tools/fuzz.sh alone runs 60)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -91,7 +91,7 @@ finish() {
 }
 trap finish EXIT
 
-export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-10}
+export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-5}
 if [[ $(id -u) -eq 0 ]]; then
   stage "install packages" tools/deps.sh build storage dds render can
   tools/deps.sh vm fuzz lint >"$late_log" 2>&1 &

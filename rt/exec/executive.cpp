@@ -258,17 +258,17 @@ Errc Executive::start_run() {
   if (!rope_->reset(scratch_.get(), n + 1, n).ok()) return Errc::invalid_argument;
   set_ends(start_m_, end_m_);
   equilibrium_.reset();
-  grasping_ = false;
-  rope_->clear_point_force();
   counters_.converged = false;
   counters_.run_s = 0;
   counters_.equilibrium_s = 0;
   ++counters_.runs;
   relaid_ = false;  // a new run (recover_rope sets it again for a relaid one)
-  if (mode_ != msg::InteractionMode::pull) ++counters_.mode_switches;
+  const bool was_spool = mode_ != msg::InteractionMode::pull;
+  if (was_spool) ++counters_.mode_switches;
   mode_ = msg::InteractionMode::pull;  // between both ends
   counters_.mode = mode_;
   arrival_ticks_ = -1;
+  let_go(was_spool);  // a new rope under the hand; from spool mode, the scene's mapping again
   return Errc::ok;
 }
 
@@ -426,10 +426,13 @@ void Executive::haptics(std::int64_t now_ns, double t_s) {
   if (sample.valid) {
     const bool pressed = sample.mode_button;
     if (pressed && !mode_button_was_ && now_ns - mode_press_ns_ >= kModePressGuardNs) {
-      mode_press_ns_ = now_ns;
       const msg::InteractionMode other =
           mode_ == msg::InteractionMode::pull ? msg::InteractionMode::spool : msg::InteractionMode::pull;
-      if (set_mode(other) != Errc::ok) ++counters_.mode_refusals;
+      if (set_mode(other) == Errc::ok) {
+        mode_press_ns_ = now_ns;
+      } else {
+        ++counters_.mode_refusals;
+      }
     }
     mode_button_was_ = pressed;
   }

@@ -276,8 +276,13 @@ class Executive final : public PeriodicTask {
   void spool();             // spool mode, each tick: pay out, or hold the arrived end
   void hold_arrived_end();  // the end's anchor on its way onto the end, then held there
   void paid_out();          // after a segment paid out
-  // the rope is being spooled out (its far end not yet held at the end)
-  bool spooling() const { return mode_ == msg::InteractionMode::spool && arrival_ticks_ < 0; }
+  // A rope laid under the hand: the grasp ends (forces return with a new
+  // press of the grasp button); `scene_mapping`: the workspace mapped onto
+  // the scene again (pull mode).
+  void let_go(bool scene_mapping);
+  // the rope is being spooled out (its far end not yet held at the end, or
+  // its anchor still on its way there)
+  bool spooling() const { return mode_ == msg::InteractionMode::spool && !counters_.spool_arrived; }
   int copy_vertices();  // the rope's vertices into scratch_; their count
   void ack(const msg::Command& c, Errc result, const char* reason);
   Errc restart_rope(const Vec3* polyline, int points, int segments, RopeModel model);
@@ -339,10 +344,10 @@ class Executive final : public PeriodicTask {
   msg::InteractionMode mode_ = msg::InteractionMode::pull;
   double spool_segment_m_ = 0.0;  // a pull-mode segment's length: what each pay-out adds
   int ticks_since_pay_out_ = 0;
-  int arrival_ticks_ = -1;              // ticks since the free end arrived (-1: not yet)
-  Vec3 arrival_from_m_ = Vec3::Zero();  // where it was then
-  bool mode_button_was_ = false;        // the mode button's last valid state (presses are its rising edges)
-  std::int64_t mode_press_ns_ = 0;      // when a press last switched the mode
+  int arrival_ticks_ = -1;                      // ticks since the free end arrived (-1: not yet)
+  Vec3 arrival_from_m_ = Vec3::Zero();          // where it was then
+  bool mode_button_was_ = false;                // the mode button's last valid state (presses are its rising edges)
+  std::int64_t mode_press_ns_ = INT64_MIN / 2;  // when a press last switched the mode
   int grasp_segment_ = 0;
   double grasp_fraction_ = 0.0;
   std::uint64_t path_sequence_ = 0;

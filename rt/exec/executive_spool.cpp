@@ -31,21 +31,24 @@ Errc Executive::set_mode(msg::InteractionMode mode) {
     mode_ = msg::InteractionMode::pull;  // the spooled rope already holds both ends: kept
     counters_.mode = mode_;
     ++counters_.mode_switches;
+    let_go(true);
+    equilibrium_.reset();
   } else {
-    e = start_run();  // lays the rope between the ends again, in pull mode (counts the switch)
+    e = start_run();  // lays the rope between the ends again, in pull mode (counts the switch, lets go)
   }
   if (e != Errc::ok) return e;
-  if (servo_) {
-    // The hand lets go of the rope it held (forces return with a new grasp),
-    // and pull mode has the scene's mapping again.
-    servo_->release_grasp();
-    if (mode_ == msg::InteractionMode::pull) {
-      servo_->restore_mapping();
-      last_proxy_m_ = servo_->config().world_offset_m;
-    }
-  }
   counters_.running = true;  // a switch starts the rope stepping, as start does
   return Errc::ok;
+}
+
+void Executive::let_go(bool scene_mapping) {
+  grasping_ = false;
+  rope_->clear_point_force();
+  pull_n_ = Vec3::Zero();
+  if (!servo_) return;
+  servo_->release_grasp();
+  if (scene_mapping) servo_->restore_mapping();
+  last_proxy_m_ = servo_->proxy_m();
 }
 
 // A lead of kSpoolLeadSegments from the start toward the end, its far end
@@ -75,17 +78,13 @@ Errc Executive::start_spool() {
   }
   rope_->set_ends(ends);
   // the handle, wherever it is, now holds the proxy at the lead's free end
-  if (servo_) {
-    servo_->reindex(lead[kSpoolLeadSegments]);
-    last_proxy_m_ = lead[kSpoolLeadSegments];
-  }
+  if (servo_) servo_->reindex(lead[kSpoolLeadSegments]);
+  let_go(false);
   mode_ = msg::InteractionMode::spool;
   spool_segment_m_ = segment_m;
   ticks_since_pay_out_ = 0;
   arrival_ticks_ = -1;
   equilibrium_.reset();
-  grasping_ = false;
-  rope_->clear_point_force();
   counters_.converged = false;
   counters_.run_s = 0;
   counters_.equilibrium_s = 0;

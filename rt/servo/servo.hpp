@@ -153,6 +153,9 @@ class Servo {
   void release_grasp();
 
   const ServoConfig& config() const { return config_; }
+  // Where the proxy is now (world, m): the mapping applied to the last handle
+  // position, or where the clutch froze it.
+  Eigen::Vector3d proxy_m() const;
   const ServoCounters& counters() const { return counters_; }
 
  private:
@@ -186,8 +189,6 @@ class Servo {
     // Force shaping: the last device force command, device frame.
     Eigen::Vector3d device_force_n = Eigen::Vector3d::Zero();
   };
-
-  Eigen::Vector3d proxy_m() const;
 
   ServoConfig config_;
   double alpha_per_s_;  // velocity filter bandwidth, rad/s

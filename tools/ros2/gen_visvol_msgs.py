@@ -70,7 +70,13 @@ def parse(lines):
                 current = None
                 continue
             if line.startswith("//"):
-                pending.append(line[2:].strip())
+                indent = len(raw) - len(raw.lstrip())
+                if entries and entries[-1][0] == "field" and entries[-1][3] and indent > field_indent + 8:
+                    # a continuation of the field's own comment (indented to its column)
+                    kind, t, n, c = entries[-1]
+                    entries[-1] = (kind, t, n, c + " " + line[2:].strip())
+                else:
+                    pending.append(line[2:].strip())
                 continue
             m = re.match(r"(sequence<[^>]+>|[A-Za-z_][A-Za-z0-9_:]*)\s+([a-z][a-z0-9_]*)\s*;(.*)$", line)
             if not m:
@@ -78,11 +84,14 @@ def parse(lines):
             for c in pending:
                 entries.append(("comment", c))
             pending = []
+            field_indent = len(raw) - len(raw.lstrip())
             entries.append(("field", ros_type(m.group(1), no), m.group(2), comment_of(m.group(3))))
             continue
+        if re.match(r"(@\w+\s+)*struct\b", line) and not line.startswith("@final"):
+            fail(no, "a struct that is not @final (ROS 2's types are plain, final CDR)")
         m = re.match(r"@final\s+struct\s+([A-Z][A-Za-z0-9]*_)\s*\{", line)
         if m:
-            current, entries, pending = m.group(1)[:-1], [], []
+            current, entries, pending, field_indent = m.group(1)[:-1], [], [], 4
             order.append(current)
             group = None
             continue

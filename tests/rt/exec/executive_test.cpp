@@ -1108,6 +1108,8 @@ TEST_F(ExecutiveTest, AModeSwitchLetsGoOfTheGraspAndAHeldButtonSwitchesOnce) {
   tick(300);  // the grasp button still held
   EXPECT_EQ(e->rope().segments(), kSpoolLeadSegments) << "nobody pulls the lead out";
   EXPECT_EQ(servo->counters().grasps, 1u);
+  EXPECT_EQ(e->counters().grasps, 1u) << "the held button did not grasp the new rope";
+  EXPECT_EQ(dev.last_force_n.norm(), 0.0) << "forces withheld until a new press";
   dev.sample_.valid = false;  // a gap in the samples, the mode button still down
   tick(5);
   dev.sample_.valid = true;

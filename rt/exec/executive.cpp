@@ -181,11 +181,14 @@ double pull_segment_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, i
   return std::max(length / std::max(segments, 1), kMinSegmentM);
 }
 
+Vec3 spool_lead_end_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, int segments, double slack) {
+  return start_m +
+         kSpoolLeadSegments * pull_segment_m(start_m, end_m, model, segments, slack) * (end_m - start_m).normalized();
+}
+
 Eigen::Vector3d spool_drag_mm(const ExecutiveConfig& c, double spacing_m, double past) {
   const servo::ServoConfig sc = scene_servo_config(c, spacing_m);
-  const Vec3 dir = (c.end_m - c.start_m).normalized();
-  const Vec3 lead_end =
-      c.start_m + kSpoolLeadSegments * pull_segment_m(c.start_m, c.end_m, c.model, c.segments, c.slack) * dir;
+  const Vec3 lead_end = spool_lead_end_m(c.start_m, c.end_m, c.model, c.segments, c.slack);
   const Vec3 target = c.end_m + past * (c.end_m - c.start_m);
   return sc.device_to_world.transpose() * (target - lead_end) / sc.world_m_per_device_mm;
 }

@@ -196,6 +196,9 @@ servo::ServoConfig scene_servo_config(const ExecutiveConfig& c, double spacing_m
 // A pull-mode rope segment between these ends (the articulated rope with its
 // slack), m: what spool mode pays out each time.
 double pull_segment_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, int segments, double slack);
+// Where a spool's lead of kSpoolLeadSegments pull-mode segments ends, m:
+// from the start toward the end.
+Vec3 spool_lead_end_m(const Vec3& start_m, const Vec3& end_m, RopeModel model, int segments, double slack);
 // The hand travel (device frame, mm) that takes a spool's lead free end, as
 // the workspace holds it once spool mode begins, to `past` (a fraction of the
 // ends' distance) beyond the end: what an operator script drags.

@@ -55,10 +55,12 @@ void Executive::let_go(bool scene_mapping) {
 // free, with the pull mode's segment length and springs.
 Errc Executive::start_spool() {
   if (device_ == nullptr) return Errc::unsupported;
-  const Vec3 dir = (end_m_ - start_m_).normalized();
   const double segment_m = pull_segment_m(start_m_, end_m_, rope_->model(), segments_, config_.slack);
+  const Vec3 lead_end = spool_lead_end_m(start_m_, end_m_, rope_->model(), segments_, config_.slack);
   Vec3 lead[kSpoolLeadSegments + 1];
-  for (int i = 0; i <= kSpoolLeadSegments; ++i) lead[i] = start_m_ + (i * segment_m) * dir;
+  for (int i = 0; i <= kSpoolLeadSegments; ++i) {
+    lead[i] = start_m_ + (static_cast<double>(i) / kSpoolLeadSegments) * (lead_end - start_m_);
+  }
   if (check_polyline(lead, kSpoolLeadSegments + 1, kSpoolLeadSegments, 1, config_.max_segments) != Errc::ok) {
     return Errc::invalid_argument;
   }

@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "fields/dense_level.hpp"
 #include "rt/rope/envelope_fit.hpp"
 #include "rt/rope/equilibrium.hpp"
 #include "rt/rope/field_forces.hpp"
@@ -388,4 +389,16 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   return result;
 }
 
+// Compiled once, optimised, in visvol_rope (plan_dense.cpp) for the levels held
+// in memory (tests, benchmarks): each caller instantiated the planner, the
+// search and the field's forces again, the longest compile of the tests.
+extern template Result<PlanResult> plan<fields::DenseLevel>(const std::vector<const fields::DenseLevel*>&,
+                                                            const PlanRequest&,
+                                                            const std::function<void(const PlanProgress&)>&);
+extern template Result<GlobalPath> global_search<fields::DenseLevel>(const fields::DenseLevel&, const Vec3&,
+                                                                     const Vec3&, const GlobalSearchParams&);
+extern template class FieldForces<fields::DenseLevel>;
+
 }  // namespace visvol::rt
+
+extern template class visvol::fields::FieldSampler<visvol::fields::DenseLevel>;

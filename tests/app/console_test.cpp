@@ -478,7 +478,7 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   // fault at all in the optimised build. Under AddressSanitizer the shadow of
   // newly touched memory is mapped lazily, and such a fault that retries
   // behind another thread's mmap is counted as major without any disk I/O.
-#if !defined(__SANITIZE_ADDRESS__)
+#ifndef VISVOL_SANITIZED_ADDRESS
   EXPECT_EQ(s["loop"]["major_faults_after_settle"].get<int>(), 0);
   EXPECT_EQ(s["loop"]["minor_faults_after_settle"].get<int>(), 0);
 #endif
@@ -506,7 +506,7 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
                 s["loop"]["safe_states"].get<int>());
   }
   EXPECT_LE(s["device"]["simulated"]["max_force_n"].get<double>(), 1.4 + 1e-9);
-#if !defined(__SANITIZE_ADDRESS__)  // ASan's shadow and quarantine are not the console's memory
+#ifndef VISVOL_SANITIZED_ADDRESS  // ASan's shadow and quarantine are not the console's memory
   EXPECT_LE(s["memory"]["rss_peak_mib"].get<double>(), s["memory"]["budget_mib"].get<double>());
 #endif
   const std::string csv = slurp(out + "/path.csv");

@@ -51,13 +51,21 @@ TEST(ExactVisibility, FieldValueCountsVisibleObserversByArea) {
   p.range_shape = RangeShape::none;
   p.eye_height_m = 0;
   // Above the wall's top everything is visible; just above the ground east of
-  // the wall, the western observers are hidden.
-  double total = 0;
-  for (float a : area) total += a;
+  // the wall (column 4), the western observers are hidden: the value is the
+  // eastern posts' share of the area, with or without the wall's own posts.
+  double total = 0, east = 0, wall_posts = 0;
+  for (int j = 0; j < hf.ny; ++j) {
+    for (int i = 0; i < hf.nx; ++i) {
+      const double a = area[static_cast<std::size_t>(j * hf.nx + i)];
+      total += a;
+      if (i > 4) east += a;
+      if (i == 4) wall_posts += a;
+    }
+  }
   EXPECT_NEAR(exact_visibility(hf, area, p, 7, 4, 1000.0), 1.0, 1e-12);
   const double low = exact_visibility(hf, area, p, 7, 4, 100.5);
-  EXPECT_GT(low, 0.0);
-  EXPECT_LT(low, 0.6);
+  EXPECT_GE(low, east / total - 1e-12);
+  EXPECT_LE(low, (east + wall_posts) / total + 1e-12);
   EXPECT_EQ(exact_visibility(hf, area, p, 7, 4, 99.0), 0.0);  // below the ground
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -173,7 +174,9 @@ TEST(HullKernel, VectorLevelsMatchTheScalarHorizon) {
         const double h = horizon[static_cast<std::size_t>((dy + r) * (2 * r + 1) + dx + r)];
         const double d = std::hypot(double(dx), double(dy)) * hf.spacing_m;
         const double hull = h <= kNoHorizon ? -1e30 : chunk.eye_m[l] + d * h;
-        int expected = static_cast<int>(std::floor((hull - g.z0_m) / g.dz_m)) + 1;
+        // clamped before the cast: no horizon is -1e30 m, far outside int
+        const double level = std::floor((hull - g.z0_m) / g.dz_m) + 1;
+        int expected = static_cast<int>(std::clamp(level, -1.0, static_cast<double>(g.nz)));
         expected = std::max(expected, t.ground_level[t.index(x, y)]);
         expected = std::clamp(expected, 0, g.nz);
         const int got = out[layout.offset(py, y, chunk.px0 / kLanes, dx - layout.first_dx(chunk.px0)) +

@@ -63,7 +63,7 @@ void expect_producer_never_waits(LivePublisher& pub) {
   const long waited = voluntary_switches() - switches;
   // ThreadSanitizer's runtime takes locks of its own on every synchronising
   // access: a switch there is not the producer's.
-#if !defined(__SANITIZE_THREAD__)
+#ifndef VISVOL_SANITIZED_THREAD
   EXPECT_EQ(waited, 0) << "the producer blocked " << waited << " times";
 #else
   (void)waited;

@@ -1274,7 +1274,7 @@ TEST(ExecutiveLoop, RunsAcrossAPackLargerThanItsBudgetWithoutFaultsOrAllocations
   // cache at best). Under AddressSanitizer the shadow of newly touched memory
   // is mapped lazily (tens of minor faults, and one that retries behind the
   // pager's munlock counts as major), so only the optimised build checks.
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#ifndef VISVOL_SANITIZED
   EXPECT_EQ(run.totals.faults_after_settle.major, 0) << "the loop thread waited on the disk";
   EXPECT_EQ(run.totals.faults_after_settle.minor, 0);
 #endif

@@ -10,8 +10,7 @@ namespace visvol::rt {
 template class FieldForces<fields::DenseLevel>;
 template Result<GlobalPath> global_search<fields::DenseLevel>(const fields::DenseLevel&, const Vec3&, const Vec3&,
                                                               const GlobalSearchParams&);
-template Result<PlanResult> plan<fields::DenseLevel>(const std::vector<const fields::DenseLevel*>&,
-                                                     const PlanRequest&,
+template Result<PlanResult> plan<fields::DenseLevel>(const std::vector<const fields::DenseLevel*>&, const PlanRequest&,
                                                      const std::function<void(const PlanProgress&)>&);
 
 }  // namespace visvol::rt

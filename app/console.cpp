@@ -9,9 +9,11 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "app/fault_injection.hpp"
 #include "app/flyable_path.hpp"
 #include "app/log.hpp"
 #include "app/supervisor.hpp"
+#include "app/terrain_catalogue.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/dds/command_intake.hpp"
@@ -167,6 +169,11 @@ struct Console::Impl {
   std::string pack_id;
   fields::Bounds2D bounds;  // the pack's planning bounds: the ends and the flyable path stay inside
   std::vector<std::pair<std::string, std::string>> terrains;  // id, path: where switch-terrain may go
+  std::unique_ptr<TerrainCatalogue> catalogue;                // --catalogue: more, verified off the loop
+  std::uint64_t catalogue_seen = ~std::uint64_t{0};           // its version last acted on
+  std::vector<CatalogueEntry> catalogue_entries;              // as last seen then
+  bool catalogue_full = false;                                // more verified than commands may name (said once)
+  dds::CommandLimits limits;                                  // the intake's, but for the catalogue's packs
   std::string switch_to;  // the pack id a switch-terrain command asked for, once seen
   double session_s = 0;   // how long the session ran
   rt::MemoryBudget budget{0};
@@ -194,6 +201,7 @@ struct Console::Impl {
   std::vector<rt::Vec3> final_path;  // the flyable path at the end (write_outputs)
   bool final_flyable = false;
   std::unique_ptr<rt::Executive> exec;
+  std::unique_ptr<StallingTask> stall;  // --inject-stall: between the loop and the executive
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
   std::string health_csv;
@@ -207,6 +215,9 @@ struct Console::Impl {
   Status start_device();
   Status start_executive();
   Status open_terrains();
+  Status start_catalogue();
+  void poll_catalogue();
+  nlohmann::json catalogue_json() const;
   std::string out_dir() const;
   Status start_dds(const fields::VolumeGeometry& g);
   Status start_thumbnails();
@@ -249,6 +260,10 @@ std::optional<ConsoleOptions> Console::next_session() const {
   ConsoleOptions next = m.o;
   for (const auto& t : m.terrains) {
     if (t.first == m.switch_to) next.pack = t.second;
+  }
+  if (next.pack == m.o.pack && m.catalogue) {
+    const std::string path = m.catalogue->verified_path(m.switch_to);
+    if (!path.empty()) next.pack = path;
   }
   if (next.pack == m.o.pack) return std::nullopt;  // not one of this console's packs (the intake checks)
   // the old pack becomes one to switch back to
@@ -307,6 +322,7 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   ic.limits.max_observers = static_cast<std::uint32_t>(observers);
   VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
   for (const auto& t : terrains) VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, t.first));
+  limits = ic.limits;  // poll_catalogue() adds the catalogue's verified packs to these
   auto in = dds::CommandIntake::start(*participant, ic, commands, &acks);
   if (!in.ok()) return in.status();
   intake = std::move(*in);
@@ -386,6 +402,7 @@ Status Console::Impl::open_terrains() {
 
 Status Console::Impl::start() {
   VISVOL_RETURN_IF_ERROR(open_pack());
+  VISVOL_RETURN_IF_ERROR(start_catalogue());
   const fields::VolumeGeometry g = pack->geometry(o.level);
   rt::RealtimeConfig rtc;
   rtc.priority = o.priority;
@@ -405,7 +422,13 @@ Status Console::Impl::start() {
   loop_config.realtime = rtc;
   field->set_reader_active(true);
   field->start_pager();
-  loop = std::make_unique<rt::PeriodicLoop>(*exec);
+  if (!o.inject_stall.empty()) {
+    stall = std::make_unique<StallingTask>(*exec, o.inject_stall[0], o.inject_stall[1]);
+    log_printf(LogLevel::warning,
+               "visvol-console: fault injection: the loop stalls %.3g s after it starts, for %.3g s\n",
+               o.inject_stall[0], o.inject_stall[1]);
+  }
+  loop = std::make_unique<rt::PeriodicLoop>(stall ? static_cast<rt::PeriodicTask&>(*stall) : *exec);
   return loop->start(loop_config);
 }
 
@@ -643,6 +666,80 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
 // The renderer reads the pack's finest level once (mesh, F_p texture) and,
 // under mlockall, those mapped pages stay locked. Hand them back: the tiles
 // the rope needs are made resident by the resident pack, within its budget.
+Status Console::Impl::start_catalogue() {
+  if (o.catalogue.empty()) return {};
+  auto c = TerrainCatalogue::start(o.catalogue, o.level);
+  if (!c.ok()) return c.status();
+  catalogue = std::move(*c);
+  log_printf(LogLevel::info, "visvol-console: catalogue %s: %zu packs, verifying them\n", o.catalogue.c_str(),
+             catalogue->entries().size());
+  return {};
+}
+
+// From the monitor: the catalogue's changes said, and its verified packs
+// made names a switch-terrain may use.
+void Console::Impl::poll_catalogue() {
+  if (!catalogue || catalogue->version() == catalogue_seen) return;
+  catalogue_seen = catalogue->version();
+  std::vector<CatalogueEntry> now = catalogue->entries();
+  for (const CatalogueEntry& e : now) {
+    const auto old = std::find_if(catalogue_entries.begin(), catalogue_entries.end(),
+                                  [&](const CatalogueEntry& k) { return k.id == e.id; });
+    const bool changed = old == catalogue_entries.end() || old->state != e.state || old->reason != e.reason;
+    if (!changed || e.state == CatalogueState::verifying) continue;
+    if (e.state == CatalogueState::verified) {
+      log_printf(LogLevel::info, "visvol-console: catalogue: %s verified (%s, %d levels of detail)\n", e.id.c_str(),
+                 e.crs.empty() ? "no CRS" : e.crs.c_str(), e.levels);
+    } else {
+      log_printf(LogLevel::warning, "visvol-console: catalogue: %s refused: %s\n", e.id.c_str(), e.reason.c_str());
+    }
+  }
+  for (const CatalogueEntry& old : catalogue_entries) {
+    if (std::none_of(now.begin(), now.end(), [&](const CatalogueEntry& e) { return e.id == old.id; })) {
+      log_printf(LogLevel::info, "visvol-console: catalogue: %s removed\n", old.id.c_str());
+    }
+  }
+  catalogue_entries = std::move(now);
+  if (!intake) return;
+  dds::CommandLimits l = limits;
+  for (const CatalogueEntry& e : catalogue_entries) {
+    if (e.state != CatalogueState::verified) continue;
+    bool known = false;
+    for (std::uint32_t i = 0; i < l.pack_count; ++i) known = known || msg::text_of(l.packs[i]) == e.id;
+    if (known) continue;
+    if (l.pack_count >= dds::kMaxKnownPacks) {
+      if (!catalogue_full) {
+        log_printf(LogLevel::warning,
+                   "visvol-console: catalogue: more than %zu packs: switch-terrain takes the first\n",
+                   dds::kMaxKnownPacks);
+      }
+      catalogue_full = true;
+      break;
+    }
+    (void)dds::add_known_pack(l, e.id);  // its id was checked when it was verified
+  }
+  if (Status s = intake->set_limits(l); !s.ok()) {
+    log_printf(LogLevel::warning, "visvol-console: catalogue: %s\n", s.message().c_str());
+  }
+}
+
+nlohmann::json Console::Impl::catalogue_json() const {
+  if (!catalogue) return nullptr;
+  nlohmann::json entries = nlohmann::json::array();
+  for (const CatalogueEntry& e : catalogue->entries()) {
+    nlohmann::json j = {{"id", e.id}, {"state", to_string(e.state)}, {"path", e.path}};
+    if (e.state == CatalogueState::refused) j["reason"] = e.reason;
+    if (e.levels > 0) {
+      j["name"] = e.name;
+      j["crs"] = e.crs;
+      j["levels"] = e.levels;
+      j["post_spacing_m"] = e.post_spacing_m;
+    }
+    entries.push_back(std::move(j));
+  }
+  return {{"folder", catalogue->folder()}, {"entries", std::move(entries)}};
+}
+
 void Console::Impl::release_pack_pages() {
   void* base = const_cast<std::uint8_t*>(pack->mapping());
   const auto bytes = static_cast<std::size_t>(pack->file_bytes());
@@ -705,6 +802,7 @@ Status Console::run(const std::atomic<bool>& stop) {
     if (const rt::ExecutiveCounters* c = m.exec->snapshot().take()) counters = *c;
     supervisor.monitor(seconds_since(t0), m.loop->ticks(), m.publisher != nullptr,
                        m.publisher ? m.publisher->passes() : 0);
+    m.poll_catalogue();
     char next[msg::kPackIdCapacity];
     if (m.exec->terrain_switch(next)) {
       m.switch_to = next;
@@ -835,6 +933,7 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
       {"switched_from", o.switched_from},
       {"switched_to", switch_to},
       {"switch_failed", o.switch_failed},
+      {"catalogue", catalogue_json()},
       {"wall_s", wall_s},
       {"loop",
        {{"period_us", o.period_us},

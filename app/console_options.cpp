@@ -44,6 +44,10 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
                  "Another preloaded pack that a switch-terrain command (by pack id: the file name without its "
                  "extension) may move the console to; repeatable")
       ->check(CLI::ExistingFile);
+  app.add_option("--catalogue", o.catalogue,
+                 "Folder of preloaded packs (ID.vvp): each verified off the loop's thread, watched for packs "
+                 "added, replaced or removed; switch-terrain takes any verified one by its ID")
+      ->check(CLI::ExistingDirectory);
   app.add_option("--seconds", o.seconds, "Run this long, s (0: until Ctrl-C or SIGTERM)")->capture_default_str();
   app.add_flag("--quiet", o.quiet,
                "No progress lines (the memory table at start, a line a second); warnings, errors and the closing "
@@ -91,6 +95,11 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--overrun-limit", o.overrun_limit, "Overruns in a row before the haptic safe state")
       ->capture_default_str();
   app.add_option("--level", o.level, "Level of detail the rope runs on (0: finest)")->capture_default_str();
+  app.add_option("--inject-stall", o.inject_stall,
+                 "Fault injection, for supervision tests: the loop stops ticking AT_S s after it started, for "
+                 "FOR_S s (systemd's watchdog pings stop), once")
+      ->expected(2)
+      ->type_name("AT_S FOR_S");
   app.add_option("--device", o.device, "Haptic device: sim (simulated, in-process bus), socketcan, none")
       ->check(CLI::IsMember({"sim", "socketcan", "none"}))
       ->capture_default_str();
@@ -205,6 +214,11 @@ Status validate(const ConsoleOptions& o) {
     return bad("--device socketcan needs --can-interface (e.g. can0 or vcan0)");
   }
   if (!(o.tile_margin_m >= 0 && o.tile_margin_m <= 1e5)) return bad("--tile-margin: must be in 0..100000 m");
+  if (!o.inject_stall.empty()) {
+    if (o.inject_stall.size() != 2) return bad("--inject-stall: needs AT_S FOR_S");
+    if (!(o.inject_stall[0] >= 0 && o.inject_stall[0] <= 1e7)) return bad("--inject-stall: AT_S must be in 0..1e7 s");
+    if (!(o.inject_stall[1] > 0 && o.inject_stall[1] <= 60)) return bad("--inject-stall: FOR_S must be in (0, 60] s");
+  }
   for (const auto& [name, p] : {std::pair{"--from", &o.from}, std::pair{"--to", &o.to}}) {
     if (p->empty()) continue;
     if (p->size() != 3) return bad(std::string(name) + ": needs X Y Z");

@@ -47,8 +47,10 @@ struct ConsoleOptions {
   int priority = 80;
   int cpu = -1;
   bool lock_memory = true;
+  std::string catalogue;  // folder of packs a switch-terrain may take (empty: none)
   int overrun_limit = 5;
   int level = 0;
+  std::vector<double> inject_stall;  // fault injection: AT_S FOR_S, the loop stops ticking (empty: none)
   // Haptic device.
   std::string device = "sim";  // sim | socketcan | none
   std::string can_interface;   // socketcan

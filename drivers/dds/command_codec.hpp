@@ -22,7 +22,8 @@
 
 namespace visvol::dds {
 
-inline constexpr std::size_t kMaxKnownPacks = 16;
+// the console's own pack, its --terrain packs and its catalogue's verified ones
+inline constexpr std::size_t kMaxKnownPacks = 64;
 
 // What commands are validated against. The console fills it from its loaded
 // pack (bounds), its reservations (segments, constraints) and its

@@ -270,6 +270,7 @@ Errc Executive::start_run() {
   if (was_spool) ++counters_.mode_switches;
   mode_ = msg::InteractionMode::pull;  // between both ends
   counters_.mode = mode_;
+  arriving_ = false;
   arrival_ticks_ = -1;
   let_go(was_spool);  // a new rope under the hand; from spool mode, the scene's mapping again
   return Errc::ok;

@@ -34,11 +34,13 @@
 // end free, and the workspace is re-indexed so that the handle, where it is,
 // holds the proxy at that end (as a clutch release re-indexes it: the start
 // may lie at the workspace's edge); the grasp button takes that end, and while the operator pulls it
-// away from the start harder than the saturated field pulls one segment (the
-// pull of 1 mm of hand travel at k3 = 1: a slack rope follows the hand more
-// closely than that) a segment of the pull mode's length pays out at the
-// start, at most one every kSpoolEveryTicks, up to max_segments. The rope settles in the
-// field as it pays out. Once the free end comes within a segment of the end
+// on along the rope's last segment harder than the saturated field pulls one
+// segment (the pull of 1 mm of hand travel at k3 = 1: a slack rope follows
+// the hand more closely than that) a segment of the pull mode's length pays
+// out, at most one every kSpoolEveryTicks, up to max_segments: the rope slides
+// out of the spool at the start along its own path, so the free end moves on
+// toward the hand and nothing else moves (Rope::pay_out_at_start). The rope
+// settles in the field as it pays out. Once the free end comes within a segment of the end
 // (and the rope is kSpoolArrivalSlack longer than the straight line, paying
 // out more where it is not) it is held there: both ends fixed, the run goes on as in pull mode (the
 // mode stays spool until switched). Switching to pull lays the rope between
@@ -347,6 +349,7 @@ class Executive final : public PeriodicTask {
   msg::InteractionMode mode_ = msg::InteractionMode::pull;
   double spool_segment_m_ = 0.0;  // a pull-mode segment's length: what each pay-out adds
   int ticks_since_pay_out_ = 0;
+  bool arriving_ = false;                       // the free end came within a segment of the end
   int arrival_ticks_ = -1;                      // ticks since the free end arrived (-1: not yet)
   Vec3 arrival_from_m_ = Vec3::Zero();          // where it was then
   bool mode_button_was_ = false;                // the mode button's last valid state (presses are its rising edges)

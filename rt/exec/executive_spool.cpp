@@ -85,6 +85,7 @@ Errc Executive::start_spool() {
   mode_ = msg::InteractionMode::spool;
   spool_segment_m_ = segment_m;
   ticks_since_pay_out_ = 0;
+  arriving_ = false;
   arrival_ticks_ = -1;
   equilibrium_.reset();
   counters_.converged = false;
@@ -114,10 +115,13 @@ void Executive::spool() {
   // Rope out of the spool: segments of spool_segment_m_ (the spring model's
   // rest length; its geometric length stretches).
   const double out_m = n * spool_segment_m_;
-  if (counters_.spool_gap_m <= spool_segment_m_) {
+  if (arriving_ || counters_.spool_gap_m <= spool_segment_m_) {
     // Arrived. Held at the end once the rope has kSpoolArrivalSlack over the
     // straight line (a rope as long as the line, or shorter, pinned at both
-    // ends pulls itself apart): one more segment a tick until it has.
+    // ends pulls itself apart): one more segment a tick until it has. Each
+    // moves the free end on, past the end perhaps: it is arriving from then
+    // on, and its anchor is moved back onto the end.
+    arriving_ = true;
     if (out_m < (1.0 + kSpoolArrivalSlack) * (end_m_ - start_m_).norm()) {
       if (rope_->pay_out_at_start()) {
         paid_out();
@@ -133,9 +137,12 @@ void Executive::spool() {
     return;
   }
   if (!grasping_ || ++ticks_since_pay_out_ < kSpoolEveryTicks) return;
-  const Vec3 out = free_end - start_m_;
-  const double span = out.norm();
-  if (!(span > 0) || pull_n_.dot(out) <= saturated_n_ * span) return;
+  // Paid out while the hand pulls the free end on along the rope's last
+  // segment (where the new segment goes) harder than the saturated field
+  // pulls one segment: the spool's drag.
+  const Vec3 tip = free_end - rope_->point(n - 1, 0.0);
+  const double tip_m = tip.norm();
+  if (!(tip_m > 0) || pull_n_.dot(tip) <= saturated_n_ * tip_m) return;
   if (!rope_->pay_out_at_start()) {
     counters_.spool_at_capacity = true;
     return;

@@ -383,21 +383,20 @@ void ArticulatedRope::set_point_force(int segment, double fraction, const Vec3& 
 
 bool ArticulatedRope::pay_out_at_start() {
   if (n_ == 0 || n_ >= p_.max_segments) return false;
-  // The new capsule leaves the spool along the first capsule; the rest moves on.
-  const Vec3 dir = axis(0);
-  const Vec3 shift = 2.0 * half_m_ * dir;
-  for (int i = n_; i > 0; --i) {
-    const std::size_t k = static_cast<std::size_t>(i);
-    x_[k] = x_[k - 1] + shift;
-    q_[k] = q_[k - 1];
-    axis_[k] = axis_[k - 1];
-    v_[k] = v_[k - 1];
-    w_[k] = w_[k - 1];
-  }
-  x_[0] = ends_.start_m + half_m_ * dir;
-  v_[0] = w_[0] = Vec3::Zero();
+  // The rope slides along its own path out of the spool: each capsule moves
+  // into the place of the next, so the path keeps its shape and only the free
+  // end moves on, one capsule along its own axis (the new last capsule, a copy
+  // of the old one moved on). Shifting the whole rope along its first capsule
+  // instead swung a bent rope's free end away from the hand's pull.
+  const std::size_t last = static_cast<std::size_t>(n_ - 1), next = static_cast<std::size_t>(n_);
+  x_[next] = x_[last] + 2.0 * half_m_ * axis_[last];
+  q_[next] = q_[last];
+  axis_[next] = axis_[last];
+  inv_inertia_[next] = inv_inertia_[last];
+  v_[next] = v_[last];
+  w_[next] = w_[last];
   ++n_;
-  if (grasp_active_) ++grasp_segment_;
+  if (grasp_active_) ++grasp_segment_;  // the grasped rope slid on one capsule
   update_vertices();
   return true;
 }

@@ -104,8 +104,10 @@ class Rope {
   virtual void set_point_force(int segment, double fraction, const Vec3& force_n) = 0;
   virtual void clear_point_force() = 0;
 
-  // Mode B: pays out one more segment at the start end (its length is the
-  // current segment length), keeping the rest in place. False at capacity.
+  // Mode B: pays out one more segment (the current segment length) from the
+  // spool at the start. The rope slides along its own path: the path keeps
+  // its shape and the free end moves on by one segment along the last one
+  // (the end must be free). False at capacity.
   virtual bool pay_out_at_start() = 0;
 
   virtual RopeModel model() const = 0;

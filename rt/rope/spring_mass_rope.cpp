@@ -127,19 +127,16 @@ void SpringMassRope::set_point_force(int segment, double fraction, const Vec3& f
 
 bool SpringMassRope::pay_out_at_start() {
   if (n_ == 0 || n_ >= p_.max_segments) return false;
-  for (int i = n_ + 1; i > 0; --i) {
-    const std::size_t k = static_cast<std::size_t>(i);
-    x_[k] = x_[k - 1];
-    x_prev_[k] = x_prev_[k - 1];
-    v_[k] = v_[k - 1];
-  }
-  // The new particle leaves the spool halfway to the old first one: the rope
-  // gains a rest length of slack and stretches out as it is dragged.
-  x_[1] = x_prev_[1] = 0.5 * (ends_.start_m + x_[2]);
-  v_[1] = Vec3::Zero();
-  x_[0] = x_prev_[0] = ends_.start_m;
+  // The rope slides along its own path out of the spool (ArticulatedRope's
+  // pay-out): the path keeps its shape and the free end moves on along the
+  // last segment, by that segment.
+  const std::size_t last = static_cast<std::size_t>(n_), next = last + 1;
+  const Vec3 on = x_[last] - x_[last - 1];
+  x_[next] = x_[last] + on;
+  x_prev_[next] = x_prev_[last] + on;
+  v_[next] = v_[last];
   ++n_;
-  if (grasp_active_) ++grasp_segment_;
+  if (grasp_active_) ++grasp_segment_;  // the grasped rope slid on one segment
   return true;
 }
 

@@ -414,45 +414,80 @@ TEST_F(Console, SigtermAndSigintEndTheSessionWithItsOutputs) {
   std::remove(held.c_str());
 }
 
-// Under systemd (a socket of ours plays it: NOTIFY_SOCKET, WATCHDOG_USEC):
-// READY=1 with a status once the loop runs, WATCHDOG=1 while it ticks and
-// the publisher passes, a STATUS= line a second, STOPPING=1 last (after the
-// loop's zero-force stop). A stalled loop stopping the pings is checked on
-// the gate itself (tests/app/supervisor_test).
-TEST_F(Console, TellsSystemdItIsReadyAliveAndStopping) {
-  const std::string sock = ::testing::TempDir() + "/console_notify_" + std::to_string(getpid()) + ".sock";
-  unlink(sock.c_str());
-  const int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-  ASSERT_GE(fd, 0);
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  sock.copy(addr.sun_path, sizeof addr.sun_path - 1);
-  ASSERT_EQ(bind(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr), 0);
-  const std::string out = out_dir("systemd");
-  // read as systemd does, while the console runs (a datagram queue holds few)
-  std::atomic<bool> done{false};
-  std::vector<std::string> got;
-  std::thread reader([&] {
+// Plays systemd's notify socket: a datagram socket of ours whose messages are
+// read, as systemd does, while the console runs (a datagram queue holds few),
+// each with the time it came (s since the listener started).
+class NotifyListener {
+ public:
+  explicit NotifyListener(const std::string& name)
+      : path_(::testing::TempDir() + "/console_" + name + "_" + std::to_string(getpid()) + ".sock") {
+    unlink(path_.c_str());
+    fd_ = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    path_.copy(addr.sun_path, sizeof addr.sun_path - 1);
+    bound_ = fd_ >= 0 && bind(fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
+    if (bound_) reader_ = std::thread([this] { read(); });
+  }
+  ~NotifyListener() {
+    stop();
+    if (fd_ >= 0) close(fd_);
+    unlink(path_.c_str());
+  }
+  bool bound() const { return bound_; }
+  const std::string& path() const { return path_; }
+  // Stops reading (the rest of the queue is read first); then messages() holds all.
+  void stop() {
+    done_.store(true);
+    if (reader_.joinable()) reader_.join();
+  }
+  struct Message {
+    std::string text;
+    double t_s;
+  };
+  const std::vector<Message>& messages() const { return got_; }
+
+ private:
+  void read() {
+    const auto t0 = std::chrono::steady_clock::now();
     char buf[4096];
-    while (!done.load()) {
-      const ssize_t n = recv(fd, buf, sizeof buf, 0);
+    for (;;) {
+      const bool last = done_.load();
+      const ssize_t n = recv(fd_, buf, sizeof buf, 0);
       if (n > 0) {
-        got.emplace_back(buf, static_cast<std::size_t>(n));
+        got_.push_back({std::string(buf, static_cast<std::size_t>(n)),
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
+      } else if (last) {
+        return;
       } else {
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
       }
     }
-    for (ssize_t n; (n = recv(fd, buf, sizeof buf, 0)) > 0;) got.emplace_back(buf, static_cast<std::size_t>(n));
-  });
+  }
+  std::string path_;
+  int fd_ = -1;
+  bool bound_ = false;
+  std::atomic<bool> done_{false};
+  std::vector<Message> got_;
+  std::thread reader_;
+};
+
+// Under systemd (a socket of ours plays it: NOTIFY_SOCKET, WATCHDOG_USEC):
+// READY=1 with a status once the loop runs, WATCHDOG=1 while it ticks and
+// the publisher passes, a STATUS= line a second, STOPPING=1 last (after the
+// loop's zero-force stop).
+TEST_F(Console, TellsSystemdItIsReadyAliveAndStopping) {
+  NotifyListener systemd("notify");
+  ASSERT_TRUE(systemd.bound());
+  const std::string out = out_dir("systemd");
   // with DDS: the publisher's passes are part of what the pings vouch for
   const Outcome r = console("--pack " + *pack_ + " --seconds 2.5 --domain 228 --priority 0 --no-lock --segments 16 " +
                                 "--script none --thumbnail-view none --out " + out,
-                            "NOTIFY_SOCKET=" + sock + " WATCHDOG_USEC=600000 timeout -k 5 60 ");
-  done.store(true);
-  reader.join();
-  close(fd);
-  unlink(sock.c_str());
+                            "NOTIFY_SOCKET=" + systemd.path() + " WATCHDOG_USEC=600000 timeout -k 5 60 ");
+  systemd.stop();
   ASSERT_EQ(r.status, 0) << r.err;
+  std::vector<std::string> got;
+  for (const NotifyListener::Message& m : systemd.messages()) got.push_back(m.text);
   ASSERT_GE(got.size(), 3u);
   EXPECT_EQ(got.front().rfind("READY=1\nSTATUS=", 0), 0u) << got.front();
   EXPECT_EQ(got.back().rfind("STOPPING=1\nSTATUS=", 0), 0u) << got.back();
@@ -463,6 +498,45 @@ TEST_F(Console, TellsSystemdItIsReadyAliveAndStopping) {
   }
   EXPECT_GE(pings, 4) << "one every 0.3 s while the loop ticks";
   EXPECT_GE(statuses, 1);
+}
+
+// A loop that stops ticking (--inject-stall: 1 s in, for 2 s) stops the
+// WATCHDOG=1 pings at once (within a monitor period and a ping interval), and
+// they come again once it ticks: systemd would have restarted it after
+// WatchdogSec (here 0.6 s).
+TEST_F(Console, AStalledLoopStopsTheWatchdogPings) {
+  NotifyListener systemd("stall");
+  ASSERT_TRUE(systemd.bound());
+  const std::string out = out_dir("stall");
+  const Outcome r = console("--pack " + *pack_ + " --seconds 5 --no-dds --priority 0 --no-lock --segments 16 " +
+                                "--script none --thumbnail-view none --inject-stall 1 2 --out " + out,
+                            "NOTIFY_SOCKET=" + systemd.path() + " WATCHDOG_USEC=600000 timeout -k 5 60 ");
+  systemd.stop();
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("fault injection"), std::string::npos) << r.err;
+  const std::vector<NotifyListener::Message>& got = systemd.messages();
+  ASSERT_FALSE(got.empty());
+  ASSERT_EQ(got.front().text.rfind("READY=1", 0), 0u) << got.front().text;
+  // the pings' times from READY=1 (the loop started just before it)
+  std::vector<double> pings;
+  for (const NotifyListener::Message& m : got) {
+    if (m.text == "WATCHDOG=1") pings.push_back(m.t_s - got.front().t_s);
+  }
+  ASSERT_GE(pings.size(), 2u);
+  // the longest silence: the stall less what a monitor period and a ping
+  // interval (0.1 + 0.3 s) can hide of it, and pings before and after it
+  double gap = 0, gap_start = 0;
+  for (std::size_t k = 1; k < pings.size(); ++k) {
+    if (pings[k] - pings[k - 1] > gap) {
+      gap = pings[k] - pings[k - 1];
+      gap_start = pings[k - 1];
+    }
+  }
+  EXPECT_GE(gap, 2.0 - 0.4) << "pings went on while the loop stood still";
+  EXPECT_GE(gap_start, 0.5) << "the stall starts 1 s in";
+  EXPECT_GT(pings.back(), gap_start + gap - 1e-9);
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_GE(s["loop"]["misses"].get<int>(), 1000) << "two seconds of deadlines missed";
 }
 
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
@@ -908,6 +982,70 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   EXPECT_GT(after["loop"]["ticks"].get<int>(), 1000);  // it ran on the other pack
   const std::string csv = slurp(out + "/path.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), after["path"]["flyable"]["vertices"].get<int>() + 1);
+}
+
+// A pack of the --catalogue folder, verified while the session runs, is one
+// a switch-terrain may name; a damaged one beside it is listed as refused.
+TEST_F(Console, SwitchesToAVerifiedPackOfItsCatalogue) {
+  using namespace visvol::dds;
+  using namespace visvol::msg;
+  const std::string dir = ::testing::TempDir() + "/console_catalogue_" + std::to_string(getpid());
+  ASSERT_EQ(std::system(("rm -rf '" + dir + "' && mkdir '" + dir + "'").c_str()), 0);
+  ASSERT_TRUE(
+      visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", dir + "/valley.vvp")
+          .ok());
+  ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 10), small_pack_params(), "",
+                                          dir + "/damaged.vvp")
+                  .ok());
+  ASSERT_EQ(truncate((dir + "/damaged.vvp").c_str(), 8192), 0);
+  const std::string first_id = "console_" + std::to_string(getpid());
+
+  ParticipantConfig pc;
+  pc.domain_id = 229;
+  pc.cyclone_xml = std::string(loopback_config());
+  auto participant = Participant::create(pc);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto commands = Writer::create(**participant, Topic::command);
+  auto acks = Reader::create(**participant, Topic::command_ack);
+  ASSERT_TRUE(commands.ok() && acks.ok());
+  const std::string out = out_dir("catalogue");
+  Outcome r;
+  std::thread run([&] {
+    r = console("--pack " + *pack_ + " --catalogue " + dir +
+                " --seconds 10 --domain 229 --priority 0 --no-lock "
+                "--segments 32 --script none --thumbnail-view none --out " +
+                out);
+  });
+  ASSERT_TRUE(commands->wait_for_readers(1, 10.0).ok()) << "the console's command intake never appeared";
+  ASSERT_TRUE(acks->wait_for_writers(1, 10.0).ok()) << "the console's acknowledgements never appeared";
+  // asked until the first session ends (its outputs written): refused while
+  // the pack is being verified (the applied one's ack may go with the session)
+  const std::string first_summary = out + "/session-1-" + first_id + "/summary.json";
+  CommandMessage msg;
+  Command go{};
+  go.kind = CommandKind::switch_terrain;
+  copy_text(go.source, "console_test");
+  copy_text(go.pack_id, "valley");
+  for (std::uint32_t seq = 1; seq <= 40 && access(first_summary.c_str(), F_OK) != 0; ++seq) {
+    go.sequence = seq;
+    ASSERT_EQ(commands->write(&msg.fill(go)), DDS_RETCODE_OK);
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  }
+  run.join();
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("catalogue: valley verified"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("catalogue: damaged refused"), std::string::npos) << r.err;
+  const nlohmann::json before = nlohmann::json::parse(slurp(out + "/session-1-" + first_id + "/summary.json"));
+  EXPECT_EQ(before["switched_to"], "valley");
+  std::map<std::string, std::string> states;
+  for (const auto& e : before["catalogue"]["entries"]) states[e["id"]] = e["state"];
+  EXPECT_EQ(states["valley"], "verified");
+  EXPECT_EQ(states["damaged"], "refused");
+  const nlohmann::json after = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(after["pack_id"], "valley");
+  EXPECT_EQ(after["pack"], dir + "/valley.vvp");
+  EXPECT_GT(after["loop"]["ticks"].get<int>(), 500);  // it ran on the catalogue's pack
+  ASSERT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
 }
 
 // A --terrain pack is checked at start-up as a switch would need it, tiles

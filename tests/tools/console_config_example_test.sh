@@ -54,9 +54,10 @@ accepted() {  # accepted NAME CONFIG: the console gets past its options
   fi
 }
 accepted "the example as is" "$example"
-# every key set; the files it names replaced by existing ones
+# every key set; the files and folders it names replaced by existing ones
 sed -E 's/^#([a-z])/\1/' "$example" |
-  sed -E "s|^(pack\|terrain\|dds-config) = .*|\1 = \"$not_pack\"|" >"$scratch/all.toml"
+  sed -E "s|^(pack\|terrain\|dds-config) = .*|\1 = \"$not_pack\"|; s|^catalogue = .*|catalogue = \"$scratch\"|" \
+    >"$scratch/all.toml"
 accepted "the example with every key set" "$scratch/all.toml"
 
 if ((failures > 0)); then

@@ -280,9 +280,20 @@ TEST(Rope, PaysOutLengthAtTheSpool) {
     RopeEnds ends = rope->ends();
     ends.end_fixed = false;  // mode B: the far end is dragged
     rope->set_ends(ends);
+    // bent first, so that a pay-out that moved the rope would show
+    Uniform side;
+    side.a = Vec3(0, 50, 0);
+    for (int t = 0; t < 300; ++t) rope->step(0.001, side);
     const double before = rope->length_m();
+    std::vector<Vec3> path(rope->vertices(), rope->vertices() + rope->segments() + 1);
     ASSERT_TRUE(rope->pay_out_at_start());
     EXPECT_EQ(rope->segments(), 9);
+    // the path keeps its shape; the free end moves on along the last segment
+    for (int i = 0; i <= 8; ++i) {
+      EXPECT_LT((rope->vertices()[i] - path[static_cast<std::size_t>(i)]).norm(), 1e-6) << to_string(model) << " " << i;
+    }
+    const Vec3 last = path[8] - path[7];
+    EXPECT_LT((rope->vertices()[9] - (path[8] + last)).norm(), 1e-6) << to_string(model);
     Uniform drag;
     for (int t = 0; t < 1000; ++t) {
       rope->set_point_force(rope->segments() - 1, 1.0, Vec3(300, 0, 0));

@@ -1,0 +1,258 @@
+#include "app/terrain_catalogue.hpp"
+
+#include <dirent.h>
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/inotify.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "storage/pack_identity.hpp"
+#include "storage/pack_reader.hpp"
+
+namespace visvol::app {
+namespace {
+
+constexpr const char* kPackSuffix = ".vvp";
+
+// ID.vvp, not a dot file (a writer's temporary file, renamed when complete).
+bool is_pack_name(const std::string& name) {
+  const std::size_t n = std::strlen(kPackSuffix);
+  return name.size() > n && name[0] != '.' && name.compare(name.size() - n, n, kPackSuffix) == 0;
+}
+
+std::string id_of(const std::string& file_name) {
+  return file_name.substr(0, file_name.size() - std::strlen(kPackSuffix));
+}
+
+// What a pack id may be (the DDS commands' rule): 1..63 of [A-Za-z0-9._-].
+bool valid_id(const std::string& id) { return !id.empty() && storage::pack_id_from_path(id + kPackSuffix) == id; }
+
+std::string errno_text(const char* what, const std::string& path) {
+  return std::string(what) + " " + path + ": " + std::strerror(errno);
+}
+
+void refuse(CatalogueEntry& e, const std::string& reason) {
+  e.state = CatalogueState::refused;
+  e.reason = reason;
+}
+
+// The pack's description: its source DEM, CRS, build parameters and extent.
+void describe(const storage::Pack& pack, CatalogueEntry& e) {
+  const storage::PackMetadata& m = pack.metadata();
+  e.name = m.source_path.substr(m.source_path.find_last_of('/') + 1);
+  e.crs = storage::epsg_from_wkt(m.crs_wkt);
+  if (e.crs.empty()) e.crs = m.crs_name;
+  const nlohmann::json meta = nlohmann::json::parse(m.json, nullptr, false);
+  e.build_json = meta.is_object() && meta.contains("build") ? meta["build"].dump() : "{}";
+  const fields::VolumeGeometry g = pack.geometry(0);
+  e.bounds = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y};
+  e.planning = m.planning.box;
+  e.post_spacing_m = g.spacing_m;
+  e.levels = pack.level_count();
+}
+
+// Every tile's checksum, each tile's pages dropped once read. The console's
+// memory is locked (mlockall, MCL_FUTURE: a page faulted in is locked until
+// unmapped) and budgeted; a pack of gigabytes verified through its mapping
+// would be locked and resident whole.
+Status verify_tiles_unkept(const storage::Pack& pack) {
+  auto* base = const_cast<std::uint8_t*>(pack.mapping());
+  const auto bytes = static_cast<std::size_t>(pack.file_bytes());
+  munlock(base, bytes);
+  for (std::uint64_t n = 0; n < pack.tile_count(); ++n) {
+    const storage::TileEntry& t = pack.tile_entry(n);
+    VISVOL_RETURN_IF_ERROR(pack.verify_tile(t));
+    madvise(base + t.offset, t.bytes, MADV_DONTNEED);  // tiles are whole pages
+  }
+  madvise(base, bytes, MADV_DONTNEED);
+  return {};
+}
+
+}  // namespace
+
+const char* to_string(CatalogueState s) {
+  switch (s) {
+    case CatalogueState::verifying: return "verifying";
+    case CatalogueState::verified: return "verified";
+    case CatalogueState::refused: return "refused";
+  }
+  return "?";
+}
+
+void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& e) {
+  e.path = path;
+  e.state = CatalogueState::verifying;
+  e.reason.clear();
+  if (!valid_id(e.id)) {
+    return refuse(e, "'" + e.id + "' is not a pack id (1..63 of A-Z a-z 0-9 . _ -): rename the file");
+  }
+  struct stat st {};
+  if (stat(path.c_str(), &st) != 0) return refuse(e, errno_text("cannot read", path));
+  if (!S_ISREG(st.st_mode)) return refuse(e, path + " is not a regular file");
+  Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path);
+  if (!pack.ok()) return refuse(e, pack.status().message());
+  describe(**pack, e);
+  if (Status s = verify_tiles_unkept(**pack); !s.ok()) return refuse(e, s.message());
+  if (level >= (*pack)->level_count()) {
+    return refuse(e, std::to_string((*pack)->level_count()) + " levels of detail: the console runs on level " +
+                         std::to_string(level));
+  }
+  e.state = CatalogueState::verified;
+}
+
+Result<std::unique_ptr<TerrainCatalogue>> TerrainCatalogue::start(const std::string& folder, int level) {
+  struct stat st {};
+  if (stat(folder.c_str(), &st) != 0) return invalid_argument("--catalogue " + errno_text("cannot read", folder));
+  if (!S_ISDIR(st.st_mode)) return invalid_argument("--catalogue " + folder + ": not a folder");
+  const int in = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+  if (in < 0) return resource_error("--catalogue " + errno_text("cannot watch", folder));
+  // written in place (closed), renamed in or out, deleted; the folder itself going
+  const std::uint32_t mask =
+      IN_CLOSE_WRITE | IN_MOVED_TO | IN_MOVED_FROM | IN_DELETE | IN_DELETE_SELF | IN_MOVE_SELF | IN_ONLYDIR;
+  if (inotify_add_watch(in, folder.c_str(), mask) < 0) {
+    const std::string e = errno_text("cannot watch", folder);
+    close(in);
+    return invalid_argument("--catalogue " + e);
+  }
+  const int wake = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (wake < 0) {
+    close(in);
+    return resource_error("--catalogue: eventfd: " + std::string(std::strerror(errno)));
+  }
+  std::unique_ptr<TerrainCatalogue> c(new TerrainCatalogue(folder, level, in, wake));
+  c->scan();  // listed before start() returns: entries() shows every pack there (verifying)
+  c->thread_ = std::thread([p = c.get()] { p->run(); });
+  return c;
+}
+
+TerrainCatalogue::TerrainCatalogue(std::string folder, int level, int inotify_fd, int wake_fd)
+    : folder_(std::move(folder)), level_(level), inotify_fd_(inotify_fd), wake_fd_(wake_fd) {}
+
+TerrainCatalogue::~TerrainCatalogue() {
+  stop_.store(true);
+  const std::uint64_t one = 1;
+  if (write(wake_fd_, &one, sizeof one) < 0) {
+    // the counter is full: the thread is awake already
+  }
+  if (thread_.joinable()) thread_.join();
+  close(inotify_fd_);
+  close(wake_fd_);
+}
+
+std::vector<CatalogueEntry> TerrainCatalogue::entries() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return entries_;
+}
+
+std::string TerrainCatalogue::verified_path(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const CatalogueEntry& e : entries_) {
+    if (e.id == id && e.state == CatalogueState::verified) return e.path;
+  }
+  return {};
+}
+
+bool TerrainCatalogue::wait_idle(double timeout_s) const {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return idle_.wait_for(lock, std::chrono::duration<double>(timeout_s), [this] {
+    return queue_.empty() && std::none_of(entries_.begin(), entries_.end(),
+                                          [](const CatalogueEntry& e) { return e.state == CatalogueState::verifying; });
+  });
+}
+
+void TerrainCatalogue::scan() {
+  DIR* d = opendir(folder_.c_str());
+  if (d == nullptr) return;  // start() checked it; a folder gone since is seen by inotify
+  while (const dirent* de = readdir(d)) {
+    const std::string name = de->d_name;
+    if (is_pack_name(name)) enqueue(name);
+  }
+  closedir(d);
+}
+
+void TerrainCatalogue::enqueue(const std::string& file_name) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string id = id_of(file_name);
+  auto it = std::lower_bound(entries_.begin(), entries_.end(), id,
+                             [](const CatalogueEntry& e, const std::string& key) { return e.id < key; });
+  if (it == entries_.end() || it->id != id) it = entries_.insert(it, CatalogueEntry{});
+  *it = CatalogueEntry{};
+  it->id = id;
+  it->path = folder_ + "/" + file_name;
+  if (std::find(queue_.begin(), queue_.end(), file_name) == queue_.end()) queue_.push_back(file_name);
+  version_.fetch_add(1, std::memory_order_acq_rel);
+}
+
+void TerrainCatalogue::remove(const std::string& file_name) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string id = id_of(file_name);
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(), [&](const CatalogueEntry& e) { return e.id == id; }),
+                 entries_.end());
+  queue_.erase(std::remove(queue_.begin(), queue_.end(), file_name), queue_.end());
+  version_.fetch_add(1, std::memory_order_acq_rel);
+  idle_.notify_all();
+}
+
+void TerrainCatalogue::verify_next() {
+  std::string file_name;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (queue_.empty()) return;
+    file_name = queue_.front();
+    queue_.pop_front();
+  }
+  CatalogueEntry e;
+  e.id = id_of(file_name);
+  verify_catalogue_entry(folder_ + "/" + file_name, level_, e);
+  std::lock_guard<std::mutex> lock(mutex_);
+  // removed meanwhile, or changed again (queued anew): that outcome is not the file's
+  const bool queued_again = std::find(queue_.begin(), queue_.end(), file_name) != queue_.end();
+  for (CatalogueEntry& old : entries_) {
+    if (old.id == e.id && !queued_again) old = std::move(e);
+  }
+  version_.fetch_add(1, std::memory_order_acq_rel);
+  idle_.notify_all();
+}
+
+void TerrainCatalogue::handle_events() {
+  alignas(inotify_event) char buf[16 * (sizeof(inotify_event) + 256)];
+  for (;;) {
+    const ssize_t n = read(inotify_fd_, buf, sizeof buf);
+    if (n <= 0) return;  // EAGAIN: all read
+    for (const char* p = buf; p < buf + n;) {
+      inotify_event ev{};
+      std::memcpy(&ev, p, sizeof ev);
+      const std::string name = ev.len > 0 ? std::string(p + sizeof ev) : std::string();
+      p += sizeof ev + ev.len;
+      if (!is_pack_name(name)) continue;
+      if (ev.mask & (IN_CLOSE_WRITE | IN_MOVED_TO)) enqueue(name);
+      if (ev.mask & (IN_MOVED_FROM | IN_DELETE)) remove(name);
+    }
+  }
+}
+
+void TerrainCatalogue::run() {
+  while (!stop_.load()) {
+    bool pending = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      pending = !queue_.empty();
+    }
+    pollfd fds[2] = {{inotify_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+    // events first (a file replaced again need not be verified twice), then one verification
+    if (poll(fds, 2, pending ? 0 : -1) < 0 && errno != EINTR) return;
+    if (stop_.load()) return;
+    if (fds[0].revents & POLLIN) handle_events();
+    verify_next();
+  }
+}
+
+}  // namespace visvol::app

@@ -16,6 +16,7 @@
 #include "app/terrain_catalogue.hpp"
 #include "app/thumbnail_thread.hpp"
 #include "drivers/can/socketcan_bus.hpp"
+#include "drivers/dds/catalogue_publisher.hpp"
 #include "drivers/dds/command_intake.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/message_codec.hpp"
@@ -174,12 +175,15 @@ struct Console::Impl {
   std::vector<CatalogueEntry> catalogue_entries;              // as last seen then
   bool catalogue_full = false;                                // more verified than commands may name (said once)
   dds::CommandLimits limits;                                  // the intake's, but for the catalogue's packs
-  std::string switch_to;  // the pack id a switch-terrain command asked for, once seen
-  double session_s = 0;   // how long the session ran
+  std::string switch_to;    // the pack id a switch-terrain command asked for, once seen
+  std::string switch_path;  // its file, found when the switch was seen
+  double session_s = 0;     // how long the session ran
   rt::MemoryBudget budget{0};
   rt::RealtimeReport realtime;
   std::unique_ptr<storage::ResidentPack> field;
   std::unique_ptr<dds::Participant> participant;
+  std::unique_ptr<dds::CataloguePublisher> catalogue_pub;  // with a catalogue (after the participant: deleted first)
+  std::unique_ptr<msg::TerrainCatalogue> catalogue_msg;    // what it sends (80 KB: not on a stack)
   // Destroyed in reverse: the publisher before the intake it reads counters
   // from, the intake before the queues it fills (their documented lifetimes).
   msg::CommandQueue commands;
@@ -217,6 +221,8 @@ struct Console::Impl {
   Status open_terrains();
   Status start_catalogue();
   void poll_catalogue();
+  std::string path_of_pack(const std::string& id) const;
+  void publish_catalogue();
   nlohmann::json catalogue_json() const;
   std::string out_dir() const;
   Status start_dds(const fields::VolumeGeometry& g);
@@ -258,16 +264,19 @@ std::optional<ConsoleOptions> Console::next_session() const {
   const Impl& m = *impl_;
   if (m.switch_to.empty()) return std::nullopt;
   ConsoleOptions next = m.o;
-  for (const auto& t : m.terrains) {
-    if (t.first == m.switch_to) next.pack = t.second;
-  }
-  if (next.pack == m.o.pack && m.catalogue) {
-    const std::string path = m.catalogue->verified_path(m.switch_to);
-    if (!path.empty()) next.pack = path;
-  }
-  if (next.pack == m.o.pack) return std::nullopt;  // not one of this console's packs (the intake checks)
-  // the old pack becomes one to switch back to
-  next.terrains.push_back(m.o.pack);
+  next.pack = m.switch_path;  // found when the switch was seen
+  if (next.pack.empty() || next.pack == m.o.pack) return std::nullopt;
+  // the old pack becomes one to switch back to, unless the catalogue has it
+  // (it verifies it again) or it is one already
+  const bool listed =
+      std::any_of(m.terrains.begin(), m.terrains.end(), [&](const auto& t) { return t.first == m.pack_id; }) ||
+      (m.catalogue && !m.catalogue->verified_path(m.pack_id).empty());
+  if (!listed) next.terrains.push_back(m.o.pack);
+  // the new pack is this session's, not another one to switch to
+  next.terrains.erase(
+      std::remove_if(next.terrains.begin(), next.terrains.end(),
+                     [&](const std::string& t) { return storage::pack_id_from_path(t) == m.switch_to; }),
+      next.terrains.end());
   if (m.o.seconds > 0) {
     const double left = m.o.seconds - m.session_s;
     if (left < 1.0) return std::nullopt;  // the time is up
@@ -402,7 +411,6 @@ Status Console::Impl::open_terrains() {
 
 Status Console::Impl::start() {
   VISVOL_RETURN_IF_ERROR(open_pack());
-  VISVOL_RETURN_IF_ERROR(start_catalogue());
   const fields::VolumeGeometry g = pack->geometry(o.level);
   rt::RealtimeConfig rtc;
   rtc.priority = o.priority;
@@ -412,6 +420,8 @@ Status Console::Impl::start() {
   observers = observers_reserved(g);
   if (o.dds) VISVOL_RETURN_IF_ERROR(start_dds(pack->geometry(0)));
   VISVOL_RETURN_IF_ERROR(reserve_and_open_tiles(g, rtc));
+  // after the memory lock and the budget: its reads are neither locked nor counted
+  VISVOL_RETURN_IF_ERROR(start_catalogue());
   VISVOL_RETURN_IF_ERROR(start_device());
   VISVOL_RETURN_IF_ERROR(start_executive());
 
@@ -668,11 +678,17 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
 // the rope needs are made resident by the resident pack, within its budget.
 Status Console::Impl::start_catalogue() {
   if (o.catalogue.empty()) return {};
+  if (participant) {
+    auto cp = dds::CataloguePublisher::create(*participant);
+    if (!cp.ok()) return cp.status();
+    catalogue_pub = std::move(*cp);
+    catalogue_msg = std::make_unique<msg::TerrainCatalogue>();
+  }
   auto c = TerrainCatalogue::start(o.catalogue, o.level);
   if (!c.ok()) return c.status();
   catalogue = std::move(*c);
-  log_printf(LogLevel::info, "visvol-console: catalogue %s: %zu packs, verifying them\n", o.catalogue.c_str(),
-             catalogue->entries().size());
+  log_printf(LogLevel::info, "visvol-console: catalogue %s: %zu packs (ID.vvp), verifying them\n",
+             printable(o.catalogue).c_str(), catalogue->entries().size());
   return {};
 }
 
@@ -688,18 +704,20 @@ void Console::Impl::poll_catalogue() {
     const bool changed = old == catalogue_entries.end() || old->state != e.state || old->reason != e.reason;
     if (!changed || e.state == CatalogueState::verifying) continue;
     if (e.state == CatalogueState::verified) {
-      log_printf(LogLevel::info, "visvol-console: catalogue: %s verified (%s, %d levels of detail)\n", e.id.c_str(),
-                 e.crs.empty() ? "no CRS" : e.crs.c_str(), e.levels);
+      log_printf(LogLevel::info, "visvol-console: catalogue: %s verified (%s, %d levels of detail)\n",
+                 printable(e.id).c_str(), e.crs.empty() ? "no CRS" : printable(e.crs).c_str(), e.levels);
     } else {
-      log_printf(LogLevel::warning, "visvol-console: catalogue: %s refused: %s\n", e.id.c_str(), e.reason.c_str());
+      log_printf(LogLevel::warning, "visvol-console: catalogue: %s refused: %s\n", printable(e.id).c_str(),
+                 printable(e.reason).c_str());
     }
   }
   for (const CatalogueEntry& old : catalogue_entries) {
     if (std::none_of(now.begin(), now.end(), [&](const CatalogueEntry& e) { return e.id == old.id; })) {
-      log_printf(LogLevel::info, "visvol-console: catalogue: %s removed\n", old.id.c_str());
+      log_printf(LogLevel::info, "visvol-console: catalogue: %s removed\n", printable(old.id).c_str());
     }
   }
   catalogue_entries = std::move(now);
+  publish_catalogue();
   if (!intake) return;
   dds::CommandLimits l = limits;
   for (const CatalogueEntry& e : catalogue_entries) {
@@ -723,11 +741,48 @@ void Console::Impl::poll_catalogue() {
   }
 }
 
+// The file of pack `id`: a --terrain pack, else a verified catalogue pack
+// (still the file that was verified); empty when neither.
+std::string Console::Impl::path_of_pack(const std::string& id) const {
+  for (const auto& t : terrains) {
+    if (t.first == id) return t.second;
+  }
+  return catalogue ? catalogue->verified_path(id) : std::string();
+}
+
+// The catalogue as last seen, on rt/visvol/terrain_catalogue.
+void Console::Impl::publish_catalogue() {
+  if (!catalogue_pub) return;
+  msg::TerrainCatalogue& m = *catalogue_msg;
+  m.stamp_ns = msg::now_stamp_ns();
+  m.count = 0;
+  for (const CatalogueEntry& e : catalogue_entries) {
+    if (m.count == msg::kMaxCatalogueEntries) break;
+    msg::CatalogueEntry& w = m.entries[m.count++];
+    w = msg::CatalogueEntry{};
+    msg::copy_text(w.pack_id, e.id);
+    msg::copy_text(w.name, e.name);
+    msg::copy_text(w.crs, e.crs);
+    msg::copy_text(w.reason, e.reason);
+    if (!msg::copy_text(w.build, e.build_json)) w.build[0] = '\0';  // JSON cut short is no JSON
+    w.min = {e.bounds.xmin_m, e.bounds.ymin_m, 0.0};
+    w.max = {e.bounds.xmax_m, e.bounds.ymax_m, 0.0};
+    w.planning_min = {e.planning.xmin_m, e.planning.ymin_m, 0.0};
+    w.planning_max = {e.planning.xmax_m, e.planning.ymax_m, 0.0};
+    w.post_spacing_m = e.post_spacing_m;
+    w.levels = static_cast<std::uint32_t>(e.levels);
+    w.state = e.state;
+  }
+  if (Status s = catalogue_pub->publish(m); !s.ok()) {
+    log_printf(LogLevel::warning, "visvol-console: catalogue: %s\n", s.message().c_str());
+  }
+}
+
 nlohmann::json Console::Impl::catalogue_json() const {
   if (!catalogue) return nullptr;
   nlohmann::json entries = nlohmann::json::array();
   for (const CatalogueEntry& e : catalogue->entries()) {
-    nlohmann::json j = {{"id", e.id}, {"state", to_string(e.state)}, {"path", e.path}};
+    nlohmann::json j = {{"id", e.id}, {"state", msg::to_string(e.state)}, {"path", e.path}};
     if (e.state == CatalogueState::refused) j["reason"] = e.reason;
     if (e.levels > 0) {
       j["name"] = e.name;
@@ -805,6 +860,14 @@ Status Console::run(const std::atomic<bool>& stop) {
     m.poll_catalogue();
     char next[msg::kPackIdCapacity];
     if (m.exec->terrain_switch(next)) {
+      m.switch_path = m.path_of_pack(next);
+      if (m.switch_path.empty()) {
+        log_printf(LogLevel::warning,
+                   "visvol-console: switch-terrain %s: no longer a verified pack of this console; staying on %s\n",
+                   printable(next).c_str(), m.pack_id.c_str());
+        m.exec->cancel_terrain_switch();
+        continue;
+      }
       m.switch_to = next;
       log_printf(LogLevel::info, "visvol-console: switch-terrain: ending this session to start one on %s\n", next);
       // the next session's start (pack, tiles, DDS) sends no pings: room for it

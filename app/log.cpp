@@ -51,4 +51,12 @@ void log_printf(LogLevel level, const char* format, ...) {
   std::fflush(stderr);
 }
 
+std::string printable(const std::string& text) {
+  std::string out = text;
+  for (char& c : out) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return out;
+}
+
 }  // namespace visvol::app

@@ -23,5 +23,8 @@ std::string log_text(LogLevel level, const std::string& text, bool journal);
 // printf-style: formats, prefixes (stderr_is_journal(), checked once) and
 // writes to standard error in one write.
 void log_printf(LogLevel level, const char* format, ...) __attribute__((format(printf, 2, 3)));
+// `text` fit for a log line: control characters and bytes outside printable
+// ASCII become '?' (a file name cannot forge a line of its own).
+std::string printable(const std::string& text);
 
 }  // namespace visvol::app

@@ -1,11 +1,15 @@
 #include "app/terrain_catalogue.hpp"
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <poll.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/eventfd.h>
 #include <sys/inotify.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -59,35 +63,56 @@ void describe(const storage::Pack& pack, CatalogueEntry& e) {
   e.levels = pack.level_count();
 }
 
-// Every tile's checksum, each tile's pages dropped once read. The console's
-// memory is locked (mlockall, MCL_FUTURE: a page faulted in is locked until
-// unmapped) and budgeted; a pack of gigabytes verified through its mapping
-// would be locked and resident whole.
-Status verify_tiles_unkept(const storage::Pack& pack) {
-  auto* base = const_cast<std::uint8_t*>(pack.mapping());
-  const auto bytes = static_cast<std::size_t>(pack.file_bytes());
-  munlock(base, bytes);
-  for (std::uint64_t n = 0; n < pack.tile_count(); ++n) {
+// Every tile checked as read with pread into one buffer: through the pack's
+// mapping, a file truncated or rewritten meanwhile would raise SIGBUS, and
+// every page read would count against the console's memory (locked, with
+// mlockall's MCL_FUTURE). The page cache is told the file is read once.
+Status verify_tiles_read(const storage::Pack& pack, const std::atomic<bool>* stop) {
+  const int fd = open(pack.path().c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return io_error(errno_text("cannot read", pack.path()));
+  posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+  std::vector<std::uint8_t> buf;
+  Status result;
+  for (std::uint64_t n = 0; n < pack.tile_count() && result.ok(); ++n) {
+    if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+      result = io_error("stopped");
+      break;
+    }
     const storage::TileEntry& t = pack.tile_entry(n);
-    VISVOL_RETURN_IF_ERROR(pack.verify_tile(t));
-    madvise(base + t.offset, t.bytes, MADV_DONTNEED);  // tiles are whole pages
+    buf.resize(t.bytes);
+    std::size_t got = 0;
+    while (got < t.bytes) {
+      const ssize_t r = pread(fd, buf.data() + got, t.bytes - got, static_cast<off_t>(t.offset + got));
+      if (r <= 0) break;
+      got += static_cast<std::size_t>(r);
+    }
+    if (got < t.bytes) {
+      result = io_error(pack.path() + ": " + storage::Pack::describe(t) + ": cannot be read whole (changed?)");
+    } else {
+      result = pack.verify_tile_bytes(t, buf.data());
+    }
   }
-  madvise(base, bytes, MADV_DONTNEED);
-  return {};
+  posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
+  close(fd);
+  return result;
+}
+
+// The verifier yields to everything else: the loop, the pager's reads.
+void run_at_idle_priority() {
+  sched_param none{};
+  pthread_setschedparam(pthread_self(), SCHED_IDLE, &none);
+  constexpr int kIoprioWhoProcess = 1, kIoprioClassIdle = 3, kIoprioClassShift = 13;
+  syscall(SYS_ioprio_set, kIoprioWhoProcess, 0, kIoprioClassIdle << kIoprioClassShift);  // this thread
+}
+
+bool same_file(const CatalogueEntry& e, const struct stat& st) {
+  return e.device == st.st_dev && e.inode == st.st_ino && e.size_bytes == static_cast<std::uint64_t>(st.st_size) &&
+         e.modified_ns == static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
 }
 
 }  // namespace
 
-const char* to_string(CatalogueState s) {
-  switch (s) {
-    case CatalogueState::verifying: return "verifying";
-    case CatalogueState::verified: return "verified";
-    case CatalogueState::refused: return "refused";
-  }
-  return "?";
-}
-
-void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& e) {
+void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& e, const std::atomic<bool>* stop) {
   e.path = path;
   e.state = CatalogueState::verifying;
   e.reason.clear();
@@ -97,14 +122,22 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
   struct stat st {};
   if (stat(path.c_str(), &st) != 0) return refuse(e, errno_text("cannot read", path));
   if (!S_ISREG(st.st_mode)) return refuse(e, path + " is not a regular file");
+  e.device = st.st_dev;
+  e.inode = st.st_ino;
+  e.size_bytes = static_cast<std::uint64_t>(st.st_size);
+  e.modified_ns = static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
   Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path);
   if (!pack.ok()) return refuse(e, pack.status().message());
+  // only the header and tables were read through the mapping: not kept locked
+  munlock((*pack)->mapping(), static_cast<std::size_t>((*pack)->file_bytes()));
   describe(**pack, e);
-  if (Status s = verify_tiles_unkept(**pack); !s.ok()) return refuse(e, s.message());
   if (level >= (*pack)->level_count()) {
     return refuse(e, std::to_string((*pack)->level_count()) + " levels of detail: the console runs on level " +
                          std::to_string(level));
   }
+  if (Status s = verify_tiles_read(**pack, stop); !s.ok()) return refuse(e, s.message());
+  // changed while it was read: verified again when the change is seen
+  if (stat(path.c_str(), &st) != 0 || !same_file(e, st)) return refuse(e, path + " changed while it was verified");
   e.state = CatalogueState::verified;
 }
 
@@ -116,7 +149,7 @@ Result<std::unique_ptr<TerrainCatalogue>> TerrainCatalogue::start(const std::str
   if (in < 0) return resource_error("--catalogue " + errno_text("cannot watch", folder));
   // written in place (closed), renamed in or out, deleted; the folder itself going
   const std::uint32_t mask =
-      IN_CLOSE_WRITE | IN_MOVED_TO | IN_MOVED_FROM | IN_DELETE | IN_DELETE_SELF | IN_MOVE_SELF | IN_ONLYDIR;
+      IN_MODIFY | IN_CLOSE_WRITE | IN_MOVED_TO | IN_MOVED_FROM | IN_DELETE | IN_DELETE_SELF | IN_MOVE_SELF | IN_ONLYDIR;
   if (inotify_add_watch(in, folder.c_str(), mask) < 0) {
     const std::string e = errno_text("cannot watch", folder);
     close(in);
@@ -155,17 +188,32 @@ std::vector<CatalogueEntry> TerrainCatalogue::entries() const {
 std::string TerrainCatalogue::verified_path(const std::string& id) const {
   std::lock_guard<std::mutex> lock(mutex_);
   for (const CatalogueEntry& e : entries_) {
-    if (e.id == id && e.state == CatalogueState::verified) return e.path;
+    struct stat st {};
+    if (e.id == id && e.state == CatalogueState::verified && stat(e.path.c_str(), &st) == 0 && same_file(e, st)) {
+      return e.path;
+    }
   }
   return {};
 }
 
 bool TerrainCatalogue::wait_idle(double timeout_s) const {
   std::unique_lock<std::mutex> lock(mutex_);
-  return idle_.wait_for(lock, std::chrono::duration<double>(timeout_s), [this] {
-    return queue_.empty() && std::none_of(entries_.begin(), entries_.end(),
-                                          [](const CatalogueEntry& e) { return e.state == CatalogueState::verifying; });
-  });
+  return idle_.wait_for(lock, std::chrono::duration<double>(timeout_s), [this] { return queue_.empty() && !busy_; });
+}
+
+// After lost events: entries whose file is gone are removed, every file there
+// is verified again.
+void TerrainCatalogue::rescan() {
+  std::vector<std::string> ids;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const CatalogueEntry& e : entries_) ids.push_back(e.id);
+  }
+  for (const std::string& id : ids) {
+    struct stat st {};
+    if (stat((folder_ + "/" + id + kPackSuffix).c_str(), &st) != 0) remove(id + kPackSuffix);
+  }
+  scan();
 }
 
 void TerrainCatalogue::scan() {
@@ -191,6 +239,30 @@ void TerrainCatalogue::enqueue(const std::string& file_name) {
   version_.fetch_add(1, std::memory_order_acq_rel);
 }
 
+// Written to (not yet closed): not to be switched to until verified again.
+void TerrainCatalogue::being_written(const std::string& file_name) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string id = id_of(file_name);
+  for (CatalogueEntry& e : entries_) {
+    if (e.id == id && e.state != CatalogueState::verifying) {
+      e.state = CatalogueState::verifying;
+      e.reason.clear();
+      version_.fetch_add(1, std::memory_order_acq_rel);
+    }
+  }
+}
+
+// The folder itself was removed or moved: its packs are no longer there to
+// switch to (the watch ends with it).
+void TerrainCatalogue::folder_gone() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  watching_ = false;
+  queue_.clear();
+  for (CatalogueEntry& e : entries_) refuse(e, folder_ + " was removed or moved");
+  version_.fetch_add(1, std::memory_order_acq_rel);
+  idle_.notify_all();
+}
+
 void TerrainCatalogue::remove(const std::string& file_name) {
   std::lock_guard<std::mutex> lock(mutex_);
   const std::string id = id_of(file_name);
@@ -208,15 +280,17 @@ void TerrainCatalogue::verify_next() {
     if (queue_.empty()) return;
     file_name = queue_.front();
     queue_.pop_front();
+    busy_ = true;
   }
   CatalogueEntry e;
   e.id = id_of(file_name);
-  verify_catalogue_entry(folder_ + "/" + file_name, level_, e);
+  verify_catalogue_entry(folder_ + "/" + file_name, level_, e, &stop_);
   std::lock_guard<std::mutex> lock(mutex_);
-  // removed meanwhile, or changed again (queued anew): that outcome is not the file's
-  const bool queued_again = std::find(queue_.begin(), queue_.end(), file_name) != queue_.end();
+  busy_ = false;
+  // (removed meanwhile: no entry takes it; changed since: verified_path()
+  // compares the file's identity, and the change's event verifies it again)
   for (CatalogueEntry& old : entries_) {
-    if (old.id == e.id && !queued_again) old = std::move(e);
+    if (old.id == e.id && watching_) old = std::move(e);
   }
   version_.fetch_add(1, std::memory_order_acq_rel);
   idle_.notify_all();
@@ -232,7 +306,16 @@ void TerrainCatalogue::handle_events() {
       std::memcpy(&ev, p, sizeof ev);
       const std::string name = ev.len > 0 ? std::string(p + sizeof ev) : std::string();
       p += sizeof ev + ev.len;
+      if (ev.mask & IN_Q_OVERFLOW) {
+        rescan();  // events were lost: the folder as it is now
+        continue;
+      }
+      if (ev.mask & (IN_DELETE_SELF | IN_MOVE_SELF | IN_IGNORED)) {
+        folder_gone();
+        return;
+      }
       if (!is_pack_name(name)) continue;
+      if (ev.mask & IN_MODIFY) being_written(name);
       if (ev.mask & (IN_CLOSE_WRITE | IN_MOVED_TO)) enqueue(name);
       if (ev.mask & (IN_MOVED_FROM | IN_DELETE)) remove(name);
     }
@@ -240,17 +323,19 @@ void TerrainCatalogue::handle_events() {
 }
 
 void TerrainCatalogue::run() {
+  run_at_idle_priority();
   while (!stop_.load()) {
     bool pending = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       pending = !queue_.empty();
     }
-    pollfd fds[2] = {{inotify_fd_, POLLIN, 0}, {wake_fd_, POLLIN, 0}};
-    // events first (a file replaced again need not be verified twice), then one verification
-    if (poll(fds, 2, pending ? 0 : -1) < 0 && errno != EINTR) return;
+    pollfd fds[2] = {{wake_fd_, POLLIN, 0}, {inotify_fd_, POLLIN, 0}};
+    // events first (a file replaced again need not be verified twice), then
+    // one verification; the folder gone, the stop alone is waited for
+    if (poll(fds, watching_ ? 2 : 1, pending ? 0 : -1) < 0 && errno != EINTR) return;
     if (stop_.load()) return;
-    if (fds[0].revents & POLLIN) handle_events();
+    if (watching_ && (fds[1].revents & POLLIN)) handle_events();
     verify_next();
   }
 }

@@ -1,11 +1,14 @@
 // The console's terrain catalogue (--catalogue DIR): the packs in a folder
 // (regular files named ID.vvp; names starting with a dot are a writer's
 // temporary files and skipped), each opened and fully verified (every tile's
-// checksum, the level the console runs on) on the catalogue's own thread,
-// never the loop's. Packs added to the folder, replaced in it (written
-// elsewhere and renamed over the old one, as `visvol build` does) or removed
-// while the console runs are seen through inotify and verified again. A
-// switch-terrain may name any verified entry; a refused one says why.
+// checksum, read with pread so that a file changed meanwhile cannot fault
+// the process; the level the console runs on) on the catalogue's own thread
+// at idle CPU and I/O priority, never the loop's. Packs added to the folder,
+// written in it, replaced (renamed over) or removed while the console runs
+// are seen through inotify and verified again; a queue overflow lists the
+// folder again. A switch-terrain may name any verified entry whose file is
+// still the one verified (device, inode, size, modification time); a refused
+// one says why.
 //
 // Thread-safety: entries(), verified_path(), version() and wait_idle() from
 // any thread but the real-time one (a mutex); start() and the destructor from
@@ -24,11 +27,11 @@
 
 #include "base/status.hpp"
 #include "fields/volume.hpp"
+#include "msg/samples.hpp"
 
 namespace visvol::app {
 
-enum class CatalogueState { verifying, verified, refused };
-const char* to_string(CatalogueState s);
+using msg::CatalogueState;  // as the catalogue topic says it
 
 struct CatalogueEntry {
   std::string id;  // the pack id: the file name less ".vvp"
@@ -43,12 +46,17 @@ struct CatalogueEntry {
   fields::Bounds2D planning;  // where F_p counts every observer
   double post_spacing_m = 0;
   int levels = 0;
+  // The file that was verified.
+  std::uint64_t device = 0, inode = 0, size_bytes = 0;
+  std::int64_t modified_ns = 0;
 };
 
 // Opens the pack at `path` and verifies it as the catalogue does: structure,
 // every tile's checksum, `level` among its levels of detail; fills what it
 // learned into `entry` (state verified, or refused with the reason).
-void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& entry);
+// `stop`, when set, ends a verification early (refused: "stopped").
+void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& entry,
+                            const std::atomic<bool>* stop = nullptr);
 
 class TerrainCatalogue {
  public:
@@ -62,7 +70,8 @@ class TerrainCatalogue {
   const std::string& folder() const { return folder_; }
   // The entries by id.
   std::vector<CatalogueEntry> entries() const;
-  // The path of the verified entry `id`; empty when there is none.
+  // The path of the verified entry `id` while its file is the one verified;
+  // empty otherwise.
   std::string verified_path(const std::string& id) const;
   // Changes whenever an entry does (added, verified, refused, removed).
   std::uint64_t version() const { return version_.load(std::memory_order_acquire); }
@@ -73,20 +82,25 @@ class TerrainCatalogue {
   TerrainCatalogue(std::string folder, int level, int inotify_fd, int wake_fd);
   void run();
   void scan();
+  void rescan();
   void handle_events();
   void enqueue(const std::string& file_name);
+  void being_written(const std::string& file_name);
   void remove(const std::string& file_name);
+  void folder_gone();
   void verify_next();
 
   std::string folder_;
   int level_;
   int inotify_fd_ = -1, wake_fd_ = -1;
+  bool watching_ = true;  // false once the folder was removed or moved
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> version_{0};
   mutable std::mutex mutex_;
   mutable std::condition_variable idle_;
   std::vector<CatalogueEntry> entries_;  // sorted by id
   std::deque<std::string> queue_;        // file names to verify
+  bool busy_ = false;                    // one is being verified
   std::thread thread_;
 };
 

@@ -25,6 +25,14 @@ const char* to_string(InteractionMode value) {
   }
   return nullptr;
 }
+const char* to_string(CatalogueState value) {
+  switch (value) {
+    case CatalogueState::verifying: return "verifying";
+    case CatalogueState::verified: return "verified";
+    case CatalogueState::refused: return "refused";
+  }
+  return nullptr;
+}
 const char* to_string(ConstraintKind value) {
   switch (value) {
     case ConstraintKind::hidden_from: return "hidden-from";

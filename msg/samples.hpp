@@ -203,6 +203,37 @@ struct TerrainInfo {
   WorldPoint planning_max;
 };
 
+// The console's terrain catalogue (--catalogue): each pack of its folder, as
+// verified. Producer: the console's main thread, when an entry changes.
+inline constexpr std::size_t kMaxCatalogueEntries = 64;
+inline constexpr std::size_t kCatalogueNameCapacity = 128;    // the source DEM's file name
+inline constexpr std::size_t kCatalogueReasonCapacity = 256;  // why a pack was refused
+inline constexpr std::size_t kCatalogueBuildCapacity = 512;   // the build's parameters, JSON
+
+enum class CatalogueState : std::uint8_t { verifying = 0, verified = 1, refused = 2 };
+const char* to_string(CatalogueState value);
+
+struct CatalogueEntry {
+  char pack_id[kPackIdCapacity];  // what switch-terrain names
+  char name[kCatalogueNameCapacity];
+  char crs[kCrsCapacity];
+  WorldPoint min;  // the finest level's posts (z unused)
+  WorldPoint max;
+  WorldPoint planning_min;  // planning bounds (x, y; z unused)
+  WorldPoint planning_max;
+  double post_spacing_m;
+  std::uint32_t levels;  // levels of detail (0 while unknown)
+  CatalogueState state;
+  char reason[kCatalogueReasonCapacity];  // refused: why (may be cut short)
+  char build[kCatalogueBuildCapacity];    // may be empty when too long
+};
+
+struct TerrainCatalogue {
+  std::int64_t stamp_ns;
+  std::uint32_t count;  // 0..kMaxCatalogueEntries
+  CatalogueEntry entries[kMaxCatalogueEntries];
+};
+
 // Commands -----------------------------------------------------------------
 
 struct Weights {

@@ -295,13 +295,15 @@ const TileEntry& Pack::tile(int level, Layer layer, int tx, int ty) const {
   return tiles_[e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny)];
 }
 
-Status Pack::verify_tile(const TileEntry& t) const {
-  if (checksum(base_ + t.offset, t.bytes) != t.crc32c) {
+Status Pack::verify_tile(const TileEntry& t) const { return verify_tile_bytes(t, base_ + t.offset); }
+
+Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) const {
+  if (checksum(bytes, t.bytes) != t.crc32c) {
     return corrupt(path_ + ": " + describe(t) + ": checksum mismatch");
   }
   // float32 F_p is read where the checksum is: a value outside [0, 1] never reaches a reader
   if (t.layer == static_cast<std::uint16_t>(Layer::visibility) && encoding() == VisibilityEncoding::float32) {
-    return check_visibility_tile(levels_[t.level], t, base_ + t.offset, path_);
+    return check_visibility_tile(levels_[t.level], t, bytes, path_);
   }
   return Status::ok_status();
 }

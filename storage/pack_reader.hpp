@@ -72,6 +72,9 @@ class Pack {
 
   // Checks one tile's checksum, naming it on failure.
   Status verify_tile(const TileEntry& t) const;
+  // The same checks on a copy of the tile's t.bytes bytes (read with pread,
+  // for instance, where a file changed under a mapping would raise SIGBUS).
+  Status verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) const;
   // Checks the tiles of one level, or all tiles; progress gets fractions.
   Status verify_level(int level) const;
   Status verify(const std::function<void(double)>& progress = {}) const;

@@ -248,4 +248,83 @@ Status TerrainMessage::fill(const msg::TerrainInfo& info) {
   return Status();
 }
 
+CatalogueMessage::CatalogueMessage(std::string frame_id)
+    : frame_id_(std::move(frame_id)),
+      text_(std::make_unique<msg::TerrainCatalogue>()),
+      entries_(std::make_unique<visvol_msgs_msg_dds__TerrainCatalogueEntry_[]>(msg::kMaxCatalogueEntries)) {
+  msg_.entries._buffer = entries_.get();
+  msg_.entries._maximum = static_cast<std::uint32_t>(msg::kMaxCatalogueEntries);
+  msg_.entries._release = false;
+  for (std::size_t i = 0; i < msg::kMaxCatalogueEntries; ++i) {
+    msg::CatalogueEntry& t = text_->entries[i];
+    visvol_msgs_msg_dds__TerrainCatalogueEntry_& w = entries_[i];
+    w.pack_id = t.pack_id;
+    w.name = t.name;
+    w.crs = t.crs;
+    w.reason = t.reason;
+    w.build = t.build;
+  }
+}
+
+Status CatalogueMessage::fill(const msg::TerrainCatalogue& c) {
+  if (c.count > msg::kMaxCatalogueEntries) {
+    return invalid_argument("terrain catalogue: " + std::to_string(c.count) + " entries, at most " +
+                            std::to_string(msg::kMaxCatalogueEntries));
+  }
+  for (std::uint32_t i = 0; i < c.count; ++i) {
+    const msg::CatalogueEntry& e = c.entries[i];
+    if (msg::text_of(e.pack_id).empty()) return invalid_argument("terrain catalogue: an entry without a pack id");
+    if (msg::to_string(e.state) == nullptr) return invalid_argument("terrain catalogue: an unknown state");
+  }
+  msg_.header = header(c.stamp_ns, frame_id_);
+  for (std::uint32_t i = 0; i < c.count; ++i) {
+    const msg::CatalogueEntry& e = c.entries[i];
+    msg::CatalogueEntry& t = text_->entries[i];
+    copy_terminated(t.pack_id, e.pack_id);
+    copy_terminated(t.name, e.name);
+    copy_terminated(t.crs, e.crs);
+    copy_terminated(t.reason, e.reason);
+    copy_terminated(t.build, e.build);
+    visvol_msgs_msg_dds__TerrainCatalogueEntry_& w = entries_[i];
+    w.min_m = to_point(e.min);
+    w.max_m = to_point(e.max);
+    w.planning_min_m = to_point(e.planning_min);
+    w.planning_max_m = to_point(e.planning_max);
+    w.post_spacing_m = e.post_spacing_m;
+    w.levels = e.levels;
+    w.state = static_cast<std::uint8_t>(e.state);
+  }
+  msg_.entries._length = c.count;
+  return Status();
+}
+
+Status decode_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& wire, msg::TerrainCatalogue& out) {
+  if (wire.entries._length > msg::kMaxCatalogueEntries) {
+    return invalid_argument("terrain catalogue: " + std::to_string(wire.entries._length) + " entries, at most " +
+                            std::to_string(msg::kMaxCatalogueEntries));
+  }
+  out.stamp_ns = from_ros_time(wire.header.stamp);
+  out.count = wire.entries._length;
+  for (std::uint32_t i = 0; i < out.count; ++i) {
+    const visvol_msgs_msg_dds__TerrainCatalogueEntry_& w = wire.entries._buffer[i];
+    msg::CatalogueEntry& e = out.entries[i];
+    if (w.state > static_cast<std::uint8_t>(msg::CatalogueState::refused)) {
+      return invalid_argument("terrain catalogue: state " + std::to_string(w.state) + " is not a CATALOGUE_*");
+    }
+    e.state = static_cast<msg::CatalogueState>(w.state);
+    msg::copy_text(e.pack_id, w.pack_id != nullptr ? w.pack_id : "");
+    msg::copy_text(e.name, w.name != nullptr ? w.name : "");
+    msg::copy_text(e.crs, w.crs != nullptr ? w.crs : "");
+    msg::copy_text(e.reason, w.reason != nullptr ? w.reason : "");
+    msg::copy_text(e.build, w.build != nullptr ? w.build : "");
+    e.min = {w.min_m.x, w.min_m.y, w.min_m.z};
+    e.max = {w.max_m.x, w.max_m.y, w.max_m.z};
+    e.planning_min = {w.planning_min_m.x, w.planning_min_m.y, w.planning_min_m.z};
+    e.planning_max = {w.planning_max_m.x, w.planning_max_m.y, w.planning_max_m.z};
+    e.post_spacing_m = w.post_spacing_m;
+    e.levels = w.levels;
+  }
+  return Status();
+}
+
 }  // namespace visvol::dds

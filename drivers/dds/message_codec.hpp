@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "base/status.hpp"
@@ -121,6 +122,30 @@ class TerrainMessage {
   char crs_wkt_[msg::kCrsWktCapacity] = {};
   visvol_msgs_msg_dds__TerrainInfo_ msg_{};
 };
+
+// The terrain catalogue; the message's strings and entries point into this
+// object (allocated once: a catalogue is some 80 KB).
+class CatalogueMessage {
+ public:
+  explicit CatalogueMessage(std::string frame_id);
+  CatalogueMessage(const CatalogueMessage&) = delete;
+  CatalogueMessage& operator=(const CatalogueMessage&) = delete;
+  // invalid_argument when count exceeds kMaxCatalogueEntries, an entry has no
+  // pack id, or its state is not one of CatalogueState's.
+  Status fill(const msg::TerrainCatalogue& catalogue);
+  const visvol_msgs_msg_dds__TerrainCatalogue_& message() const { return msg_; }
+
+ private:
+  std::string frame_id_;
+  std::unique_ptr<msg::TerrainCatalogue> text_;  // the strings, NUL-terminated
+  std::unique_ptr<visvol_msgs_msg_dds__TerrainCatalogueEntry_[]> entries_;
+  visvol_msgs_msg_dds__TerrainCatalogue_ msg_{};
+};
+
+// Subscriber side: a received catalogue back into plain data (texts cut to
+// their capacities). invalid_argument past kMaxCatalogueEntries or for an
+// unknown state.
+Status decode_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& wire, msg::TerrainCatalogue& out);
 
 // Subscriber side: a received PathUpdate back into a PathSample.
 // invalid_argument when it holds more vertices than kMaxPathVertices, its

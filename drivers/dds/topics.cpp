@@ -32,6 +32,7 @@ const std::array<TopicSpec, kTopicCount> kTopics = {{
     {"visvol/health", &visvol_msgs_msg_dds__LoopHealth__desc, Profile::telemetry},
     {"visvol/command", &visvol_msgs_msg_dds__Command__desc, Profile::command},
     {"visvol/command_ack", &visvol_msgs_msg_dds__CommandAck__desc, Profile::ack},
+    {"visvol/terrain_catalogue", &visvol_msgs_msg_dds__TerrainCatalogue__desc, Profile::latest},
 }};
 
 const TopicSpec& spec(Topic topic) { return kTopics.at(static_cast<std::size_t>(topic)); }

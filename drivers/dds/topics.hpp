@@ -10,6 +10,7 @@
 //   visvol/path_update           visvol_msgs::msg::dds_::PathUpdate_       latest
 //   visvol/thumbnail/compressed  sensor_msgs::msg::dds_::CompressedImage_  latest
 //   visvol/terrain               visvol_msgs::msg::dds_::TerrainInfo_      latest
+//   visvol/terrain_catalogue     visvol_msgs::msg::dds_::TerrainCatalogue_ latest
 //   visvol/device_status         visvol_msgs::msg::dds_::DeviceStatus_     latest
 //   visvol/health                visvol_msgs::msg::dds_::LoopHealth_       telemetry
 //   visvol/command               visvol_msgs::msg::dds_::Command_          command
@@ -49,8 +50,9 @@ enum class Topic : int {
   health,
   command,
   command_ack,
+  terrain_catalogue,
 };
-inline constexpr int kTopicCount = 8;
+inline constexpr int kTopicCount = 9;
 
 // The world frame of every header unless the console configures another.
 inline constexpr const char* kDefaultFrameId = "visvol_world";

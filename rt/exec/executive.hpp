@@ -239,6 +239,9 @@ class Executive final : public PeriodicTask {
   // id and returns true (any thread; the loop asks nothing more until the
   // console has switched). The console checks the id against its packs first.
   bool terrain_switch(char (&pack_id)[msg::kPackIdCapacity]) const;
+  // The console found that pack gone (removed from its catalogue since the
+  // command was checked): the session goes on and takes switches again.
+  void cancel_terrain_switch() { switch_requested_.store(false, std::memory_order_release); }
 
   const ExecutiveCounters& counters() const { return counters_; }
   // The counters, handed to another thread every device_every_ticks.

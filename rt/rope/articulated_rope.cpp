@@ -382,7 +382,7 @@ void ArticulatedRope::set_point_force(int segment, double fraction, const Vec3& 
 }
 
 bool ArticulatedRope::pay_out_at_start() {
-  if (n_ == 0 || n_ >= p_.max_segments) return false;
+  if (n_ == 0 || n_ >= p_.max_segments || ends_.end_fixed) return false;
   // The rope slides along its own path out of the spool: each capsule moves
   // into the place of the next, so the path keeps its shape and only the free
   // end moves on, one capsule along its own axis (the new last capsule, a copy

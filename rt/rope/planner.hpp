@@ -389,9 +389,17 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   return result;
 }
 
+}  // namespace visvol::rt
+
 // Compiled once, optimised, in visvol_rope (plan_dense.cpp) for the levels held
 // in memory (tests, benchmarks): each caller instantiated the planner, the
-// search and the field's forces again, the longest compile of the tests.
+// search and the field's forces again, the longest compile of the tests. (The
+// fuzz build has no rope: it leaves plan_dense.cpp out.)
+#ifndef VISVOL_FUZZING
+extern template class visvol::fields::FieldSampler<visvol::fields::DenseLevel>;
+
+namespace visvol::rt {
+
 extern template Result<PlanResult> plan<fields::DenseLevel>(const std::vector<const fields::DenseLevel*>&,
                                                             const PlanRequest&,
                                                             const std::function<void(const PlanProgress&)>&);
@@ -400,5 +408,4 @@ extern template Result<GlobalPath> global_search<fields::DenseLevel>(const field
 extern template class FieldForces<fields::DenseLevel>;
 
 }  // namespace visvol::rt
-
-extern template class visvol::fields::FieldSampler<visvol::fields::DenseLevel>;
+#endif

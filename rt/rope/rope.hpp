@@ -107,7 +107,7 @@ class Rope {
   // Mode B: pays out one more segment (the current segment length) from the
   // spool at the start. The rope slides along its own path: the path keeps
   // its shape and the free end moves on by one segment along the last one
-  // (the end must be free). False at capacity.
+  // False at capacity, or with the far end held (it must be free).
   virtual bool pay_out_at_start() = 0;
 
   virtual RopeModel model() const = 0;

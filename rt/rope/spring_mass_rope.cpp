@@ -126,7 +126,7 @@ void SpringMassRope::set_point_force(int segment, double fraction, const Vec3& f
 }
 
 bool SpringMassRope::pay_out_at_start() {
-  if (n_ == 0 || n_ >= p_.max_segments) return false;
+  if (n_ == 0 || n_ >= p_.max_segments || ends_.end_fixed) return false;
   // The rope slides along its own path out of the spool (ArticulatedRope's
   // pay-out): the path keeps its shape and the free end moves on along the
   // last segment, by that segment.

@@ -26,6 +26,7 @@
 #include "../tools/cli_runner.hpp"
 #include "console_packs.hpp"
 #include "drivers/dds/command_codec.hpp"
+#include "drivers/dds/message_codec.hpp"
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
@@ -1007,7 +1008,8 @@ TEST_F(Console, SwitchesToAVerifiedPackOfItsCatalogue) {
   ASSERT_TRUE(participant.ok()) << participant.status().message();
   auto commands = Writer::create(**participant, Topic::command);
   auto acks = Reader::create(**participant, Topic::command_ack);
-  ASSERT_TRUE(commands.ok() && acks.ok());
+  auto listing = Reader::create(**participant, Topic::terrain_catalogue);
+  ASSERT_TRUE(commands.ok() && acks.ok() && listing.ok());
   const std::string out = out_dir("catalogue");
   Outcome r;
   std::thread run([&] {
@@ -1033,6 +1035,23 @@ TEST_F(Console, SwitchesToAVerifiedPackOfItsCatalogue) {
   }
   run.join();
   ASSERT_EQ(r.status, 0) << r.err;
+  // on DDS: the catalogue as verified (transient-local: the last of each session)
+  auto seen = std::make_unique<TerrainCatalogue>();
+  bool listed_verified = false, listed_refused = false;
+  auto taken = listing->take<visvol_msgs_msg_dds__TerrainCatalogue_>(
+      [&](const visvol_msgs_msg_dds__TerrainCatalogue_& m, const dds_sample_info_t&) {
+        ASSERT_TRUE(decode_catalogue(m, *seen).ok());
+        for (std::uint32_t i = 0; i < seen->count; ++i) {
+          const CatalogueEntry& e = seen->entries[i];
+          listed_verified |= text_of(e.pack_id) == "valley" && e.state == CatalogueState::verified && e.levels == 2;
+          listed_refused |= text_of(e.pack_id) == "damaged" && e.state == CatalogueState::refused &&
+                            text_of(e.reason).find("truncated") != std::string_view::npos;
+        }
+      },
+      16);
+  ASSERT_TRUE(taken.ok());
+  EXPECT_TRUE(listed_verified) << "valley, verified, not on rt/visvol/terrain_catalogue";
+  EXPECT_TRUE(listed_refused) << "damaged, refused with its reason, not on rt/visvol/terrain_catalogue";
   EXPECT_NE(r.err.find("catalogue: valley verified"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("catalogue: damaged refused"), std::string::npos) << r.err;
   const nlohmann::json before = nlohmann::json::parse(slurp(out + "/session-1-" + first_id + "/summary.json"));

@@ -145,15 +145,46 @@ TEST(TerrainCatalogue, SeesPacksAddedReplacedAndRemoved) {
   ASSERT_TRUE(wait_for(**c, "site", CatalogueState::refused)) << "the damaged replacement was not refused";
   EXPECT_EQ((*c)->verified_path("site"), "");
 
-  // a good one written in place with its final name: verified once closed
-  build(dir + "/other.vvp", 8);
-  ASSERT_TRUE(wait_for(**c, "other", CatalogueState::verified));
+  // a good one copied in place with its final name (cp): verified once closed
+  build(staging + "/other.vvp", 8);
+  {
+    std::ifstream from(staging + "/other.vvp", std::ios::binary);
+    std::ofstream to(dir + "/other.vvp", std::ios::binary);
+    to << from.rdbuf();
+  }
+  std::remove((staging + "/other.vvp").c_str());
+  ASSERT_TRUE(wait_for(**c, "other", CatalogueState::verified)) << "the pack written in place never came";
 
   ASSERT_EQ(std::remove((dir + "/site.vvp").c_str()), 0);
   ASSERT_TRUE(wait_for(**c, "site", std::nullopt)) << "the removed pack stayed";
   ASSERT_EQ(std::rename((dir + "/other.vvp").c_str(), (staging + "/other.vvp").c_str()), 0);
   ASSERT_TRUE(wait_for(**c, "other", std::nullopt)) << "the pack moved out stayed";
   std::remove((staging + "/other.vvp").c_str());
+}
+
+// The folder removed under it: its packs can no longer be switched to.
+TEST(TerrainCatalogue, AFolderRemovedTakesItsPacksWithIt) {
+  const std::string dir = make_folder("gone");
+  build(dir + "/site.vvp", 9);
+  auto c = TerrainCatalogue::start(dir, 0);
+  ASSERT_TRUE(c.ok());
+  ASSERT_TRUE(wait_for(**c, "site", CatalogueState::verified));
+  ASSERT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
+  ASSERT_TRUE(wait_for(**c, "site", std::nullopt) || wait_for(**c, "site", CatalogueState::refused));
+  EXPECT_EQ((*c)->verified_path("site"), "");
+}
+
+// Stopped while it verifies: the destructor does not wait for the rest.
+TEST(TerrainCatalogue, StopsWhileItVerifies) {
+  const std::string dir = make_folder("stop");
+  for (int k = 0; k < 6; ++k) build(dir + "/p" + std::to_string(k) + ".vvp", 10 + k);
+  const auto t0 = std::chrono::steady_clock::now();
+  {
+    auto c = TerrainCatalogue::start(dir, 0);
+    ASSERT_TRUE(c.ok());
+    EXPECT_EQ((*c)->entries().size(), 6u) << "listed at start";
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 30.0);
 }
 
 TEST(TerrainCatalogue, AFolderThatIsNotOneIsNamed) {

@@ -107,6 +107,21 @@ std::string format_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m) {
   return out;
 }
 
+// One line for the catalogue, then one per entry (indented).
+std::string format_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& m) {
+  std::string out;
+  add(out, "terrain_catalogue stamp=%s entries=%u", stamp(m.header.stamp).c_str(), m.entries._length);
+  for (std::uint32_t i = 0; i < m.entries._length; ++i) {
+    const visvol_msgs_msg_dds__TerrainCatalogueEntry_& e = m.entries._buffer[i];
+    add(out, "\n  pack=%s state=%s name=%s crs=%s levels=%u post_spacing_m=%.3f planning_m=x %.3f..%.3f, y %.3f..%.3f",
+        quoted(e.pack_id).c_str(), name_of<msg::CatalogueState>(e.state), quoted(e.name).c_str(), quoted(e.crs).c_str(),
+        e.levels, e.post_spacing_m, e.planning_min_m.x, e.planning_max_m.x, e.planning_min_m.y, e.planning_max_m.y);
+    if (e.state == static_cast<std::uint8_t>(msg::CatalogueState::refused))
+      add(out, " reason=%s", quoted(e.reason).c_str());
+  }
+  return out;
+}
+
 std::string format_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m) {
   std::string out;
   add(out, "thumbnail stamp=%s format=%s bytes=%u", stamp(m.header.stamp).c_str(), quoted(m.format).c_str(),
@@ -217,6 +232,30 @@ std::string json_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m) {
                   {"post_spacing_m", m.post_spacing_m},
                   {"planning_min_m", point(m.planning_min_m)},
                   {"planning_max_m", point(m.planning_max_m)}});
+}
+
+std::string json_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& m) {
+  nlohmann::json entries = nlohmann::json::array();
+  for (std::uint32_t i = 0; i < m.entries._length; ++i) {
+    const visvol_msgs_msg_dds__TerrainCatalogueEntry_& e = m.entries._buffer[i];
+    const char* state = msg::to_string(static_cast<msg::CatalogueState>(e.state));
+    entries.push_back({{"pack_id", text(e.pack_id)},
+                       {"state", state != nullptr ? nlohmann::json(state) : nlohmann::json(e.state)},
+                       {"name", text(e.name)},
+                       {"crs", text(e.crs)},
+                       {"min_m", point(e.min_m)},
+                       {"max_m", point(e.max_m)},
+                       {"planning_min_m", point(e.planning_min_m)},
+                       {"planning_max_m", point(e.planning_max_m)},
+                       {"post_spacing_m", e.post_spacing_m},
+                       {"levels", e.levels},
+                       {"reason", text(e.reason)},
+                       {"build", text(e.build)}});
+  }
+  return line_of({{"topic", "catalogue"},
+                  {"stamp_ns", stamp_ns(m.header.stamp)},
+                  {"frame_id", text(m.header.frame_id)},
+                  {"entries", std::move(entries)}});
 }
 
 std::string json_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m) {

@@ -14,6 +14,7 @@ std::string format_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool w
 std::string format_health(const visvol_msgs_msg_dds__LoopHealth_& m);
 std::string format_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m);
 std::string format_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m);
+std::string format_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& m);
 std::string format_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m);
 std::string format_ack(const visvol_msgs_msg_dds__CommandAck_& m);
 
@@ -25,6 +26,7 @@ std::string json_path_update(const visvol_msgs_msg_dds__PathUpdate_& m, bool wit
 std::string json_health(const visvol_msgs_msg_dds__LoopHealth_& m);
 std::string json_device_status(const visvol_msgs_msg_dds__DeviceStatus_& m);
 std::string json_terrain(const visvol_msgs_msg_dds__TerrainInfo_& m);
+std::string json_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& m);
 std::string json_thumbnail(const sensor_msgs_msg_dds__CompressedImage_& m);
 std::string json_ack(const visvol_msgs_msg_dds__CommandAck_& m);
 

@@ -132,8 +132,13 @@ Result<std::unique_ptr<Participant>> open(const Common& common) {
 
 const std::map<std::string, Topic>& watchable() {
   static const std::map<std::string, Topic> topics = {
-      {"path", Topic::path_update}, {"health", Topic::health},       {"device", Topic::device_status},
-      {"terrain", Topic::terrain},  {"thumbnail", Topic::thumbnail}, {"acks", Topic::command_ack},
+      {"path", Topic::path_update},
+      {"health", Topic::health},
+      {"device", Topic::device_status},
+      {"terrain", Topic::terrain},
+      {"thumbnail", Topic::thumbnail},
+      {"acks", Topic::command_ack},
+      {"catalogue", Topic::terrain_catalogue},
   };
   return topics;
 }
@@ -165,6 +170,11 @@ std::size_t print_all(Topic topic, const Reader& reader, bool vertices, bool jso
         line(json ? echo::json_terrain(m) : echo::format_terrain(m));
       });
       break;
+    case Topic::terrain_catalogue:
+      (void)reader.take<visvol_msgs_msg_dds__TerrainCatalogue_>([&](const auto& m, const dds_sample_info_t&) {
+        line(json ? echo::json_catalogue(m) : echo::format_catalogue(m));
+      });
+      break;
     case Topic::thumbnail:
       (void)reader.take<sensor_msgs_msg_dds__CompressedImage_>([&](const auto& m, const dds_sample_info_t&) {
         line(json ? echo::json_thumbnail(m) : echo::format_thumbnail(m));
@@ -184,7 +194,8 @@ int run_watch(const Common& common, const WatchOptions& options) {
   std::set<std::string> names(options.topics.begin(), options.topics.end());
   for (const std::string& n : names) {
     if (!watchable().count(n)) {
-      return usage_error("--topics: unknown topic '" + n + "' (path, health, device, terrain, thumbnail, acks)");
+      return usage_error("--topics: unknown topic '" + n +
+                         "' (path, health, device, terrain, catalogue, thumbnail, acks)");
     }
   }
   Result<std::unique_ptr<Participant>> p = open(common);
@@ -441,7 +452,8 @@ int main(int argc, char** argv) {
 
   CLI::App* watch_app = app.add_subcommand("watch", "print messages as they arrive");
   watch_app
-      ->add_option("--topics", watch.topics, "path, health, device, terrain, thumbnail, acks (default: path health)")
+      ->add_option("--topics", watch.topics,
+                   "path, health, device, terrain, catalogue, thumbnail, acks (default: path health)")
       ->delimiter(',');
   CLI::App* path_app = app.add_subcommand("path", "print path updates as they arrive");
   CLI::App* health_app = app.add_subcommand("health", "print health reports as they arrive");

@@ -35,6 +35,9 @@ def fail(line_no, text):
 
 
 def ros_type(idl_type, line_no):
+    m = re.fullmatch(r"sequence<\s*(.+?)\s*,\s*(\d+)\s*>", idl_type)
+    if m:  # bounded
+        return ros_type(m.group(1), line_no) + f"[<={m.group(2)}]"
     m = re.fullmatch(r"sequence<\s*(.+?)\s*>", idl_type)
     if m:
         return ros_type(m.group(1), line_no) + "[]"

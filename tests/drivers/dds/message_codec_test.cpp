@@ -150,6 +150,53 @@ TEST(TerrainMessage, NeedsAPackAndACrs) {
   EXPECT_STREQ(m.message().crs_wkt, "PROJCRS[\"WGS 84 / UTM zone 10N\"]");
 }
 
+TEST(CatalogueMessage, RoundTripsEveryEntryAndRefusesWhatItCannotSay) {
+  auto c = std::make_unique<msg::TerrainCatalogue>();
+  *c = msg::TerrainCatalogue{};
+  c->stamp_ns = 1'700'000'000'123'456'789;
+  c->count = 2;
+  msg::copy_text(c->entries[0].pack_id, "sf_north");
+  msg::copy_text(c->entries[0].crs, "EPSG:32610");
+  msg::copy_text(c->entries[0].name, "sf_north_utm10_30m.tif");
+  msg::copy_text(c->entries[0].build, "{\"range_posts\":64}");
+  c->entries[0].state = msg::CatalogueState::verified;
+  c->entries[0].levels = 3;
+  c->entries[0].post_spacing_m = 30.0;
+  c->entries[0].planning_min = {545000, 4180000, 0};
+  c->entries[0].planning_max = {555000, 4190000, 0};
+  msg::copy_text(c->entries[1].pack_id, "taunus");
+  msg::copy_text(c->entries[1].reason, "tile 3 of level 0: checksum");
+  c->entries[1].state = msg::CatalogueState::refused;
+  CatalogueMessage m("visvol_world");
+  ASSERT_TRUE(m.fill(*c).ok());
+  EXPECT_EQ(m.message().entries._length, 2u);
+  EXPECT_STREQ(m.message().entries._buffer[1].reason, "tile 3 of level 0: checksum");
+  auto back = std::make_unique<msg::TerrainCatalogue>();
+  ASSERT_TRUE(decode_catalogue(m.message(), *back).ok());
+  EXPECT_EQ(back->stamp_ns, c->stamp_ns);
+  ASSERT_EQ(back->count, 2u);
+  EXPECT_EQ(msg::text_of(back->entries[0].pack_id), "sf_north");
+  EXPECT_EQ(msg::text_of(back->entries[0].build), "{\"range_posts\":64}");
+  EXPECT_EQ(back->entries[0].state, msg::CatalogueState::verified);
+  EXPECT_EQ(back->entries[0].levels, 3u);
+  EXPECT_EQ(back->entries[0].planning_max.y_m, 4190000.0);
+  EXPECT_EQ(back->entries[1].state, msg::CatalogueState::refused);
+  EXPECT_EQ(msg::text_of(back->entries[1].reason), "tile 3 of level 0: checksum");
+
+  c->entries[1].pack_id[0] = '\0';
+  EXPECT_NE(m.fill(*c).message().find("without a pack id"), std::string::npos);
+  c->count = static_cast<std::uint32_t>(msg::kMaxCatalogueEntries + 1);
+  EXPECT_NE(m.fill(*c).message().find("at most 64"), std::string::npos);
+  // a state no CATALOGUE_* names, from the wire
+  c->count = 1;
+  ASSERT_TRUE(m.fill(*c).ok());
+  visvol_msgs_msg_dds__TerrainCatalogue_ wire = m.message();
+  visvol_msgs_msg_dds__TerrainCatalogueEntry_ odd = wire.entries._buffer[0];
+  odd.state = 7;
+  wire.entries._buffer = &odd;
+  EXPECT_NE(decode_catalogue(wire, *back).message().find("state 7"), std::string::npos);
+}
+
 TEST(HealthMessage, AddsTheLayerCounters) {
   msg::HealthSample h{};
   h.sequence = 3;
@@ -193,7 +240,9 @@ TEST(Samples, NamesOfEnumerations) {
   EXPECT_STREQ(to_string(msg::CommandKind::set_segment_count), "set-segments");
   EXPECT_STREQ(to_string(msg::AckResult::failed), "failed");
   EXPECT_STREQ(to_string(msg::DeviceState::idle), "idle");
+  EXPECT_STREQ(to_string(msg::CatalogueState::refused), "refused");
   EXPECT_EQ(to_string(static_cast<msg::CommandKind>(0)), nullptr);
+  EXPECT_EQ(to_string(static_cast<msg::CatalogueState>(3)), nullptr);
   char small[4];
   EXPECT_FALSE(msg::copy_text(small, "abcdef"));
   EXPECT_STREQ(small, "abc");

@@ -307,7 +307,13 @@ TEST(Rope, PaysOutLengthAtTheSpool) {
   auto full = make_rope(p);
   const Vec3 line[2] = {{0, 0, 0}, {80, 0, 0}};
   ASSERT_TRUE((*full)->reset(line, 2, 8).ok());
+  RopeEnds free_end = (*full)->ends();
+  free_end.end_fixed = false;
+  (*full)->set_ends(free_end);
   EXPECT_FALSE((*full)->pay_out_at_start());  // at capacity
+  auto held = laid_rope(RopeModel::articulated, 8, 0.0, {0, 0, 0}, {100, 0, 0});
+  EXPECT_FALSE(held->pay_out_at_start()) << "the far end is held";
+  EXPECT_EQ(held->segments(), 8);
 }
 
 }  // namespace

@@ -270,7 +270,7 @@ std::optional<ConsoleOptions> Console::next_session() const {
   // (it verifies it again) or it is one already
   const bool listed =
       std::any_of(m.terrains.begin(), m.terrains.end(), [&](const auto& t) { return t.first == m.pack_id; }) ||
-      (m.catalogue && !m.catalogue->verified_path(m.pack_id).empty());
+      (m.catalogue && m.catalogue->has(m.pack_id));
   if (!listed) next.terrains.push_back(m.o.pack);
   // the new pack is this session's, not another one to switch to
   next.terrains.erase(
@@ -331,7 +331,13 @@ Status Console::Impl::start_dds(const fields::VolumeGeometry& g) {
   ic.limits.max_observers = static_cast<std::uint32_t>(observers);
   VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, pack_id));
   for (const auto& t : terrains) VISVOL_RETURN_IF_ERROR(dds::add_known_pack(ic.limits, t.first));
-  limits = ic.limits;  // poll_catalogue() adds the catalogue's verified packs to these
+  limits = ic.limits;          // poll_catalogue() adds the catalogue's verified packs to these
+  if (!o.catalogue.empty()) {  // made here: counted in the budget with the rest of DDS
+    auto cp = dds::CataloguePublisher::create(*participant);
+    if (!cp.ok()) return cp.status();
+    catalogue_pub = std::move(*cp);
+    catalogue_msg = std::make_unique<msg::TerrainCatalogue>();
+  }
   auto in = dds::CommandIntake::start(*participant, ic, commands, &acks);
   if (!in.ok()) return in.status();
   intake = std::move(*in);
@@ -678,12 +684,6 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
 // the rope needs are made resident by the resident pack, within its budget.
 Status Console::Impl::start_catalogue() {
   if (o.catalogue.empty()) return {};
-  if (participant) {
-    auto cp = dds::CataloguePublisher::create(*participant);
-    if (!cp.ok()) return cp.status();
-    catalogue_pub = std::move(*cp);
-    catalogue_msg = std::make_unique<msg::TerrainCatalogue>();
-  }
   auto c = TerrainCatalogue::start(o.catalogue, o.level);
   if (!c.ok()) return c.status();
   catalogue = std::move(*c);
@@ -760,11 +760,12 @@ void Console::Impl::publish_catalogue() {
     if (m.count == msg::kMaxCatalogueEntries) break;
     msg::CatalogueEntry& w = m.entries[m.count++];
     w = msg::CatalogueEntry{};
-    msg::copy_text(w.pack_id, e.id);
-    msg::copy_text(w.name, e.name);
-    msg::copy_text(w.crs, e.crs);
-    msg::copy_text(w.reason, e.reason);
-    if (!msg::copy_text(w.build, e.build_json)) w.build[0] = '\0';  // JSON cut short is no JSON
+    // printable ASCII: valid UTF-8 for every reader, cut anywhere
+    msg::copy_text(w.pack_id, printable(e.id));
+    msg::copy_text(w.name, printable(e.name));
+    msg::copy_text(w.crs, printable(e.crs));
+    msg::copy_text(w.reason, printable(e.reason));
+    if (!msg::copy_text(w.build, printable(e.build_json))) w.build[0] = '\0';  // JSON cut short is no JSON
     w.min = {e.bounds.xmin_m, e.bounds.ymin_m, 0.0};
     w.max = {e.bounds.xmax_m, e.bounds.ymax_m, 0.0};
     w.planning_min = {e.planning.xmin_m, e.planning.ymin_m, 0.0};
@@ -782,7 +783,7 @@ nlohmann::json Console::Impl::catalogue_json() const {
   if (!catalogue) return nullptr;
   nlohmann::json entries = nlohmann::json::array();
   for (const CatalogueEntry& e : catalogue->entries()) {
-    nlohmann::json j = {{"id", e.id}, {"state", msg::to_string(e.state)}, {"path", e.path}};
+    nlohmann::json j = {{"id", printable(e.id)}, {"state", msg::to_string(e.state)}, {"path", printable(e.path)}};
     if (e.state == CatalogueState::refused) j["reason"] = e.reason;
     if (e.levels > 0) {
       j["name"] = e.name;

@@ -8,6 +8,7 @@
 #include <sys/eventfd.h>
 #include <sys/inotify.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -97,17 +98,20 @@ Status verify_tiles_read(const storage::Pack& pack, const std::atomic<bool>* sto
   return result;
 }
 
-// The verifier yields to everything else: the loop, the pager's reads.
+// The verifier yields to everything else: the loop, the pager's reads (not
+// SCHED_IDLE: the main thread takes its mutex, and would wait on a thread
+// that a busy machine never runs).
 void run_at_idle_priority() {
   sched_param none{};
-  pthread_setschedparam(pthread_self(), SCHED_IDLE, &none);
+  pthread_setschedparam(pthread_self(), SCHED_BATCH, &none);
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), 19);
   constexpr int kIoprioWhoProcess = 1, kIoprioClassIdle = 3, kIoprioClassShift = 13;
   syscall(SYS_ioprio_set, kIoprioWhoProcess, 0, kIoprioClassIdle << kIoprioClassShift);  // this thread
 }
 
 bool same_file(const CatalogueEntry& e, const struct stat& st) {
   return e.device == st.st_dev && e.inode == st.st_ino && e.size_bytes == static_cast<std::uint64_t>(st.st_size) &&
-         e.modified_ns == static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
+         e.changed_ns == static_cast<std::int64_t>(st.st_ctim.tv_sec) * 1'000'000'000 + st.st_ctim.tv_nsec;
 }
 
 }  // namespace
@@ -125,7 +129,7 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
   e.device = st.st_dev;
   e.inode = st.st_ino;
   e.size_bytes = static_cast<std::uint64_t>(st.st_size);
-  e.modified_ns = static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec;
+  e.changed_ns = static_cast<std::int64_t>(st.st_ctim.tv_sec) * 1'000'000'000 + st.st_ctim.tv_nsec;
   Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path);
   if (!pack.ok()) return refuse(e, pack.status().message());
   // only the header and tables were read through the mapping: not kept locked
@@ -194,6 +198,11 @@ std::string TerrainCatalogue::verified_path(const std::string& id) const {
     }
   }
   return {};
+}
+
+bool TerrainCatalogue::has(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::any_of(entries_.begin(), entries_.end(), [&](const CatalogueEntry& e) { return e.id == id; });
 }
 
 bool TerrainCatalogue::wait_idle(double timeout_s) const {

@@ -7,8 +7,8 @@
 // written in it, replaced (renamed over) or removed while the console runs
 // are seen through inotify and verified again; a queue overflow lists the
 // folder again. A switch-terrain may name any verified entry whose file is
-// still the one verified (device, inode, size, modification time); a refused
-// one says why.
+// still the one verified (device, inode, size, status change time); a
+// refused one says why.
 //
 // Thread-safety: entries(), verified_path(), version() and wait_idle() from
 // any thread but the real-time one (a mutex); start() and the destructor from
@@ -48,7 +48,7 @@ struct CatalogueEntry {
   int levels = 0;
   // The file that was verified.
   std::uint64_t device = 0, inode = 0, size_bytes = 0;
-  std::int64_t modified_ns = 0;
+  std::int64_t changed_ns = 0;  // st_ctim: any write or rename sets it, nothing sets it back
 };
 
 // Opens the pack at `path` and verifies it as the catalogue does: structure,
@@ -75,6 +75,8 @@ class TerrainCatalogue {
   std::string verified_path(const std::string& id) const;
   // Changes whenever an entry does (added, verified, refused, removed).
   std::uint64_t version() const { return version_.load(std::memory_order_acquire); }
+  // Whether `id` is an entry, in any state.
+  bool has(const std::string& id) const;
   // Waits until nothing is left to verify, at most `timeout_s`; true if so.
   bool wait_idle(double timeout_s) const;
 

@@ -304,8 +304,8 @@ Status decode_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& wire, msg:
                             std::to_string(msg::kMaxCatalogueEntries));
   }
   out.stamp_ns = from_ros_time(wire.header.stamp);
-  out.count = wire.entries._length;
-  for (std::uint32_t i = 0; i < out.count; ++i) {
+  out.count = 0;  // set once every entry decoded
+  for (std::uint32_t i = 0; i < wire.entries._length; ++i) {
     const visvol_msgs_msg_dds__TerrainCatalogueEntry_& w = wire.entries._buffer[i];
     msg::CatalogueEntry& e = out.entries[i];
     if (w.state > static_cast<std::uint8_t>(msg::CatalogueState::refused)) {
@@ -324,6 +324,7 @@ Status decode_catalogue(const visvol_msgs_msg_dds__TerrainCatalogue_& wire, msg:
     e.post_spacing_m = w.post_spacing_m;
     e.levels = w.levels;
   }
+  out.count = wire.entries._length;
   return Status();
 }
 

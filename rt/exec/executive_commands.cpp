@@ -240,7 +240,7 @@ Errc Executive::apply_switch_terrain(const msg::Command& c, const char*& reason)
     reason = "the console is on that pack already";
     return Errc::invalid_argument;
   }
-  if (switch_requested_.load(std::memory_order_relaxed)) {
+  if (switch_requested_.load(std::memory_order_acquire)) {  // pairs with cancel_terrain_switch()
     reason = "a terrain switch is already under way";
     return Errc::invalid_argument;
   }

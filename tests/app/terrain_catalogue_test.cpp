@@ -162,16 +162,41 @@ TEST(TerrainCatalogue, SeesPacksAddedReplacedAndRemoved) {
   std::remove((staging + "/other.vvp").c_str());
 }
 
-// The folder removed under it: its packs can no longer be switched to.
-TEST(TerrainCatalogue, AFolderRemovedTakesItsPacksWithIt) {
-  const std::string dir = make_folder("gone");
+// The folder moved away under it (a deployment swapping folders): its packs
+// are refused, and no longer switched to; removed, they go with it.
+TEST(TerrainCatalogue, AFolderMovedOrRemovedTakesItsPacksWithIt) {
+  const std::string dir = make_folder("moved");
   build(dir + "/site.vvp", 9);
   auto c = TerrainCatalogue::start(dir, 0);
   ASSERT_TRUE(c.ok());
   ASSERT_TRUE(wait_for(**c, "site", CatalogueState::verified));
-  ASSERT_EQ(std::system(("rm -rf '" + dir + "'").c_str()), 0);
-  ASSERT_TRUE(wait_for(**c, "site", std::nullopt) || wait_for(**c, "site", CatalogueState::refused));
+  ASSERT_EQ(std::system(("rm -rf '" + dir + ".old' && mv '" + dir + "' '" + dir + ".old'").c_str()), 0);
+  ASSERT_TRUE(wait_for(**c, "site", CatalogueState::refused)) << "the moved folder's pack stayed verified";
+  EXPECT_NE(find(**c, "site")->reason.find("removed or moved"), std::string::npos) << find(**c, "site")->reason;
   EXPECT_EQ((*c)->verified_path("site"), "");
+  ASSERT_EQ(std::system(("rm -rf '" + dir + ".old'").c_str()), 0);
+
+  const std::string gone = make_folder("removed");
+  build(gone + "/site.vvp", 9);
+  auto d = TerrainCatalogue::start(gone, 0);
+  ASSERT_TRUE(d.ok());
+  ASSERT_TRUE(wait_for(**d, "site", CatalogueState::verified));
+  ASSERT_EQ(std::system(("rm -rf '" + gone + "'").c_str()), 0);
+  ASSERT_TRUE(wait_for(**d, "site", std::nullopt));
+}
+
+// A verified pack whose file changes (rewritten in place, same name) is not
+// switched to until verified again.
+TEST(TerrainCatalogue, AVerifiedPackChangedSinceIsNotSwitchedTo) {
+  const std::string dir = make_folder("changed");
+  build(dir + "/site.vvp", 11);
+  auto c = TerrainCatalogue::start(dir, 0);
+  ASSERT_TRUE(c.ok());
+  ASSERT_TRUE(wait_for(**c, "site", CatalogueState::verified));
+  ASSERT_EQ((*c)->verified_path("site"), dir + "/site.vvp");
+  damage_a_tile(dir + "/site.vvp");  // written in place: its status change time moves
+  EXPECT_EQ((*c)->verified_path("site"), "") << "switched to before it was verified again";
+  ASSERT_TRUE(wait_for(**c, "site", CatalogueState::refused));
 }
 
 // Stopped while it verifies: the destructor does not wait for the rest.

@@ -311,9 +311,11 @@ TEST(Rope, PaysOutLengthAtTheSpool) {
   free_end.end_fixed = false;
   (*full)->set_ends(free_end);
   EXPECT_FALSE((*full)->pay_out_at_start());  // at capacity
-  auto held = laid_rope(RopeModel::articulated, 8, 0.0, {0, 0, 0}, {100, 0, 0});
-  EXPECT_FALSE(held->pay_out_at_start()) << "the far end is held";
-  EXPECT_EQ(held->segments(), 8);
+  for (RopeModel model : {RopeModel::articulated, RopeModel::spring}) {
+    auto held = laid_rope(model, 8, 0.0, {0, 0, 0}, {100, 0, 0});
+    EXPECT_FALSE(held->pay_out_at_start()) << to_string(model) << ": the far end is held";
+    EXPECT_EQ(held->segments(), 8);
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "app/console_options.hpp"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -17,6 +18,79 @@ std::string regular_file_problem(const std::string& path) {
   return s.ok() ? std::string() : s.message();
 }
 
+// The configuration file's sections and the keys each holds (the long option
+// names; app/systemd/console.toml documents them in this order).
+const std::vector<std::pair<std::string, std::vector<std::string>>>& config_sections() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> sections = {
+      {"terrain", {"pack", "terrain", "catalogue"}},
+      {"session", {"seconds", "out", "quiet"}},
+      {"rope", {"from", "to", "objective", "model", "segments", "max-segments", "k1", "k2", "k3", "level"}},
+      {"vehicle",
+       {"vehicle", "speed", "max-climb", "max-descent", "min-turn-radius", "clearance", "max-agl", "max-altitude",
+        "autopilot"}},
+      {"observers", {"hidden-from", "visible-to", "eye-height", "max-observers"}},
+      {"realtime",
+       {"budget-mib", "period-us", "priority", "cpu", "no-lock", "overrun-limit", "inject-stall", "tile-margin"}},
+      {"device", {"device", "can-interface", "node", "script"}},
+      {"dds", {"no-dds", "domain", "dds-config", "namespace"}},
+      {"thumbnails", {"thumbnail-view", "thumbnail-size", "thumbnail-max-hz"}},
+  };
+  return sections;
+}
+
+const std::vector<std::string>* keys_of_section(const std::string& name) {
+  for (const auto& [section, keys] : config_sections()) {
+    if (section == name) return &keys;
+  }
+  return nullptr;
+}
+
+std::string section_of_key(const std::string& key) {
+  for (const auto& [section, keys] : config_sections()) {
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) return section;
+  }
+  return {};
+}
+
+std::string section_names() {
+  std::string out;
+  for (const auto& s : config_sections()) out += (out.empty() ? "[" : ", [") + s.first + "]";
+  return out;
+}
+
+// TOML (or INI) as CLI11 reads it, with the sections above: a key in its own
+// section (or at the top level, as before sections) is the option it names;
+// a key in another section, an unknown section or a nested one is refused,
+// naming it.
+class SectionedConfig final : public CLI::ConfigTOML {
+ public:
+  std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+    std::vector<CLI::ConfigItem> read = CLI::ConfigTOML::from_config(input);
+    std::vector<CLI::ConfigItem> out;
+    for (CLI::ConfigItem& item : read) {
+      if (item.parents.empty()) {
+        out.push_back(std::move(item));
+        continue;
+      }
+      const std::string section = CLI::detail::join(item.parents, ".");
+      const std::vector<std::string>* keys = keys_of_section(section);
+      if (keys == nullptr) {
+        throw CLI::ConfigError("unknown section [" + section + "] (the sections are " + section_names() + ")");
+      }
+      if (item.name == "++" || item.name == "--") continue;  // CLI11's marks of a section's start and end
+      if (std::find(keys->begin(), keys->end(), item.name) == keys->end()) {
+        const std::string home = section_of_key(item.name);
+        throw CLI::ConfigError(home.empty()
+                                   ? "unknown key '" + item.name + "' in [" + section + "]"
+                                   : "key '" + item.name + "' belongs in [" + home + "], not [" + section + "]");
+      }
+      item.parents.clear();
+      out.push_back(std::move(item));
+    }
+    return out;
+  }
+};
+
 }  // namespace
 
 std::string config_error_text(const std::string& message) {
@@ -25,14 +99,18 @@ std::string config_error_text(const std::string& message) {
   std::string key = message.substr(prefix.size());
   const std::string section_marker = ".++";
   if (key.size() > section_marker.size() && key.compare(key.size() - 3, 3, section_marker) == 0) {
-    return "unknown section [" + key.substr(0, key.size() - 3) + "] (keys are the long option names, at the top level)";
+    return "unknown section [" + key.substr(0, key.size() - 3) + "] (the sections are " + section_names() + ")";
   }
   return "unknown key '" + key + "' (keys are the long option names without the dashes)";
 }
 
 void add_console_options(CLI::App& app, ConsoleOptions& o) {
   // checked as soon as it is parsed: CLI11 reads it before any other check
-  app.set_config("--config", "", "Read options from this INI or TOML file (long option names as keys)")
+  app.config_formatter(std::make_shared<SectionedConfig>());
+  app.set_config("--config", "",
+                 "Read options from this TOML (or INI) file: the long option names as keys, at the top level or in "
+                 "their sections ([terrain], [session], [rope], [vehicle], [observers], [realtime], [device], [dds], "
+                 "[thumbnails]; /etc/visvol/console.toml shows each)")
       ->check(CLI::Validator([](std::string& path) { return regular_file_problem(path); }, "FILE"))
       ->trigger_on_parse();
   // a key the console does not know is a mistake to name, not to skip

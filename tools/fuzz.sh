@@ -4,6 +4,8 @@
 # A crash, leak or timeout fails the run and leaves the input under
 # build-fuzz/artifacts/.
 #   VISVOL_FUZZ_SECONDS   time per target (default 60)
+#   VISVOL_FUZZ_OPT       the fuzz build's optimisation (default -O1; the test
+#                         command's short run takes -O0: faster to build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${VISVOL_FUZZ_SECONDS:-60}
@@ -12,7 +14,7 @@ tools/deps.sh build storage dds fuzz
 generator=()
 [[ -f build-fuzz/CMakeCache.txt ]] || generator=(-G Ninja)
 CC=clang CXX=clang++ cmake "${generator[@]}" -S . -B build-fuzz -DVISVOL_FUZZ=ON \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISVOL_DEBUG_INFO=-g1 >/dev/null
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISVOL_DEBUG_INFO=-g1 -DVISVOL_FUZZ_OPT="${VISVOL_FUZZ_OPT:--O1}" >/dev/null
 cmake --build build-fuzz --target fuzzers -j "$(nproc)"
 
 mkdir -p build-fuzz/artifacts

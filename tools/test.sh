@@ -6,6 +6,9 @@
 # stage's time as it ends and all of them at the end, passed or not.
 #   VISVOL_FUZZ_SECONDS   time per fuzz target (default here 5: the seed corpus
 #                         replayed and a short run; tools/fuzz.sh alone runs 60)
+#   VISVOL_FUZZ_OPT       the fuzz build's optimisation (default here -O0: half
+#                         the build time, enough for a 5 s run; tools/fuzz.sh
+#                         alone builds -O1)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -92,6 +95,7 @@ finish() {
 trap finish EXIT
 
 export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-5}
+export VISVOL_FUZZ_OPT=${VISVOL_FUZZ_OPT:--O0}
 if [[ $(id -u) -eq 0 ]]; then
   stage "install packages" tools/deps.sh build storage dds render can
   tools/deps.sh vm fuzz lint >"$late_log" 2>&1 &

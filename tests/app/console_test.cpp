@@ -173,10 +173,14 @@ TEST_F(Console, JournalLinesCarryTheirPriorities) {
 TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
   const std::string dir = out_dir("config");
   ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
-  const std::pair<std::string, std::string> cases[] = {{"bogus-key = 3\n", "unknown key 'bogus-key'"},
-                                                       {"[console]\nseconds = 1\n", "unknown section [console]"},
-                                                       {"segments = \"many\"\n", "--segments = many"},
-                                                       {"segments = 1\n", "--segments: 1 must be in 2.."}};
+  const std::pair<std::string, std::string> cases[] = {
+      {"bogus-key = 3\n", "unknown key 'bogus-key'"},
+      {"[console]\nseconds = 1\n", "unknown section [console]"},
+      {"[rope]\nnode = 3\n", "key 'node' belongs in [device], not [rope]"},
+      {"[dds]\nfrobnicate = 1\n", "unknown key 'frobnicate' in [dds]"},
+      {"[rope]\nsegments = 1\n", "--segments: 1 must be in 2.."},
+      {"segments = \"many\"\n", "--segments = many"},
+      {"segments = 1\n", "--segments: 1 must be in 2.."}};
   int k = 0;
   for (const auto& [text, expected] : cases) {
     const std::string file = dir + "/console_" + std::to_string(k++) + ".toml";

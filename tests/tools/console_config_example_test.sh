@@ -4,10 +4,11 @@
 # console's options cannot drift apart:
 #   - its keys (each "#key = value" or "key = value" line) are exactly the long
 #     options `CONSOLE --help` lists, less --help, --version and --config, each once;
-#   - every other line is blank or a comment ("# ...");
+#   - every other line is blank, a comment ("# ...") or a [section];
 #   - CONSOLE --config EXAMPLE is accepted as is, and with every key
-#     uncommented (the values written must be valid): with a file that is not a
-#     pack as --pack, start-up gets past the options and refuses that file.
+#     uncommented (the values written must be valid, each key in its own
+#     section): with a file that is not a pack as --pack, start-up gets past
+#     the options and refuses that file.
 set -euo pipefail
 console=$1 example=$2
 scratch=$(mktemp -d)
@@ -36,8 +37,8 @@ fi
 if extra=$(comm -13 "$scratch/options" <(sort -u "$scratch/keys")) && [[ -n $extra ]]; then
   fail "keys of $example that --help does not list: $(tr '\n' ' ' <<<"$extra")"
 fi
-if stray=$(grep -nvE '^$|^# |^#$|^#?[a-z0-9][a-z0-9-]* = ' "$example") && [[ -n $stray ]]; then
-  fail "lines of $example that are neither a comment (\"# ...\") nor a key:"$'\n'"$stray"
+if stray=$(grep -nvE '^$|^# |^#$|^#?[a-z0-9][a-z0-9-]* = |^\[[a-z]+\]$' "$example") && [[ -n $stray ]]; then
+  fail "lines of $example that are neither a comment (\"# ...\"), a key nor a [section]:"$'\n'"$stray"
 fi
 if set_keys=$(grep -nE '^[a-z]' "$example") && [[ -n $set_keys ]]; then
   fail "keys of $example set rather than commented out at their defaults:"$'\n'"$set_keys"

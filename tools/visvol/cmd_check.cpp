@@ -11,6 +11,7 @@
 #include "cli.hpp"
 #include "commands.hpp"
 #include "io/json_text.hpp"
+#include "pack_planner.hpp"  // the planner and sampler for packs: compiled in visvol_pack_planner
 #include "path_io.hpp"
 #include "planning_pack.hpp"
 #include "rt/rope/field_forces.hpp"

@@ -18,6 +18,7 @@
 #include "io/atomic_file.hpp"
 #include "io/input_file.hpp"
 #include "io/json_text.hpp"
+#include "pack_planner.hpp"  // the planner and sampler for packs: compiled in visvol_pack_planner
 #include "storage/pack_reader.hpp"
 #include "storage/volume_export.hpp"
 

@@ -16,6 +16,7 @@
 #include "drivers/render/renderer.hpp"
 #include "fields/sampler.hpp"
 #include "io/atomic_file.hpp"
+#include "pack_planner.hpp"  // the planner and sampler for packs: compiled in visvol_pack_planner
 #include "path_io.hpp"
 #include "storage/pack_reader.hpp"
 

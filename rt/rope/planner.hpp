@@ -391,21 +391,22 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
 
 }  // namespace visvol::rt
 
+// The templates a caller of plan() instantiates for one level type, declared
+// (KIND extern) or defined (KIND empty): one list, so that a declaration and
+// its definition cannot drift apart.
+#define VISVOL_PLANNER_TEMPLATES(KIND, LEVEL)                                                                 \
+  KIND template class visvol::fields::FieldSampler<LEVEL>;                                                    \
+  KIND template class visvol::rt::FieldForces<LEVEL>;                                                         \
+  KIND template visvol::Result<visvol::rt::GlobalPath> visvol::rt::global_search<LEVEL>(                      \
+      const LEVEL&, const visvol::rt::Vec3&, const visvol::rt::Vec3&, const visvol::rt::GlobalSearchParams&); \
+  KIND template visvol::Result<visvol::rt::PlanResult> visvol::rt::plan<LEVEL>(                               \
+      const std::vector<const LEVEL*>&, const visvol::rt::PlanRequest&,                                       \
+      const std::function<void(const visvol::rt::PlanProgress&)>&);
+
 // Compiled once, optimised, in visvol_rope (plan_dense.cpp) for the levels held
 // in memory (tests, benchmarks): each caller instantiated the planner, the
 // search and the field's forces again, the longest compile of the tests. (The
 // fuzz build has no rope: it leaves plan_dense.cpp out.)
 #ifndef VISVOL_FUZZING
-extern template class visvol::fields::FieldSampler<visvol::fields::DenseLevel>;
-
-namespace visvol::rt {
-
-extern template Result<PlanResult> plan<fields::DenseLevel>(const std::vector<const fields::DenseLevel*>&,
-                                                            const PlanRequest&,
-                                                            const std::function<void(const PlanProgress&)>&);
-extern template Result<GlobalPath> global_search<fields::DenseLevel>(const fields::DenseLevel&, const Vec3&,
-                                                                     const Vec3&, const GlobalSearchParams&);
-extern template class FieldForces<fields::DenseLevel>;
-
-}  // namespace visvol::rt
+VISVOL_PLANNER_TEMPLATES(extern, visvol::fields::DenseLevel)
 #endif

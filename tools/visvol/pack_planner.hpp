@@ -7,15 +7,4 @@
 #include "rt/rope/planner.hpp"
 #include "storage/pack_reader.hpp"
 
-extern template class visvol::fields::FieldSampler<visvol::storage::PackLevel>;
-
-namespace visvol::rt {
-
-extern template class FieldForces<storage::PackLevel>;
-extern template Result<GlobalPath> global_search<storage::PackLevel>(const storage::PackLevel&, const Vec3&,
-                                                                     const Vec3&, const GlobalSearchParams&);
-extern template Result<PlanResult> plan<storage::PackLevel>(const std::vector<const storage::PackLevel*>&,
-                                                            const PlanRequest&,
-                                                            const std::function<void(const PlanProgress&)>&);
-
-}  // namespace visvol::rt
+VISVOL_PLANNER_TEMPLATES(extern, visvol::storage::PackLevel)

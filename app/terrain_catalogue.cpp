@@ -7,7 +7,6 @@
 #include <sched.h>
 #include <sys/eventfd.h>
 #include <sys/inotify.h>
-#include <sys/mman.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
@@ -19,6 +18,7 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 
+#include "io/input_file.hpp"
 #include "storage/pack_identity.hpp"
 #include "storage/pack_reader.hpp"
 
@@ -64,14 +64,14 @@ void describe(const storage::Pack& pack, CatalogueEntry& e) {
   e.levels = pack.level_count();
 }
 
-// Every tile checked as read with pread into one buffer: through the pack's
-// mapping, a file truncated or rewritten meanwhile would raise SIGBUS, and
-// every page read would count against the console's memory (locked, with
-// mlockall's MCL_FUTURE). The page cache is told the file is read once.
+// Every tile checked as read with pread into one buffer: through a mapping,
+// a file truncated or rewritten meanwhile would raise SIGBUS, and every page
+// read would count against the console's memory (locked, with mlockall's
+// MCL_FUTURE). The page cache is told the file is read once.
 Status verify_tiles_read(const storage::Pack& pack, const std::atomic<bool>* stop) {
-  const int fd = open(pack.path().c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return io_error(errno_text("cannot read", pack.path()));
-  posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+  Result<InputFile> file = InputFile::open(pack.path());
+  if (!file.ok()) return file.status();
+  posix_fadvise(file->fd(), 0, 0, POSIX_FADV_SEQUENTIAL);
   std::vector<std::uint8_t> buf;
   Status result;
   for (std::uint64_t n = 0; n < pack.tile_count() && result.ok(); ++n) {
@@ -81,20 +81,10 @@ Status verify_tiles_read(const storage::Pack& pack, const std::atomic<bool>* sto
     }
     const storage::TileEntry& t = pack.tile_entry(n);
     buf.resize(t.bytes);
-    std::size_t got = 0;
-    while (got < t.bytes) {
-      const ssize_t r = pread(fd, buf.data() + got, t.bytes - got, static_cast<off_t>(t.offset + got));
-      if (r <= 0) break;
-      got += static_cast<std::size_t>(r);
-    }
-    if (got < t.bytes) {
-      result = io_error(pack.path() + ": " + storage::Pack::describe(t) + ": cannot be read whole (changed?)");
-    } else {
-      result = pack.verify_tile_bytes(t, buf.data());
-    }
+    result = file->read_at(buf.data(), buf.size(), t.offset);
+    if (result.ok()) result = pack.verify_tile_bytes(t, buf.data());
   }
-  posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
-  close(fd);
+  posix_fadvise(file->fd(), 0, 0, POSIX_FADV_DONTNEED);
   return result;
 }
 
@@ -130,10 +120,9 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
   e.inode = st.st_ino;
   e.size_bytes = static_cast<std::uint64_t>(st.st_size);
   e.changed_ns = static_cast<std::int64_t>(st.st_ctim.tv_sec) * 1'000'000'000 + st.st_ctim.tv_nsec;
-  Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path);
+  // not mapped: the header, tables and height tiles read with pread
+  Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path, storage::PackAccess::inspect);
   if (!pack.ok()) return refuse(e, pack.status().message());
-  // only the header and tables were read through the mapping: not kept locked
-  munlock((*pack)->mapping(), static_cast<std::size_t>((*pack)->file_bytes()));
   describe(**pack, e);
   if (level >= (*pack)->level_count()) {
     return refuse(e, std::to_string((*pack)->level_count()) + " levels of detail: the console runs on level " +

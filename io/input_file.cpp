@@ -81,6 +81,22 @@ Result<std::string> InputFile::read_all(std::size_t max_bytes) {
   return text;
 }
 
+Status InputFile::read_at(void* out, std::size_t bytes, std::uint64_t offset) const {
+  auto* dst = static_cast<std::uint8_t*>(out);
+  std::size_t got = 0;
+  while (got < bytes) {
+    const ssize_t n = ::pread(fd_, dst + got, bytes - got, static_cast<off_t>(offset + got));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return io_error(path_ + ": read failed: " + std::strerror(errno));
+    if (n == 0) {
+      return io_error(path_ + ": ended at byte " + std::to_string(offset + got) + ", " +
+                      std::to_string(offset + bytes) + " expected (changed while read?)");
+    }
+    got += static_cast<std::size_t>(n);
+  }
+  return Status::ok_status();
+}
+
 Result<std::string> read_input_file(const std::string& path, std::size_t max_bytes) {
   Result<InputFile> f = InputFile::open(path);
   if (!f.ok()) return f.status();

@@ -38,6 +38,10 @@ class InputFile {
   // The whole file; Errc::invalid_argument naming the limit when it is larger
   // than `max_bytes`.
   Result<std::string> read_all(std::size_t max_bytes);
+  // Exactly `bytes` at `offset` (pread: the file position is left alone), or
+  // Errc::io naming the path: a read error, or the file ending first (changed
+  // since it was opened).
+  Status read_at(void* out, std::size_t bytes, std::uint64_t offset) const;
 
  private:
   InputFile() = default;

@@ -40,6 +40,9 @@ inline constexpr int kBrickPosts = 16;    // visibility and tff tiles (columns a
 inline constexpr int kMaxLodLevels = 16;  // levels of detail
 inline constexpr int kMaxVoxelLevels = 255;
 inline constexpr int kMaxBandLevels = 64;
+// The metadata JSON (a few kilobytes: CRS, source, build parameters): a
+// reader refuses more before reading it.
+inline constexpr std::uint64_t kMaxMetadataBytes = std::uint64_t{16} << 20;
 
 enum class Layer : std::uint16_t { height = 0, area = 1, visibility = 2, tff = 3 };
 inline constexpr int kLayerCount = 4;

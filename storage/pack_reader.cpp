@@ -125,7 +125,7 @@ std::string Pack::describe(const TileEntry& t) {
   return s.str();
 }
 
-Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path) {
+Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAccess access) {
   std::shared_ptr<Pack> pack(new Pack());
   pack->path_ = path;
   // never blocks on a FIFO; refuses what is not a regular file
@@ -136,18 +136,22 @@ Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path) {
     return corrupt(path + ": " + std::to_string(pack->size_) +
                    " bytes, smaller than a pack header; not a visvol pack or truncated");
   }
-  void* map = ::mmap(nullptr, static_cast<std::size_t>(pack->size_), PROT_READ, MAP_SHARED, file->fd(), 0);
-  // the mapping keeps the file once `file` closes it
-  if (map == MAP_FAILED) return io_error(path + ": cannot map: " + std::strerror(errno));
-  pack->base_ = static_cast<const std::uint8_t*>(map);
-  VISVOL_RETURN_IF_ERROR(pack->validate_structure());
+  VISVOL_RETURN_IF_ERROR(file->read_at(&pack->header_copy_, sizeof(PackHeader), 0));
+  VISVOL_RETURN_IF_ERROR(pack->validate_header());
+  VISVOL_RETURN_IF_ERROR(pack->read_tables(*file));
+  VISVOL_RETURN_IF_ERROR(pack->validate_tiles());
   VISVOL_RETURN_IF_ERROR(pack->parse_metadata());
-  VISVOL_RETURN_IF_ERROR(pack->check_heights());
+  if (access == PackAccess::mapped) {
+    void* map = ::mmap(nullptr, static_cast<std::size_t>(pack->size_), PROT_READ, MAP_SHARED, file->fd(), 0);
+    // the mapping keeps the file once `file` closes it
+    if (map == MAP_FAILED) return io_error(path + ": cannot map: " + std::strerror(errno));
+    pack->base_ = static_cast<const std::uint8_t*>(map);
+  }
+  VISVOL_RETURN_IF_ERROR(pack->check_heights(*file));
   return std::shared_ptr<const Pack>(std::move(pack));
 }
 
-Status Pack::validate_structure() {
-  header_ = reinterpret_cast<const PackHeader*>(base_);
+Status Pack::validate_header() {
   const PackHeader& h = *header_;
   std::ostringstream msg;
   msg << path_ << ": ";
@@ -181,7 +185,8 @@ Status Pack::validate_structure() {
                std::to_string(h.band_offset_m) + " m) is out of range");
   }
   const std::uint64_t level_bytes = std::uint64_t{h.level_count} * sizeof(LevelEntry);
-  if (h.level_table_offset % 8 != 0 || !within(h.level_table_offset, level_bytes, size_)) {
+  if (h.level_table_offset % 8 != 0 || h.level_table_offset < sizeof(PackHeader) ||
+      !within(h.level_table_offset, level_bytes, size_)) {
     return bad("level table (offset " + std::to_string(h.level_table_offset) + ") is outside the file");
   }
   if (h.tile_count > size_ / sizeof(TileEntry) || h.tile_table_offset % 8 != 0 ||
@@ -195,15 +200,26 @@ Status Pack::validate_structure() {
     return bad("metadata (offset " + std::to_string(h.metadata_offset) + ", " + std::to_string(h.metadata_bytes) +
                " bytes) is outside the file");
   }
-  if (checksum(base_ + h.level_table_offset, size_ - h.level_table_offset) != h.tables_crc32c) {
-    return bad("table or metadata checksum mismatch");
+  if (h.metadata_bytes > kMaxMetadataBytes) {
+    return bad("metadata of " + std::to_string(h.metadata_bytes) + " bytes, more than the " +
+               std::to_string(kMaxMetadataBytes) + " a pack may hold");
   }
-  levels_ = reinterpret_cast<const LevelEntry*>(base_ + h.level_table_offset);
-  tiles_ = reinterpret_cast<const TileEntry*>(base_ + h.tile_table_offset);
+  return Status::ok_status();
+}
 
+// The level table first: its grids say how many tiles there are, so the tile
+// table read next is no larger than the levels need (a file claiming more is
+// refused before anything that size is allocated).
+Status Pack::read_tables(const InputFile& file) {
+  const PackHeader& h = *header_;
+  auto bad = [&](const std::string& what) { return corrupt(path_ + ": " + what); };
+  const std::uint64_t level_bytes = std::uint64_t{h.level_count} * sizeof(LevelEntry);
+  tables_.resize(static_cast<std::size_t>(level_bytes));
+  VISVOL_RETURN_IF_ERROR(file.read_at(tables_.data(), tables_.size(), h.level_table_offset));
   std::uint64_t expected_first = 0;
   for (std::uint32_t l = 0; l < h.level_count; ++l) {
-    const LevelEntry& e = levels_[l];
+    LevelEntry e;
+    std::memcpy(&e, tables_.data() + l * sizeof(LevelEntry), sizeof e);
     const std::string name = "level " + std::to_string(l) + ": ";
     if (e.nx < 2 || e.ny < 2 || e.nx > 32768 || e.ny > 32768 || e.nz < 2 || e.nz > kMaxVoxelLevels) {
       return bad(name + "grid " + std::to_string(e.nx) + " x " + std::to_string(e.ny) + " x " + std::to_string(e.nz) +
@@ -217,6 +233,22 @@ Status Pack::validate_structure() {
   if (expected_first != h.tile_count) {
     return bad("tile_count " + std::to_string(h.tile_count) + ", the levels need " + std::to_string(expected_first));
   }
+  // the tile table and metadata, up to the end of the file (validate_header)
+  tables_.resize(static_cast<std::size_t>(size_ - h.level_table_offset));
+  VISVOL_RETURN_IF_ERROR(
+      file.read_at(tables_.data() + level_bytes, tables_.size() - level_bytes, h.level_table_offset + level_bytes));
+  if (checksum(tables_.data(), tables_.size()) != h.tables_crc32c) {
+    return bad("table or metadata checksum mismatch");
+  }
+  // operator new's alignment suits both tables (their offsets are multiples of 8)
+  levels_ = reinterpret_cast<const LevelEntry*>(tables_.data());
+  tiles_ = reinterpret_cast<const TileEntry*>(tables_.data() + level_bytes);
+  return Status::ok_status();
+}
+
+Status Pack::validate_tiles() {
+  const PackHeader& h = *header_;
+  auto bad = [&](const std::string& what) { return corrupt(path_ + ": " + what); };
   // the numbers readers index grids with: finite, sane, levels consistent
   VISVOL_RETURN_IF_ERROR(check_level_geometry(levels_, static_cast<int>(h.level_count), path_));
   // every tile entry: identity, alignment, size, inside the tile area
@@ -248,7 +280,8 @@ Status Pack::validate_structure() {
 }
 
 Status Pack::parse_metadata() {
-  const char* text = reinterpret_cast<const char*>(base_ + header_->metadata_offset);
+  const char* text =
+      reinterpret_cast<const char*>(tables_.data() + (header_->metadata_offset - header_->level_table_offset));
   metadata_.json.assign(text, static_cast<std::size_t>(header_->metadata_bytes));
   try {
     const nlohmann::json j = nlohmann::json::parse(metadata_.json);
@@ -295,7 +328,12 @@ const TileEntry& Pack::tile(int level, Layer layer, int tx, int ty) const {
   return tiles_[e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny)];
 }
 
-Status Pack::verify_tile(const TileEntry& t) const { return verify_tile_bytes(t, base_ + t.offset); }
+Status Pack::verify_tile(const TileEntry& t) const {
+  if (base_ == nullptr) {
+    return Status(Errc::state, path_ + ": opened for inspection, not mapped: " + describe(t) + " must be read first");
+  }
+  return verify_tile_bytes(t, base_ + t.offset);
+}
 
 Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) const {
   if (checksum(bytes, t.bytes) != t.crc32c) {
@@ -308,14 +346,21 @@ Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) co
   return Status::ok_status();
 }
 
-Status Pack::check_heights() const {
+Status Pack::check_heights(const InputFile& file) const {
+  std::vector<std::uint8_t> copy;  // an inspected pack's tile, as read
   for (int l = 0; l < level_count(); ++l) {
     const LevelEntry& e = levels_[l];
     const TileGrid g = tile_grid(Layer::height, e.nx, e.ny);
     for (int ty = 0; ty < g.tiles_y; ++ty) {
       for (int tx = 0; tx < g.tiles_x; ++tx) {
         const TileEntry& t = tile(l, Layer::height, tx, ty);
-        VISVOL_RETURN_IF_ERROR(check_height_tile(e, t, tile_data(t), path_));
+        const std::uint8_t* bytes = base_ ? tile_data(t) : nullptr;
+        if (bytes == nullptr) {
+          copy.resize(static_cast<std::size_t>(t.bytes));
+          VISVOL_RETURN_IF_ERROR(file.read_at(copy.data(), copy.size(), t.offset));
+          bytes = copy.data();
+        }
+        VISVOL_RETURN_IF_ERROR(check_height_tile(e, t, bytes, path_));
       }
     }
   }
@@ -342,6 +387,9 @@ Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level, T
   if (level < 0 || level >= pack->level_count()) {
     return invalid_argument(pack->path() + ": no level of detail " + std::to_string(level) + " (it has " +
                             std::to_string(pack->level_count()) + ")");
+  }
+  if (pack->mapping() == nullptr) {
+    return Status(Errc::state, pack->path() + ": opened for inspection, not mapped: its levels cannot be read");
   }
   if (check == TileCheck::at_open) VISVOL_RETURN_IF_ERROR(pack->verify_level(level));
   PackLevel v;

@@ -1,4 +1,5 @@
-// Reads a field pack by memory mapping it read-only.
+// Reads a field pack: the header, tables and metadata are read (pread) into
+// memory the Pack owns; the tiles are memory mapped read-only.
 //
 // open() checks everything structural before anything is used: magic,
 // version, header and table checksums, the file size against the header (a
@@ -10,6 +11,12 @@
 // expect. Tile checksums (and float32 F_p in [0, 1]) are checked by verify()
 // and verify_level(), which name the bad tile. Nothing here trusts a number
 // from the file without bounds.
+//
+// A pack opened with PackAccess::inspect is not mapped at all: its height
+// tiles are checked as read with pread, and its tiles are read the same way
+// by whoever verifies them (verify_tile_bytes). A file truncated or rewritten
+// while a mapping of it is read raises SIGBUS; the console's terrain
+// catalogue inspects packs that operators may be copying in.
 //
 // Thread-safety: a Pack is immutable after open(); concurrent reads are safe.
 // Not real-time safe to open (I/O); the mapped bytes are read in place.
@@ -25,6 +32,7 @@
 #include "base/status.hpp"
 #include "fields/terrain_force.hpp"
 #include "fields/volume.hpp"
+#include "io/input_file.hpp"
 #include "storage/pack_format.hpp"
 #include "storage/planning_bounds.hpp"
 
@@ -45,16 +53,19 @@ struct PackMetadata {
   PlanningBounds planning;
 };
 
+enum class PackAccess : std::uint8_t { mapped, inspect };
+
 class Pack {
  public:
-  static Result<std::shared_ptr<const Pack>> open(const std::string& path);
+  static Result<std::shared_ptr<const Pack>> open(const std::string& path, PackAccess access = PackAccess::mapped);
   ~Pack();
   Pack(const Pack&) = delete;
   Pack& operator=(const Pack&) = delete;
 
   const std::string& path() const { return path_; }
   std::uint64_t file_bytes() const { return size_; }
-  // The read-only mapping of the whole file (file_bytes() long).
+  // The read-only mapping of the whole file (file_bytes() long); null when
+  // opened with PackAccess::inspect.
   const std::uint8_t* mapping() const { return base_; }
   const PackHeader& header() const { return *header_; }
   const PackMetadata& metadata() const { return metadata_; }
@@ -64,13 +75,15 @@ class Pack {
   fields::TffParams tff_params() const { return {header_->band_offset_m, static_cast<int>(header_->band_levels)}; }
   fields::VolumeGeometry geometry(int level) const;
 
-  // The entry and bytes of a tile (entries are validated at open()).
+  // The entry and bytes of a tile (entries are validated at open()); the
+  // bytes only of a mapped pack.
   const TileEntry& tile(int level, Layer layer, int tx, int ty) const;
   const std::uint8_t* tile_data(const TileEntry& t) const { return base_ + t.offset; }
   std::uint64_t tile_count() const { return header_->tile_count; }
   const TileEntry& tile_entry(std::uint64_t n) const { return tiles_[n]; }
 
-  // Checks one tile's checksum, naming it on failure.
+  // Checks one tile's checksum, naming it on failure (a mapped pack; an
+  // inspected one answers Errc::state).
   Status verify_tile(const TileEntry& t) const;
   // The same checks on a copy of the tile's t.bytes bytes (read with pread,
   // for instance, where a file changed under a mapping would raise SIGBUS).
@@ -84,16 +97,23 @@ class Pack {
 
  private:
   Pack() = default;
-  Status validate_structure();
+  // The header's own checks, then the level table (read first: it bounds the
+  // tile table), then the tables and metadata read whole and checked.
+  Status validate_header();
+  Status read_tables(const InputFile& file);
+  Status validate_tiles();
   Status parse_metadata();
   // Every level's height posts finite and within its voxel levels (a scan of
-  // the height layer, a small part of the pack; see pack_checks.hpp).
-  Status check_heights() const;
+  // the height layer, a small part of the pack; see pack_checks.hpp): through
+  // the mapping, or read from `file` when there is none.
+  Status check_heights(const InputFile& file) const;
 
   std::string path_;
-  const std::uint8_t* base_ = nullptr;
+  const std::uint8_t* base_ = nullptr;  // the mapping; null when inspected
   std::uint64_t size_ = 0;
-  const PackHeader* header_ = nullptr;
+  PackHeader header_copy_{};
+  std::vector<std::uint8_t> tables_;  // level table .. end of file
+  const PackHeader* header_ = &header_copy_;
   const LevelEntry* levels_ = nullptr;
   const TileEntry* tiles_ = nullptr;
   PackMetadata metadata_;

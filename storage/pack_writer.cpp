@@ -140,6 +140,10 @@ Status PackWriter::finish(const std::string& metadata_json) {
                                           std::to_string(t.level) + " was never written"));
     }
   }
+  if (metadata_json.size() > kMaxMetadataBytes) {
+    return fail(invalid_argument(path_ + ": metadata of " + std::to_string(metadata_json.size()) +
+                                 " bytes, more than the " + std::to_string(kMaxMetadataBytes) + " a reader accepts"));
+  }
   // tables and metadata, contiguous after the tiles
   std::vector<std::uint8_t> tables;
   auto append = [&](const void* p, std::size_t n) {

@@ -83,6 +83,26 @@ TEST_F(InputFileTest, AFifoBesideAnInputWithTheSameStemIsRefused) {
 }
 
 // The descriptor is blocking again: reads of a regular file behave as usual.
+TEST_F(InputFileTest, ReadAtReadsExactlyOrNamesTheShortFile) {
+  const std::string file = dir_ + "/bytes.bin";
+  std::ofstream(file) << "0123456789";
+  Result<InputFile> f = InputFile::open(file);
+  ASSERT_TRUE(f.ok());
+  char out[4] = {};
+  ASSERT_TRUE(f->read_at(out, 4, 3).ok());
+  EXPECT_EQ(std::string(out, 4), "3456");
+  ASSERT_TRUE(f->read_at(out, 4, 6).ok());  // up to the last byte
+  EXPECT_EQ(std::string(out, 4), "6789");
+  const Status past = f->read_at(out, 4, 8);
+  ASSERT_FALSE(past.ok());
+  EXPECT_EQ(past.code(), Errc::io);
+  EXPECT_NE(past.message().find(file), std::string::npos) << past.message();
+  EXPECT_NE(past.message().find("ended at byte 10, 12 expected"), std::string::npos) << past.message();
+  // cut short after it was opened: the same error, not a fault
+  ASSERT_EQ(::truncate(file.c_str(), 2), 0);
+  EXPECT_EQ(f->read_at(out, 4, 0).code(), Errc::io);
+}
+
 TEST_F(InputFileTest, TheDescriptorIsLeftBlocking) {
   const std::string file = dir_ + "/a.txt";
   std::ofstream(file) << "x";

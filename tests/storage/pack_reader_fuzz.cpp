@@ -1,5 +1,6 @@
 // libFuzzer target: the pack reader. Any bytes must open as a valid pack or
-// give an error: never a crash, a read outside the mapping, or a hang. The
+// give an error: never a crash, a read outside the mapping, or a hang; mapped
+// or inspected, the same verdict. The
 // header and table checksums are recomputed first, so mutations reach the
 // structural checks behind them rather than stopping at a checksum.
 #include <sys/mman.h>
@@ -36,6 +37,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const std::string path = "/proc/self/fd/" + std::to_string(fd);
   auto pack = Pack::open(path);
+  // inspected (nothing mapped, read with pread): the same verdict
+  auto inspected = Pack::open(path, PackAccess::inspect);
+  if (pack.ok() != inspected.ok() || (!pack.ok() && pack.status().message() != inspected.status().message())) {
+    __builtin_trap();
+  }
   if (pack.ok()) {
     (void)(*pack)->verify();
     for (int l = 0; l < (*pack)->level_count(); ++l) {

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "../fields/terrains.hpp"
@@ -244,6 +245,13 @@ TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
       {"tile beyond tables",
        [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 5)->offset = h.level_table_offset; }, "is invalid"},
       {"swapped identity", [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 2)->tx = 9; }, "tile entry 2"},
+      {"metadata beyond the cap",
+       [](PackHeader& h, std::vector<char>& b) {
+         b.resize(static_cast<std::size_t>(h.metadata_offset + kMaxMetadataBytes + 1), ' ');
+         h.metadata_bytes = kMaxMetadataBytes + 1;
+         h.file_bytes = b.size();
+       },
+       "a pack may hold"},
       {"level grid",
        [&](PackHeader& h, std::vector<char>& b) {
          reinterpret_cast<LevelEntry*>(b.data() + h.level_table_offset)->nz = 1000;
@@ -257,6 +265,77 @@ TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
     EXPECT_NE(pack.status().message().find(c.expect), std::string::npos) << c.what << ": " << pack.status().message();
   }
   std::remove(bad.c_str());
+}
+
+// The console's terrain catalogue inspects packs that operators may be
+// copying in: nothing of an inspected pack is mapped, so a file cut short
+// under it is an error, never SIGBUS.
+TEST_F(PackFile, AnInspectedPackIsNotMappedAndReadsAsAMappedOne) {
+  Result<std::shared_ptr<const Pack>> mapped = Pack::open(*path_);
+  Result<std::shared_ptr<const Pack>> inspected = Pack::open(*path_, PackAccess::inspect);
+  ASSERT_TRUE(mapped.ok() && inspected.ok()) << inspected.status().message();
+  const Pack& m = **mapped;
+  const Pack& i = **inspected;
+  EXPECT_NE(m.mapping(), nullptr);
+  EXPECT_EQ(i.mapping(), nullptr);
+  EXPECT_EQ(i.metadata().json, m.metadata().json);
+  ASSERT_EQ(i.level_count(), m.level_count());
+  ASSERT_EQ(i.tile_count(), m.tile_count());
+  EXPECT_EQ(std::memcmp(&i.level(1), &m.level(1), sizeof(LevelEntry)), 0);
+  EXPECT_EQ(std::memcmp(&i.tile_entry(i.tile_count() - 1), &m.tile_entry(m.tile_count() - 1), sizeof(TileEntry)), 0);
+  // its tiles are read, then checked
+  Result<InputFile> file = InputFile::open(*path_);
+  ASSERT_TRUE(file.ok());
+  std::vector<std::uint8_t> bytes;
+  for (std::uint64_t n = 0; n < i.tile_count(); ++n) {
+    const TileEntry& t = i.tile_entry(n);
+    bytes.resize(t.bytes);
+    ASSERT_TRUE(file->read_at(bytes.data(), bytes.size(), t.offset).ok());
+    ASSERT_TRUE(i.verify_tile_bytes(t, bytes.data()).ok()) << Pack::describe(t);
+  }
+  // and never through a mapping it does not have
+  EXPECT_EQ(i.verify_tile(i.tile_entry(0)).code(), Errc::state);
+  EXPECT_EQ(i.verify().code(), Errc::state);
+  const Result<PackLevel> level = PackLevel::open(*inspected, 0);
+  ASSERT_FALSE(level.ok());
+  EXPECT_EQ(level.status().code(), Errc::state);
+  EXPECT_NE(level.status().message().find("not mapped"), std::string::npos) << level.status().message();
+}
+
+TEST_F(PackFile, AnInspectedPackChecksItsHeightsAsRead) {
+  Result<std::shared_ptr<const Pack>> pack = Pack::open(*path_);
+  ASSERT_TRUE(pack.ok());
+  const TileEntry t = (*pack)->tile(1, Layer::height, 0, 0);
+  std::vector<char> bytes = read_file(*path_);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(bytes.data() + t.offset + 4 * sizeof(float), &nan, sizeof nan);
+  const std::string bad = temp_path("nan_height");
+  write_file(bad, bytes);
+  for (PackAccess access : {PackAccess::mapped, PackAccess::inspect}) {
+    const Result<std::shared_ptr<const Pack>> opened = Pack::open(bad, access);
+    ASSERT_FALSE(opened.ok());
+    EXPECT_NE(opened.status().message().find("height tile (0, 0) of level 1"), std::string::npos)
+        << opened.status().message();
+  }
+  std::remove(bad.c_str());
+}
+
+// The header and tables are the pack's own copy: a file truncated under an
+// open pack (a copy over it) faults none of them (before, the tables at the
+// end of the file were read through the mapping).
+TEST_F(PackFile, TheTablesOutliveTheFileBeingCutShort) {
+  const std::string copy = temp_path("cut_short");
+  write_file(copy, read_file(*path_));
+  Result<std::shared_ptr<const Pack>> pack = Pack::open(copy);
+  ASSERT_TRUE(pack.ok());
+  const std::uint64_t count = (*pack)->tile_count();
+  const TileEntry last = (*pack)->tile_entry(count - 1);
+  ASSERT_EQ(::truncate(copy.c_str(), 0), 0);
+  EXPECT_EQ(std::memcmp(&(*pack)->tile_entry(count - 1), &last, sizeof last), 0);
+  EXPECT_EQ((*pack)->header().tile_count, count);
+  EXPECT_GE((*pack)->level(0).nx, 2);
+  EXPECT_NE((*pack)->metadata().json.find("fractal"), std::string::npos);
+  std::remove(copy.c_str());
 }
 
 TEST(PackWriter, AbandonedWriteLeavesTheOldPackAndNoTemporary) {

@@ -8,7 +8,8 @@ namespace visvol::fields {
 namespace {
 
 // Terrain at a point on a grid line: `along` is the fractional coordinate
-// along the line, `across` the integer coordinate of the line.
+// along the line (on the grid), `across` the integer coordinate of the line
+// (a line of the grid).
 double terrain_on_line(const Heightfield& hf, bool vertical_line, int across, double along) {
   const int limit = vertical_line ? hf.ny - 1 : hf.nx - 1;
   const double lo = std::floor(along);
@@ -22,7 +23,8 @@ double terrain_on_line(const Heightfield& hf, bool vertical_line, int across, do
 }
 
 // Tests the crossings with grid lines of one direction (x = integer when
-// `vertical_line`, else y = integer).
+// `vertical_line`, else y = integer): the grid's own lines only, so a sight
+// line reaching beyond the grid is judged over the terrain it crosses.
 bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double aj, double az, double bi, double bj,
                     double bz, double d_total_m, double coeff) {
   const double a_main = vertical_line ? ai : aj;
@@ -31,10 +33,18 @@ bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double
   const double b_other = vertical_line ? bj : bi;
   if (a_main == b_main) return true;
   const double lo = std::min(a_main, b_main), hi = std::max(a_main, b_main);
-  for (int line = static_cast<int>(std::floor(lo)) + 1; line < hi; ++line) {
-    if (line <= lo) continue;
+  const int last_line = vertical_line ? hf.nx - 1 : hf.ny - 1;
+  const double other_last = vertical_line ? hf.ny - 1 : hf.nx - 1;
+  // the lines strictly between lo and hi, within the grid (bounded before
+  // any conversion to int: the ends may lie anywhere)
+  const double first = std::max(std::floor(lo) + 1.0, 0.0);
+  const double last = std::min(std::ceil(hi) - 1.0, static_cast<double>(last_line));
+  if (first > last) return true;
+  for (int line = static_cast<int>(first); line <= static_cast<int>(last); ++line) {
+    if (line <= lo || line >= hi) continue;
     const double f = (line - a_main) / (b_main - a_main);  // 0 < f < 1
     const double along = a_other + f * (b_other - a_other);
+    if (!(along >= 0 && along <= other_last)) continue;  // off the grid: unknown terrain blocks nothing
     const double d = f * d_total_m;
     const double ground = terrain_on_line(hf, vertical_line, line, along) - coeff * d * d / (2.0 * kEarthRadiusM);
     const double z = az + f * (bz - az);
@@ -47,6 +57,9 @@ bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double
 
 bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double bi, double bj, double bz_m,
                 double curvature_coeff) {
+  for (double v : {ai, aj, az_m, bi, bj, bz_m}) {
+    if (!std::isfinite(v)) return false;  // no sight line to judge: never "clear"
+  }
   const double d_total = std::hypot(bi - ai, bj - aj) * hf.spacing_m;
   // The target, seen from a, is lowered by the curvature drop too.
   const double bz = bz_m - curvature_coeff * d_total * d_total / (2.0 * kEarthRadiusM);

@@ -17,7 +17,10 @@
 
 namespace visvol::fields {
 
-// a and b in grid coordinates (posts) and metres of height.
+// a and b in grid coordinates (posts) and metres of height, anywhere: the
+// sight line is judged over the grid lines it crosses (beyond the grid, the
+// terrain is unknown and blocks nothing); a coordinate that is not finite is
+// never visible.
 bool r3_visible(const Heightfield& hf, double ai, double aj, double az_m, double bi, double bj, double bz_m,
                 double curvature_coeff);
 

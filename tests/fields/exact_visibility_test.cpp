@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "terrains.hpp"
 
 namespace visvol::fields {
@@ -24,6 +27,26 @@ TEST(ExactVisibility, WallHidesTheFarSide) {
   // The wall's top is 130 m midway: the line must pass above it.
   EXPECT_FALSE(r3_visible(hf, 0, 5, 130, 20 - 1, 5, 130, 0.0));
   EXPECT_TRUE(r3_visible(hf, 0, 5, 130.5, 19, 5, 130.5, 0.0));
+}
+
+// A target anywhere (a path point of another area, a forged coordinate):
+// judged over the grid it crosses, never a read beyond it.
+TEST(ExactVisibility, SightLinesLeavingTheGridAreJudgedOverIt) {
+  const Heightfield hf = wall(20, 10, 30.0f);
+  // far beyond the grid in both axes: only the grid's part can block
+  EXPECT_TRUE(r3_visible(hf, 2, 5, 102, 2, -1e7, 1e9, 0.0));
+  EXPECT_TRUE(r3_visible(hf, 2, 5, 102, 1e7, 5, 1e9, 0.0));
+  // the wall still hides what lies straight behind it, however far
+  EXPECT_FALSE(r3_visible(hf, 2, 5, 102, 1e7, 5, 102, 0.0));
+  EXPECT_FALSE(r3_visible(hf, 2, 5, 102, 1e300, 5, 102, 0.0));
+  // both ends outside, the line crossing the grid over the wall, then not
+  EXPECT_FALSE(r3_visible(hf, -50, 5, 110, 70, 5, 110, 0.0));
+  EXPECT_TRUE(r3_visible(hf, -50, 5, 140, 70, 5, 140, 0.0));
+  EXPECT_TRUE(r3_visible(hf, -50, -60, 90, 70, -40, 90, 0.0));  // misses the grid: nothing in the way
+  for (double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+    EXPECT_FALSE(r3_visible(hf, 2, 5, 102, bad, 5, 102, 0.0));
+    EXPECT_FALSE(r3_visible(hf, 2, 5, bad, 18, 5, 102, 0.0));
+  }
 }
 
 TEST(ExactVisibility, InterpolatesAlongGridLines) {

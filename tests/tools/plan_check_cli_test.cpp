@@ -128,7 +128,7 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
   // a mission as QGroundControl saves it: relative altitudes over a home
   const std::string plan = base("qgc") + ".plan";
   nlohmann::json items = nlohmann::json::array();
-  const double points[][3] = {{37.7900, -122.4340, 150}, {37.7880, -122.4320, 150}, {37.7860, -122.4300, 150}};
+  const double points[][3] = {{37.7900, -122.4330, 150}, {37.7880, -122.4310, 150}, {37.7860, -122.4290, 150}};
   int id = 1;
   for (const auto& p : points) {
     items.push_back({{"type", "SimpleItem"},
@@ -148,7 +148,7 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
         {"vehicleType", 2},
         {"cruiseSpeed", 15},
         {"hoverSpeed", 5},
-        {"plannedHomePosition", {37.7900, -122.4340, 150}},
+        {"plannedHomePosition", {37.7900, -122.4330, 150}},
         {"items", items}}},
       {"geoFence", {{"version", 2}, {"polygons", nlohmann::json::array()}, {"circles", nlohmann::json::array()}}},
       {"rallyPoints", {{"version", 2}, {"points", nlohmann::json::array()}}}};
@@ -195,6 +195,22 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   EXPECT_NE(access((b + ".csv").c_str(), F_OK), 0);
   std::remove(vehicle.c_str());
   std::remove(autopilot.c_str());
+}
+
+// A path reaching beyond the pack (a mission made for another area): no
+// terrain to judge it on, refused naming the vertex, never a read off the grid.
+TEST_F(PlanCheck, CheckRefusesAPathBeyondThePack) {
+  const std::string path = ::testing::TempDir() + "/beyond_" + std::to_string(getpid()) + ".txt";
+  for (const char* far : {"550300 -5817550 1e9", "1e300 4182450 400", "550300 4182450 nan"}) {
+    std::ofstream(path) << "550300 4182450 320\n" << far << "\n";
+    const Outcome r = visvol("check " + *pack_ + " " + path + " --hidden-from 550500 4182200 330");
+    EXPECT_EQ(r.status, 2) << far << ": " << r.err;
+    EXPECT_NE(r.err.find(path), std::string::npos) << far << ": " << r.err;
+  }
+  std::ofstream(path) << "550300 4182450 320\n550300 -5817550 1e9\n";
+  const Outcome r = visvol("check " + *pack_ + " " + path + " --hidden-from 550500 4182200 330");
+  EXPECT_NE(r.err.find("vertex 1 (550300.0, -5817550.0) lies outside the pack"), std::string::npos) << r.err;
+  std::remove(path.c_str());
 }
 
 // The .plan is written for the flight stack the vehicle flies: PX4 unless the

@@ -17,6 +17,7 @@
 #include "rt/rope/field_forces.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/point_hull_maker.hpp"
+#include "storage/planning_bounds.hpp"
 
 namespace visvol::cli {
 
@@ -55,6 +56,18 @@ int run_check(const CheckOptions& o) {
   if (!file.ok()) return fail("check", file.status());
   if (!file->has_heights) {
     return fail("check", invalid_argument(o.path + ": the path has no heights (x y z or a file with altitudes)"));
+  }
+  // no terrain to judge a vertex against beyond the pack (a plan made for
+  // another area, or another CRS)
+  const fields::Bounds2D extent = storage::post_extent(p.pack->geometry(0));
+  for (std::size_t k = 0; k < file->points.size(); ++k) {
+    const rt::Vec3& v = file->points[k];
+    if (!extent.contains(v.x(), v.y())) {
+      char text[256];
+      std::snprintf(text, sizeof text, ": vertex %zu (%.1f, %.1f) lies outside the pack (x %.1f..%.1f, y %.1f..%.1f)",
+                    k, v.x(), v.y(), extent.xmin_m, extent.xmax_m, extent.ymin_m, extent.ymax_m);
+      return fail("check", invalid_argument(o.path + text));
+    }
   }
   const rt::FieldForces<storage::PackLevel> field(p.levels.front(), rt::ForceGains{});
   rt::PathCheckSpec spec;

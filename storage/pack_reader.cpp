@@ -15,6 +15,7 @@
 #endif
 
 #include "io/input_file.hpp"
+#include "io/json_input.hpp"
 #include "storage/crc32c.hpp"
 #include "storage/pack_checks.hpp"
 
@@ -283,8 +284,11 @@ Status Pack::parse_metadata() {
   const char* text =
       reinterpret_cast<const char*>(tables_.data() + (header_->metadata_offset - header_->level_table_offset));
   metadata_.json.assign(text, static_cast<std::size_t>(header_->metadata_bytes));
+  // nesting limited: readers print and copy it (catalogue, info)
+  Result<nlohmann::json> parsed = parse_json_input(metadata_.json, path_ + ": metadata");
+  if (!parsed.ok()) return corrupt(parsed.status().message());
   try {
-    const nlohmann::json j = nlohmann::json::parse(metadata_.json);
+    const nlohmann::json& j = *parsed;
     VISVOL_RETURN_IF_ERROR(check_metadata_types(j, path_));
     auto str = [&](const char* key) {
       return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
@@ -304,7 +308,7 @@ Status Pack::parse_metadata() {
     if (!planning.ok()) return planning.status();
     metadata_.planning = *planning;
   } catch (const nlohmann::json::exception& e) {
-    return corrupt(path_ + ": metadata is not valid JSON: " + e.what());
+    return corrupt(path_ + ": metadata: " + e.what());
   }
   return Status::ok_status();
 }

@@ -176,7 +176,13 @@ TEST_F(Crafted, MetadataOfTheWrongTypesIsRefusedByMember) {
       {"weights", in_build("weights", 1), "build.weights is 1, not true or false"},
       {"range shape", in_build("range_shape", 1), "build.range_shape"},
       {"an array", [](CraftedPack& p) { p.set_metadata("[]"); }, "metadata is not a JSON object"},
-      {"not JSON", [](CraftedPack& p) { p.set_metadata("{\"tool\": "); }, "metadata is not valid JSON"},
+      {"not JSON", [](CraftedPack& p) { p.set_metadata("{\"tool\": "); }, "metadata: not valid JSON"},
+      // printing or copying it would recurse once a level
+      {"nested",
+       [](CraftedPack& p) {
+         p.set_metadata("{\"tool\": " + std::string(100000, '[') + std::string(100000, ']') + "}");
+       },
+       "metadata: JSON nested deeper than 64 levels"},
   });
 }
 

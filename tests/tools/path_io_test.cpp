@@ -458,6 +458,9 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
        "type.plan: fileType \"GeoFence\"; a QGroundControl plan"},
       {"version.plan", R"({"fileType":"Plan","version":3,"mission":{}})",
        "version.plan: version 3; this reader knows QGroundControl plan version 1"},
+      // messages print the values they name: a nesting this deep would overflow the stack
+      {"nested.plan", R"({"fileType":)" + std::string(1000000, '[') + std::string(1000000, ']') + "}",
+       "nested.plan: JSON nested deeper than 64 levels"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);

@@ -19,6 +19,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/input_file.hpp"
+#include "io/json_input.hpp"
 #include "io/json_text.hpp"
 
 namespace visvol::cli {
@@ -498,12 +499,9 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
 
 // A JSON document: a QGroundControl plan (it has a fileType) or GeoJSON.
 Result<PathFile> parse_json_path(const std::string& text, const std::string& path, const std::string& crs_wkt) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    return invalid_argument(path + ": not valid JSON: " + e.what());
-  }
+  Result<nlohmann::json> parsed = parse_json_input(text, path);
+  if (!parsed.ok()) return parsed.status();
+  const nlohmann::json& j = *parsed;
   if (j.is_object() && j.contains("fileType")) return parse_qgc_plan(j, path, crs_wkt);
   return parse_geojson(j, path, crs_wkt);
 }

@@ -1,0 +1,45 @@
+#include "io/json_input.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace visvol {
+namespace {
+
+std::string nested(int levels, char open, char close) {
+  return std::string(static_cast<std::size_t>(levels), open) + std::string(static_cast<std::size_t>(levels), close);
+}
+
+TEST(JsonInput, ParsesADocumentWithinTheLimit) {
+  const Result<nlohmann::json> j = parse_json_input(R"({"a": [1, {"b": 2}]})", "x.json");
+  ASSERT_TRUE(j.ok()) << j.status().message();
+  EXPECT_EQ((*j)["a"][1]["b"], 2);
+  // exactly the limit: 64 levels of arrays
+  EXPECT_TRUE(parse_json_input(nested(kMaxJsonDepth, '[', ']'), "x.json").ok());
+}
+
+TEST(JsonInput, RefusesNestingBeyondTheLimitNamingTheInput) {
+  for (const std::string& text :
+       {nested(kMaxJsonDepth + 1, '[', ']'), "{\"k\":" + nested(2000000, '[', ']') + "}", std::string(3000000, '[')}) {
+    const Result<nlohmann::json> j = parse_json_input(text, "deep.json");
+    ASSERT_FALSE(j.ok());
+    EXPECT_EQ(j.status().code(), Errc::invalid_argument);
+    EXPECT_EQ(j.status().message(), "deep.json: JSON nested deeper than 64 levels");
+  }
+  // objects count as levels too
+  std::string objects;
+  for (int k = 0; k <= kMaxJsonDepth; ++k) objects += "{\"k\":";
+  objects += "1" + std::string(kMaxJsonDepth + 1, '}');
+  EXPECT_FALSE(parse_json_input(objects, "o.json").ok());
+  EXPECT_TRUE(parse_json_input(objects, "o.json", kMaxJsonDepth + 2).ok());
+}
+
+TEST(JsonInput, NamesTheInputOfTextThatIsNotJson) {
+  const Result<nlohmann::json> j = parse_json_input("{\"a\": ", "cut.json");
+  ASSERT_FALSE(j.ok());
+  EXPECT_NE(j.status().message().find("cut.json: not valid JSON"), std::string::npos) << j.status().message();
+}
+
+}  // namespace
+}  // namespace visvol

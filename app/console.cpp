@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -208,7 +209,10 @@ struct Console::Impl {
   std::unique_ptr<StallingTask> stall;  // --inject-stall: between the loop and the executive
   std::unique_ptr<rt::PeriodicLoop> loop;
   rt::LoopConfig loop_config;
-  std::string health_csv;
+  // health.csv's lines, the last kHealthLines of them: a console run as a
+  // service (--seconds 0) would otherwise grow them for ever
+  static constexpr std::size_t kHealthLines = 3600;
+  std::deque<std::string> health_lines;
   rt::ExecutiveCounters counters_at_start;  // before the loop started (then: snapshot())
   double fc_start = 0;
   std::uint64_t rss_peak = 0;
@@ -843,9 +847,6 @@ Status Console::run(const std::atomic<bool>& stop) {
     log_printf(LogLevel::info, "visvol-console: %s, rope of %d segments, %s, device %s, DDS %s; memory budget:\n%s",
                m.pack_id.c_str(), m.o.segments, m.o.objective.c_str(), m.o.device.c_str(),
                m.o.dds ? ("domain " + std::to_string(m.o.domain)).c_str() : "off", m.budget.table().c_str());
-  m.health_csv =
-      "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"
-      "resident_tiles_mib,rss_mib,fallbacks\n";
   rt::LoopReport last{};
   rt::ExecutiveCounters counters = m.counters_at_start;
   std::uint64_t health_seq = 0;
@@ -889,7 +890,8 @@ Status Console::run(const std::atomic<bool>& stop) {
                     static_cast<unsigned long long>(last.totals.misses), counters.fc, counters.converged ? 1 : 0,
                     device_text(counters), static_cast<double>(ts.resident_bytes) / kMiB,
                     static_cast<double>(rss) / kMiB, static_cast<unsigned long long>(m.field->fallbacks()));
-      m.health_csv += line;
+      if (m.health_lines.size() == Impl::kHealthLines) m.health_lines.pop_front();
+      m.health_lines.emplace_back(line);
       if (!m.o.quiet)
         log_printf(LogLevel::info,
                    "%6.1f s  F_c %.4f%s  wake p99 %.0f us  compute p99 %.0f us  overruns %llu  device %s  "
@@ -940,6 +942,10 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   path_fitter().describe(final_path, *flyable_sample);
   const msg::PathSample& fp = *flyable_sample;
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp)));
+  std::string health_csv =
+      "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"
+      "resident_tiles_mib,rss_mib,fallbacks\n";
+  for (const std::string& line : health_lines) health_csv += line;
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/health.csv", health_csv));
   if (thumbs) {
     const Status t = thumbs->write_last(out + "/thumbnail.png");

@@ -282,7 +282,13 @@ void TerrainCatalogue::verify_next() {
   }
   CatalogueEntry e;
   e.id = id_of(file_name);
-  verify_catalogue_entry(folder_ + "/" + file_name, level_, e, &stop_);
+  // an exception on this thread would end the console: a pack whose sizes
+  // ask for more memory than there is is refused like any other bad pack
+  try {
+    verify_catalogue_entry(folder_ + "/" + file_name, level_, e, &stop_);
+  } catch (const std::exception& ex) {
+    refuse(e, folder_ + "/" + file_name + ": cannot be verified: " + ex.what());
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   busy_ = false;
   // (removed meanwhile: no entry takes it; changed since: verified_path()

@@ -252,8 +252,12 @@ Status Pack::validate_tiles() {
   auto bad = [&](const std::string& what) { return corrupt(path_ + ": " + what); };
   // the numbers readers index grids with: finite, sane, levels consistent
   VISVOL_RETURN_IF_ERROR(check_level_geometry(levels_, static_cast<int>(h.level_count), path_));
-  // every tile entry: identity, alignment, size, inside the tile area
+  // every tile entry: identity, alignment, size, inside the tile area, after
+  // the one before it (as the writer lays them out): no two share bytes, so
+  // the grids a pack declares are paid for in its size (a small file cannot
+  // make its readers allocate for a huge grid)
   std::uint64_t n = 0;
+  std::uint64_t end_of_previous = kPageBytes;
   for (std::uint32_t l = 0; l < h.level_count; ++l) {
     const LevelEntry& e = levels_[l];
     for (int layer = 0; layer < kLayerCount; ++layer) {
@@ -273,6 +277,11 @@ Status Pack::validate_tiles() {
             return bad(describe(t) + ": offset " + std::to_string(t.offset) + " or size " + std::to_string(t.bytes) +
                        " is invalid");
           }
+          if (t.offset < end_of_previous) {
+            return bad(describe(t) + ": offset " + std::to_string(t.offset) +
+                       " overlaps the tile before it (ending at " + std::to_string(end_of_previous) + ")");
+          }
+          end_of_previous = t.offset + t.bytes;
         }
       }
     }

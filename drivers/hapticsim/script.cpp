@@ -15,6 +15,7 @@ constexpr double kMaxSeconds = 1e6;
 // far beyond any script written by hand or generated for a test
 constexpr std::size_t kMaxScriptBytes = 16u << 20;
 constexpr double kDefaultStrokeMm = 60.0;
+constexpr int kMaxDragStrokes = 10000;  // a 10 km drag in default strokes
 constexpr double kDefaultRebootS = 0.2;
 constexpr std::uint32_t kMaxGarbage = 1'000'000;
 
@@ -138,7 +139,13 @@ Status LineParser::push_drag(const std::array<double, 3>& start, const std::arra
     if (stroke_mm <= 0.0 || stroke_mm > 1000.0) return error("stroke " + tok[6] + " must lie in (0, 1000] mm");
   }
   const double length_mm = std::sqrt(by_mm[0] * by_mm[0] + by_mm[1] * by_mm[1] + by_mm[2] * by_mm[2]);
-  const int strokes = std::max(1, static_cast<int>(std::ceil(length_mm / stroke_mm - 1e-9)));
+  // bounded before the conversion: every stroke is four events, held in memory
+  const double stroke_count = std::ceil(length_mm / stroke_mm - 1e-9);
+  if (!(stroke_count <= kMaxDragStrokes)) {
+    return error("a drag of " + std::to_string(length_mm) + " mm in strokes of " + std::to_string(stroke_mm) +
+                 " mm is more than " + std::to_string(kMaxDragStrokes) + " strokes");
+  }
+  const int strokes = std::max(1, static_cast<int>(stroke_count));
   const double slot_s = dur_s / strokes;
   const std::array<double, 3> delta = {by_mm[0] / strokes, by_mm[1] / strokes, by_mm[2] / strokes};
   const double t0_s = time_s_;

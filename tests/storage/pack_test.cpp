@@ -244,6 +244,9 @@ TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
       {"misaligned tile", [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 3)->offset += 8; }, "is invalid"},
       {"tile beyond tables",
        [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 5)->offset = h.level_table_offset; }, "is invalid"},
+      {"shared bytes",
+       [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 6)->offset = tile_at(b, h, 5)->offset; },
+       "overlaps the tile before it"},
       {"swapped identity", [&](PackHeader& h, std::vector<char>& b) { tile_at(b, h, 2)->tx = 9; }, "tile entry 2"},
       {"metadata beyond the cap",
        [](PackHeader& h, std::vector<char>& b) {

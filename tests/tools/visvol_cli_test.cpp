@@ -251,6 +251,22 @@ TEST_F(Cli, PlanRefusesBadRequests) {
   EXPECT_NE(access((base + ".csv").c_str(), F_OK), 0);
 }
 
+// A 2D --init is lifted over the terrain every half post: a path zigzagging
+// across the pack thousands of times is refused, not lifted to gigabytes.
+TEST_F(Cli, PlanRefusesAnInitPathTooLongToLift) {
+  const std::string init = *pack_ + "_zigzag.txt";
+  {
+    std::ofstream out(init);
+    for (int k = 0; k < 40000; ++k) out << (k % 2 ? "550850 4181850\n" : "550300 4182450\n");
+  }
+  const Outcome r = visvol("plan " + *pack_ + " --from 550300 4182450 150 --to 550850 4181850 150 --init " + init +
+                           " --objective hide -o " + *pack_ + "_zigzag");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--init " + init + ": 40000 points"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("trace a shorter path"), std::string::npos) << r.err;
+  std::remove(init.c_str());
+}
+
 // `build --area`: the pack's planning bounds hold the area, and the DEM is
 // cropped to little more than the area and its margin.
 class CliArea : public ::testing::Test {

@@ -66,6 +66,9 @@ std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
 // Each point of an --init path inside the planning bounds and, with heights,
 // between the terrain and the field's top; errors name the file and the
 // point as the file counts them (1 the first).
+// The most points a 2D --init path is lifted to (24 MB of them).
+constexpr double kMaxLiftedPoints = 1e6;
+
 Status check_init_points(const std::string& file_name, const PathFile& file, const PlanningPack& p,
                          const fields::FieldSampler<PackLevel>& finest) {
   const fields::Bounds2D& b = p.bounds;
@@ -90,6 +93,24 @@ Status check_init_points(const std::string& file_name, const PathFile& file, con
     }
     if (v.z() > top_m) {
       msg << "is over the field's top " << top_m << " m";
+      return invalid_argument(msg.str());
+    }
+  }
+  // A 2D path is lifted over the terrain every half post: bounded, so that a
+  // path zigzagging across the pack cannot ask for gigabytes of points (the
+  // rope is laid on 128 segments of it in any case).
+  if (!file.has_heights) {
+    double length_m = 0;
+    for (std::size_t i = 1; i < file.points.size(); ++i) {
+      length_m += std::hypot(file.points[i].x() - file.points[i - 1].x(), file.points[i].y() - file.points[i - 1].y());
+    }
+    const double step_m = p.levels.front().geometry().spacing_m / 2;
+    if (length_m / step_m + static_cast<double>(file.points.size()) > kMaxLiftedPoints) {
+      std::ostringstream msg;
+      msg.precision(1);
+      msg << std::fixed << "--init " << file_name << ": " << file.points.size() << " points, " << length_m / 1000
+          << " km: lifted over the terrain every " << step_m << " m that is more than " << kMaxLiftedPoints
+          << " points; trace a shorter path";
       return invalid_argument(msg.str());
     }
   }

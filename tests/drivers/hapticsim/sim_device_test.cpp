@@ -328,6 +328,9 @@ TEST(Script, ErrorsNameTheLineAndTheProblem) {
   EXPECT_EQ(error("0 garbage 2.5\n").find("s.txt:1: garbage frame count 2.5"), 0u);
   EXPECT_EQ(error("0 clutch maybe\n"), "s.txt:1: clutch takes 'on' or 'off', got 'maybe'");
   EXPECT_EQ(error("0 mode maybe\n"), "s.txt:1: mode takes 'on' or 'off', got 'maybe'");
+  // strokes are held in memory: billions of them are refused, not queued
+  EXPECT_EQ(error("0 drag 0 0 200000 1 0.0001\n").find("s.txt:1: a drag of 200000.000000 mm in strokes of"), 0u);
+  EXPECT_NE(error("0 drag 0 0 1e9 1 0.001\n").find("more than 10000 strokes"), std::string::npos);
   EXPECT_EQ(error("0 mode\n"), "s.txt:1: 'mode' takes 1 argument(s), got 0");
   EXPECT_EQ(error("x grab\n"), "s.txt:1: time 'x' is not a finite number");
   EXPECT_EQ(error("  # only a comment\n\n0 grab # and another\n"), "(parsed)");

@@ -220,81 +220,95 @@ LevelRowLayout::LevelRowLayout(int nx_, int ny_, int radius_) : nx(nx_), ny(ny_)
 
 namespace {
 
-// Vectors of kLanes values (GCC/Clang vector extensions; the compiler maps them
-// to AVX-512, AVX2 or SSE registers per target clone).
-typedef float VecF __attribute__((vector_size(kLanes * sizeof(float))));
-typedef std::int32_t VecI __attribute__((vector_size(kLanes * sizeof(std::int32_t))));
+// The kernel runs the chunk's kLanes observers in passes of W lanes, W the
+// widest vector the CPU computes natively: 16 floats on AVX-512, 8 on AVX2,
+// 4 on the baseline's SSE. (GCC 12 lowers a comparison of 16 floats lane by
+// lane, in scalar code, on a target without 512-bit registers, and keeps
+// such vectors on the stack: on AVX2 the kernel ran at 79 M hull cells per
+// second and core, against 657 on AVX-512.) The lanes are independent
+// observers, so a pass reads and writes its own W of every kLanes-wide slot.
+template <int W>
+struct Lanes {
+  typedef float F __attribute__((vector_size(W * sizeof(float))));
+  typedef std::int32_t I __attribute__((vector_size(W * sizeof(std::int32_t))));
+};
 
 // Helpers pass vectors by reference: a vector wider than the baseline
 // registers must not cross a function boundary by value (it would change the
 // ABI, which clang refuses and GCC warns about).
 #define VISVOL_INLINE inline __attribute__((always_inline))
 
-VISVOL_INLINE void load(VecF& v, const float* p) { std::memcpy(&v, p, sizeof v); }
-VISVOL_INLINE void load(VecI& v, const std::int32_t* p) { std::memcpy(&v, p, sizeof v); }
-VISVOL_INLINE void max_into(VecF& a, const VecF& b) { a = a > b ? a : b; }
-VISVOL_INLINE void max_into(VecI& a, const VecI& b) { a = a > b ? a : b; }
+template <class V, class T>
+VISVOL_INLINE void load(V& v, const T* p) {
+  std::memcpy(&v, p, sizeof v);
+}
+template <class V>
+VISVOL_INLINE void max_into(V& a, const V& b) {
+  a = a > b ? a : b;
+}
 
 // floor(q) for q >= -4 (truncation of a positive number is its floor).
-VISVOL_INLINE void floor_into(VecI& out, const VecF& q) { out = __builtin_convertvector(q + 4.0f, VecI) - 4; }
+template <int W>
+VISVOL_INLINE void floor_into(typename Lanes<W>::I& out, const typename Lanes<W>::F& q) {
+  out = __builtin_convertvector(q + 4.0f, typename Lanes<W>::I) - 4;
+}
+
 // (z - z0) / dz clamped to [-2, hi].
-VISVOL_INLINE void level_coordinate(VecF& q, const VecF& z_m, const LevelMap& lv, float hi) {
+template <int W>
+VISVOL_INLINE void level_coordinate(typename Lanes<W>::F& q, const typename Lanes<W>::F& z_m, const LevelMap& lv,
+                                    float hi) {
+  using F = typename Lanes<W>::F;
   q = (z_m - lv.z0_m) * lv.inv_dz;
-  q = q < -2.0f ? VecF{} - 2.0f : q;
-  q = q > hi ? VecF{} + hi : q;
+  q = q < -2.0f ? F{} - 2.0f : q;
+  q = q > hi ? F{} + hi : q;
 }
 
 // First level strictly above each hull height (visibility needs z > hull).
-VISVOL_INLINE void level_above(VecI& out, const VecF& hull_m, const LevelMap& lv) {
-  VecF q;
-  level_coordinate(q, hull_m, lv, static_cast<float>(lv.nz - 1));
-  floor_into(out, q);
+template <int W>
+VISVOL_INLINE void level_above(typename Lanes<W>::I& out, const typename Lanes<W>::F& hull_m, const LevelMap& lv) {
+  typename Lanes<W>::F q;
+  level_coordinate<W>(q, hull_m, lv, static_cast<float>(lv.nz - 1));
+  floor_into<W>(out, q);
   out += 1;
 }
 
 // First level at or above a height (for the sphere's lower bound):
 // ceil(q) = floor(q) + (floor(q) < q); comparisons give -1 for true.
-VISVOL_INLINE void level_at_or_above(VecI& out, const VecF& z_m, const LevelMap& lv) {
-  VecF q;
-  level_coordinate(q, z_m, lv, static_cast<float>(lv.nz));
-  floor_into(out, q);
-  out -= __builtin_convertvector(out, VecF) < q;
+template <int W>
+VISVOL_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typename Lanes<W>::F& z_m, const LevelMap& lv) {
+  typename Lanes<W>::F q;
+  level_coordinate<W>(q, z_m, lv, static_cast<float>(lv.nz));
+  floor_into<W>(out, q);
+  out -= __builtin_convertvector(out, typename Lanes<W>::F) < q;
 }
 
-VISVOL_INLINE void store_levels(const VecI& k, int nz, std::uint8_t* dst) {
-  const VecI clamped = k < nz ? k : VecI{} + nz;
-  for (int l = 0; l < kLanes; ++l) dst[l] = static_cast<std::uint8_t>(clamped[l]);
+template <int W>
+VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, int nz, std::uint8_t* dst) {
+  typedef std::uint8_t Bytes __attribute__((vector_size(W)));
+  const typename Lanes<W>::I clamped = k < nz ? k : typename Lanes<W>::I{} + nz;
+  const Bytes b = __builtin_convertvector(clamped, Bytes);  // 0..nz <= 255
+  std::memcpy(dst, &b, sizeof b);
 }
 
-}  // namespace
-
-// One clone per instruction set, picked at load time by an ifunc resolver.
-// ThreadSanitizer instruments that resolver, which then runs before the
-// sanitizer's runtime is up and crashes: its build keeps the default clone.
-// So do builds by clang before 15 (the fuzzers': Debian 12 has 14): clang 14
-// runs the x86-64-v4 clone on CPUs without AVX-512 (SIGILL).
-#if defined(VISVOL_SANITIZED_THREAD) || defined(__SANITIZE_THREAD__) || (defined(__clang__) && __clang_major__ < 15)
-#define VISVOL_KERNEL_CLONES
-#else
-#define VISVOL_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#endif
-
-VISVOL_KERNEL_CLONES
-void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
-                       const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
-                       float* ring_b, std::uint8_t* out) {
+// Lanes [lane0, lane0 + W) of the chunk.
+template <int W>
+VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                             const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, int lane0,
+                             float* ring_a, float* ring_b, std::uint8_t* out) {
+  using VecF = typename Lanes<W>::F;
+  using VecI = typename Lanes<W>::I;
   const int px0 = chunk.px0;
   const int py = chunk.py;
   const int ci = px0 / kLanes;
   const int dx_first = layout.first_dx(px0);
   const int dx_last = layout.last_dx(px0);
   const int stride = terrain.stride;
-  const float* t0 = terrain.height_m.data() + terrain.index(px0, py);
-  const std::int32_t* g0 = terrain.ground_level.data() + terrain.index(px0, py);
+  const float* t0 = terrain.height_m.data() + terrain.index(px0, py) + lane0;
+  const std::int32_t* g0 = terrain.ground_level.data() + terrain.index(px0, py) + lane0;
   VecF eye;
-  load(eye, chunk.eye_m);
+  load(eye, chunk.eye_m + lane0);
   VecI floor_level;
-  load(floor_level, chunk.floor_level);
+  load(floor_level, chunk.floor_level + lane0);
   const bool sphere = shape == RangeShape::sphere;
 
   // The lowest level a target may take: on or above its ground, inside the
@@ -304,20 +318,22 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
     load(k, g0 + e.dy * stride + e.dx);
     max_into(k, floor_level);
     if (sphere) {
-      level_at_or_above(bound, eye - e.span_m, levels);
+      level_at_or_above<W>(bound, eye - e.span_m, levels);
       max_into(k, bound);
     }
   };
   auto write = [&](const HullEntry& e, const VecI& k) {
     const int y = py + e.dy;
     if (y < 0 || y >= layout.ny || e.dx < dx_first || e.dx > dx_last) return;
-    store_levels(k, levels.nz, out + layout.offset(py, y, ci, e.dx - dx_first));
+    store_levels<W>(k, levels.nz, out + layout.offset(py, y, ci, e.dx - dx_first) + lane0);
   };
   // The slope from the eye to the target's own terrain.
   auto own_slope = [&](VecF& s, const HullEntry& e) {
     load(s, t0 + e.dy * stride + e.dx);
     s = (s - e.drop_m - eye) / e.d_m;
   };
+  // An entry's slot of a ring buffer: this pass's lanes of it.
+  auto slot = [&](float* ring, int n) { return ring + n * kLanes + lane0; };
 
   // Rings 0 and 1: no crossing, visible from the ground up.
   for (const HullEntry& e : table.inner()) {
@@ -337,7 +353,7 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
     if (e.dx == 0 && e.dy == 0) continue;
     VecF own;
     own_slope(own, e);
-    std::memcpy(prev + ring_index(e.dx, e.dy, 1) * kLanes, &own, sizeof own);
+    std::memcpy(slot(prev, ring_index(e.dx, e.dy, 1)), &own, sizeof own);
   }
   for (int m = 2; m <= last_ring; ++m) {
     const HullEntry* ring = table.ring(m);
@@ -352,36 +368,107 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
         for (const Crossing* c = table.crossings_begin(m, n); c != table.crossings_end(m, n); ++c) {
           load(ta, t0 + c->ta);
           load(tb, t0 + c->tb);
-          max_into(h, (ta + c->t * (tb - ta) - c->drop_m - eye) * c->inv_d);
+          max_into(h, VecF((ta + c->t * (tb - ta) - c->drop_m - eye) * c->inv_d));
         }
       } else {
         // Horizon over the far crossings, interpolated between the stencil cells,
         // and exact slopes at the two nearest crossings.
         VecF ha, hb;
-        load(ha, prev + e.a * kLanes);
-        load(hb, prev + e.b * kLanes);
+        load(ha, slot(prev, e.a));
+        load(hb, slot(prev, e.b));
         h = ha + e.t * (hb - ha);
         load(ta, t0 + e.ta);
         load(tb, t0 + e.tb);
-        max_into(h, (ta + e.t * (tb - ta) - e.drop1_m - eye) * e.inv_d1);
+        max_into(h, VecF((ta + e.t * (tb - ta) - e.drop1_m - eye) * e.inv_d1));
         load(ta, t0 + e.tc);
         load(tb, t0 + e.td);
-        max_into(h, (ta + e.t2 * (tb - ta) - e.drop2_m - eye) * e.inv_d2);
+        max_into(h, VecF((ta + e.t2 * (tb - ta) - e.drop2_m - eye) * e.inv_d2));
       }
       // Rays beyond pass next to this cell: its own terrain is part of their horizon.
       VecF next;
       own_slope(next, e);
       max_into(next, h);
-      std::memcpy(cur + n * kLanes, &next, sizeof next);
+      std::memcpy(slot(cur, n), &next, sizeof next);
       // Lowest visible height over the target.
       VecI k, lowest;
-      level_above(k, eye + e.d_m * h + e.drop_m, levels);
+      level_above<W>(k, eye + e.d_m * h + e.drop_m, levels);
       lowest_level(lowest, e);
       max_into(k, lowest);
       write(e, k);
     }
     std::swap(prev, cur);
   }
+}
+
+template <int W>
+VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                              const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                              float* ring_b, std::uint8_t* out) {
+  static_assert(kLanes % W == 0, "passes cover the chunk");
+  for (int lane0 = 0; lane0 < kLanes; lane0 += W) {
+    hull_pass<W>(table, terrain, layout, levels, shape, chunk, lane0, ring_a, ring_b, out);
+  }
+}
+
+}  // namespace
+
+// The kernel for the CPU it runs on, picked once (x86-64 levels v4: AVX-512,
+// v3: AVX2, else the baseline). ThreadSanitizer instruments the checks of a
+// resolver, which run before its runtime is up, and clang 14 (the fuzzers')
+// ran AVX-512 code on CPUs without it: those builds, and any compiler but
+// GCC, take the baseline alone.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(VISVOL_SANITIZED_THREAD) && \
+    !defined(__SANITIZE_THREAD__)
+#define VISVOL_HULL_DISPATCH 1
+#endif
+
+namespace {
+
+#ifdef VISVOL_HULL_DISPATCH
+using ChunkFn = void (*)(const HullTable&, const PaddedTerrain&, const LevelRowLayout&, const LevelMap&, RangeShape,
+                         const ObserverChunk&, float*, float*, std::uint8_t*);
+
+__attribute__((target("arch=x86-64-v4"))) void hull_chunk_v4(const HullTable& table, const PaddedTerrain& terrain,
+                                                             const LevelRowLayout& layout, const LevelMap& levels,
+                                                             RangeShape shape, const ObserverChunk& chunk,
+                                                             float* ring_a, float* ring_b, std::uint8_t* out) {
+  hull_chunk<16>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+}
+
+__attribute__((target("arch=x86-64-v3"))) void hull_chunk_v3(const HullTable& table, const PaddedTerrain& terrain,
+                                                             const LevelRowLayout& layout, const LevelMap& levels,
+                                                             RangeShape shape, const ObserverChunk& chunk,
+                                                             float* ring_a, float* ring_b, std::uint8_t* out) {
+  hull_chunk<8>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+}
+#endif
+
+void hull_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                         const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                         float* ring_b, std::uint8_t* out) {
+  hull_chunk<4>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+}
+
+#ifdef VISVOL_HULL_DISPATCH
+ChunkFn pick_hull_chunk() {
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("x86-64-v4")) return hull_chunk_v4;
+  if (__builtin_cpu_supports("x86-64-v3")) return hull_chunk_v3;
+  return hull_chunk_baseline;
+}
+#endif
+
+}  // namespace
+
+void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                       const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                       float* ring_b, std::uint8_t* out) {
+#ifdef VISVOL_HULL_DISPATCH
+  static const ChunkFn chunk_fn = pick_hull_chunk();
+  chunk_fn(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+#else
+  hull_chunk_baseline(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+#endif
 }
 
 void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings, double spacing_m,

@@ -38,7 +38,7 @@ Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 }
 
 struct Nearest {
-  Vec3 point;
+  Vec3 point = Vec3::Zero();
   double distance2 = std::numeric_limits<double>::infinity();
 };
 
@@ -87,13 +87,94 @@ Nearest nearest_local(const Heightfield& hf, const Vec3& q, double search_m) {
   return best;
 }
 
-TffSample band_sample(const Heightfield& hf, const TffParams& params, int i, int j, int b) {
+// The height range of every terrain cell over a band of cell rows, held
+// contiguously: the band's nearest-point search rules out most cells in its
+// reach by their range alone (one load, not four scattered posts).
+class CellRanges {
+ public:
+  // Cell rows [row_begin, row_end) of hf, clamped to the grid's cells.
+  CellRanges(const Heightfield& hf, int row_begin, int row_end)
+      : hf_(hf), ncx_(hf.nx - 1), j0_(std::max(0, row_begin)), j1_(std::min(hf.ny - 1, row_end)) {
+    range_.resize(static_cast<std::size_t>(ncx_) * static_cast<std::size_t>(std::max(0, j1_ - j0_)));
+    for (int j = j0_; j < j1_; ++j) {
+      for (int i = 0; i < ncx_; ++i) {
+        const float h00 = hf.at(i, j), h10 = hf.at(i + 1, j), h01 = hf.at(i, j + 1), h11 = hf.at(i + 1, j + 1);
+        range_[index(i, j)] = {std::min({h00, h10, h01, h11}), std::max({h00, h10, h01, h11})};
+      }
+    }
+  }
+
+  // The nearest point of the surface to q (local frame) among points nearer
+  // than `best` on entry (a known surface point, or none) and within
+  // `search_m` horizontally of q: nearest_local()'s rings, over the rows held
+  // (the caller's rows must cover the search).
+  Nearest nearest(const Vec3& q, double search_m, Nearest best) const {
+    const double s = hf_.spacing_m;
+    const int i_lo = std::max(0, static_cast<int>(std::floor((q.x() - search_m) / s)));
+    const int i_hi = std::min(ncx_ - 1, static_cast<int>(std::floor((q.x() + search_m) / s)));
+    const int j_lo = std::max(j0_, static_cast<int>(std::floor((q.y() - search_m) / s)));
+    const int j_hi = std::min(j1_ - 1, static_cast<int>(std::floor((q.y() + search_m) / s)));
+    if (i_lo > i_hi || j_lo > j_hi) return best;
+    const int ci = std::clamp(static_cast<int>(std::floor(q.x() / s)), i_lo, i_hi);
+    const int cj = std::clamp(static_cast<int>(std::floor(q.y() / s)), j_lo, j_hi);
+    auto visit = [&](int i, int j) {
+      const double gap_x = std::max({0.0, i * s - q.x(), q.x() - (i + 1) * s});
+      const double gap_y = std::max({0.0, j * s - q.y(), q.y() - (j + 1) * s});
+      const Range& r = range_[index(i, j)];
+      const double gap_z = std::max({0.0, q.z() - r.hi, r.lo - q.z()});
+      if (gap_x * gap_x + gap_y * gap_y + gap_z * gap_z >= best.distance2) return;
+      const double h00 = hf_.at(i, j), h10 = hf_.at(i + 1, j), h01 = hf_.at(i, j + 1), h11 = hf_.at(i + 1, j + 1);
+      const Vec3 a{i * s, j * s, h00}, b{(i + 1) * s, j * s, h10};
+      const Vec3 c{(i + 1) * s, (j + 1) * s, h11}, d{i * s, (j + 1) * s, h01};
+      for (const Vec3& p : {closest_on_triangle(q, a, b, c), closest_on_triangle(q, a, c, d)}) {
+        const double d2 = (p - q).squaredNorm();
+        if (d2 < best.distance2) best = {p, d2};
+      }
+    };
+    const int rings = std::max({ci - i_lo, i_hi - ci, cj - j_lo, j_hi - cj});
+    for (int r = 0; r <= rings; ++r) {
+      // A ring's nearest cell is at least (r - 1) cells away horizontally.
+      const double ring_gap = std::max(0, r - 1) * s;
+      if (ring_gap * ring_gap >= best.distance2) break;
+      for (int j = cj - r; j <= cj + r; ++j) {
+        if (j < j_lo || j > j_hi) continue;
+        const bool edge_row = j == cj - r || j == cj + r;
+        for (int i = ci - r; i <= ci + r; i += edge_row ? 1 : 2 * r) {
+          if (i >= i_lo && i <= i_hi) visit(i, j);
+          if (r == 0) break;
+        }
+      }
+    }
+    return best;
+  }
+
+ private:
+  struct Range {
+    float lo, hi;
+  };
+  std::size_t index(int i, int j) const {
+    return static_cast<std::size_t>(j - j0_) * static_cast<std::size_t>(ncx_) + static_cast<std::size_t>(i);
+  }
+
+  const Heightfield& hf_;
+  int ncx_, j0_, j1_;  // cells per row; the cell rows held, [j0_, j1_)
+  std::vector<Range> range_;
+};
+
+// One band sample. `previous` is the nearest point of the sample below it in
+// its column (or none): the nearest point is no farther than that one, so
+// the search starts with it as its best.
+TffSample band_sample(const CellRanges& cells, const Heightfield& hf, const TffParams& params, int i, int j, int b,
+                      Nearest& previous) {
   const double ground = hf.at(i, j);
   const double z = ground - params.band_offset_m + b * params.step_m();
   const Vec3 q{i * hf.spacing_m, j * hf.spacing_m, z};
   // The post below (or above) q is on the surface: the nearest point is no farther.
   const double bound = std::fabs(z - ground);
-  const Nearest n = nearest_local(hf, q, bound + 1e-9);
+  Nearest seed;
+  if (std::isfinite(previous.distance2)) seed = {previous.point, (previous.point - q).squaredNorm()};
+  const Nearest n = cells.nearest(q, bound + 1e-9, seed);
+  previous = n;
   const bool inside = z < ground;
   Vec3 e = inside ? Vec3(n.point - q) : Vec3(q - n.point);  // outward, local axes
   TffSample out;
@@ -134,11 +215,17 @@ void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_be
                         WorkerPool* pool) {
   const std::size_t nx = static_cast<std::size_t>(hf.nx);
   const std::size_t levels = static_cast<std::size_t>(params.band_levels);
+  // every cell a search from these rows can reach: within the band's offset
+  const int reach = static_cast<int>(std::ceil(params.band_offset_m / hf.spacing_m)) + 1;
+  const CellRanges cells(hf, j_begin - reach, j_end + reach);
   auto row = [&](int item, int) {
     const int j = j_begin + item;
-    for (int b = 0; b < params.band_levels; ++b) {
-      TffSample* dst = out + (static_cast<std::size_t>(j - j_begin) * levels + static_cast<std::size_t>(b)) * nx;
-      for (int i = 0; i < hf.nx; ++i) dst[i] = band_sample(hf, params, i, j, b);
+    for (int i = 0; i < hf.nx; ++i) {
+      Nearest previous;  // none yet in this column
+      for (int b = 0; b < params.band_levels; ++b) {
+        out[(static_cast<std::size_t>(j - j_begin) * levels + static_cast<std::size_t>(b)) * nx +
+            static_cast<std::size_t>(i)] = band_sample(cells, hf, params, i, j, b, previous);
+      }
     }
   };
   if (pool) {

@@ -2,6 +2,7 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <malloc.h>
 #include <poll.h>
 #include <pthread.h>
 #include <sched.h>
@@ -82,7 +83,11 @@ Status verify_tiles_read(const storage::Pack& pack, const std::atomic<bool>* sto
     const storage::TileEntry& t = pack.tile_entry(n);
     buf.resize(t.bytes);
     result = file->read_at(buf.data(), buf.size(), t.offset);
-    if (result.ok()) result = pack.verify_tile_bytes(t, buf.data());
+    if (!result.ok()) {
+      result = io_error(storage::Pack::describe(t) + ": " + result.message());
+    } else {
+      result = pack.verify_tile_bytes(t, buf.data());
+    }
   }
   posix_fadvise(file->fd(), 0, 0, POSIX_FADV_DONTNEED);
   return result;
@@ -289,6 +294,10 @@ void TerrainCatalogue::verify_next() {
   } catch (const std::exception& ex) {
     refuse(e, folder_ + "/" + file_name + ": cannot be verified: " + ex.what());
   }
+  // The pack's tables were heap memory, locked like all of it (mlockall's
+  // MCL_FUTURE): handed back to the system rather than kept by this thread's
+  // arena.
+  malloc_trim(0);
   std::lock_guard<std::mutex> lock(mutex_);
   busy_ = false;
   // (removed meanwhile: no entry takes it; changed since: verified_path()

@@ -8,10 +8,11 @@ namespace visvol::fields {
 namespace {
 
 // Terrain at a point on a grid line: `along` is the fractional coordinate
-// along the line (on the grid), `across` the integer coordinate of the line
-// (a line of the grid).
+// along the line (on the grid, up to rounding), `across` the integer
+// coordinate of the line (a line of the grid).
 double terrain_on_line(const Heightfield& hf, bool vertical_line, int across, double along) {
   const int limit = vertical_line ? hf.ny - 1 : hf.nx - 1;
+  along = std::clamp(along, 0.0, static_cast<double>(limit));
   const double lo = std::floor(along);
   const int i0 = std::clamp(static_cast<int>(lo), 0, limit);
   const int i1 = std::min(i0 + 1, limit);
@@ -44,7 +45,9 @@ bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double
     if (line <= lo || line >= hi) continue;
     const double f = (line - a_main) / (b_main - a_main);  // 0 < f < 1
     const double along = a_other + f * (b_other - a_other);
-    if (!(along >= 0 && along <= other_last)) continue;  // off the grid: unknown terrain blocks nothing
+    // off the grid: unknown terrain blocks nothing (an end on the grid's
+    // edge may land a rounding step beyond it: still the edge)
+    if (!(along >= -1e-9 && along <= other_last + 1e-9)) continue;
     const double d = f * d_total_m;
     const double ground = terrain_on_line(hf, vertical_line, line, along) - coeff * d * d / (2.0 * kEarthRadiusM);
     const double z = az + f * (bz - az);

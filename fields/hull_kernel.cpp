@@ -471,6 +471,21 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
 #endif
 }
 
+int hull_kernel_width() {
+#ifdef VISVOL_HULL_DISPATCH
+  const ChunkFn f = pick_hull_chunk();
+  return f == hull_chunk_v4 ? 16 : f == hull_chunk_v3 ? 8 : 4;
+#else
+  return 4;
+#endif
+}
+
+void hull_levels_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                                const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                                float* ring_b, std::uint8_t* out) {
+  hull_chunk_baseline(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+}
+
 void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings, double spacing_m,
                       double curvature_coeff, int pi, int pj, double eye_z_m, std::vector<float>& horizon,
                       bool grid_only) {

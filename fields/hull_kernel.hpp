@@ -193,6 +193,14 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
                        const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
                        float* ring_b, std::uint8_t* out);
 
+// The vector width hull_levels_chunk runs at on this CPU (16 lanes with
+// AVX-512, 8 with AVX2, 4 otherwise), and the kernel at the baseline's width
+// whatever the CPU: tests hold the two to the same bytes.
+int hull_kernel_width();
+void hull_levels_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                                const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                                float* ring_b, std::uint8_t* out);
+
 // The horizon slope H of every target around one observer (scalar; for
 // viewsheds, point hulls and tests), by the same rules as the kernel.
 // `horizon` receives (2r+1)^2 values indexed (dy + r) * (2r + 1) + (dx + r);

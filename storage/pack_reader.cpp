@@ -213,7 +213,21 @@ Status Pack::validate_header() {
 // refused before anything that size is allocated).
 Status Pack::read_tables(const InputFile& file) {
   const PackHeader& h = *header_;
-  auto bad = [&](const std::string& what) { return corrupt(path_ + ": " + what); };
+  // A level table that does not hold together is more often damage than
+  // forgery: the checksum, streamed over the tables in small reads (nothing
+  // their claimed size allocated), says which.
+  auto bad = [&](const std::string& what) {
+    std::vector<std::uint8_t> chunk(std::size_t{1} << 16);
+    std::uint32_t crc = 0;
+    for (std::uint64_t at = h.level_table_offset; at < size_;) {
+      const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), size_ - at));
+      if (!file.read_at(chunk.data(), n, at).ok()) break;
+      crc = crc32c(chunk.data(), n, crc);
+      at += n;
+    }
+    clear_upper_vector_state();
+    return corrupt(path_ + ": " + (crc != h.tables_crc32c ? "table or metadata checksum mismatch" : what));
+  };
   const std::uint64_t level_bytes = std::uint64_t{h.level_count} * sizeof(LevelEntry);
   tables_.resize(static_cast<std::size_t>(level_bytes));
   VISVOL_RETURN_IF_ERROR(file.read_at(tables_.data(), tables_.size(), h.level_table_offset));
@@ -239,7 +253,7 @@ Status Pack::read_tables(const InputFile& file) {
   VISVOL_RETURN_IF_ERROR(
       file.read_at(tables_.data() + level_bytes, tables_.size() - level_bytes, h.level_table_offset + level_bytes));
   if (checksum(tables_.data(), tables_.size()) != h.tables_crc32c) {
-    return bad("table or metadata checksum mismatch");
+    return corrupt(path_ + ": table or metadata checksum mismatch");
   }
   // operator new's alignment suits both tables (their offsets are multiples of 8)
   levels_ = reinterpret_cast<const LevelEntry*>(tables_.data());

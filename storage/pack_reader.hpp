@@ -76,9 +76,9 @@ class Pack {
   fields::VolumeGeometry geometry(int level) const;
 
   // The entry and bytes of a tile (entries are validated at open()); the
-  // bytes only of a mapped pack.
+  // bytes only of a mapped pack (null for an inspected one).
   const TileEntry& tile(int level, Layer layer, int tx, int ty) const;
-  const std::uint8_t* tile_data(const TileEntry& t) const { return base_ + t.offset; }
+  const std::uint8_t* tile_data(const TileEntry& t) const { return base_ ? base_ + t.offset : nullptr; }
   std::uint64_t tile_count() const { return header_->tile_count; }
   const TileEntry& tile_entry(std::uint64_t n) const { return tiles_[n]; }
 

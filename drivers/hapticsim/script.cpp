@@ -15,7 +15,7 @@ constexpr double kMaxSeconds = 1e6;
 // far beyond any script written by hand or generated for a test
 constexpr std::size_t kMaxScriptBytes = 16u << 20;
 constexpr double kDefaultStrokeMm = 60.0;
-constexpr int kMaxDragStrokes = 10000;  // a 10 km drag in default strokes
+constexpr int kMaxDragStrokes = 10000;  // 600 m of hand travel in default strokes
 constexpr double kDefaultRebootS = 0.2;
 constexpr std::uint32_t kMaxGarbage = 1'000'000;
 

@@ -191,6 +191,44 @@ TEST(HullKernel, VectorLevelsMatchTheScalarHorizon) {
   EXPECT_GE(equal, compared - compared / 500) << equal << " of " << compared;
 }
 
+// The kernel runs at the CPU's vector width (AVX-512, AVX2 or SSE): every
+// width computes each lane's levels with the same operations, so the levels
+// are the same bytes as the baseline's, for every range shape and for exact
+// rings and the recursion alike.
+TEST(HullKernel, EveryVectorWidthGivesTheBaselinesLevels) {
+  const Heightfield hf = fractal(56, 4);
+  const int r = 14;
+  VolumeGeometry g;
+  g.nz = 90;
+  g.z0_m = height_range(hf).min_m;
+  g.dz_m = (height_range(hf).max_m - g.z0_m + 60.0) / (g.nz - 1);
+  const PaddedTerrain t = pad_terrain(hf, g, r);
+  const LevelRowLayout layout(hf.nx, hf.ny, r);
+  const LevelMap levels{static_cast<float>(g.z0_m), static_cast<float>(1.0 / g.dz_m), g.nz};
+  std::vector<float> ra(static_cast<std::size_t>(ring_size(r)) * kLanes), rb(ra.size());
+  const int width = hull_kernel_width();
+  EXPECT_TRUE(width == 4 || width == 8 || width == 16) << width;
+  for (RangeShape shape : {RangeShape::none, RangeShape::cube, RangeShape::sphere}) {
+    const HullTable table(r, 4, hf.spacing_m, 1.0 / 7.0, shape, r * hf.spacing_m * 0.8, t.stride);
+    for (int py : {0, 23, hf.ny - 1}) {
+      for (int px0 : {0, 16, 32, 48}) {
+        ObserverChunk chunk;
+        chunk.px0 = px0;
+        chunk.py = py;
+        for (int l = 0; l < kLanes; ++l) {
+          chunk.eye_m[l] = hf.at(std::min(px0 + l, hf.nx - 1), py) + 2.0f + static_cast<float>(l);
+          chunk.floor_level[l] = l % 3;
+        }
+        std::vector<std::uint8_t> native(layout.bytes_per_observer_row(), 0), baseline(native.size(), 0);
+        hull_levels_chunk(table, t, layout, levels, shape, chunk, ra.data(), rb.data(), native.data());
+        hull_levels_chunk_baseline(table, t, layout, levels, shape, chunk, ra.data(), rb.data(), baseline.data());
+        ASSERT_EQ(native, baseline) << "width " << width << ", shape " << to_string(shape) << ", chunk at " << px0
+                                    << "," << py;
+      }
+    }
+  }
+}
+
 TEST(HullKernel, PaddingNeverBlocksAndGroundLevelsAreClamped) {
   const Heightfield hf = flat(8);
   VolumeGeometry g;

@@ -195,6 +195,14 @@ TEST_F(PackFile, TruncationHeaderAndTableDamageAreNamed) {
       {"magic", [](std::vector<char>& b) { b[0] = 'X'; }, "not a visvol pack"},
       {"header", [](std::vector<char>& b) { b[40] ^= 1; }, "header checksum"},
       {"metadata", [](std::vector<char>& b) { b[b.size() - 3] ^= 1; }, "table or metadata checksum"},
+      // damage to the level table reads as damage, not as a forged grid
+      {"level table",
+       [](std::vector<char>& b) {
+         PackHeader h;
+         std::memcpy(&h, b.data(), sizeof h);
+         b[h.level_table_offset + offsetof(LevelEntry, nx) + 1] ^= 0x40;
+       },
+       "table or metadata checksum"},
       {"grown", [](std::vector<char>& b) { b.push_back(0); }, "the header says"},
   };
   for (const Case& c : cases) {

@@ -63,8 +63,10 @@ int run_check(const CheckOptions& o) {
   for (std::size_t k = 0; k < file->points.size(); ++k) {
     const rt::Vec3& v = file->points[k];
     if (!extent.contains(v.x(), v.y())) {
-      char text[256];
-      std::snprintf(text, sizeof text, ": vertex %zu (%.1f, %.1f) lies outside the pack (x %.1f..%.1f, y %.1f..%.1f)",
+      char text[400];
+      std::snprintf(text, sizeof text,
+                    ": vertex %zu (%.1f, %.1f) lies outside the pack (x %.1f..%.1f, y %.1f..%.1f): no terrain to "
+                    "judge it on; check it on a pack that covers the mission (visvol build --area)",
                     k, v.x(), v.y(), extent.xmin_m, extent.xmax_m, extent.ymin_m, extent.ymax_m);
       return fail("check", invalid_argument(o.path + text));
     }

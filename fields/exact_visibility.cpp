@@ -10,12 +10,14 @@ namespace {
 // Terrain at a point on a grid line: `along` is the fractional coordinate
 // along the line (on the grid, up to rounding), `across` the integer
 // coordinate of the line (a line of the grid).
+// (Comparisons, not std::clamp: the exact reference runs under the
+// sanitizers at -O1, where every std:: call stays a call.)
 double terrain_on_line(const Heightfield& hf, bool vertical_line, int across, double along) {
   const int limit = vertical_line ? hf.ny - 1 : hf.nx - 1;
-  along = std::clamp(along, 0.0, static_cast<double>(limit));
+  along = along < 0 ? 0 : (along > limit ? limit : along);
   const double lo = std::floor(along);
-  const int i0 = std::clamp(static_cast<int>(lo), 0, limit);
-  const int i1 = std::min(i0 + 1, limit);
+  const int i0 = static_cast<int>(lo);
+  const int i1 = i0 < limit ? i0 + 1 : limit;
   const double t = along - lo;
   const double h0 = vertical_line ? hf.at(across, i0) : hf.at(i0, across);
   if (t == 0) return h0;
@@ -41,8 +43,8 @@ bool clear_of_lines(const Heightfield& hf, bool vertical_line, double ai, double
   const double first = std::max(std::floor(lo) + 1.0, 0.0);
   const double last = std::min(std::ceil(hi) - 1.0, static_cast<double>(last_line));
   if (first > last) return true;
-  for (int line = static_cast<int>(first); line <= static_cast<int>(last); ++line) {
-    if (line <= lo || line >= hi) continue;
+  const int line_end = static_cast<int>(last);
+  for (int line = static_cast<int>(first); line <= line_end; ++line) {
     const double f = (line - a_main) / (b_main - a_main);  // 0 < f < 1
     const double along = a_other + f * (b_other - a_other);
     // off the grid: unknown terrain blocks nothing (an end on the grid's

@@ -413,12 +413,17 @@ VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terra
 }  // namespace
 
 // The kernel for the CPU it runs on, picked once (x86-64 levels v4: AVX-512,
-// v3: AVX2, else the baseline). ThreadSanitizer instruments the checks of a
-// resolver, which run before its runtime is up, and clang 14 (the fuzzers')
-// ran AVX-512 code on CPUs without it: those builds, and any compiler but
-// GCC, take the baseline alone.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(VISVOL_SANITIZED_THREAD) && \
-    !defined(__SANITIZE_THREAD__)
+// v3: AVX2, else the baseline), by GCC builds; others take the baseline.
+// Under the sanitizers every load is checked: there the kernel reads whole
+// 16-lane vectors whatever the CPU (fewer checks than narrower passes).
+#if defined(VISVOL_SANITIZED) || defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr int kAvx2Width = 16;
+constexpr int kBaselineWidth = 16;
+#else
+constexpr int kAvx2Width = 8;
+constexpr int kBaselineWidth = 4;
+#endif
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define VISVOL_HULL_DISPATCH 1
 #endif
 
@@ -439,14 +444,14 @@ __attribute__((target("arch=x86-64-v3"))) void hull_chunk_v3(const HullTable& ta
                                                              const LevelRowLayout& layout, const LevelMap& levels,
                                                              RangeShape shape, const ObserverChunk& chunk,
                                                              float* ring_a, float* ring_b, std::uint8_t* out) {
-  hull_chunk<8>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+  hull_chunk<kAvx2Width>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
 }
 #endif
 
 void hull_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
                          const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
                          float* ring_b, std::uint8_t* out) {
-  hull_chunk<4>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+  hull_chunk<kBaselineWidth>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
 }
 
 #ifdef VISVOL_HULL_DISPATCH
@@ -474,9 +479,9 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
 int hull_kernel_width() {
 #ifdef VISVOL_HULL_DISPATCH
   const ChunkFn f = pick_hull_chunk();
-  return f == hull_chunk_v4 ? 16 : f == hull_chunk_v3 ? 8 : 4;
+  return f == hull_chunk_v4 ? 16 : f == hull_chunk_v3 ? kAvx2Width : kBaselineWidth;
 #else
-  return 4;
+  return kBaselineWidth;
 #endif
 }
 

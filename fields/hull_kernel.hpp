@@ -194,8 +194,9 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
                        float* ring_b, std::uint8_t* out);
 
 // The vector width hull_levels_chunk runs at on this CPU (16 lanes with
-// AVX-512, 8 with AVX2, 4 otherwise), and the kernel at the baseline's width
-// whatever the CPU: tests hold the two to the same bytes.
+// AVX-512, 8 with AVX2, 4 otherwise; 16 in the sanitizer builds), and the
+// kernel at the baseline's width whatever the CPU: tests hold the two to the
+// same bytes.
 int hull_kernel_width();
 void hull_levels_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
                                 const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,

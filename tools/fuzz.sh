@@ -6,6 +6,7 @@
 #   VISVOL_FUZZ_SECONDS   time per target (default 60)
 #   VISVOL_FUZZ_OPT       the fuzz build's optimisation (default -O1; the test
 #                         command's short run takes -O0: faster to build)
+#   VISVOL_FUZZ_BUILD_ONLY 1: build the targets, run none
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${VISVOL_FUZZ_SECONDS:-60}
@@ -16,6 +17,9 @@ generator=()
 CC=clang CXX=clang++ cmake "${generator[@]}" -S . -B build-fuzz -DVISVOL_FUZZ=ON \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVISVOL_DEBUG_INFO=-g1 -DVISVOL_FUZZ_OPT="${VISVOL_FUZZ_OPT:--O1}" >/dev/null
 cmake --build build-fuzz --target fuzzers -j "$(nproc)"
+# VISVOL_FUZZ_BUILD_ONLY=1: the build alone (the test command builds the
+# fuzzers while its optimised tests leave the cores half idle)
+[[ "${VISVOL_FUZZ_BUILD_ONLY:-0}" == 1 ]] && exit 0
 
 mkdir -p build-fuzz/artifacts
 scratch=$(mktemp -d)

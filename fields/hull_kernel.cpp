@@ -417,10 +417,10 @@ VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terra
 // Under the sanitizers every load is checked: there the kernel reads whole
 // 16-lane vectors whatever the CPU (fewer checks than narrower passes).
 #if defined(VISVOL_SANITIZED) || defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr int kAvx2Width = 16;
+[[maybe_unused]] constexpr int kAvx2Width = 16;  // (clang builds have no AVX2 kernel)
 constexpr int kBaselineWidth = 16;
 #else
-constexpr int kAvx2Width = 8;
+[[maybe_unused]] constexpr int kAvx2Width = 8;
 constexpr int kBaselineWidth = 4;
 #endif
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)

@@ -1,6 +1,5 @@
 #include "app/console.hpp"
 
-#include <sys/mman.h>
 #include <sys/stat.h>
 
 #include <chrono>
@@ -238,7 +237,6 @@ struct Console::Impl {
   const PathFitter& path_fitter() const { return flyable ? flyable->fitter() : *fitter; }
   void fit_final_path();
   nlohmann::json check_path(std::string& line) const;
-  void release_pack_pages();
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   Status make_output_dirs(const std::string& out) const;
   static std::string path_csv(const msg::PathSample& fp);
@@ -367,8 +365,9 @@ namespace {
 
 // A --terrain pack as a switch would find it: its structure and contents
 // (Pack::open), every tile's checksum, and the --level the session runs on.
+// Read with pread, never mapped: a file changed meanwhile is an error, not SIGBUS.
 Status check_terrain(const std::string& path, int level) {
-  auto p = storage::Pack::open(path);
+  auto p = storage::Pack::open(path, storage::PackAccess::inspect);
   if (!p.ok()) return p.status();
   VISVOL_RETURN_IF_ERROR((*p)->verify());
   if (level >= (*p)->level_count()) {
@@ -407,7 +406,8 @@ Status Console::Impl::open_terrains() {
     if (terrains.size() + 1 >= dds::kMaxKnownPacks) {
       return invalid_argument("--terrain: at most " + std::to_string(dds::kMaxKnownPacks - 1) + " other packs");
     }
-    const Status st = o.session == 1 ? check_terrain(path, o.level) : storage::Pack::open(path).status();
+    const Status st = o.session == 1 ? check_terrain(path, o.level)
+                                     : storage::Pack::open(path, storage::PackAccess::inspect).status();
     if (!st.ok() && o.session == 1) return Status(st.code(), "--terrain " + path + ": " + st.message());
     if (!st.ok()) {
       log_printf(LogLevel::warning, "visvol-console: warning: switch-terrain %s is no longer possible: %s\n",
@@ -452,10 +452,11 @@ Status Console::Impl::start() {
   return loop->start(loop_config);
 }
 
-// The pack (mapped, nothing read but its tables), the other terrains, the
-// level and the ends checked against them.
+// The pack (not mapped: whatever reads its tiles reads checked copies, so a
+// pack file cut short or rewritten under the session cannot fault it), the
+// other terrains, the level and the ends checked against them.
 Status Console::Impl::open_pack() {
-  auto p = storage::Pack::open(o.pack);
+  auto p = storage::Pack::open(o.pack, storage::PackAccess::inspect);
   if (!p.ok()) return p.status();
   pack = *p;
   pack_id = storage::pack_id_from_path(o.pack);
@@ -476,14 +477,12 @@ Status Console::Impl::reserve_and_open_tiles(const fields::VolumeGeometry& g, co
   if (o.thumbnail_view != "none") {
     const std::uint64_t before = rt::resident_bytes();
     VISVOL_RETURN_IF_ERROR(start_thumbnails());
-    release_pack_pages();
     const std::uint64_t after = rt::resident_bytes();
     budget.reserve("renderer (GL context, mesh, F_p texture, PNG)", after > before ? after - before : 0);
   }
   VISVOL_RETURN_IF_ERROR(start_fitter());
-  release_pack_pages();  // the fitter read the finest terrain once
   budget.reserve("flyable path (finest terrain, two folded hulls of it, fit)",
-                 PathFitter::bytes(pack->geometry(0), observers) + 8 * sizeof(msg::PathSample) + 1024 * 1024 +
+                 PathFitter::bytes(*pack, observers) + 8 * sizeof(msg::PathSample) + 1024 * 1024 +
                      (observers > 0 ? rt::ConstraintHulls::build_bytes(pack->geometry(0)) : 0));
   const std::uint64_t segments = static_cast<std::uint64_t>(o.max_segments) + 1;
   budget.reserve("ropes (both models, max segments)", 2 * segments * 1024);
@@ -683,9 +682,6 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
   return check_json(c, checker->spec().sample_step_m);
 }
 
-// The renderer reads the pack's finest level once (mesh, F_p texture) and,
-// under mlockall, those mapped pages stay locked. Hand them back: the tiles
-// the rope needs are made resident by the resident pack, within its budget.
 Status Console::Impl::start_catalogue() {
   if (o.catalogue.empty()) return {};
   auto c = TerrainCatalogue::start(o.catalogue, o.level);
@@ -798,13 +794,6 @@ nlohmann::json Console::Impl::catalogue_json() const {
     entries.push_back(std::move(j));
   }
   return {{"folder", catalogue->folder()}, {"entries", std::move(entries)}};
-}
-
-void Console::Impl::release_pack_pages() {
-  void* base = const_cast<std::uint8_t*>(pack->mapping());
-  const auto bytes = static_cast<std::size_t>(pack->file_bytes());
-  munlock(base, bytes);
-  madvise(base, bytes, MADV_DONTNEED);
 }
 
 Status Console::Impl::start_thumbnails() {
@@ -939,7 +928,10 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   VISVOL_RETURN_IF_ERROR(make_output_dirs(out));
   fit_final_path();
   auto flyable_sample = std::make_unique<msg::PathSample>();
-  path_fitter().describe(final_path, *flyable_sample);
+  if (!path_fitter().describe(final_path, *flyable_sample)) {
+    log_printf(LogLevel::warning, "visvol-console: warning: the final path's F_p is unknown (NaN): %s\n",
+               printable(path_fitter().read_error()).c_str());
+  }
   const msg::PathSample& fp = *flyable_sample;
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp)));
   std::string health_csv =
@@ -1059,6 +1051,7 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
         {"evicted", ts.bricks_evicted},
         {"corrupt", ts.corrupt_bricks},
         {"lock_failures", ts.lock_failures},
+        {"last_error", ts.last_error},
         {"fallbacks", field->fallbacks()}}}};
   if (sim) {
     const hapticsim::SimCounters& sc = sim->device().counters();

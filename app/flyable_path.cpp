@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <limits>
 
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/path_metrics.hpp"
@@ -18,24 +19,27 @@ Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const sto
                                                        int max_observers) {
   VISVOL_RETURN_IF_ERROR(rt::validate(vehicle));
   if (fc_samples < 2) return invalid_argument("flyable path: fc_samples must be at least 2");
-  // every tile checked once here: the fitter reads level 0 outside the pager
-  Result<storage::PackLevel> level = storage::PackLevel::open(std::move(pack), 0, storage::TileCheck::at_open);
+  // each brick checked as it is copied: the fitter reads level 0 outside the pager
+  Result<storage::CachedLevel> level = storage::CachedLevel::open(std::move(pack), 0);
   if (!level.ok()) return level.status();
   std::unique_ptr<PathFitter> f(new PathFitter());
   f->bounds_ = storage::planning_bounds(level->pack());
   f->vehicle_ = vehicle;
   f->fc_samples_ = fc_samples;
-  f->finest_ = std::make_unique<storage::PackLevel>(std::move(*level));
+  f->finest_ = std::make_unique<storage::CachedLevel>(std::move(*level));
   f->top_m_ = f->finest_->geometry().top_m();
-  f->field_ = std::make_unique<rt::FieldForces<storage::PackLevel>>(*f->finest_, rt::ForceGains{});
+  f->field_ = std::make_unique<rt::FieldForces<storage::CachedLevelRef>>(storage::CachedLevelRef(*f->finest_),
+                                                                         rt::ForceGains{});
   f->terrain_ = rt::level_terrain(*f->finest_);
   f->observers_allowed_ = max_observers > 0;
   return f;
 }
 
-std::uint64_t PathFitter::bytes(const fields::VolumeGeometry& g, int observers) {
+std::uint64_t PathFitter::bytes(const storage::Pack& pack, int observers) {
+  const fields::VolumeGeometry g = pack.geometry(0);
   const auto posts = static_cast<std::uint64_t>(g.nx) * static_cast<std::uint64_t>(g.ny);
-  return posts * sizeof(float) * static_cast<std::uint64_t>(observers > 0 ? 3 : 1);
+  return storage::CachedLevel::bytes(pack, 0) +
+         posts * sizeof(float) * static_cast<std::uint64_t>(observers > 0 ? 3 : 1);
 }
 
 void PathFitter::set_observers(const rt::HullRequest& r) {
@@ -98,7 +102,8 @@ rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::F
   return rt::fit_to_envelope(path, spec, terrain_);
 }
 
-void PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const {
+bool PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const {
+  const std::uint64_t failures = finest_->read_failures();
   const int n = static_cast<int>(std::min(path.size(), msg::kMaxPathVertices));
   double lowest = INFINITY;
   for (int k = 0; k < n; ++k) {
@@ -116,6 +121,11 @@ void PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& ou
   for (int k = 1; k < n; ++k)
     length += (path[static_cast<std::size_t>(k)] - path[static_cast<std::size_t>(k - 1)]).norm();
   out.length_m = length;
+  if (finest_->read_failures() == failures) return true;
+  // unread bricks read as zeros: no figure of F_p stands
+  out.f_c = std::numeric_limits<double>::quiet_NaN();
+  for (int k = 0; k < n; ++k) out.vertices[k].visibility = std::numeric_limits<double>::quiet_NaN();
+  return false;
 }
 
 // ---- the thread -------------------------------------------------------------
@@ -193,7 +203,10 @@ void FlyablePath::send(const rt::LimitedPath& limited) {
   out.mode = rope.mode;  // spool mode: a rope still being paid out reaches only its free end
   out.spool_paid_out_m = rope.spool_paid_out_m;
   out.inside_envelope = fit.feasible;
-  fitter_->describe(fit.path, out);
+  if (!fitter_->describe(fit.path, out)) {  // the pack changed under the session: no figures to trust
+    failed_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
   for (LatestValue<msg::PathSample>* sink : {to_publisher_, to_renderer_}) {
     if (sink != nullptr) sink->write(out);
   }

@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -38,6 +39,7 @@
 #include "rt/rope/envelope_fit.hpp"
 #include "rt/rope/field_forces.hpp"
 #include "rt/rope/vehicle.hpp"
+#include "storage/cached_level.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::app {
@@ -62,12 +64,17 @@ class PathFitter {
   // many vertices too. A path that is not finite gives an empty fit.
   rt::EnvelopeFit fit(const rt::Vec3* vertices, int count, const rt::ForceGains& gains) const;
   // `path` into `out`'s vertices and figures (F_c, length, lowest clearance
-  // on the finest level); the header fields are left as they are.
-  void describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const;
+  // on the finest level); the header fields are left as they are. False
+  // when a brick of the pack the figures need could not be read (the file
+  // cut short or changed under the session): the figures are not to be sent.
+  bool describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const;
+  // Why the last describe() failed.
+  const std::string& read_error() const { return finest_->last_error(); }
 
   const fields::Heightfield& terrain() const { return terrain_; }
-  // Bytes held: the finest terrain, and two folded hulls of it with observers.
-  static std::uint64_t bytes(const fields::VolumeGeometry& finest, int observers);
+  // Bytes held: the finest level's copies (heights and a cache of bricks),
+  // the finest terrain, and two folded hulls of it with observers.
+  static std::uint64_t bytes(const storage::Pack& pack, int observers);
   int hull_failures() const { return hull_failures_; }
 
  private:
@@ -76,8 +83,10 @@ class PathFitter {
   double top_m_ = 0;
   fields::Bounds2D bounds_;  // the pack's planning bounds: the fit clamps into them
   int fc_samples_ = 128;
-  std::unique_ptr<storage::PackLevel> finest_;
-  std::unique_ptr<rt::FieldForces<storage::PackLevel>> field_;
+  // read through copies, never the mapping: a pack replaced under the
+  // session cannot fault this thread
+  std::unique_ptr<storage::CachedLevel> finest_;
+  std::unique_ptr<rt::FieldForces<storage::CachedLevelRef>> field_;
   fields::Heightfield terrain_;
   std::uint64_t observers_sequence_ = 0;
   std::optional<rt::PointHull> hidden_, visible_;    // the folded hull of each kind
@@ -89,7 +98,7 @@ class PathFitter {
 struct FlyableStats {
   std::uint64_t fitted = 0;     // flyable paths sent
   std::uint64_t unflyable = 0;  // of them, outside the envelope somewhere (the nearest the fit found)
-  std::uint64_t failed = 0;     // fits that failed (memory), nothing sent
+  std::uint64_t failed = 0;     // fits that failed (memory, or the pack unreadable), nothing sent
   int hull_failures = 0;        // observers left out of the fit (their hull could not be built)
 };
 

@@ -149,6 +149,7 @@ Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAcce
     pack->base_ = static_cast<const std::uint8_t*>(map);
   }
   VISVOL_RETURN_IF_ERROR(pack->check_heights(*file));
+  pack->file_.emplace(std::move(*file));
   return std::shared_ptr<const Pack>(std::move(pack));
 }
 
@@ -357,9 +358,16 @@ const TileEntry& Pack::tile(int level, Layer layer, int tx, int ty) const {
 
 Status Pack::verify_tile(const TileEntry& t) const {
   if (base_ == nullptr) {
-    return Status(Errc::state, path_ + ": opened for inspection, not mapped: " + describe(t) + " must be read first");
+    std::vector<std::uint8_t> copy(static_cast<std::size_t>(t.bytes));
+    return read_tile(t, copy.data());
   }
   return verify_tile_bytes(t, base_ + t.offset);
+}
+
+Status Pack::read_tile(const TileEntry& t, std::uint8_t* out) const {
+  const Status read = file_->read_at(out, static_cast<std::size_t>(t.bytes), t.offset);
+  if (!read.ok()) return Status(read.code(), read.message() + " (" + describe(t) + ")");
+  return verify_tile_bytes(t, out);
 }
 
 Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) const {
@@ -370,6 +378,9 @@ Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) co
   if (t.layer == static_cast<std::uint16_t>(Layer::visibility) && encoding() == VisibilityEncoding::float32) {
     return check_visibility_tile(levels_[t.level], t, bytes, path_);
   }
+  // heights were checked at open(); a copy read later is checked again (a
+  // checksum is no proof against a file rewritten on purpose)
+  if (t.layer == static_cast<std::uint16_t>(Layer::height)) return check_height_tile(levels_[t.level], t, bytes, path_);
   return Status::ok_status();
 }
 
@@ -411,14 +422,34 @@ Status Pack::verify(const std::function<void(double)>& progress) const {
 }
 
 Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level, TileCheck check) {
+  if (pack->mapping() == nullptr) {
+    return Status(Errc::state, pack->path() + ": opened for inspection, not mapped: its levels cannot be read");
+  }
+  if (level >= 0 && level < pack->level_count() && check == TileCheck::at_open) {
+    VISVOL_RETURN_IF_ERROR(pack->verify_level(level));
+  }
+  Result<PackLevel> v = open_unset(std::move(pack), level);
+  if (!v.ok()) return v;
+  const Pack& p = *v->pack_;
+  const LevelEntry& e = p.level(level);
+  auto collect = [&](Layer layer, std::vector<const std::uint8_t*>& out) {
+    const TileGrid g = tile_grid(layer, e.nx, e.ny);
+    for (int ty = 0; ty < g.tiles_y; ++ty)
+      for (int tx = 0; tx < g.tiles_x; ++tx)
+        out[static_cast<std::size_t>(ty * g.tiles_x + tx)] = p.tile_data(p.tile(level, layer, tx, ty));
+  };
+  collect(Layer::height, v->height_);
+  collect(Layer::area, v->area_);
+  collect(Layer::visibility, v->visibility_);
+  collect(Layer::tff, v->tff_tiles_);
+  return v;
+}
+
+Result<PackLevel> PackLevel::open_unset(std::shared_ptr<const Pack> pack, int level) {
   if (level < 0 || level >= pack->level_count()) {
     return invalid_argument(pack->path() + ": no level of detail " + std::to_string(level) + " (it has " +
                             std::to_string(pack->level_count()) + ")");
   }
-  if (pack->mapping() == nullptr) {
-    return Status(Errc::state, pack->path() + ": opened for inspection, not mapped: its levels cannot be read");
-  }
-  if (check == TileCheck::at_open) VISVOL_RETURN_IF_ERROR(pack->verify_level(level));
   PackLevel v;
   v.pack_ = pack;
   v.level_ = level;
@@ -426,19 +457,16 @@ Result<PackLevel> PackLevel::open(std::shared_ptr<const Pack> pack, int level, T
   v.tff_ = pack->tff_params();
   v.quantised_ = pack->encoding() == VisibilityEncoding::uint16;
   const LevelEntry& e = pack->level(level);
-  auto collect = [&](Layer layer, std::vector<const std::uint8_t*>& out, int& tiles_x) {
+  auto unset = [&](Layer layer, std::vector<const std::uint8_t*>& out, int& tiles_x) {
     const TileGrid g = tile_grid(layer, e.nx, e.ny);
     tiles_x = g.tiles_x;
-    out.resize(static_cast<std::size_t>(g.count()));
-    for (int ty = 0; ty < g.tiles_y; ++ty)
-      for (int tx = 0; tx < g.tiles_x; ++tx)
-        out[static_cast<std::size_t>(ty * g.tiles_x + tx)] = pack->tile_data(pack->tile(level, layer, tx, ty));
+    out.assign(static_cast<std::size_t>(g.count()), nullptr);
   };
   int unused = 0;
-  collect(Layer::height, v.height_, v.tiles2d_x_);
-  collect(Layer::area, v.area_, unused);
-  collect(Layer::visibility, v.visibility_, v.bricks_x_);
-  collect(Layer::tff, v.tff_tiles_, unused);
+  unset(Layer::height, v.height_, v.tiles2d_x_);
+  unset(Layer::area, v.area_, unused);
+  unset(Layer::visibility, v.visibility_, v.bricks_x_);
+  unset(Layer::tff, v.tff_tiles_, unused);
   return v;
 }
 

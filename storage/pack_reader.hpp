@@ -13,10 +13,13 @@
 // from the file without bounds.
 //
 // A pack opened with PackAccess::inspect is not mapped at all: its height
-// tiles are checked as read with pread, and its tiles are read the same way
-// by whoever verifies them (verify_tile_bytes). A file truncated or rewritten
-// while a mapping of it is read raises SIGBUS; the console's terrain
-// catalogue inspects packs that operators may be copying in.
+// tiles are checked as read with pread, and so are its tiles when verified.
+// A file truncated while a mapping of it is read raises SIGBUS, and one
+// rewritten in place changes under the reader: whatever reads a pack that
+// operators may replace reads copies (read_tile: pread, then the checksum),
+// as the console's terrain catalogue, tile pager (storage/resident_pack.hpp)
+// and path fitter (storage/cached_level.hpp) do. The Pack keeps the file
+// open for that: a pack renamed over later is not the file read.
 //
 // Thread-safety: a Pack is immutable after open(); concurrent reads are safe.
 // Not real-time safe to open (I/O); the mapped bytes are read in place.
@@ -26,6 +29,7 @@
 #include <cstring>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,12 +86,18 @@ class Pack {
   std::uint64_t tile_count() const { return header_->tile_count; }
   const TileEntry& tile_entry(std::uint64_t n) const { return tiles_[n]; }
 
-  // Checks one tile's checksum, naming it on failure (a mapped pack; an
-  // inspected one answers Errc::state).
+  // Checks one tile's checksum, naming it on failure: through the mapping,
+  // or for an inspected pack on a copy read with pread.
   Status verify_tile(const TileEntry& t) const;
   // The same checks on a copy of the tile's t.bytes bytes (read with pread,
-  // for instance, where a file changed under a mapping would raise SIGBUS).
+  // for instance, where a file changed under a mapping would raise SIGBUS);
+  // a height tile's posts are checked again too (finite, within the levels).
   Status verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) const;
+  // Reads tile `t`'s t.bytes bytes into `out` with pread from the file
+  // opened, and checks them (verify_tile_bytes): Errc::io naming the pack
+  // when the file has been cut short since, Errc::corrupt when it changed.
+  // Never touches the mapping. Any thread.
+  Status read_tile(const TileEntry& t, std::uint8_t* out) const;
   // Checks the tiles of one level, or all tiles; progress gets fractions.
   Status verify_level(int level) const;
   Status verify(const std::function<void(double)>& progress = {}) const;
@@ -109,6 +119,7 @@ class Pack {
   Status check_heights(const InputFile& file) const;
 
   std::string path_;
+  std::optional<InputFile> file_;       // open for read_tile (pread is safe from any thread)
   const std::uint8_t* base_ = nullptr;  // the mapping; null when inspected
   std::uint64_t size_ = 0;
   PackHeader header_copy_{};
@@ -196,6 +207,13 @@ class PackLevel {
   int level() const { return level_; }
 
  private:
+  // Readers that hold copies of the tiles (read_tile) and point the level at
+  // them as they read them: the level with every tile pointer null, of a
+  // mapped or an inspected pack alike.
+  friend class ResidentPack;
+  friend class CachedLevel;
+  static Result<PackLevel> open_unset(std::shared_ptr<const Pack> pack, int level);
+
   // Values between one level of a brick column and the next.
   static constexpr std::size_t kBrickColumnStride = std::size_t{kBrickPosts} * kBrickPosts;
 

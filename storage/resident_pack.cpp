@@ -1,7 +1,5 @@
 #include "storage/resident_pack.hpp"
 
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -132,7 +130,7 @@ Result<std::unique_ptr<ResidentPack>> ResidentPack::create(std::shared_ptr<const
 Status ResidentPack::init() {
   const int n = pack_->level_count();
   for (int l = 0; l < n; ++l) {
-    Result<PackLevel> level = PackLevel::open(pack_, l, TileCheck::deferred);
+    Result<PackLevel> level = PackLevel::open_unset(pack_, l);
     if (!level.ok()) return level.status();
     levels_.push_back(std::move(*level));
   }
@@ -150,6 +148,7 @@ Status ResidentPack::init() {
     s->bricks_x = bg.tiles_x;
     s->bricks_y = bg.tiles_y;
     s->state = std::make_unique<std::atomic<std::uint8_t>[]>(static_cast<std::size_t>(bg.count()));
+    s->copies.resize(2 * static_cast<std::size_t>(bg.count()));
     s->target.assign(static_cast<std::size_t>(bg.count()), 0);
     for (int by = 0; by < bg.tiles_y; ++by) {
       for (int bx = 0; bx < bg.tiles_x; ++bx) {
@@ -181,18 +180,22 @@ Status ResidentPack::init() {
     v.coarser_ = l == n - 1 ? nullptr : &views_[static_cast<std::size_t>(l + 1)];
     v.fallbacks_ = &s.fallbacks;
   }
-  // lock the minimum now
+  // copy and lock the minimum now
   for (int l = 0; l < n; ++l) {
     const LevelEntry& e = pack_->level(l);
     const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
-    for (int ty = 0; ty < hg.tiles_y; ++ty)
-      for (int tx = 0; tx < hg.tiles_x; ++tx)
-        VISVOL_RETURN_IF_ERROR(make_resident(pack_->tile(l, Layer::height, tx, ty)));
+    for (int ty = 0; ty < hg.tiles_y; ++ty) {
+      for (int tx = 0; tx < hg.tiles_x; ++tx) {
+        Result<TileCopy> c = copy(pack_->tile(l, Layer::height, tx, ty));
+        if (!c.ok()) return c.status();
+        levels_[static_cast<std::size_t>(l)].height_[static_cast<std::size_t>(ty * hg.tiles_x + tx)] = c->data();
+        heights_.push_back(std::move(*c));
+      }
+    }
   }
   LevelState& coarsest = *state_.back();
   for (std::size_t b = 0; b < coarsest.bricks.size(); ++b) {
-    VISVOL_RETURN_IF_ERROR(make_resident(*coarsest.bricks[b].visibility));
-    VISVOL_RETURN_IF_ERROR(make_resident(*coarsest.bricks[b].tff));
+    VISVOL_RETURN_IF_ERROR(load_brick(n - 1, b));
     coarsest.state[b].store(kResident, std::memory_order_release);
     coarsest.target[b] = 1;
   }
@@ -201,31 +204,45 @@ Status ResidentPack::init() {
   return {};
 }
 
-ResidentPack::~ResidentPack() {
-  stop_pager();
-  // unlock everything this pack locked (pages stay in the page cache)
-  if (config_.lock) munlock(pack_->mapping(), static_cast<std::size_t>(pack_->file_bytes()));
-}
+ResidentPack::~ResidentPack() { stop_pager(); }
 
-Status ResidentPack::make_resident(const TileEntry& tile) {
-  const std::uint8_t* data = pack_->tile_data(tile);
-  // the checksum reads every page once: a corrupt tile never becomes resident
-  VISVOL_RETURN_IF_ERROR(pack_->verify_tile(tile));
-  if (config_.lock && mlock(data, tile.bytes) != 0) {
-    const int e = errno;
+Result<TileCopy> ResidentPack::copy(const TileEntry& tile) {
+  Result<TileCopy> c = TileCopy::read(*pack_, tile);
+  if (!c.ok() || !config_.lock) return c;
+  const std::string why = c->lock();
+  if (!why.empty()) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.lock_failures;
     stats_.last_error =
-        Pack::describe(tile) + ": not locked (mlock: " + std::strerror(e) + "); it stays resident while memory lasts";
+        Pack::describe(tile) + ": not locked (mlock: " + why + "); it stays resident while memory lasts";
   }
+  return c;
+}
+
+// Before the brick is marked resident: the state's release store publishes
+// the pointers with the copies.
+Status ResidentPack::load_brick(int level, std::size_t b) {
+  LevelState& s = *state_[static_cast<std::size_t>(level)];
+  Result<TileCopy> v = copy(*s.bricks[b].visibility);
+  if (!v.ok()) return v.status();
+  Result<TileCopy> t = copy(*s.bricks[b].tff);
+  if (!t.ok()) return t.status();
+  PackLevel& pl = levels_[static_cast<std::size_t>(level)];
+  pl.visibility_[b] = v->data();
+  pl.tff_tiles_[b] = t->data();
+  s.copies[2 * b] = std::move(*v);
+  s.copies[2 * b + 1] = std::move(*t);
   return {};
 }
 
-void ResidentPack::release(const TileEntry& tile) {
-  auto* data = const_cast<std::uint8_t*>(pack_->tile_data(tile));
-  if (config_.lock) munlock(data, tile.bytes);
-  // drops this process's mapping of the pages (the page cache may keep them)
-  madvise(data, tile.bytes, MADV_DONTNEED);
+// After the brick was marked absent and the readers have passed it.
+void ResidentPack::drop_brick(int level, std::size_t b) {
+  LevelState& s = *state_[static_cast<std::size_t>(level)];
+  PackLevel& pl = levels_[static_cast<std::size_t>(level)];
+  pl.visibility_[b] = nullptr;
+  pl.tff_tiles_[b] = nullptr;
+  s.copies[2 * b] = TileCopy();
+  s.copies[2 * b + 1] = TileCopy();
 }
 
 bool ResidentPack::wait_for_readers() {
@@ -319,10 +336,8 @@ Status ResidentPack::update() {
   if (!evict.empty()) {
     if (!wait_for_readers()) return {};  // stopping: the destructor unlocks
     for (const auto& [l, b] : evict) {
-      const Brick& brick = state_[static_cast<std::size_t>(l)]->bricks[b];
-      release(*brick.visibility);
-      release(*brick.tff);
-      resident -= brick.bytes;
+      drop_brick(l, b);
+      resident -= state_[static_cast<std::size_t>(l)]->bricks[b].bytes;
     }
   }
   std::uint64_t loaded = 0, corrupt = 0;
@@ -333,13 +348,8 @@ Status ResidentPack::update() {
       if (!s.target[b] || s.state[b].load(std::memory_order_relaxed) == kResident) continue;
       if (stop_.load(std::memory_order_acquire)) break;
       const Brick& brick = s.bricks[b];
-      Status st = make_resident(*brick.visibility);
-      if (st.ok()) st = make_resident(*brick.tff);
+      const Status st = load_brick(l, b);
       if (!st.ok()) {
-        if (config_.lock) {
-          munlock(pack_->tile_data(*brick.visibility), brick.visibility->bytes);
-          munlock(pack_->tile_data(*brick.tff), brick.tff->bytes);
-        }
         s.target[b] = 0;
         ++corrupt;
         error = st.message();

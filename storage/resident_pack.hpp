@@ -1,15 +1,19 @@
 // Resident tiles: the part of a memory-mapped field pack the real-time thread
 // may read, kept in memory within a budget.
 //
-// The pack is mapped read-only. A pager thread (not real-time) keeps resident,
-// prefaulted and locked (mlock), what the rope needs:
+// Tiles are copied out of the pack file (storage/tile_copy.hpp: pread, then
+// the checksum) into memory of their own, never read through a mapping: a
+// pack file cut short or rewritten under a running console changes nothing
+// the real-time thread reads (a brick the pager cannot read any more stays
+// out, counted and named). A pager thread (not real-time) keeps resident and
+// locked (mlock), what the rope needs:
 //   - the terrain heights of every level of detail, always;
 //   - every field brick (F_p and terrain force, 16 x 16 columns) of the
 //     coarsest level, always: the floor every lookup can fall back to;
 //   - the bricks of the finer levels around the rope's bounding box plus a
 //     margin, coarser levels first, nearest bricks first, while the budget
-//     lasts; bricks far from the rope are evicted (munlock, MADV_DONTNEED).
-// Each brick's checksum is checked as it is made resident; a corrupt one
+//     lasts; bricks far from the rope are evicted (their copies freed).
+// Each brick's checksum is checked on its copy; a corrupt or unreadable one
 // stays out (and is counted and named), so lookups there fall back.
 //
 // The real-time thread reads through ResidentLevel, a sampler level
@@ -19,7 +23,8 @@
 // the pager where the rope is (set_focus) and when it has finished a tick
 // (tick_done): a brick is unmapped only after the real-time thread has passed
 // two tick boundaries since the brick was marked absent, so no read is ever
-// in flight on an evicted brick.
+// in flight on an evicted brick. The pack's mapping, if it has one, is never
+// read here (the pack may be opened with PackAccess::inspect).
 //
 // Ownership: shares the Pack; owns the pager thread and the locks.
 // Thread-safety: level(), set_focus(), tick_done() from the real-time thread
@@ -41,6 +46,7 @@
 #include "fields/terrain_force.hpp"
 #include "fields/volume.hpp"
 #include "storage/pack_reader.hpp"
+#include "storage/tile_copy.hpp"
 
 namespace visvol::storage {
 
@@ -66,7 +72,7 @@ struct ResidentStats {
   std::uint64_t bricks_loaded = 0;
   std::uint64_t bricks_evicted = 0;
   std::uint64_t lock_failures = 0;             // tiles prefaulted but not locked (no CAP_IPC_LOCK)
-  std::uint64_t corrupt_bricks = 0;            // bricks whose checksum failed: never resident
+  std::uint64_t corrupt_bricks = 0;            // bricks unreadable or failing their checksum: never resident
   std::uint64_t budget_short = 0;              // passes that could not hold every wanted brick
   std::vector<std::uint32_t> resident_bricks;  // per level
   std::vector<std::uint32_t> brick_counts;     // per level
@@ -154,11 +160,11 @@ class ResidentSampler {
 
 class ResidentPack {
  public:
-  // Locks the heights of every level and the coarsest level's bricks (checking
-  // their checksums). Fails, saying what the minimum is, when the budget
-  // cannot hold it.
+  // Copies and locks the heights of every level and the coarsest level's
+  // bricks (checking their checksums). Fails, saying what the minimum is,
+  // when the budget cannot hold it.
   static Result<std::unique_ptr<ResidentPack>> create(std::shared_ptr<const Pack> pack, const ResidentConfig& config);
-  ~ResidentPack();  // stops the pager, unlocks everything
+  ~ResidentPack();  // stops the pager; the copies are freed
   ResidentPack(const ResidentPack&) = delete;
   ResidentPack& operator=(const ResidentPack&) = delete;
 
@@ -184,7 +190,6 @@ class ResidentPack {
   void start_pager();
   void stop_pager();
 
-  const PackLevel& pack_level(int l) const { return levels_[static_cast<std::size_t>(l)]; }
   const Pack& pack() const { return *pack_; }
   const ResidentConfig& config() const { return config_; }
   ResidentStats stats() const;
@@ -198,6 +203,7 @@ class ResidentPack {
   struct LevelState {
     int bricks_x = 0, bricks_y = 0;
     std::vector<Brick> bricks;
+    std::vector<TileCopy> copies;                        // brick b: 2 b visibility, 2 b + 1 terrain force
     std::unique_ptr<std::atomic<std::uint8_t>[]> state;  // 1: resident
     std::vector<std::uint8_t> target;                    // pager's plan of this pass
     std::atomic<std::uint64_t> fallbacks{0};
@@ -205,15 +211,17 @@ class ResidentPack {
 
   ResidentPack(std::shared_ptr<const Pack> pack, const ResidentConfig& config);
   Status init();
-  Status make_resident(const TileEntry& tile);
-  void release(const TileEntry& tile);
+  Result<TileCopy> copy(const TileEntry& tile);     // read, checked, locked
+  Status load_brick(int level, std::size_t brick);  // copies it and points the level at them
+  void drop_brick(int level, std::size_t brick);
   bool wait_for_readers();
   void plan(const WorldBox& box, std::uint64_t budget_left);
   void pager_loop();
 
   std::shared_ptr<const Pack> pack_;
   ResidentConfig config_;
-  std::vector<PackLevel> levels_;
+  std::vector<PackLevel> levels_;  // their tile pointers: into the copies below, or null
+  std::vector<TileCopy> heights_;  // every level's height tiles
   std::vector<std::unique_ptr<LevelState>> state_;
   std::vector<ResidentLevel> views_;
 

@@ -17,6 +17,7 @@
 #include "drivers/render/png_encoder.hpp"
 #include "drivers/render/renderer.hpp"
 #include "drivers/render/scene.hpp"
+#include "storage/cached_level.hpp"
 
 namespace visvol::render {
 namespace detail {
@@ -132,15 +133,15 @@ struct Renderer::Impl {
 
   double ground_m(double x_m, double y_m) const;
   Status build_meshes(int max_width, int max_height);
-  Status build_field_texture(const storage::PackLevel& level, std::size_t max_voxels, double fp_max_config,
+  Status build_field_texture(const storage::CachedLevel& level, std::size_t max_voxels, double fp_max_config,
                              SceneInfo& info);
   Status build_programs();
   Status build_surface_programs();  // terrain, tube, overlay
   Status build_field_programs();    // volume, its composite, slice
   void upload_field(const std::vector<float>& mean, int tx, int ty, int tz);
   void map_field_texture(const fields::VolumeGeometry& g, int stride, int tx, int ty);
-  void load_terrain(const storage::PackLevel& level, double vertical_exaggeration);
-  Status build_gl(const storage::PackLevel& level, const RendererConfig& config, SceneInfo& info);
+  void load_terrain(const storage::CachedLevel& level, double vertical_exaggeration);
+  Status build_gl(const storage::CachedLevel& level, const RendererConfig& config, SceneInfo& info);
   Status build_buffers(const RendererConfig& config);
   Status build_frame_targets(int w, int h);
   Status build_half_target(int w, int h);

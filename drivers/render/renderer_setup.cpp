@@ -142,15 +142,16 @@ int volume_stride(const fields::VolumeGeometry& g, std::size_t max_voxels, int m
 // (southward), then z; `largest` is the largest F_p of a single voxel. The
 // coarser levels of the pack have a wider range (another field), so they are
 // not used for this.
-std::vector<float> averaged_field(const storage::PackLevel& level, int stride, double& largest) {
+std::vector<float> averaged_field(const storage::CachedLevel& level, int stride, double& largest) {
   const fields::VolumeGeometry& g = level.geometry();
   const int tx = texels_of(g.nx, stride), ty = texels_of(g.ny, stride);
-  std::vector<float> mean(static_cast<std::size_t>(tx) * static_cast<std::size_t>(ty) * static_cast<std::size_t>(g.nz));
+  const std::size_t layer = static_cast<std::size_t>(tx) * static_cast<std::size_t>(ty);
+  std::vector<float> mean(layer * static_cast<std::size_t>(g.nz));
   largest = 0;
-  std::size_t n = 0;
-  for (int k = 0; k < g.nz; ++k) {
-    for (int bj = 0; bj < ty; ++bj) {
-      for (int bi = 0; bi < tx; ++bi) {
+  // a texel column at a time, all its levels: the bricks it reads stay in the level's cache
+  for (int bj = 0; bj < ty; ++bj) {
+    for (int bi = 0; bi < tx; ++bi) {
+      for (int k = 0; k < g.nz; ++k) {
         double sum = 0;
         int count = 0;
         for (int j = bj * stride; j < std::min(g.ny, (bj + 1) * stride); ++j) {
@@ -161,7 +162,8 @@ std::vector<float> averaged_field(const storage::PackLevel& level, int stride, d
             ++count;
           }
         }
-        mean[n++] = static_cast<float>(sum / count);
+        mean[static_cast<std::size_t>(k) * layer + static_cast<std::size_t>(bj) * static_cast<std::size_t>(tx) +
+             static_cast<std::size_t>(bi)] = static_cast<float>(sum / count);
       }
     }
   }
@@ -202,7 +204,7 @@ void Renderer::Impl::map_field_texture(const fields::VolumeGeometry& g, int stri
   tex_offset[2] = static_cast<float>((-first.z() / dz_scene + 0.5) / g.nz);
 }
 
-Status Renderer::Impl::build_field_texture(const storage::PackLevel& level, std::size_t max_voxels,
+Status Renderer::Impl::build_field_texture(const storage::CachedLevel& level, std::size_t max_voxels,
                                            double fp_max_config, SceneInfo& info) {
   const fields::VolumeGeometry& g = level.geometry();
   GLint max_3d = 0;
@@ -470,7 +472,7 @@ Status validate_config(const RendererConfig& c) {
 
 }  // namespace
 
-void Renderer::Impl::load_terrain(const storage::PackLevel& level, double vertical_exaggeration) {
+void Renderer::Impl::load_terrain(const storage::CachedLevel& level, double vertical_exaggeration) {
   const fields::VolumeGeometry& g = level.geometry();
   nx = g.nx;
   ny = g.ny;
@@ -503,7 +505,7 @@ void Renderer::Impl::load_terrain(const storage::PackLevel& level, double vertic
   volume_max_steps = static_cast<int>(kVolumeStepsPerDiagonal) + 2;
 }
 
-Status Renderer::Impl::build_gl(const storage::PackLevel& level, const RendererConfig& config, SceneInfo& info) {
+Status Renderer::Impl::build_gl(const storage::CachedLevel& level, const RendererConfig& config, SceneInfo& info) {
   Result<std::unique_ptr<GlContext>> made = GlContext::create();
   if (!made.ok()) return made.status();
   context = std::move(*made);
@@ -551,7 +553,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage
                                                    const RendererConfig& config) {
   VISVOL_RETURN_IF_ERROR(validate_config(config));
   if (!pack) return invalid_argument("renderer: no pack");
-  Result<storage::PackLevel> level = storage::PackLevel::open(pack, 0);
+  // copies, never the mapping (a console's pack may be replaced under it);
+  // every brick is checked as it is read
+  Result<storage::CachedLevel> level = storage::CachedLevel::open(pack, 0);
   if (!level.ok()) return level.status();
   const fields::VolumeGeometry& g = level->geometry();
   if (g.nx < 2 || g.ny < 2 || g.nz < 2) return invalid_argument(pack->path() + ": level 0 is smaller than 2 x 2 x 2");
@@ -562,6 +566,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage
   r->impl_->pack = std::move(pack);
   r->impl_->load_terrain(*level, config.vertical_exaggeration);
   VISVOL_RETURN_IF_ERROR(r->impl_->build_gl(*level, config, r->info_));
+  if (level->read_failures() > 0) return Status(Errc::corrupt, level->last_error());
   VISVOL_RETURN_IF_ERROR(r->warm_up());
   return r;
 }

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -389,6 +390,33 @@ TEST_F(Console, APackNameThatIsNotUtf8EndsWithItsSummary) {
 // session: the loop stops (its last act commands zero force, disabled:
 // ExecutiveTest.StoppingLeavesTheDeviceAtZeroForceDisabled), the outputs are
 // written whole, and the exit status is 0, within seconds.
+// An operator copies a pack over the one a session runs on (cp truncates it
+// first): the session reads checked copies of its tiles, never the file
+// through a mapping (SIGBUS), so it runs to its end and writes its outputs.
+TEST_F(Console, APackCutShortUnderTheSessionEndsItNormally) {
+  const std::string copy = ::testing::TempDir() + "/console_cut_" + std::to_string(getpid()) + ".vvp";
+  std::filesystem::copy_file(*pack_, copy, std::filesystem::copy_options::overwrite_existing);
+  const std::string out = out_dir("cut");
+  Outcome r;
+  std::atomic<bool> ended{false};
+  std::thread run([&] {
+    r = console_limited("--pack " + copy + " --seconds 4 --no-dds --priority 0 --no-lock --segments 16 --script " +
+                        *script_ + " --thumbnail-view none --out " + out);
+    ended = true;
+  });
+  // while the rope moves (the script pulls from 0.5 s, drags from 2.4 s)
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  std::filesystem::resize_file(copy, 4096);
+  EXPECT_FALSE(ended.load()) << "the session ended before its pack was cut: this run proves nothing";
+  run.join();
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"), nullptr, false);
+  ASSERT_FALSE(s.is_discarded()) << "no summary.json";
+  EXPECT_GT(s["loop"]["ticks"].get<int>(), 1000);
+  EXPECT_NE(slurp(out + "/path.csv").find('\n'), std::string::npos);
+  std::remove(copy.c_str());
+}
+
 TEST_F(Console, SigtermAndSigintEndTheSessionWithItsOutputs) {
   // the operator holds the grasp to the end: the motors are enabled when the signal comes
   const std::string held = ::testing::TempDir() + "/console_held_" + std::to_string(getpid()) + ".txt";

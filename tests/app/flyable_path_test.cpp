@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <thread>
 
 #include "../fields/terrains.hpp"
@@ -185,6 +186,61 @@ TEST_F(Flyable, ObserversInForceAreBuiltOnceAndKeptUnderTheirHull) {
   for (std::size_t k = 1; k + 1 < without.path.size(); ++k) sum_without += without.path[k].z();
   EXPECT_LT(sum_with / static_cast<double>(std::max<std::size_t>(1, with.path.size() - 2)),
             sum_without / static_cast<double>(std::max<std::size_t>(1, without.path.size() - 2)));
+}
+
+// The pack cut short under a running session (an operator's cp over it):
+// the fitter reads its bricks as checked copies, so it cannot fault; a path
+// whose figures need a brick it cannot read any more is not sent, counted,
+// and its F_p is NaN, never the zeros an unread brick reads as.
+TEST_F(Flyable, APackCutShortUnderTheFitterIsCountedNotFatal) {
+  // more bricks (11 x 11) than the fitter's cache holds (64): some are read again later
+  const std::string copy = ::testing::TempDir() + "/flyable_cut_" + std::to_string(getpid()) + ".vvp";
+  storage::PackBuildParams p;
+  p.field.nz = 12;
+  p.field.ceiling_m = 300;
+  p.field.range_posts = 4;
+  p.lod_levels = 1;
+  ASSERT_TRUE(storage::build_pack(fields::testing::fractal(161, 3), p, "", copy).ok());
+  auto pack = storage::Pack::open(copy, storage::PackAccess::inspect);
+  ASSERT_TRUE(pack.ok()) << pack.status().message();
+  auto made = PathFitter::create(*pack, vehicle(), 64, 0);
+  ASSERT_TRUE(made.ok()) << made.status().message();
+  std::filesystem::resize_file(copy, 4096);
+  LatestValue<msg::PathSample> publisher;
+  auto f = FlyablePath::start(std::move(*made), &publisher, nullptr);
+  ASSERT_TRUE(f.ok()) << f.status().message();
+  // a path along the pack's middle row, 100 m up
+  const fields::VolumeGeometry g = (*pack)->geometry(0);
+  const fields::Heightfield& ground = (*f)->fitter().terrain();
+  rt::LimitedPath& l = (*f)->rope_paths().back();
+  l = rt::LimitedPath{};
+  l.path.sequence = 7;
+  l.path.vertex_count = 9;
+  for (int i = 0; i < 9; ++i) {
+    const int col = 5 + i * (g.nx - 11) / 8, row = g.ny / 2;
+    l.path.vertices[i].position = {g.origin_x + col * g.spacing_m, g.origin_y - row * g.spacing_m,
+                                   ground.at(col, row) + 100.0};
+  }
+  l.limits.gains.clearance_m = 20;
+  (*f)->rope_paths().publish();
+  for (int k = 0; k < 500 && (*f)->stats().failed == 0; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  (*f)->stop();
+  EXPECT_EQ((*f)->stats().failed, 1u);
+  EXPECT_EQ((*f)->stats().fitted, 0u);
+  EXPECT_EQ(publisher.take(), nullptr);
+  PathFitter& fitter = (*f)->fitter();
+  EXPECT_NE(fitter.read_error().find("ended at byte"), std::string::npos) << fitter.read_error();
+  // described anyway (a session's final path): F_p unknown, the geometry kept
+  const std::vector<rt::Vec3> path = {{g.origin_x + 100, g.origin_y - 100, ground.at(3, 3) + 100.0},
+                                      {g.origin_x + (g.nx - 4) * g.spacing_m, g.origin_y - (g.ny - 4) * g.spacing_m,
+                                       ground.at(g.nx - 4, g.ny - 4) + 100.0}};
+  auto out_ptr = std::make_unique<msg::PathSample>();
+  msg::PathSample& out = *out_ptr;
+  EXPECT_FALSE(fitter.describe(path, out));
+  EXPECT_TRUE(std::isnan(out.f_c));
+  EXPECT_EQ(out.vertex_count, 2u);
+  EXPECT_GT(out.length_m, 0.0);
+  std::remove(copy.c_str());
 }
 
 }  // namespace

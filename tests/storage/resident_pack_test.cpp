@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -115,7 +116,10 @@ TEST_F(ResidentPackTest, LookupsReadTheBrickWhereResidentAndFallBackElsewhere) {
   r->set_focus(box_at(0.5, 0.5, 200));
   ASSERT_TRUE(r->update().ok());
   const ResidentLevel& fine = r->level(0);
-  const PackLevel& direct = r->pack_level(0);
+  // the pack read through its own mapping: independent of the pager's copies
+  const Result<PackLevel> mapped = PackLevel::open(*pack_, 0);
+  ASSERT_TRUE(mapped.ok());
+  const PackLevel& direct = *mapped;
   const fields::VolumeGeometry g = fine.geometry();
   // resident: exactly the pack's values
   for (int k = 0; k < g.nz; k += 5) {
@@ -126,7 +130,9 @@ TEST_F(ResidentPackTest, LookupsReadTheBrickWhereResidentAndFallBackElsewhere) {
   EXPECT_EQ(r->fallbacks(), 0u);
   // not resident: the next coarser level's view at the same world point
   const FieldSampler<ResidentLevel> coarser(r->level(1));
-  const FieldSampler<PackLevel> coarsest(r->pack_level(2));
+  const Result<PackLevel> mapped_coarsest = PackLevel::open(*pack_, 2);
+  ASSERT_TRUE(mapped_coarsest.ok());
+  const FieldSampler<PackLevel> coarsest(*mapped_coarsest);
   for (int k = 1; k < g.nz; k += 3) {
     const double x = g.origin_x + 3 * g.spacing_m, y = g.origin_y - 5 * g.spacing_m, z = g.z_of(k);
     const float v = fine.voxel(3, 5, k);
@@ -194,6 +200,67 @@ TEST_F(ResidentPackTest, ACorruptBrickStaysOutAndIsNamed) {
   EXPECT_TRUE((*r)->level(0).resident(11 * 16 + 8, 12 * 16 + 8));
   r->reset();
   std::remove(bad.c_str());
+}
+
+// An operator copies a new pack over the one a console runs on (cp truncates
+// it, then writes), or a disk error cuts it short: what the real-time thread
+// reads is the pager's checked copies, so it reads on, unchanged; bricks read
+// after the change are refused (counted, named) and lookups there fall back.
+// Through a mapping, the first read past the new end raised SIGBUS.
+TEST_F(ResidentPackTest, APackCutShortOrRewrittenUnderThePagerFaultsNothing) {
+  const std::string copy = pack_path("resident_cut");
+  for (const bool rewrite : {false, true}) {
+    std::filesystem::copy_file(*path_, copy, std::filesystem::copy_options::overwrite_existing);
+    auto pack = Pack::open(copy, PackAccess::inspect);
+    ASSERT_TRUE(pack.ok()) << pack.status().message();
+    ResidentConfig c;
+    c.budget_bytes = 4 * kMiB;
+    c.margin_m = 0;
+    auto r = ResidentPack::create(*pack, c);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    const ResidentLevel& fine = (*r)->level(0);
+    const fields::VolumeGeometry g = fine.geometry();
+    (*r)->set_focus(box_at(0.25, 0.25, 200));
+    ASSERT_TRUE((*r)->update().ok());
+    const int i = g.nx / 4, j = g.ny / 4;
+    ASSERT_TRUE(fine.resident(i, j));
+    std::vector<float> before;
+    for (int k = 0; k < g.nz; ++k) before.push_back(fine.voxel(i, j, k));
+    const FieldSampler<ResidentLevel> s(fine);
+    const double x = g.origin_x + i * g.spacing_m, y = g.origin_y - j * g.spacing_m;
+    const double fp_before = s.visibility(x, y, s.height(x, y) + 40);
+
+    if (rewrite) {  // same size, other bytes past the header: the tiles' checksums refuse them
+      std::fstream f(copy, std::ios::binary | std::ios::in | std::ios::out);
+      const std::string junk(1 << 20, '\x5a');
+      const std::uint64_t size = (*pack)->file_bytes();
+      ASSERT_TRUE(f.seekp(4096));
+      for (std::uint64_t at = 4096; at < size; at += junk.size()) {
+        ASSERT_TRUE(
+            f.write(junk.data(), static_cast<std::streamsize>(std::min<std::uint64_t>(junk.size(), size - at))));
+      }
+      ASSERT_TRUE(f.flush());
+    } else {
+      std::filesystem::resize_file(copy, 4096);
+    }
+    // what is resident reads on, unchanged
+    for (int k = 0; k < g.nz; ++k) EXPECT_EQ(fine.voxel(i, j, k), before[static_cast<std::size_t>(k)]) << k;
+    EXPECT_EQ(s.visibility(x, y, s.height(x, y) + 40), fp_before);
+    // the focus moves: the bricks there cannot be read, stay out, are named
+    (*r)->set_focus(box_at(0.75, 0.75, 200));
+    ASSERT_TRUE((*r)->update().ok());
+    const ResidentStats st = (*r)->stats();
+    EXPECT_GT(st.corrupt_bricks, 0u) << rewrite;
+    EXPECT_NE(st.last_error.find("level"), std::string::npos) << st.last_error;
+    EXPECT_NE(st.last_error.find(rewrite ? "checksum" : "ended at byte"), std::string::npos) << st.last_error;
+    EXPECT_FALSE(fine.resident(3 * g.nx / 4, 3 * g.ny / 4));
+    // lookups there fall back to what is held; every value finite
+    const double x2 = g.origin_x + 0.75 * (g.nx - 1) * g.spacing_m, y2 = g.origin_y - 0.75 * (g.ny - 1) * g.spacing_m;
+    EXPECT_TRUE(std::isfinite(s.visibility(x2, y2, s.height(x2, y2) + 40)));
+    EXPECT_TRUE(s.gradient(x2, y2, s.height(x2, y2) + 40).allFinite());
+    r->reset();
+  }
+  std::remove(copy.c_str());
 }
 
 // ---- the sampler's shortcuts against the straightforward reads ----------------
@@ -344,10 +411,12 @@ TEST_F(ResidentPackTest, AReaderSweepingThePackNeverTakesAMajorFault) {
   ASSERT_GT(start.pack_bytes, 6 * start.budget_bytes);
 
   // Control: the measurement sees a major fault when a page really is absent.
+  const Result<PackLevel> mapped = PackLevel::open(*pack_, 0, TileCheck::deferred);
+  ASSERT_TRUE(mapped.ok());
   drop_page_cache(*path_);
   {
     const rt::ThreadFaults f0 = rt::thread_faults();
-    volatile float sink = r->pack_level(0).voxel(5, 5, 3);
+    volatile float sink = mapped->voxel(5, 5, 3);
     (void)sink;
     const rt::ThreadFaults f1 = rt::thread_faults();
     if (f1.major == f0.major) GTEST_SKIP() << "this file system serves dropped pages without a major fault";

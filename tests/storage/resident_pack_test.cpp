@@ -164,8 +164,13 @@ TEST_F(ResidentPackTest, MovingTheFocusEvictsAndStaysWithinTheBudget) {
   const ResidentStats s = r->stats();
   EXPECT_GT(s.bricks_evicted, 0u);
   EXPECT_GT(s.bricks_loaded, s.bricks_evicted / 2);
-  // what the process keeps mapped grows by the budget at most (plus slack for the test)
+  // what the process keeps grows by the budget at most (plus slack for the
+  // test); not under the sanitizers, whose shadow of each copy is counted too
+#ifndef VISVOL_SANITIZED
   EXPECT_LT(rt::resident_bytes(), rss_before + s.budget_bytes + 8 * kMiB);
+#else
+  (void)rss_before;
+#endif
 }
 
 TEST_F(ResidentPackTest, ACorruptBrickStaysOutAndIsNamed) {

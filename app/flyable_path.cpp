@@ -19,7 +19,9 @@ Result<std::unique_ptr<PathFitter>> PathFitter::create(std::shared_ptr<const sto
                                                        int max_observers) {
   VISVOL_RETURN_IF_ERROR(rt::validate(vehicle));
   if (fc_samples < 2) return invalid_argument("flyable path: fc_samples must be at least 2");
-  // each brick checked as it is copied: the fitter reads level 0 outside the pager
+  // every tile checked once here (read with pread), and each brick again as
+  // it is copied: the fitter reads level 0 outside the pager
+  VISVOL_RETURN_IF_ERROR(pack->verify_level(0));
   Result<storage::CachedLevel> level = storage::CachedLevel::open(std::move(pack), 0);
   if (!level.ok()) return level.status();
   std::unique_ptr<PathFitter> f(new PathFitter());
@@ -103,7 +105,7 @@ rt::EnvelopeFit PathFitter::fit(const rt::Vec3* vertices, int count, const rt::F
 }
 
 bool PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& out) const {
-  const std::uint64_t failures = finest_->read_failures();
+  const std::uint64_t zeros = finest_->zero_reads();
   const int n = static_cast<int>(std::min(path.size(), msg::kMaxPathVertices));
   double lowest = INFINITY;
   for (int k = 0; k < n; ++k) {
@@ -121,7 +123,7 @@ bool PathFitter::describe(const std::vector<rt::Vec3>& path, msg::PathSample& ou
   for (int k = 1; k < n; ++k)
     length += (path[static_cast<std::size_t>(k)] - path[static_cast<std::size_t>(k - 1)]).norm();
   out.length_m = length;
-  if (finest_->read_failures() == failures) return true;
+  if (finest_->zero_reads() == zeros) return true;
   // unread bricks read as zeros: no figure of F_p stands
   out.f_c = std::numeric_limits<double>::quiet_NaN();
   for (int k = 0; k < n; ++k) out.vertices[k].visibility = std::numeric_limits<double>::quiet_NaN();

@@ -38,7 +38,7 @@ bool CachedLevel::load(std::size_t b) const {
   if (!t.ok()) {
     slot_of_[b] = kUnreadable;
     ++failures_;
-    last_error_ = t.status().message();
+    last_error_ = t.status();
     return false;
   }
   std::size_t s = slots_.size();

@@ -7,8 +7,10 @@
 // A sampler level (fields/sampler.hpp): the values are exactly PackLevel's.
 // A brick that cannot be read (the file cut short or changed since it was
 // opened) reads as zeros (F_p 0, no terrain force) and is not read again;
-// read_failures() counts such bricks and last_error() names the last one, so
-// the caller knows its figures are not to be trusted.
+// read_failures() counts such bricks, zero_reads() every value read as zero
+// for want of its brick, and last_error() names the last one: a caller
+// compares zero_reads() before and after its queries to know whether their
+// figures stand.
 //
 // Not thread-safe (a read may fill the cache): one thread. Allocates.
 #pragma once
@@ -46,7 +48,10 @@ class CachedLevel {
   const Pack& pack() const { return level_.pack(); }
   // Bricks that could not be read (each counted once), and the last reason.
   std::uint64_t read_failures() const { return failures_; }
-  const std::string& last_error() const { return last_error_; }
+  // Values read as zeros because their brick could not be read.
+  std::uint64_t zero_reads() const { return zero_reads_; }
+  const std::string& last_error() const { return last_error_.message(); }
+  const Status& last_status() const { return last_error_; }
   // Bytes of tile copies held at most: the level's heights and the cache.
   static std::uint64_t bytes(const Pack& pack, int level, int max_bricks = kDefaultBricks);
 
@@ -66,7 +71,9 @@ class CachedLevel {
       slots_[static_cast<std::size_t>(s)].used = ++clock_;
       return true;
     }
-    return s == kUnread && load(b);
+    if (s == kUnread && load(b)) return true;
+    ++zero_reads_;
+    return false;
   }
   bool load(std::size_t brick) const;
 
@@ -80,7 +87,8 @@ class CachedLevel {
   mutable std::vector<int> slot_of_;  // per brick: its slot, kUnread or kUnreadable
   mutable std::uint64_t clock_ = 0;
   mutable std::uint64_t failures_ = 0;
-  mutable std::string last_error_;
+  mutable std::uint64_t zero_reads_ = 0;
+  mutable Status last_error_;
 };
 
 // A CachedLevel by reference: the sampler level a FieldSampler holds by

@@ -144,7 +144,6 @@ Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAcce
   VISVOL_RETURN_IF_ERROR(pack->parse_metadata());
   if (access == PackAccess::mapped) {
     void* map = ::mmap(nullptr, static_cast<std::size_t>(pack->size_), PROT_READ, MAP_SHARED, file->fd(), 0);
-    // the mapping keeps the file once `file` closes it
     if (map == MAP_FAILED) return io_error(path + ": cannot map: " + std::strerror(errno));
     pack->base_ = static_cast<const std::uint8_t*>(map);
   }

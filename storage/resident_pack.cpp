@@ -142,19 +142,21 @@ Status ResidentPack::init() {
     const LevelEntry& e = pack_->level(l);
     const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
     for (int ty = 0; ty < hg.tiles_y; ++ty)
-      for (int tx = 0; tx < hg.tiles_x; ++tx) minimum += pack_->tile(l, Layer::height, tx, ty).bytes;
+      for (int tx = 0; tx < hg.tiles_x; ++tx)
+        minimum += TileCopy::footprint(pack_->tile(l, Layer::height, tx, ty).bytes);
     auto s = std::make_unique<LevelState>();
     const TileGrid bg = tile_grid(Layer::visibility, e.nx, e.ny);
     s->bricks_x = bg.tiles_x;
     s->bricks_y = bg.tiles_y;
     s->state = std::make_unique<std::atomic<std::uint8_t>[]>(static_cast<std::size_t>(bg.count()));
     s->copies.resize(2 * static_cast<std::size_t>(bg.count()));
+    s->refused.assign(static_cast<std::size_t>(bg.count()), 0);
     s->target.assign(static_cast<std::size_t>(bg.count()), 0);
     for (int by = 0; by < bg.tiles_y; ++by) {
       for (int bx = 0; bx < bg.tiles_x; ++bx) {
         const TileEntry* v = &pack_->tile(l, Layer::visibility, bx, by);
         const TileEntry* t = &pack_->tile(l, Layer::tff, bx, by);
-        s->bricks.push_back({v, t, std::uint64_t{v->bytes} + t->bytes});
+        s->bricks.push_back({v, t, TileCopy::footprint(v->bytes) + TileCopy::footprint(t->bytes)});
         s->state[s->bricks.size() - 1].store(kAbsent, std::memory_order_relaxed);
         if (l == n - 1) minimum += s->bricks.back().bytes;
       }
@@ -235,6 +237,11 @@ Status ResidentPack::load_brick(int level, std::size_t b) {
   return {};
 }
 
+void ResidentPack::drop_evicted() {
+  for (const auto& [l, b] : evicted_) drop_brick(l, b);
+  evicted_.clear();
+}
+
 // After the brick was marked absent and the readers have passed it.
 void ResidentPack::drop_brick(int level, std::size_t b) {
   LevelState& s = *state_[static_cast<std::size_t>(level)];
@@ -291,6 +298,7 @@ void ResidentPack::plan(const WorldBox& box, std::uint64_t budget_left) {
     std::sort(candidates.begin(), candidates.end(),
               [](const Candidate& a, const Candidate& b) { return a.distance2 < b.distance2; });
     for (const Candidate& c : candidates) {
+      if (s.refused[c.brick]) continue;
       const std::uint64_t cost = s.bricks[c.brick].bytes;
       if (cost > budget_left) {
         short_of_budget = true;
@@ -323,23 +331,21 @@ Status ResidentPack::update() {
   plan(last_focus_, config_.budget_bytes - minimum);
   const int n = level_count();
   // evict first, so that the budget holds at every moment
-  std::vector<std::pair<int, std::size_t>> evict;
+  std::uint64_t evicted = 0;
   for (int l = 0; l < n - 1; ++l) {
     LevelState& s = *state_[static_cast<std::size_t>(l)];
     for (std::size_t b = 0; b < s.bricks.size(); ++b) {
       if (!s.target[b] && s.state[b].load(std::memory_order_relaxed) == kResident) {
         s.state[b].store(kAbsent, std::memory_order_seq_cst);  // see tick_done
-        evict.emplace_back(l, b);
+        evicted_.emplace_back(l, b);
+        resident -= s.bricks[b].bytes;
+        ++evicted;
       }
     }
   }
-  if (!evict.empty()) {
-    if (!wait_for_readers()) return {};  // stopping: the destructor unlocks
-    for (const auto& [l, b] : evict) {
-      drop_brick(l, b);
-      resident -= state_[static_cast<std::size_t>(l)]->bricks[b].bytes;
-    }
-  }
+  // stopping: what was marked absent is dropped by the next pass, or with the pack
+  if (!evicted_.empty() && !wait_for_readers()) return {};
+  drop_evicted();
   std::uint64_t loaded = 0, corrupt = 0;
   std::string error;
   for (int l = n - 2; l >= 0; --l) {  // coarser first: the wider fallback comes in soonest
@@ -351,6 +357,7 @@ Status ResidentPack::update() {
       const Status st = load_brick(l, b);
       if (!st.ok()) {
         s.target[b] = 0;
+        s.refused[b] = 1;
         ++corrupt;
         error = st.message();
         continue;
@@ -363,7 +370,7 @@ Status ResidentPack::update() {
   std::lock_guard<std::mutex> lock(stats_mutex_);
   ++stats_.passes;
   stats_.bricks_loaded += loaded;
-  stats_.bricks_evicted += evict.size();
+  stats_.bricks_evicted += evicted;
   stats_.corrupt_bricks += corrupt;
   if (!error.empty()) stats_.last_error = error;
   stats_.resident_bytes = resident;

@@ -1,5 +1,5 @@
-// Resident tiles: the part of a memory-mapped field pack the real-time thread
-// may read, kept in memory within a budget.
+// Resident tiles: the part of a field pack the real-time thread may read,
+// kept in memory within a budget.
 //
 // Tiles are copied out of the pack file (storage/tile_copy.hpp: pread, then
 // the checksum) into memory of their own, never read through a mapping: a
@@ -14,7 +14,7 @@
 //     margin, coarser levels first, nearest bricks first, while the budget
 //     lasts; bricks far from the rope are evicted (their copies freed).
 // Each brick's checksum is checked on its copy; a corrupt or unreadable one
-// stays out (and is counted and named), so lookups there fall back.
+// stays out for good (counted once and named), so lookups there fall back.
 //
 // The real-time thread reads through ResidentLevel, a sampler level
 // (fields/sampler.hpp) that reads a brick only when it is resident and
@@ -71,9 +71,9 @@ struct ResidentStats {
   std::uint64_t passes = 0;
   std::uint64_t bricks_loaded = 0;
   std::uint64_t bricks_evicted = 0;
-  std::uint64_t lock_failures = 0;             // tiles prefaulted but not locked (no CAP_IPC_LOCK)
-  std::uint64_t corrupt_bricks = 0;            // bricks unreadable or failing their checksum: never resident
-  std::uint64_t budget_short = 0;              // passes that could not hold every wanted brick
+  std::uint64_t lock_failures = 0;   // tiles prefaulted but not locked (no CAP_IPC_LOCK)
+  std::uint64_t corrupt_bricks = 0;  // bricks unreadable or failing their checksum (each once): never resident
+  std::uint64_t budget_short = 0;    // passes that could not hold every wanted brick
   std::vector<std::uint32_t> resident_bricks;  // per level
   std::vector<std::uint32_t> brick_counts;     // per level
   std::string last_error;                      // the last corrupt tile or lock failure, named
@@ -111,12 +111,14 @@ class ResidentLevel {
   // Whether every brick holding columns [i0, i1] x [j0, j1] is resident.
   bool resident(int i0, int j0, int i1, int j1) const;
   int level() const { return level_->level(); }
-  const PackLevel& pack_level() const { return *level_; }
   const ResidentLevel* coarser() const { return coarser_; }
 
  private:
   friend class ResidentPack;
   friend class ResidentSampler;
+  // Its bricks that are not resident have no bytes: for the sampler, which
+  // checks residency first.
+  const PackLevel& pack_level() const { return *level_; }
   const PackLevel* level_ = nullptr;
   const std::atomic<std::uint8_t>* state_ = nullptr;  // per brick: 1 resident
   int bricks_x_ = 0;
@@ -204,6 +206,7 @@ class ResidentPack {
     int bricks_x = 0, bricks_y = 0;
     std::vector<Brick> bricks;
     std::vector<TileCopy> copies;                        // brick b: 2 b visibility, 2 b + 1 terrain force
+    std::vector<std::uint8_t> refused;                   // 1: unreadable or corrupt, never tried again
     std::unique_ptr<std::atomic<std::uint8_t>[]> state;  // 1: resident
     std::vector<std::uint8_t> target;                    // pager's plan of this pass
     std::atomic<std::uint64_t> fallbacks{0};
@@ -215,6 +218,7 @@ class ResidentPack {
   Status load_brick(int level, std::size_t brick);  // copies it and points the level at them
   void drop_brick(int level, std::size_t brick);
   bool wait_for_readers();
+  void drop_evicted();  // after wait_for_readers()
   void plan(const WorldBox& box, std::uint64_t budget_left);
   void pager_loop();
 
@@ -223,6 +227,7 @@ class ResidentPack {
   std::vector<PackLevel> levels_;  // their tile pointers: into the copies below, or null
   std::vector<TileCopy> heights_;  // every level's height tiles
   std::vector<std::unique_ptr<LevelState>> state_;
+  std::vector<std::pair<int, std::size_t>> evicted_;  // marked absent, copies not yet dropped
   std::vector<ResidentLevel> views_;
 
   LatestValue<WorldBox> focus_;

@@ -8,11 +8,15 @@
 
 namespace visvol::storage {
 
+std::uint64_t TileCopy::footprint(std::uint64_t tile_bytes) {
+  static const auto page = static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+  return (tile_bytes + page - 1) / page * page;
+}
+
 Result<TileCopy> TileCopy::read(const Pack& pack, const TileEntry& tile) {
   TileCopy c;
-  const auto page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
   c.bytes_ = static_cast<std::size_t>(tile.bytes);
-  c.mapped_ = (c.bytes_ + page - 1) / page * page;
+  c.mapped_ = static_cast<std::size_t>(footprint(tile.bytes));
   if (c.mapped_ == 0) return Status(Errc::corrupt, pack.path() + ": " + Pack::describe(tile) + " is empty");
   void* m = ::mmap(nullptr, c.mapped_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
   if (m == MAP_FAILED) {

@@ -29,6 +29,9 @@ class TileCopy {
   TileCopy(const TileCopy&) = delete;
   TileCopy& operator=(const TileCopy&) = delete;
 
+  // The memory a copy of a tile of `tile_bytes` takes: whole pages.
+  static std::uint64_t footprint(std::uint64_t tile_bytes);
+
   const std::uint8_t* data() const { return data_; }
   std::size_t bytes() const { return bytes_; }
   bool empty() const { return data_ == nullptr; }

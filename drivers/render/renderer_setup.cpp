@@ -555,7 +555,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage
   if (!pack) return invalid_argument("renderer: no pack");
   // copies, never the mapping (a console's pack may be replaced under it);
   // every brick is checked as it is read
-  Result<storage::CachedLevel> level = storage::CachedLevel::open(pack, 0);
+  // (the texture is averaged a texel column at a time along texel rows: two
+  // rows of bricks held keep every brick read once where a texel is at most
+  // a brick wide)
+  const int bricks_x = (pack->geometry(0).nx + storage::kBrickPosts - 1) / storage::kBrickPosts;
+  Result<storage::CachedLevel> level = storage::CachedLevel::open(pack, 0, 2 * bricks_x + 4);
   if (!level.ok()) return level.status();
   const fields::VolumeGeometry& g = level->geometry();
   if (g.nx < 2 || g.ny < 2 || g.nz < 2) return invalid_argument(pack->path() + ": level 0 is smaller than 2 x 2 x 2");
@@ -566,7 +570,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<const storage
   r->impl_->pack = std::move(pack);
   r->impl_->load_terrain(*level, config.vertical_exaggeration);
   VISVOL_RETURN_IF_ERROR(r->impl_->build_gl(*level, config, r->info_));
-  if (level->read_failures() > 0) return Status(Errc::corrupt, level->last_error());
+  if (level->read_failures() > 0) return level->last_status();
   VISVOL_RETURN_IF_ERROR(r->warm_up());
   return r;
 }

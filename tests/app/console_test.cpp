@@ -386,10 +386,6 @@ TEST_F(Console, APackNameThatIsNotUtf8EndsWithItsSummary) {
   EXPECT_NE(s["pack"].get<std::string>().find("latin1_\xEF\xBF\xBD_"), std::string::npos) << s["pack"];
 }
 
-// A supervisor's stop (SIGTERM) or Ctrl-C (SIGINT) in the middle of a long
-// session: the loop stops (its last act commands zero force, disabled:
-// ExecutiveTest.StoppingLeavesTheDeviceAtZeroForceDisabled), the outputs are
-// written whole, and the exit status is 0, within seconds.
 // An operator copies a pack over the one a session runs on (cp truncates it
 // first): the session reads checked copies of its tiles, never the file
 // through a mapping (SIGBUS), so it runs to its end and writes its outputs.
@@ -404,8 +400,12 @@ TEST_F(Console, APackCutShortUnderTheSessionEndsItNormally) {
                         *script_ + " --thumbnail-view none --out " + out);
     ended = true;
   });
-  // while the rope moves (the script pulls from 0.5 s, drags from 2.4 s)
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  // once the loop runs (its first progress line, on standard error), while
+  // the rope moves (the script pulls from 0.5 s, drags from 2.4 s)
+  const std::string err = ::testing::TempDir() + "/console_err_" + std::to_string(getpid());
+  for (int k = 0; k < 400 && slurp(err).find(" s  F_c ") == std::string::npos && !ended; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
   std::filesystem::resize_file(copy, 4096);
   EXPECT_FALSE(ended.load()) << "the session ended before its pack was cut: this run proves nothing";
   run.join();
@@ -417,6 +417,10 @@ TEST_F(Console, APackCutShortUnderTheSessionEndsItNormally) {
   std::remove(copy.c_str());
 }
 
+// A supervisor's stop (SIGTERM) or Ctrl-C (SIGINT) in the middle of a long
+// session: the loop stops (its last act commands zero force, disabled:
+// ExecutiveTest.StoppingLeavesTheDeviceAtZeroForceDisabled), the outputs are
+// written whole, and the exit status is 0, within seconds.
 TEST_F(Console, SigtermAndSigintEndTheSessionWithItsOutputs) {
   // the operator holds the grasp to the end: the motors are enabled when the signal comes
   const std::string held = ::testing::TempDir() + "/console_held_" + std::to_string(getpid()) + ".txt";

@@ -238,6 +238,10 @@ TEST_F(Flyable, APackCutShortUnderTheFitterIsCountedNotFatal) {
   msg::PathSample& out = *out_ptr;
   EXPECT_FALSE(fitter.describe(path, out));
   EXPECT_TRUE(std::isnan(out.f_c));
+  // and again over the same bricks (known unreadable now, not read again)
+  out.f_c = 0;
+  EXPECT_FALSE(fitter.describe(path, out));
+  EXPECT_TRUE(std::isnan(out.f_c));
   EXPECT_EQ(out.vertex_count, 2u);
   EXPECT_GT(out.length_m, 0.0);
   std::remove(copy.c_str());

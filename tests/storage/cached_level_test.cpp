@@ -128,8 +128,12 @@ TEST_F(CachedLevelTest, APackCutShortOrRewrittenIsCountedAndNamedNeverAFault) {
     EXPECT_EQ(cached->voxel(90, 90, 3), 0.0f);  // another brick: unreadable, zeros
     EXPECT_EQ(cached->tff(90, 90, 2).signed_distance_m, 0.0f);
     EXPECT_EQ(cached->read_failures(), 1u);
-    EXPECT_EQ(cached->voxel(91, 91, 4), 0.0f);  // the same brick is not read again
+    EXPECT_EQ(cached->zero_reads(), 2u);
+    EXPECT_EQ(cached->voxel(91, 91, 4), 0.0f);  // the same brick is not read again, but every zero is counted
     EXPECT_EQ(cached->read_failures(), 1u);
+    EXPECT_EQ(cached->zero_reads(), 3u);
+    EXPECT_EQ(cached->voxel(5, 5, 3), held);
+    EXPECT_EQ(cached->zero_reads(), 3u);
     EXPECT_NE(cached->last_error().find("of level 0"), std::string::npos) << cached->last_error();
     EXPECT_NE(cached->last_error().find(rewrite ? "checksum" : "ended at byte"), std::string::npos)
         << cached->last_error();

@@ -290,13 +290,16 @@ VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, int nz, std::uint
   std::memcpy(dst, &b, sizeof b);
 }
 
-// Lanes [lane0, lane0 + W) of the chunk.
-template <int W>
+// Lanes [lane0, lane0 + R W) of the chunk: R registers of W lanes, so that
+// the table walk and the scalar work of each entry (its fields, the bounds
+// and offset of its write) are paid once for R W observers.
+template <int W, int R>
 VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
                              const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, int lane0,
                              float* ring_a, float* ring_b, std::uint8_t* out) {
   using VecF = typename Lanes<W>::F;
   using VecI = typename Lanes<W>::I;
+  constexpr std::size_t N = static_cast<std::size_t>(R);  // array bounds
   const int px0 = chunk.px0;
   const int py = chunk.py;
   const int ci = px0 / kLanes;
@@ -305,39 +308,46 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
   const int stride = terrain.stride;
   const float* t0 = terrain.height_m.data() + terrain.index(px0, py) + lane0;
   const std::int32_t* g0 = terrain.ground_level.data() + terrain.index(px0, py) + lane0;
-  VecF eye;
-  load(eye, chunk.eye_m + lane0);
-  VecI floor_level;
-  load(floor_level, chunk.floor_level + lane0);
+  VecF eye[N];
+  VecI floor_level[N];
+  for (int r = 0; r < R; ++r) {
+    load(eye[r], chunk.eye_m + lane0 + r * W);
+    load(floor_level[r], chunk.floor_level + lane0 + r * W);
+  }
   const bool sphere = shape == RangeShape::sphere;
 
   // The lowest level a target may take: on or above its ground, inside the
   // observer's range.
-  auto lowest_level = [&](VecI& k, const HullEntry& e) {
-    VecI bound;
-    load(k, g0 + e.dy * stride + e.dx);
-    max_into(k, floor_level);
-    if (sphere) {
-      level_at_or_above<W>(bound, eye - e.span_m, levels);
-      max_into(k, bound);
+  auto lowest_level = [&](VecI(&k)[N], const HullEntry& e) {
+    for (int r = 0; r < R; ++r) {
+      load(k[r], g0 + e.dy * stride + e.dx + r * W);
+      max_into(k[r], floor_level[r]);
+      if (sphere) {
+        VecI bound;
+        level_at_or_above<W>(bound, eye[r] - e.span_m, levels);
+        max_into(k[r], bound);
+      }
     }
   };
-  auto write = [&](const HullEntry& e, const VecI& k) {
+  auto write = [&](const HullEntry& e, const VecI(&k)[N]) {
     const int y = py + e.dy;
     if (y < 0 || y >= layout.ny || e.dx < dx_first || e.dx > dx_last) return;
-    store_levels<W>(k, levels.nz, out + layout.offset(py, y, ci, e.dx - dx_first) + lane0);
+    std::uint8_t* dst = out + layout.offset(py, y, ci, e.dx - dx_first) + lane0;
+    for (int r = 0; r < R; ++r) store_levels<W>(k[r], levels.nz, dst + r * W);
   };
   // The slope from the eye to the target's own terrain.
-  auto own_slope = [&](VecF& s, const HullEntry& e) {
-    load(s, t0 + e.dy * stride + e.dx);
-    s = (s - e.drop_m - eye) / e.d_m;
+  auto own_slope = [&](VecF(&s)[N], const HullEntry& e) {
+    for (int r = 0; r < R; ++r) {
+      load(s[r], t0 + e.dy * stride + e.dx + r * W);
+      s[r] = (s[r] - e.drop_m - eye[r]) / e.d_m;
+    }
   };
   // An entry's slot of a ring buffer: this pass's lanes of it.
   auto slot = [&](float* ring, int n) { return ring + n * kLanes + lane0; };
 
   // Rings 0 and 1: no crossing, visible from the ground up.
   for (const HullEntry& e : table.inner()) {
-    VecI k;
+    VecI k[N];
     lowest_level(k, e);
     write(e, k);
   }
@@ -351,9 +361,10 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
   // Ring 1 passes on the slope to its own terrain (it has no crossings).
   for (const HullEntry& e : table.inner()) {
     if (e.dx == 0 && e.dy == 0) continue;
-    VecF own;
+    VecF own[N];
     own_slope(own, e);
-    std::memcpy(slot(prev, ring_index(e.dx, e.dy, 1)), &own, sizeof own);
+    float* dst = slot(prev, ring_index(e.dx, e.dy, 1));
+    for (int r = 0; r < R; ++r) std::memcpy(dst + r * W, &own[r], sizeof own[r]);
   }
   for (int m = 2; m <= last_ring; ++m) {
     const HullEntry* ring = table.ring(m);
@@ -361,52 +372,63 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
     const bool exact = m <= table.exact_rings();
     for (int n = 0; n < count; ++n) {
       const HullEntry& e = ring[n];
-      VecF h = VecF{} + kNoHorizon;
+      VecF h[N];
       VecF ta, tb;
       if (exact) {
         // Every crossing of the sight line.
+        for (int r = 0; r < R; ++r) h[r] = VecF{} + kNoHorizon;
         for (const Crossing* c = table.crossings_begin(m, n); c != table.crossings_end(m, n); ++c) {
-          load(ta, t0 + c->ta);
-          load(tb, t0 + c->tb);
-          max_into(h, VecF((ta + c->t * (tb - ta) - c->drop_m - eye) * c->inv_d));
+          for (int r = 0; r < R; ++r) {
+            load(ta, t0 + c->ta + r * W);
+            load(tb, t0 + c->tb + r * W);
+            max_into(h[r], VecF((ta + c->t * (tb - ta) - c->drop_m - eye[r]) * c->inv_d));
+          }
         }
       } else {
         // Horizon over the far crossings, interpolated between the stencil cells,
         // and exact slopes at the two nearest crossings.
-        VecF ha, hb;
-        load(ha, slot(prev, e.a));
-        load(hb, slot(prev, e.b));
-        h = ha + e.t * (hb - ha);
-        load(ta, t0 + e.ta);
-        load(tb, t0 + e.tb);
-        max_into(h, VecF((ta + e.t * (tb - ta) - e.drop1_m - eye) * e.inv_d1));
-        load(ta, t0 + e.tc);
-        load(tb, t0 + e.td);
-        max_into(h, VecF((ta + e.t2 * (tb - ta) - e.drop2_m - eye) * e.inv_d2));
+        const float* sa = slot(prev, e.a);
+        const float* sb = slot(prev, e.b);
+        for (int r = 0; r < R; ++r) {
+          VecF ha, hb;
+          load(ha, sa + r * W);
+          load(hb, sb + r * W);
+          h[r] = ha + e.t * (hb - ha);
+          load(ta, t0 + e.ta + r * W);
+          load(tb, t0 + e.tb + r * W);
+          max_into(h[r], VecF((ta + e.t * (tb - ta) - e.drop1_m - eye[r]) * e.inv_d1));
+          load(ta, t0 + e.tc + r * W);
+          load(tb, t0 + e.td + r * W);
+          max_into(h[r], VecF((ta + e.t2 * (tb - ta) - e.drop2_m - eye[r]) * e.inv_d2));
+        }
       }
       // Rays beyond pass next to this cell: its own terrain is part of their horizon.
-      VecF next;
+      VecF next[N];
       own_slope(next, e);
-      max_into(next, h);
-      std::memcpy(slot(cur, n), &next, sizeof next);
+      float* dst = slot(cur, n);
+      for (int r = 0; r < R; ++r) {
+        max_into(next[r], h[r]);
+        std::memcpy(dst + r * W, &next[r], sizeof next[r]);
+      }
       // Lowest visible height over the target.
-      VecI k, lowest;
-      level_above<W>(k, eye + e.d_m * h + e.drop_m, levels);
+      VecI k[N], lowest[N];
+      for (int r = 0; r < R; ++r) level_above<W>(k[r], eye[r] + e.d_m * h[r] + e.drop_m, levels);
       lowest_level(lowest, e);
-      max_into(k, lowest);
+      for (int r = 0; r < R; ++r) max_into(k[r], lowest[r]);
       write(e, k);
     }
     std::swap(prev, cur);
   }
 }
 
-template <int W>
+// The chunk in passes of R registers of W lanes.
+template <int W, int R = 1>
 VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
                               const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
                               float* ring_b, std::uint8_t* out) {
-  static_assert(kLanes % W == 0, "passes cover the chunk");
-  for (int lane0 = 0; lane0 < kLanes; lane0 += W) {
-    hull_pass<W>(table, terrain, layout, levels, shape, chunk, lane0, ring_a, ring_b, out);
+  static_assert(kLanes % (W * R) == 0, "passes cover the chunk");
+  for (int lane0 = 0; lane0 < kLanes; lane0 += W * R) {
+    hull_pass<W, R>(table, terrain, layout, levels, shape, chunk, lane0, ring_a, ring_b, out);
   }
 }
 
@@ -444,7 +466,7 @@ __attribute__((target("arch=x86-64-v3"))) void hull_chunk_v3(const HullTable& ta
                                                              const LevelRowLayout& layout, const LevelMap& levels,
                                                              RangeShape shape, const ObserverChunk& chunk,
                                                              float* ring_a, float* ring_b, std::uint8_t* out) {
-  hull_chunk<kAvx2Width>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+  hull_chunk<kAvx2Width, kLanes / kAvx2Width>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
 }
 #endif
 

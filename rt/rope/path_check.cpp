@@ -114,6 +114,15 @@ bool PathChecker::sees(const ConstraintPoint& c, const Vec3& p) const {
                             terrain_.j_of(p.y()), p.z(), spec_.curvature_coeff);
 }
 
+double PathChecker::sample_count(const std::vector<Vec3>& path) const {
+  double total = static_cast<double>(path.size());
+  for (std::size_t s = 0; s + 1 < path.size(); ++s) {
+    if (!path[s].allFinite() || !path[s + 1].allFinite()) return std::numeric_limits<double>::infinity();
+    total += std::ceil((path[s + 1] - path[s]).norm() / spec_.sample_step_m);
+  }
+  return total;
+}
+
 PathCheck PathChecker::check(const Vec3* v, int count) const {
   PathCheck out;
   const VehicleEnvelope& e = spec_.envelope;
@@ -153,7 +162,9 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
     const Vec3 a = v[s], b = v[s + 1];
     const double len = (b - a).norm();
     out.length_m += len;
-    const int m = std::max(1, static_cast<int>(std::ceil(len / spec_.sample_step_m)));
+    // bounded before the conversion (a segment of 1e10 m, or infinite)
+    const double wanted = std::ceil(len / spec_.sample_step_m);
+    const int m = wanted >= 1 ? static_cast<int>(std::min(wanted, double(kMaxSegmentSamples))) : 1;
     for (int k = 0; k <= m; ++k) {
       const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);
       // the segment's ends are the vertices themselves

@@ -100,8 +100,18 @@ class PathChecker {
   // below it, naming the point's option ("--hidden-from").
   static Result<PathChecker> create(fields::Heightfield terrain, const PathField* field, PathCheckSpec spec);
 
+  // Samples a segment takes at most: a longer one is sampled more sparsely
+  // (only a path far beyond any pack has one; callers refuse those first,
+  // with sample_count()).
+  static constexpr int kMaxSegmentSamples = 1 << 22;
+  // Samples a whole check takes at most (about ten seconds of work).
+  static constexpr double kMaxSamples = 1e7;
+
   PathCheck check(const Vec3* vertices, int count) const;
   PathCheck check(const std::vector<Vec3>& path) const { return check(path.data(), static_cast<int>(path.size())); }
+  // The samples a check of the path takes (infinite for a vertex that is
+  // not finite): compare with kMaxSamples before checking outside input.
+  double sample_count(const std::vector<Vec3>& path) const;
 
   const PathCheckSpec& spec() const { return spec_; }
   const fields::Heightfield& terrain() const { return terrain_; }

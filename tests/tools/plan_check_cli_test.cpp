@@ -197,6 +197,27 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   std::remove(autopilot.c_str());
 }
 
+// A path thousands of km up, or zigzagging across the pack a million times:
+// refused before its sight lines are drawn (a vertex at 1e10 m took
+// 1.3e9 samples, for minutes; at 1e300 the sample count overflowed an int).
+TEST_F(PlanCheck, CheckRefusesAPathItCouldNotCheckInSeconds) {
+  const std::string path = ::testing::TempDir() + "/tall_" + std::to_string(getpid()) + ".txt";
+  for (const char* high : {"1e10", "1e300", "-2e5"}) {
+    std::ofstream(path) << "550300 4182450 320\n550400 4182450 " << high << "\n";
+    const Outcome r = visvol("check " + *pack_ + " " + path);
+    EXPECT_EQ(r.status, 2) << high << ": " << r.err;
+    EXPECT_NE(r.err.find("vertex 1 altitude"), std::string::npos) << high << ": " << r.err;
+  }
+  {
+    std::ofstream f(path);
+    for (int k = 0; k < 400000; ++k) f << (k % 2 ? "550300 4182450 400\n" : "550850 4181850 400\n");
+  }
+  const Outcome r = visvol("check " + *pack_ + " " + path + " --json");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("samples"), std::string::npos) << r.err;
+  std::remove(path.c_str());
+}
+
 // A path reaching beyond the pack (a mission made for another area): no
 // terrain to judge it on, refused naming the vertex, never a read off the grid.
 TEST_F(PlanCheck, CheckRefusesAPathBeyondThePack) {

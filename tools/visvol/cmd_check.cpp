@@ -1,6 +1,7 @@
 // visvol check PACK PATH: the paper's path assessment for any path (visvol's
 // own, a QGroundControl .plan, GeoJSON, CSV, text), checked the independent
 // way: exact sight lines and limits on the finest terrain.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -46,6 +47,10 @@ void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path) {
   }
 }
 
+// Altitudes a path may name (m from the datum): the packs' heights lie
+// within +-200 km, and no aircraft flies above 100 km.
+constexpr double kMaxAltitudeM = 1e5;
+
 int run_check(const CheckOptions& o) {
   Result<PlanningPack> opened = open_planning_pack(o.pack);
   if (!opened.ok()) return fail("check", opened.status());
@@ -70,17 +75,40 @@ int run_check(const CheckOptions& o) {
                     k, v.x(), v.y(), extent.xmin_m, extent.xmax_m, extent.ymin_m, extent.ymax_m);
       return fail("check", invalid_argument(o.path + text));
     }
+    if (!(std::fabs(v.z()) <= kMaxAltitudeM)) {
+      char text[200];
+      std::snprintf(text, sizeof text, ": vertex %zu altitude %g m is beyond +-%.0f km of the datum", k, v.z(),
+                    kMaxAltitudeM / 1000);
+      return fail("check", invalid_argument(o.path + text));
+    }
   }
   const rt::FieldForces<storage::PackLevel> field(p.levels.front(), rt::ForceGains{});
   rt::PathCheckSpec spec;
   spec.envelope = *envelope;
   Result<std::vector<rt::ConstraintPoint>> observers = constraint_points(o.constraints);
   if (!observers.ok()) return fail("check", observers.status());
+  for (const rt::ConstraintKind kind : {rt::ConstraintKind::hidden_from, rt::ConstraintKind::visible_to}) {
+    const auto n = std::count_if(observers->begin(), observers->end(),
+                                 [&](const rt::ConstraintPoint& c) { return c.kind == kind; });
+    if (n > rt::kMaxPlanObservers) {  // as plan: each point's sight lines are drawn from every sample
+      return fail("check", invalid_argument(std::to_string(n) + " --" + rt::to_string(kind) + " points: at most " +
+                                            std::to_string(rt::kMaxPlanObservers)));
+    }
+  }
   spec.constraints = std::move(*observers);
   spec.planning_bounds = p.bounds;
   spec.curvature_coeff = p.curvature_coeff;
   Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
   if (!checker.ok()) return fail("check", checker.status());
+  // samples every quarter post along the path: a vertex thousands of km up
+  // (or a path zigzagging across the pack millions of times) would take hours
+  const double samples = checker->sample_count(file->points);
+  if (!(samples <= rt::PathChecker::kMaxSamples)) {
+    char text[200];
+    std::snprintf(text, sizeof text, ": %.3g samples of %.2f m along the path: more than %.0f to check", samples,
+                  checker->spec().sample_step_m, rt::PathChecker::kMaxSamples);
+    return fail("check", invalid_argument(o.path + text));
+  }
   const rt::PathCheck c = checker->check(file->points);
 
   if (o.json) {

@@ -173,6 +173,7 @@ struct Console::Impl {
   std::unique_ptr<TerrainCatalogue> catalogue;                // --catalogue: more, verified off the loop
   std::uint64_t catalogue_seen = ~std::uint64_t{0};           // its version last acted on
   std::vector<CatalogueEntry> catalogue_entries;              // as last seen then
+  bool catalogue_left_out_said = false;                       // more files than it keeps (said once)
   bool catalogue_full = false;                                // more verified than commands may name (said once)
   dds::CommandLimits limits;                                  // the intake's, but for the catalogue's packs
   std::string switch_to;    // the pack id a switch-terrain command asked for, once seen
@@ -698,10 +699,15 @@ void Console::Impl::poll_catalogue() {
   if (!catalogue || catalogue->version() == catalogue_seen) return;
   catalogue_seen = catalogue->version();
   std::vector<CatalogueEntry> now = catalogue->entries();
+  // both lists sorted by id: one pass says what was added, changed or removed
+  auto old = catalogue_entries.cbegin();
   for (const CatalogueEntry& e : now) {
-    const auto old = std::find_if(catalogue_entries.begin(), catalogue_entries.end(),
-                                  [&](const CatalogueEntry& k) { return k.id == e.id; });
-    const bool changed = old == catalogue_entries.end() || old->state != e.state || old->reason != e.reason;
+    for (; old != catalogue_entries.cend() && old->id < e.id; ++old) {
+      log_printf(LogLevel::info, "visvol-console: catalogue: %s removed\n", printable(old->id).c_str());
+    }
+    const bool known = old != catalogue_entries.cend() && old->id == e.id;
+    const bool changed = !known || old->state != e.state || old->reason != e.reason;
+    if (known) ++old;
     if (!changed || e.state == CatalogueState::verifying) continue;
     if (e.state == CatalogueState::verified) {
       log_printf(LogLevel::info, "visvol-console: catalogue: %s verified (%s, %d levels of detail)\n",
@@ -711,10 +717,13 @@ void Console::Impl::poll_catalogue() {
                  printable(e.reason).c_str());
     }
   }
-  for (const CatalogueEntry& old : catalogue_entries) {
-    if (std::none_of(now.begin(), now.end(), [&](const CatalogueEntry& e) { return e.id == old.id; })) {
-      log_printf(LogLevel::info, "visvol-console: catalogue: %s removed\n", printable(old.id).c_str());
-    }
+  for (; old != catalogue_entries.cend(); ++old) {
+    log_printf(LogLevel::info, "visvol-console: catalogue: %s removed\n", printable(old->id).c_str());
+  }
+  if (catalogue->left_out() > 0 && !catalogue_left_out_said) {
+    log_printf(LogLevel::warning, "visvol-console: catalogue: more than %zu packs in %s: the others are left out\n",
+               TerrainCatalogue::kMaxPacks, printable(catalogue->folder()).c_str());
+    catalogue_left_out_said = true;
   }
   catalogue_entries = std::move(now);
   publish_catalogue();

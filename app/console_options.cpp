@@ -2,8 +2,11 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "io/input_file.hpp"
 
@@ -204,13 +207,21 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
 }
 
 Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 32 || h < 32 ||
-      w > 4096 || h > 4096) {
+  // strtol, not sscanf's %d (undefined past INT_MAX): each side's digits, bounded
+  auto side = [](const char* from, char** end) {
+    if (!std::isdigit(static_cast<unsigned char>(*from))) return -1L;
+    errno = 0;
+    const long v = std::strtol(from, end, 10);
+    return errno == 0 ? v : -1L;
+  };
+  char* end = nullptr;
+  const long w = side(text.c_str(), &end);
+  long h = -1;
+  if (w >= 0 && (*end == 'x' || *end == 'X')) h = side(end + 1, &end);
+  if (w < 32 || h < 32 || w > 4096 || h > 4096 || *end != '\0') {
     return invalid_argument("--thumbnail-size: '" + text + "' is not WxH with sides 32..4096 pixels");
   }
-  return std::pair{w, h};
+  return std::pair{static_cast<int>(w), static_cast<int>(h)};
 }
 
 namespace {

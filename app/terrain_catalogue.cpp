@@ -58,6 +58,9 @@ void describe(const storage::Pack& pack, CatalogueEntry& e) {
   if (e.crs.empty()) e.crs = m.crs_name;
   const nlohmann::json meta = nlohmann::json::parse(m.json, nullptr, false);
   e.build_json = meta.is_object() && meta.contains("build") ? meta["build"].dump() : "{}";
+  // published in a field of 511 characters, where JSON cut short is no JSON:
+  // longer is kept empty (a pack's metadata may hold megabytes there)
+  if (e.build_json.size() >= msg::kCatalogueBuildCapacity) e.build_json.clear();
   const fields::VolumeGeometry g = pack.geometry(0);
   e.bounds = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y};
   e.planning = m.planning.box;
@@ -234,7 +237,14 @@ void TerrainCatalogue::enqueue(const std::string& file_name) {
   const std::string id = id_of(file_name);
   auto it = std::lower_bound(entries_.begin(), entries_.end(), id,
                              [](const CatalogueEntry& e, const std::string& key) { return e.id < key; });
-  if (it == entries_.end() || it->id != id) it = entries_.insert(it, CatalogueEntry{});
+  if (it == entries_.end() || it->id != id) {
+    if (entries_.size() >= kMaxPacks) {
+      left_out_.fetch_add(1, std::memory_order_relaxed);
+      version_.fetch_add(1, std::memory_order_acq_rel);
+      return;
+    }
+    it = entries_.insert(it, CatalogueEntry{});
+  }
   *it = CatalogueEntry{};
   it->id = id;
   it->path = folder_ + "/" + file_name;

@@ -60,6 +60,12 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
 
 class TerrainCatalogue {
  public:
+  // Packs a catalogue keeps at most (by id); files beyond are left out and
+  // counted. A switch names at most 64, the published catalogue lists 64: a
+  // folder of thousands of files would only cost the console's monitor time
+  // and locked memory.
+  static constexpr std::size_t kMaxPacks = 256;
+
   // Watches `folder` and verifies what is in it. Errors: the folder cannot be
   // listed or watched (named).
   static Result<std::unique_ptr<TerrainCatalogue>> start(const std::string& folder, int level);
@@ -77,6 +83,8 @@ class TerrainCatalogue {
   std::uint64_t version() const { return version_.load(std::memory_order_acquire); }
   // Whether `id` is an entry, in any state.
   bool has(const std::string& id) const;
+  // Files left out because kMaxPacks were kept (counted each time one is seen).
+  std::uint64_t left_out() const { return left_out_.load(std::memory_order_relaxed); }
   // Waits until nothing is left to verify, at most `timeout_s`; true if so.
   bool wait_idle(double timeout_s) const;
 
@@ -98,6 +106,7 @@ class TerrainCatalogue {
   bool watching_ = true;  // false once the folder was removed or moved
   std::atomic<bool> stop_{false};
   std::atomic<std::uint64_t> version_{0};
+  std::atomic<std::uint64_t> left_out_{0};
   mutable std::mutex mutex_;
   mutable std::condition_variable idle_;
   std::vector<CatalogueEntry> entries_;  // sorted by id

@@ -16,6 +16,9 @@ constexpr double kMaxSeconds = 1e6;
 constexpr std::size_t kMaxScriptBytes = 16u << 20;
 constexpr double kDefaultStrokeMm = 60.0;
 constexpr int kMaxDragStrokes = 10000;  // 600 m of hand travel in default strokes
+// Events a script may hold in all (drags on many lines add up; the console
+// loads its script into locked memory): about an hour of a hand at 250 Hz.
+constexpr std::size_t kMaxScriptEvents = 1000000;
 constexpr double kDefaultRebootS = 0.2;
 constexpr std::uint32_t kMaxGarbage = 1'000'000;
 
@@ -146,6 +149,9 @@ Status LineParser::push_drag(const std::array<double, 3>& start, const std::arra
                  " mm is more than " + std::to_string(kMaxDragStrokes) + " strokes");
   }
   const int strokes = std::max(1, static_cast<int>(stroke_count));
+  if (out_.events.size() + 4 * static_cast<std::size_t>(strokes) > kMaxScriptEvents) {
+    return error("the script's drags come to more than " + std::to_string(kMaxScriptEvents) + " events");
+  }
   const double slot_s = dur_s / strokes;
   const std::array<double, 3> delta = {by_mm[0] / strokes, by_mm[1] / strokes, by_mm[2] / strokes};
   const double t0_s = time_s_;
@@ -172,6 +178,7 @@ Status LineParser::push_drag(const std::array<double, 3>& start, const std::arra
 
 Status LineParser::parse(int line, const std::vector<std::string>& tok) {
   line_ = line;
+  if (out_.events.size() >= kMaxScriptEvents) return error("more than " + std::to_string(kMaxScriptEvents) + " events");
   VISVOL_RETURN_IF_ERROR(seconds(tok[0], "time", true, time_s_));
   if (time_s_ < last_time_s_) {
     return error("time " + tok[0] + " s is before the previous event's " + std::to_string(last_time_s_) + " s");

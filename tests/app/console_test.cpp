@@ -113,7 +113,9 @@ TEST_F(Console, HelpAndBadOptions) {
        {std::string("--pack /nonexistent.vvp"), "--pack " + *pack_ + " --segments 1",
         "--pack " + *pack_ + " --device socketcan", "--pack " + *pack_ + " --objective sideways",
         "--pack " + *pack_ + " --from 1 2 3 --no-dds", "--pack " + *pack_ + " --level 7 --no-dds",
-        "--pack " + *pack_ + " --thumbnail-size 10x10 --no-dds", "--pack " + *pack_ + " --thumbnail-view side"}) {
+        "--pack " + *pack_ + " --thumbnail-size 10x10 --no-dds", "--pack " + *pack_ + " --thumbnail-view side",
+        "--pack " + *pack_ + " --thumbnail-size 99999999999x100 --no-dds",
+        "--pack " + *pack_ + " --thumbnail-size 640x480x2 --no-dds"}) {
     const Outcome r = console(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
     EXPECT_NE(r.err.find("visvol-console: "), std::string::npos) << args;

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <filesystem>
 
 #include <chrono>
 #include <cstdio>
@@ -120,6 +122,26 @@ TEST(TerrainCatalogue, ALevelThePackLacksIsRefused) {
   ASSERT_TRUE(e);
   EXPECT_EQ(e->state, CatalogueState::refused);
   EXPECT_NE(e->reason.find("level"), std::string::npos) << e->reason;
+}
+
+// A folder of thousands of files (a mistaken copy, or an attack on the
+// console's monitor, which compared the lists entry by entry): the catalogue
+// keeps kMaxPacks of them and counts the rest.
+TEST(TerrainCatalogue, KeepsAtMostItsCapacityOfPacks) {
+  const std::string dir = make_folder("many");
+  const std::size_t files = TerrainCatalogue::kMaxPacks + 40;
+  for (std::size_t k = 0; k < files; ++k) std::ofstream(dir + "/p" + std::to_string(1000 + k) + ".vvp") << "no pack";
+  auto c = TerrainCatalogue::start(dir, 0);
+  ASSERT_TRUE(c.ok());
+  ASSERT_TRUE((*c)->wait_idle(60.0));
+  const std::vector<CatalogueEntry> entries = (*c)->entries();
+  EXPECT_EQ(entries.size(), TerrainCatalogue::kMaxPacks);
+  EXPECT_GE((*c)->left_out(), 40u);
+  for (const CatalogueEntry& e : entries) EXPECT_EQ(e.state, CatalogueState::refused) << e.id;
+  EXPECT_TRUE(std::is_sorted(entries.begin(), entries.end(),
+                             [](const CatalogueEntry& a, const CatalogueEntry& b) { return a.id < b.id; }));
+  c->reset();
+  std::filesystem::remove_all(dir);
 }
 
 // Packs copied in (written elsewhere, renamed in), replaced the same way and

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <string>
 
@@ -128,9 +129,7 @@ std::string summary_json(const Options& o, const SimDevice& d, const visvol::can
   return buf;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-hapticsim")) return 0;
   CLI::App app{
       "visvol-hapticsim: a simulated 3-DOF haptic device (Phantom Premium 1.5 stand-in) on a CAN\n"
@@ -225,4 +224,19 @@ int main(int argc, char** argv) {
     return written.code() == visvol::Errc::invalid_argument ? kExitUsage : kExitFailure;
   }
   return kExitOk;
+}
+
+}  // namespace
+
+// Anything thrown (memory, mostly) ends the process with a message and a
+// status, never with std::terminate's abort.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "visvol-hapticsim: internal error: %s\n", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "visvol-hapticsim: internal error (unknown exception)\n");
+  }
+  return kExitFailure;
 }

@@ -331,6 +331,15 @@ TEST(Script, ErrorsNameTheLineAndTheProblem) {
   // strokes are held in memory: billions of them are refused, not queued
   EXPECT_EQ(error("0 drag 0 0 200000 1 0.0001\n").find("s.txt:1: a drag of 200000.000000 mm in strokes of"), 0u);
   EXPECT_NE(error("0 drag 0 0 1e9 1 0.001\n").find("more than 10000 strokes"), std::string::npos);
+  {
+    // nor do drags on many lines add up past a million events (3000 lines of
+    // 10000 strokes asked 8.6 GB); back and forth, so the hand stays inside
+    std::string many;
+    for (int k = 0; k < 40; ++k) {
+      many += std::to_string(k) + " drag " + (k % 2 ? "-" : "") + "599000 0 0 0.5 60\n";
+    }
+    EXPECT_NE(error(many).find("more than 1000000 events"), std::string::npos) << error(many);
+  }
   EXPECT_EQ(error("0 mode\n"), "s.txt:1: 'mode' takes 1 argument(s), got 0");
   EXPECT_EQ(error("x grab\n"), "s.txt:1: time 'x' is not a finite number");
   EXPECT_EQ(error("  # only a comment\n\n0 grab # and another\n"), "(parsed)");

@@ -263,17 +263,22 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, WorkerPool& pool, BuildStats& stats) {
-  const int ny = b.hf.ny;
+// Target rows [band.first, band.end): the observers within the range of
+// them, in batches; each row is handed to the sink once no later observer
+// reaches it.
+Status run_build(Build& b, RowBand band, VolumeRowSink& sink, const ProgressFn& progress, WorkerPool& pool,
+                 BuildStats& stats) {
   const int batch = b.plan.batch_rows;
+  const int obs_lo = std::max(0, band.first - b.radius);
+  const int obs_hi = std::min(b.hf.ny, band.end + b.radius);
   const std::size_t ring_floats = static_cast<std::size_t>(ring_size(std::max(b.radius, 1))) * kLanes;
   std::vector<std::vector<float>> ring_a(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   std::vector<std::vector<float>> ring_b(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   b.cells_per_worker.assign(static_cast<std::size_t>(pool.size()), 0);
-  int rows_out = 0;  // rows handed to the sink
+  int rows_out = band.first;  // rows handed to the sink
   std::vector<float> staging(static_cast<std::size_t>(b.geom.nz) * static_cast<std::size_t>(b.hf.nx));
-  for (int first = 0; first < ny; first += batch) {
-    const int rows = std::min(batch, ny - first);
+  for (int first = obs_lo; first < obs_hi; first += batch) {
+    const int rows = std::min(batch, obs_hi - first);
     // phase 1: hull levels of the batch's observers
     auto t0 = std::chrono::steady_clock::now();
     pool.run(rows * b.layout.chunks, [&](int item, int worker) {
@@ -282,10 +287,10 @@ Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, Work
     stats.hull_s += seconds_since(t0);
     // phase 2: scatter into target rows; finish rows no later observer reaches
     t0 = std::chrono::steady_clock::now();
-    const int y_lo = std::max(0, first - b.radius);
-    const int y_hi = std::min(ny - 1, first + rows - 1 + b.radius);
-    const bool last_batch = first + rows == ny;
-    const int finished_to = last_batch ? ny : std::max(0, first + rows - b.radius);
+    const int y_lo = std::max(band.first, first - b.radius);
+    const int y_hi = std::min(band.end - 1, first + rows - 1 + b.radius);
+    const bool last_batch = first + rows == obs_hi;
+    const int finished_to = last_batch ? band.end : std::clamp(first + rows - b.radius, band.first, band.end);
     pool.run(y_hi - y_lo + 1, [&](int item, int worker) {
       const int y = y_lo + item;
       b.cells_per_worker[static_cast<std::size_t>(worker)] += scatter_row(b, first, rows, y);
@@ -299,7 +304,7 @@ Status run_build(Build& b, VolumeRowSink& sink, const ProgressFn& progress, Work
       std::fill(slab, slab + b.slab_ints, 0);
     }
     stats.scatter_s += seconds_since(t0);
-    if (progress) progress(static_cast<double>(first + rows) / ny);
+    if (progress) progress(static_cast<double>(first + rows - obs_lo) / (obs_hi - obs_lo));
   }
   return Status::ok_status();
 }
@@ -360,6 +365,15 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
 
 Status build_visibility(const Heightfield& hf, const FieldParams& params, VolumeRowSink& sink,
                         const ProgressFn& progress, BuildStats* stats) {
+  return build_visibility_rows(hf, params, RowBand{0, hf.ny}, sink, progress, stats);
+}
+
+Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, RowBand band, VolumeRowSink& sink,
+                             const ProgressFn& progress, BuildStats* stats) {
+  if (band.first < 0 || band.end > hf.ny || band.first >= band.end) {
+    return invalid_argument("field build: rows " + std::to_string(band.first) + ".." + std::to_string(band.end) +
+                            " are not a band of the grid's " + std::to_string(hf.ny));
+  }
   const auto t0 = std::chrono::steady_clock::now();
   Result<BuildPlan> plan = plan_visibility_build(hf, params);
   if (!plan.ok()) return plan.status();
@@ -370,7 +384,7 @@ Status build_visibility(const Heightfield& hf, const FieldParams& params, Volume
     b.window.assign(static_cast<std::size_t>(b.win) * b.slab_ints, 0);
     WorkerPool pool(params.threads);
     BuildStats local;
-    VISVOL_RETURN_IF_ERROR(run_build(b, sink, progress, pool, local));
+    VISVOL_RETURN_IF_ERROR(run_build(b, band, sink, progress, pool, local));
     if (stats) {
       *stats = local;
       stats->wall_s = seconds_since(t0);

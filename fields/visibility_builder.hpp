@@ -68,6 +68,19 @@ using ProgressFn = std::function<void(double fraction)>;
 Status build_visibility(const Heightfield& hf, const FieldParams& params, VolumeRowSink& sink,
                         const ProgressFn& progress = {}, BuildStats* stats = nullptr);
 
+// Target rows [first, end) of the grid.
+struct RowBand {
+  int first = 0, end = 0;
+};
+
+// Builds rows [band.first, band.end) of F_p only, streaming them to `sink`:
+// each exactly the whole build's row (the observers within the range of the
+// band are all counted; the sums are integers). What one of several
+// processes builds; its cost is that of the band's observers and those of
+// the range around it.
+Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, RowBand band, VolumeRowSink& sink,
+                             const ProgressFn& progress = {}, BuildStats* stats = nullptr);
+
 // Builds F_p into memory.
 Result<DenseVolume> build_visibility_dense(const Heightfield& hf, const FieldParams& params,
                                            const ProgressFn& progress = {}, BuildStats* stats = nullptr);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <random>
 
 #include "fields/exact_visibility.hpp"
@@ -158,6 +159,52 @@ TEST(VisibilityField, IdenticalWhateverTheThreadCount) {
     EXPECT_EQ(0, std::memcmp(one.values.data(), many.values.data(), one.values.size() * sizeof(float)))
         << threads << " threads";
   }
+}
+
+// Rows handed to a sink, by row, in the order they came.
+class RowCollector final : public VolumeRowSink {
+ public:
+  explicit RowCollector(const VolumeGeometry& g) : g_(g) {}
+  Status write_row(int j, const float* values) override {
+    order.push_back(j);
+    rows[j].assign(values, values + static_cast<std::size_t>(g_.nz) * static_cast<std::size_t>(g_.nx));
+    return Status::ok_status();
+  }
+  std::vector<int> order;
+  std::map<int, std::vector<float>> rows;
+
+ private:
+  VolumeGeometry g_;
+};
+
+// What one of several processes builds (an MPI rank's band of rows) is the
+// whole build's rows, byte for byte, whatever the band and the range shape.
+TEST(VisibilityField, ABandOfRowsIsTheWholeBuildsRows) {
+  const Heightfield hf = fractal(41, 5);
+  for (const RangeShape shape : {RangeShape::cube, RangeShape::sphere, RangeShape::none}) {
+    const FieldParams p = small_params(shape, 6, 24);
+    const DenseVolume whole = build(hf, p);
+    const VolumeGeometry& g = whole.geometry;
+    for (const RowBand band : {RowBand{0, 41}, RowBand{0, 9}, RowBand{9, 10}, RowBand{10, 29}, RowBand{29, 41}}) {
+      RowCollector sink(g);
+      ASSERT_TRUE(build_visibility_rows(hf, p, band, sink).ok());
+      ASSERT_EQ(sink.order.size(), static_cast<std::size_t>(band.end - band.first)) << to_string(shape);
+      for (int j = band.first; j < band.end; ++j) {
+        ASSERT_EQ(sink.order[static_cast<std::size_t>(j - band.first)], j);
+        const std::vector<float>& row = sink.rows[j];
+        for (int k = 0; k < g.nz; ++k) {
+          ASSERT_EQ(0, std::memcmp(&row[static_cast<std::size_t>(k) * static_cast<std::size_t>(g.nx)],
+                                   &whole.values[g.index(0, j, k)], static_cast<std::size_t>(g.nx) * sizeof(float)))
+              << to_string(shape) << " row " << j << " level " << k << " of band " << band.first << ".." << band.end;
+        }
+      }
+    }
+  }
+  RowCollector sink(volume_geometry(hf, small_params(RangeShape::cube, 6)));
+  for (const RowBand bad : {RowBand{-1, 5}, RowBand{5, 5}, RowBand{30, 42}}) {
+    EXPECT_FALSE(build_visibility_rows(hf, small_params(RangeShape::cube, 6), bad, sink).ok());
+  }
+  EXPECT_TRUE(sink.order.empty());
 }
 
 TEST(VisibilityField, BelowTheTerrainIsZero) {

@@ -73,8 +73,6 @@ late_install=""
 late_log=$(mktemp)
 fuzz_build=""  # the fuzzers' build beside the optimised tests (its pid, its log)
 fuzz_build_log=""
-tsan_build=""  # the TSan tree's build beside the ASan+UBSan tests (its pid, its log)
-tsan_build_log=""
 wait_for_late_packages() {
   local rc=0
   if [[ -n "$late_install" ]]; then
@@ -99,11 +97,6 @@ finish() {
     wait "$fuzz_build" || true
   fi
   [[ -z "$fuzz_build_log" ]] || rm -f "$fuzz_build_log"
-  if [[ -n "$tsan_build" ]]; then
-    echo "== waiting for the TSan build beside the tests"
-    wait "$tsan_build" || true
-  fi
-  [[ -z "$tsan_build_log" ]] || rm -f "$tsan_build_log"
   report_times_of "$status"
 }
 trap finish EXIT
@@ -118,28 +111,6 @@ fuzz_stage() {
     ((rc == 0)) || return "$rc"
   fi
   tools/fuzz.sh
-}
-
-# The TSan tree (the threaded tests' target only) builds beside the ASan+UBSan
-# tests at the lowest CPU and I/O priority, as the fuzzers do beside the
-# optimised ones: those tests wait on real time too (console sessions, DDS
-# exchanges, the VM) and leave cores idle. Its stage waits for it and prints
-# its log.
-tsan_build_begin() {
-  tsan_build_log=$(mktemp)
-  (
-    renice -n 19 -p "$BASHPID" >/dev/null
-    ionice -c 3 -p "$BASHPID"
-    build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF -- visvol_threaded_tests
-  ) >"$tsan_build_log" 2>&1 &
-  tsan_build=$!
-}
-tsan_build_end() {
-  local rc=0
-  wait "$tsan_build" || rc=$?
-  tsan_build=""
-  cat "$tsan_build_log"
-  return "$rc"
 }
 
 export VISVOL_FUZZ_SECONDS=${VISVOL_FUZZ_SECONDS:-5}
@@ -165,7 +136,6 @@ fuzz_build=$!
 stage "lint: format" tools/check_format.sh
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF
-tsan_build_begin
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs" \
   -LE numeric
@@ -173,8 +143,8 @@ stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 # real threads sharing state (hand-offs, the loop, the executive, the hull
 # builder, the tile pager, the DDS publisher and intake, the renderer and the
 # flyable-path threads), under ThreadSanitizer.
-# (begun beside the ASan+UBSan tests: the rest of it, if any)
-stage "build: TSan (threaded tests)" tsan_build_end
+stage "build: TSan (threaded tests)" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
+  -- visvol_threaded_tests
 stage "tests: TSan" env TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
   ctest --test-dir build-tsan -L threaded -LE numeric --output-on-failure -j "$jobs"
 # (the build started beside the optimised tests: finished by now, or finishing)

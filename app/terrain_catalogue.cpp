@@ -53,14 +53,18 @@ void refuse(CatalogueEntry& e, const std::string& reason) {
 // The pack's description: its source DEM, CRS, build parameters and extent.
 void describe(const storage::Pack& pack, CatalogueEntry& e) {
   const storage::PackMetadata& m = pack.metadata();
-  e.name = m.source_path.substr(m.source_path.find_last_of('/') + 1);
+  // kept as long as published at most (a pack's metadata may hold megabytes
+  // there, and the catalogue's entries are locked memory, copied on each poll)
+  auto at_most = [](const std::string& text, std::size_t capacity) {
+    return text.size() < capacity ? text : text.substr(0, capacity - 1);
+  };
+  e.name = at_most(m.source_path.substr(m.source_path.find_last_of('/') + 1), msg::kCatalogueNameCapacity);
   e.crs = storage::epsg_from_wkt(m.crs_wkt);
-  if (e.crs.empty()) e.crs = m.crs_name;
+  if (e.crs.empty()) e.crs = at_most(m.crs_name, msg::kCrsCapacity);
   const nlohmann::json meta = nlohmann::json::parse(m.json, nullptr, false);
-  e.build_json = meta.is_object() && meta.contains("build") ? meta["build"].dump() : "{}";
-  // published in a field of 511 characters, where JSON cut short is no JSON:
-  // longer is kept empty (a pack's metadata may hold megabytes there)
-  if (e.build_json.size() >= msg::kCatalogueBuildCapacity) e.build_json.clear();
+  std::string build = meta.is_object() && meta.contains("build") ? meta["build"].dump() : "{}";
+  // published whole or not at all: JSON cut short is no JSON
+  e.build_json = build.size() < msg::kCatalogueBuildCapacity ? std::move(build) : std::string("{}");
   const fields::VolumeGeometry g = pack.geometry(0);
   e.bounds = {g.origin_x, g.origin_y - (g.ny - 1) * g.spacing_m, g.origin_x + (g.nx - 1) * g.spacing_m, g.origin_y};
   e.planning = m.planning.box;
@@ -222,14 +226,19 @@ void TerrainCatalogue::rescan() {
   scan();
 }
 
-void TerrainCatalogue::scan() {
+// Every pack file of the folder, in id order (the lowest ids are the ones
+// kept when there are more than kMaxPacks); `only_new`: those not yet entries.
+void TerrainCatalogue::scan(bool only_new) {
   DIR* d = opendir(folder_.c_str());
   if (d == nullptr) return;  // start() checked it; a folder gone since is seen by inotify
+  std::vector<std::string> names;
   while (const dirent* de = readdir(d)) {
     const std::string name = de->d_name;
-    if (is_pack_name(name)) enqueue(name);
+    if (is_pack_name(name) && !(only_new && has(id_of(name)))) names.push_back(name);
   }
   closedir(d);
+  std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) { return id_of(a) < id_of(b); });
+  for (const std::string& name : names) enqueue(name);
 }
 
 void TerrainCatalogue::enqueue(const std::string& file_name) {
@@ -340,7 +349,11 @@ void TerrainCatalogue::handle_events() {
       if (!is_pack_name(name)) continue;
       if (ev.mask & IN_MODIFY) being_written(name);
       if (ev.mask & (IN_CLOSE_WRITE | IN_MOVED_TO)) enqueue(name);
-      if (ev.mask & (IN_MOVED_FROM | IN_DELETE)) remove(name);
+      if (ev.mask & (IN_MOVED_FROM | IN_DELETE)) {
+        remove(name);
+        // room for one left out: the folder's first new id in order takes it
+        if (left_out_.load(std::memory_order_relaxed) > 0) scan(true);
+      }
     }
   }
 }

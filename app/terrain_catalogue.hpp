@@ -60,10 +60,9 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
 
 class TerrainCatalogue {
  public:
-  // Packs a catalogue keeps at most (by id); files beyond are left out and
-  // counted. A switch names at most 64, the published catalogue lists 64: a
-  // folder of thousands of files would only cost the console's monitor time
-  // and locked memory.
+  // Packs a catalogue keeps at most (the lowest ids of a folder listed;
+  // then new ones as room is made); files beyond are left out and counted. A switch names at most 64, the published
+  // catalogue lists 64: a folder of thousands of files would only cost the console's monitor time and locked memory.
   static constexpr std::size_t kMaxPacks = 256;
 
   // Watches `folder` and verifies what is in it. Errors: the folder cannot be
@@ -91,7 +90,7 @@ class TerrainCatalogue {
  private:
   TerrainCatalogue(std::string folder, int level, int inotify_fd, int wake_fd);
   void run();
-  void scan();
+  void scan(bool only_new = false);
   void rescan();
   void handle_events();
   void enqueue(const std::string& file_name);

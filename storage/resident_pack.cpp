@@ -343,8 +343,14 @@ Status ResidentPack::update() {
       }
     }
   }
-  // stopping: what was marked absent is dropped by the next pass, or with the pack
-  if (!evicted_.empty() && !wait_for_readers()) return {};
+  if (!evicted_.empty() && !wait_for_readers()) {
+    // stopping: what was marked absent is dropped by the next pass, or with
+    // the pack; the figures say it is gone already
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.bricks_evicted += evicted;
+    stats_.resident_bytes = resident;
+    return {};
+  }
   drop_evicted();
   std::uint64_t loaded = 0, corrupt = 0;
   std::string error;

@@ -104,7 +104,8 @@ class PathChecker {
   // (only a path far beyond any pack has one; callers refuse those first,
   // with sample_count()).
   static constexpr int kMaxSegmentSamples = 1 << 22;
-  // Samples a whole check takes at most (about ten seconds of work).
+  // Samples a whole check takes at most, times its observers (each sample
+  // draws a sight line to each): about ten seconds of work.
   static constexpr double kMaxSamples = 1e7;
 
   PathCheck check(const Vec3* vertices, int count) const;

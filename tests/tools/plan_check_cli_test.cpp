@@ -215,6 +215,16 @@ TEST_F(PlanCheck, CheckRefusesAPathItCouldNotCheckInSeconds) {
   const Outcome r = visvol("check " + *pack_ + " " + path + " --json");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("samples"), std::string::npos) << r.err;
+  // a tenth of that path, checkable alone, is refused with 20 observers
+  {
+    std::ofstream f(path);
+    for (int k = 0; k < 40000; ++k) f << (k % 2 ? "550300 4182450 400\n" : "550850 4181850 400\n");
+  }
+  std::string observers;
+  for (int k = 0; k < 20; ++k) observers += " --hidden-from 550500 4182200 330";
+  const Outcome many = visvol("check " + *pack_ + " " + path + observers);
+  EXPECT_EQ(many.status, 2) << many.err;
+  EXPECT_NE(many.err.find("times 20 observers"), std::string::npos) << many.err;
   std::remove(path.c_str());
 }
 

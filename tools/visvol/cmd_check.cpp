@@ -100,13 +100,17 @@ int run_check(const CheckOptions& o) {
   spec.curvature_coeff = p.curvature_coeff;
   Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
   if (!checker.ok()) return fail("check", checker.status());
-  // samples every quarter post along the path: a vertex thousands of km up
-  // (or a path zigzagging across the pack millions of times) would take hours
+  // samples every quarter post along the path, a sight line from each to
+  // every observer: a path zigzagging across the pack millions of times, or
+  // hundreds of observers of a long one, would take hours
   const double samples = checker->sample_count(file->points);
-  if (!(samples <= rt::PathChecker::kMaxSamples)) {
-    char text[200];
-    std::snprintf(text, sizeof text, ": %.3g samples of %.2f m along the path: more than %.0f to check", samples,
-                  checker->spec().sample_step_m, rt::PathChecker::kMaxSamples);
+  const double work = samples * static_cast<double>(std::max<std::size_t>(1, spec.constraints.size()));
+  if (!(work <= rt::PathChecker::kMaxSamples)) {
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  ": %.3g samples of %.2f m along the path, times %zu observers: more than %.0f to check", samples,
+                  checker->spec().sample_step_m, std::max<std::size_t>(1, spec.constraints.size()),
+                  rt::PathChecker::kMaxSamples);
     return fail("check", invalid_argument(o.path + text));
   }
   const rt::PathCheck c = checker->check(file->points);

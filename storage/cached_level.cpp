@@ -6,20 +6,11 @@ namespace visvol::storage {
 
 Result<CachedLevel> CachedLevel::open(std::shared_ptr<const Pack> pack, int level, int max_bricks) {
   if (max_bricks < 1) return invalid_argument("cached level: max_bricks must be at least 1");
-  Result<PackLevel> unset = PackLevel::open_unset(std::move(pack), level);
+  Result<PackLevel> unset = LevelCopies::unset(std::move(pack), level);
   if (!unset.ok()) return unset.status();
   CachedLevel c(std::move(*unset));
-  const Pack& p = c.level_.pack();
-  const LevelEntry& e = p.level(level);
-  const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
-  for (int ty = 0; ty < hg.tiles_y; ++ty) {
-    for (int tx = 0; tx < hg.tiles_x; ++tx) {
-      Result<TileCopy> h = TileCopy::read(p, p.tile(level, Layer::height, tx, ty));
-      if (!h.ok()) return h.status();
-      c.level_.height_[static_cast<std::size_t>(ty * hg.tiles_x + tx)] = h->data();
-      c.heights_.push_back(std::move(*h));
-    }
-  }
+  VISVOL_RETURN_IF_ERROR(LevelCopies::copy_heights(c.level_, c.heights_));
+  const LevelEntry& e = c.level_.pack().level(level);
   const TileGrid bg = tile_grid(Layer::visibility, e.nx, e.ny);
   c.bricks_x_ = bg.tiles_x;
   c.max_slots_ = static_cast<std::size_t>(std::min<std::int64_t>(max_bricks, bg.count()));
@@ -29,16 +20,12 @@ Result<CachedLevel> CachedLevel::open(std::shared_ptr<const Pack> pack, int leve
 }
 
 bool CachedLevel::load(std::size_t b) const {
-  const Pack& p = level_.pack();
-  const int level = level_.level();
-  const int bx = static_cast<int>(b % static_cast<std::size_t>(bricks_x_));
-  const int by = static_cast<int>(b / static_cast<std::size_t>(bricks_x_));
-  Result<TileCopy> v = TileCopy::read(p, p.tile(level, Layer::visibility, bx, by));
-  Result<TileCopy> t = v.ok() ? TileCopy::read(p, p.tile(level, Layer::tff, bx, by)) : Result<TileCopy>(v.status());
-  if (!t.ok()) {
+  TileCopy visibility, tff;
+  const Status read = LevelCopies::copy_brick(level_, b, visibility, tff);
+  if (!read.ok()) {
     slot_of_[b] = kUnreadable;
     ++failures_;
-    last_error_ = t.status();
+    last_error_ = read;
     return false;
   }
   std::size_t s = slots_.size();
@@ -46,39 +33,29 @@ bool CachedLevel::load(std::size_t b) const {
     s = static_cast<std::size_t>(
         std::min_element(slots_.begin(), slots_.end(), [](const Slot& a, const Slot& z) { return a.used < z.used; }) -
         slots_.begin());
-    const std::size_t old = slots_[s].brick;
-    slot_of_[old] = kUnread;
-    level_.visibility_[old] = nullptr;
-    level_.tff_tiles_[old] = nullptr;
+    slot_of_[slots_[s].brick] = kUnread;
+    LevelCopies::drop_brick(level_, slots_[s].brick, slots_[s].visibility, slots_[s].tff);
   } else {
     slots_.emplace_back();
   }
   Slot& slot = slots_[s];
   slot.brick = b;
   slot.used = ++clock_;
-  slot.visibility = std::move(*v);
-  slot.tff = std::move(*t);
-  level_.visibility_[b] = slot.visibility.data();
-  level_.tff_tiles_[b] = slot.tff.data();
+  slot.visibility = std::move(visibility);  // the pages, and the level's pointers into them, stay
+  slot.tff = std::move(tff);
   slot_of_[b] = static_cast<int>(s);
   return true;
 }
 
 std::uint64_t CachedLevel::bytes(const Pack& p, int level, int max_bricks) {
   const LevelEntry& e = p.level(level);
-  std::uint64_t total = 0, largest_brick = 0;
-  const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
-  for (int ty = 0; ty < hg.tiles_y; ++ty)
-    for (int tx = 0; tx < hg.tiles_x; ++tx) total += p.tile(level, Layer::height, tx, ty).bytes;
+  std::uint64_t largest_brick = 0;
   const TileGrid bg = tile_grid(Layer::visibility, e.nx, e.ny);
-  for (int by = 0; by < bg.tiles_y; ++by) {
-    for (int bx = 0; bx < bg.tiles_x; ++bx) {
-      largest_brick =
-          std::max<std::uint64_t>(largest_brick, std::uint64_t{p.tile(level, Layer::visibility, bx, by).bytes} +
-                                                     p.tile(level, Layer::tff, bx, by).bytes);
-    }
-  }
-  return total + largest_brick * static_cast<std::uint64_t>(std::min<std::int64_t>(max_bricks, bg.count()));
+  for (int by = 0; by < bg.tiles_y; ++by)
+    for (int bx = 0; bx < bg.tiles_x; ++bx)
+      largest_brick = std::max(largest_brick, LevelCopies::brick_footprint(p, level, bx, by));
+  return LevelCopies::heights_footprint(p, level) +
+         largest_brick * static_cast<std::uint64_t>(std::min<std::int64_t>(max_bricks, bg.count()));
 }
 
 }  // namespace visvol::storage

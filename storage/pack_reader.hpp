@@ -207,11 +207,10 @@ class PackLevel {
   int level() const { return level_; }
 
  private:
-  // Readers that hold copies of the tiles (read_tile) and point the level at
-  // them as they read them: the level with every tile pointer null, of a
-  // mapped or an inspected pack alike.
-  friend class ResidentPack;
-  friend class CachedLevel;
+  // Readers that hold copies of the tiles (read_tile) point the level at
+  // them as they read them (storage/tile_copy.hpp): the level with every tile
+  // pointer null, of a mapped or an inspected pack alike.
+  friend class LevelCopies;
   static Result<PackLevel> open_unset(std::shared_ptr<const Pack> pack, int level);
 
   // Values between one level of a brick column and the next.

@@ -130,7 +130,7 @@ Result<std::unique_ptr<ResidentPack>> ResidentPack::create(std::shared_ptr<const
 Status ResidentPack::init() {
   const int n = pack_->level_count();
   for (int l = 0; l < n; ++l) {
-    Result<PackLevel> level = PackLevel::open_unset(pack_, l);
+    Result<PackLevel> level = LevelCopies::unset(pack_, l);
     if (!level.ok()) return level.status();
     levels_.push_back(std::move(*level));
   }
@@ -140,10 +140,7 @@ Status ResidentPack::init() {
   std::uint64_t minimum = 0;
   for (int l = 0; l < n; ++l) {
     const LevelEntry& e = pack_->level(l);
-    const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
-    for (int ty = 0; ty < hg.tiles_y; ++ty)
-      for (int tx = 0; tx < hg.tiles_x; ++tx)
-        minimum += TileCopy::footprint(pack_->tile(l, Layer::height, tx, ty).bytes);
+    minimum += LevelCopies::heights_footprint(*pack_, l);
     auto s = std::make_unique<LevelState>();
     const TileGrid bg = tile_grid(Layer::visibility, e.nx, e.ny);
     s->bricks_x = bg.tiles_x;
@@ -154,9 +151,7 @@ Status ResidentPack::init() {
     s->target.assign(static_cast<std::size_t>(bg.count()), 0);
     for (int by = 0; by < bg.tiles_y; ++by) {
       for (int bx = 0; bx < bg.tiles_x; ++bx) {
-        const TileEntry* v = &pack_->tile(l, Layer::visibility, bx, by);
-        const TileEntry* t = &pack_->tile(l, Layer::tff, bx, by);
-        s->bricks.push_back({v, t, TileCopy::footprint(v->bytes) + TileCopy::footprint(t->bytes)});
+        s->bricks.push_back({LevelCopies::brick_footprint(*pack_, l, bx, by)});
         s->state[s->bricks.size() - 1].store(kAbsent, std::memory_order_relaxed);
         if (l == n - 1) minimum += s->bricks.back().bytes;
       }
@@ -184,16 +179,7 @@ Status ResidentPack::init() {
   }
   // copy and lock the minimum now
   for (int l = 0; l < n; ++l) {
-    const LevelEntry& e = pack_->level(l);
-    const TileGrid hg = tile_grid(Layer::height, e.nx, e.ny);
-    for (int ty = 0; ty < hg.tiles_y; ++ty) {
-      for (int tx = 0; tx < hg.tiles_x; ++tx) {
-        Result<TileCopy> c = copy(pack_->tile(l, Layer::height, tx, ty));
-        if (!c.ok()) return c.status();
-        levels_[static_cast<std::size_t>(l)].height_[static_cast<std::size_t>(ty * hg.tiles_x + tx)] = c->data();
-        heights_.push_back(std::move(*c));
-      }
-    }
+    VISVOL_RETURN_IF_ERROR(LevelCopies::copy_heights(levels_[static_cast<std::size_t>(l)], heights_, lock_copy()));
   }
   LevelState& coarsest = *state_.back();
   for (std::size_t b = 0; b < coarsest.bricks.size(); ++b) {
@@ -208,33 +194,25 @@ Status ResidentPack::init() {
 
 ResidentPack::~ResidentPack() { stop_pager(); }
 
-Result<TileCopy> ResidentPack::copy(const TileEntry& tile) {
-  Result<TileCopy> c = TileCopy::read(*pack_, tile);
-  if (!c.ok() || !config_.lock) return c;
-  const std::string why = c->lock();
-  if (!why.empty()) {
+// Each copy locked where asked; a copy that cannot be is counted and named.
+LevelCopies::Lock ResidentPack::lock_copy() {
+  if (!config_.lock) return {};
+  return [this](TileCopy& c, const TileEntry& tile) {
+    const std::string why = c.lock();
+    if (why.empty()) return;
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.lock_failures;
     stats_.last_error =
         Pack::describe(tile) + ": not locked (mlock: " + why + "); it stays resident while memory lasts";
-  }
-  return c;
+  };
 }
 
 // Before the brick is marked resident: the state's release store publishes
 // the pointers with the copies.
 Status ResidentPack::load_brick(int level, std::size_t b) {
   LevelState& s = *state_[static_cast<std::size_t>(level)];
-  Result<TileCopy> v = copy(*s.bricks[b].visibility);
-  if (!v.ok()) return v.status();
-  Result<TileCopy> t = copy(*s.bricks[b].tff);
-  if (!t.ok()) return t.status();
-  PackLevel& pl = levels_[static_cast<std::size_t>(level)];
-  pl.visibility_[b] = v->data();
-  pl.tff_tiles_[b] = t->data();
-  s.copies[2 * b] = std::move(*v);
-  s.copies[2 * b + 1] = std::move(*t);
-  return {};
+  return LevelCopies::copy_brick(levels_[static_cast<std::size_t>(level)], b, s.copies[2 * b], s.copies[2 * b + 1],
+                                 lock_copy());
 }
 
 void ResidentPack::drop_evicted() {
@@ -245,11 +223,7 @@ void ResidentPack::drop_evicted() {
 // After the brick was marked absent and the readers have passed it.
 void ResidentPack::drop_brick(int level, std::size_t b) {
   LevelState& s = *state_[static_cast<std::size_t>(level)];
-  PackLevel& pl = levels_[static_cast<std::size_t>(level)];
-  pl.visibility_[b] = nullptr;
-  pl.tff_tiles_[b] = nullptr;
-  s.copies[2 * b] = TileCopy();
-  s.copies[2 * b + 1] = TileCopy();
+  LevelCopies::drop_brick(levels_[static_cast<std::size_t>(level)], b, s.copies[2 * b], s.copies[2 * b + 1]);
 }
 
 bool ResidentPack::wait_for_readers() {

@@ -198,9 +198,7 @@ class ResidentPack {
 
  private:
   struct Brick {
-    const TileEntry* visibility;
-    const TileEntry* tff;
-    std::uint64_t bytes;
+    std::uint64_t bytes;  // of its copies (F_p and terrain force), whole pages
   };
   struct LevelState {
     int bricks_x = 0, bricks_y = 0;
@@ -214,7 +212,7 @@ class ResidentPack {
 
   ResidentPack(std::shared_ptr<const Pack> pack, const ResidentConfig& config);
   Status init();
-  Result<TileCopy> copy(const TileEntry& tile);     // read, checked, locked
+  LevelCopies::Lock lock_copy();                    // locks each copy where the config asks
   Status load_brick(int level, std::size_t brick);  // copies it and points the level at them
   void drop_brick(int level, std::size_t brick);
   bool wait_for_readers();

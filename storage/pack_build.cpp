@@ -8,7 +8,6 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "fields/pyramid.hpp"
 #include "fields/worker_pool.hpp"
 #include "io/json_text.hpp"
 #include "storage/pack_writer.hpp"
@@ -26,11 +25,12 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Height or area tiles of one level.
-Status write_2d(PackWriter& w, int level, Layer layer, const Heightfield& hf, const std::vector<float>& values) {
+// Height or area tiles of one level, tile rows [rows.first, rows.end).
+Status write_2d(TileSink& w, int level, Layer layer, const Heightfield& hf, const std::vector<float>& values,
+                TileRows rows) {
   const TileGrid g = tile_grid(layer, hf.nx, hf.ny);
   std::vector<float> tile(static_cast<std::size_t>(kTile2dPosts * kTile2dPosts));
-  for (int ty = 0; ty < g.tiles_y; ++ty) {
+  for (int ty = rows.first; ty < rows.end; ++ty) {
     for (int tx = 0; tx < g.tiles_x; ++tx) {
       std::fill(tile.begin(), tile.end(), 0.0f);
       for (int y = 0; y < kTile2dPosts; ++y) {
@@ -53,7 +53,7 @@ Status write_2d(PackWriter& w, int level, Layer layer, const Heightfield& hf, co
 // bricks as soon as it is complete.
 class BrickSink final : public fields::VolumeRowSink {
  public:
-  BrickSink(PackWriter& w, int level, int nx, int ny, int nz, VisibilityEncoding enc)
+  BrickSink(TileSink& w, std::size_t brick_bytes, int level, int nx, int ny, int nz, VisibilityEncoding enc)
       : w_(w),
         level_(level),
         nx_(nx),
@@ -62,7 +62,7 @@ class BrickSink final : public fields::VolumeRowSink {
         enc_(enc),
         band_(static_cast<std::size_t>(kBrickPosts) * static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx),
               0.0f),
-        brick_(w.payload_bytes(level, Layer::visibility)) {}
+        brick_(brick_bytes) {}
 
   Status write_row(int j, const float* values) override {
     const int y = j % kBrickPosts;
@@ -105,7 +105,7 @@ class BrickSink final : public fields::VolumeRowSink {
     return Status::ok_status();
   }
 
-  PackWriter& w_;
+  TileSink& w_;
   int level_, nx_, ny_, nz_;
   VisibilityEncoding enc_;
   std::vector<float> band_;          // kBrickPosts rows of nz x nx values
@@ -117,15 +117,15 @@ std::int16_t to_centimetres(float metres) {
   return static_cast<std::int16_t>(std::clamp(cm, -32767.0, 32767.0));
 }
 
-// Terrain force field bricks of one level, band by band.
-Status write_tff(PackWriter& w, int level, const Heightfield& hf, const fields::TffParams& p,
-                 fields::WorkerPool& pool) {
+// Terrain force field bricks of one level, brick rows [rows.first, rows.end).
+Status write_tff(TileSink& w, std::size_t brick_bytes, int level, const Heightfield& hf, const fields::TffParams& p,
+                 TileRows rows, fields::WorkerPool& pool) {
   const TileGrid g = tile_grid(Layer::tff, hf.nx, hf.ny);
   const std::size_t nx = static_cast<std::size_t>(hf.nx);
   const std::size_t levels = static_cast<std::size_t>(p.band_levels);
   std::vector<fields::TffSample> band(static_cast<std::size_t>(kBrickPosts) * levels * nx);
-  std::vector<std::int16_t> brick(w.payload_bytes(level, Layer::tff) / sizeof(std::int16_t));
-  for (int ty = 0; ty < g.tiles_y; ++ty) {
+  std::vector<std::int16_t> brick(brick_bytes / sizeof(std::int16_t));
+  for (int ty = rows.first; ty < rows.end; ++ty) {
     const int j0 = ty * kBrickPosts, j1 = std::min(hf.ny, j0 + kBrickPosts);
     fields::terrain_force_rows(hf, p, j0, j1, band.data(), &pool);
     for (int tx = 0; tx < g.tiles_x; ++tx) {
@@ -239,29 +239,38 @@ std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std:
 
 const char* tool_version() { return VISVOL_VERSION; }
 
-Status build_pack(const Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
-                  const std::string& out_path, const fields::ProgressFn& progress, PackBuildReport* report) {
-  const auto t0 = Clock::now();
+Status validate(const BuildShare& share) {
+  if (share.count >= 1 && share.index >= 0 && share.index < share.count) return Status::ok_status();
+  return invalid_argument("build share " + std::to_string(share.index) + " of " + std::to_string(share.count) +
+                          " is not one of 0.." + std::to_string(share.count - 1));
+}
+
+TileRows share_tile_rows(int tiles_y, BuildShare share) {
+  const auto at = [&](int i) {
+    return static_cast<int>(static_cast<std::int64_t>(tiles_y) * i / std::max(share.count, 1));
+  };
+  return {at(share.index), at(share.index + 1)};
+}
+
+Result<PackPlan> plan_pack(const Heightfield& hf, const PackBuildParams& params) {
   VISVOL_RETURN_IF_ERROR(fields::validate(params.tff));
   if (params.lod_levels < 1 || params.lod_levels > kMaxLodLevels) {
     return invalid_argument("levels of detail: " + std::to_string(params.lod_levels) + " is outside 1.." +
                             std::to_string(kMaxLodLevels));
   }
-  if (!source_json.empty() && !nlohmann::json::accept(source_json)) {
-    return invalid_argument("pack source description is not valid JSON");
-  }
+  PackPlan plan;
   Result<std::vector<fields::LodInput>> inputs = fields::lod_inputs(hf, params.field, params.lod_levels);
   if (!inputs.ok()) return inputs.status();
+  plan.inputs = std::move(*inputs);
   // Check every level's memory plan before writing anything.
-  for (const fields::LodInput& in : *inputs) {
-    Result<fields::BuildPlan> plan = fields::plan_visibility_build(in.terrain, in.params);
-    if (!plan.ok()) return plan.status();
+  for (const fields::LodInput& in : plan.inputs) {
+    Result<fields::BuildPlan> memory = fields::plan_visibility_build(in.terrain, in.params);
+    if (!memory.ok()) return memory.status();
   }
-  PackLayout layout;
-  layout.encoding = params.encoding;
-  layout.band_levels = params.tff.band_levels;
-  layout.band_offset_m = params.tff.band_offset_m;
-  for (const fields::LodInput& in : *inputs) {
+  plan.layout.encoding = params.encoding;
+  plan.layout.band_levels = params.tff.band_levels;
+  plan.layout.band_offset_m = params.tff.band_offset_m;
+  for (const fields::LodInput& in : plan.inputs) {
     const fields::VolumeGeometry g = fields::volume_geometry(in.terrain, in.params);
     LevelEntry e{};
     e.nx = g.nx;
@@ -273,45 +282,89 @@ Status build_pack(const Heightfield& hf, const PackBuildParams& params, const st
     e.origin_y = g.origin_y;
     e.z0_m = g.z0_m;
     e.dz_m = g.dz_m;
-    layout.levels.push_back(e);
+    plan.layout.levels.push_back(e);
   }
   Result<PlanningBounds> planning =
-      planning_bounds_for(fields::volume_geometry(inputs->front().terrain, inputs->front().params), params);
+      planning_bounds_for(fields::volume_geometry(plan.inputs.front().terrain, plan.inputs.front().params), params);
   if (!planning.ok()) return planning.status();
-  Result<std::unique_ptr<PackWriter>> writer = PackWriter::create(out_path, layout);
-  if (!writer.ok()) return writer.status();
-  PackWriter& w = **writer;
+  plan.planning = *planning;
+  return plan;
+}
 
+Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, BuildShare share, TileSink& sink,
+                        const fields::ProgressFn& progress, PackBuildReport* report) {
+  const auto t0 = Clock::now();
+  VISVOL_RETURN_IF_ERROR(validate(share));
+  Result<TilePlacement> placement = place_tiles(plan.layout);  // the tiles' sizes
+  if (!placement.ok()) return placement.status();
   // Progress: the field is most of the work; the terrain force field the rest.
   double total = 0, done = 0;
-  for (const fields::LodInput& in : *inputs) total += static_cast<double>(in.terrain.size());
+  for (const fields::LodInput& in : plan.inputs) total += static_cast<double>(in.terrain.size());
   fields::WorkerPool pool(params.field.threads);
   PackBuildReport local;
-  for (std::size_t l = 0; l < inputs->size(); ++l) {
-    const fields::LodInput& in = (*inputs)[l];
+  for (std::size_t l = 0; l < plan.inputs.size(); ++l) {
+    const fields::LodInput& in = plan.inputs[l];
+    const Heightfield& t = in.terrain;
     const int level = static_cast<int>(l);
-    const double share = static_cast<double>(in.terrain.size()) / total;
-    VISVOL_RETURN_IF_ERROR(write_2d(w, level, Layer::height, in.terrain, in.terrain.height_m));
-    VISVOL_RETURN_IF_ERROR(write_2d(w, level, Layer::area, in.terrain, fields::area_factor(in.terrain)));
-    BrickSink sink(w, level, in.terrain.nx, in.terrain.ny, in.params.nz, params.encoding);
+    const double share_of_total = static_cast<double>(t.size()) / total;
+    const TileRows flat = share_tile_rows(tile_grid(Layer::height, t.nx, t.ny).tiles_y, share);
+    const TileRows bricks = share_tile_rows(tile_grid(Layer::visibility, t.nx, t.ny).tiles_y, share);
+    if (flat.first < flat.end) {
+      VISVOL_RETURN_IF_ERROR(write_2d(sink, level, Layer::height, t, t.height_m, flat));
+      VISVOL_RETURN_IF_ERROR(write_2d(sink, level, Layer::area, t, fields::area_factor(t), flat));
+    }
     fields::BuildStats stats;
-    Status st = fields::build_visibility(
-        in.terrain, in.params, sink,
-        [&](double f) {
-          if (progress) progress(done + share * 0.9 * f);
-        },
-        &stats);
-    if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
+    if (bricks.first < bricks.end) {
+      BrickSink bricks_out(sink, placement->payload_bytes(level, Layer::visibility), level, t.nx, t.ny, in.params.nz,
+                           params.encoding);
+      const fields::RowBand rows{bricks.first * kBrickPosts, std::min(t.ny, bricks.end * kBrickPosts)};
+      Status st = fields::build_visibility_rows(
+          t, in.params, rows, bricks_out,
+          [&](double f) {
+            if (progress) progress(done + share_of_total * 0.9 * f);
+          },
+          &stats);
+      if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
+      const auto t_tff = Clock::now();
+      VISVOL_RETURN_IF_ERROR(
+          write_tff(sink, placement->payload_bytes(level, Layer::tff), level, t, params.tff, bricks, pool));
+      local.tff_s += seconds_since(t_tff);
+    }
     local.levels.push_back(stats);
-    const auto t_tff = Clock::now();
-    VISVOL_RETURN_IF_ERROR(write_tff(w, level, in.terrain, params.tff, pool));
-    local.tff_s += seconds_since(t_tff);
-    done += share;
+    done += share_of_total;
     if (progress) progress(done);
   }
-  VISVOL_RETURN_IF_ERROR(w.finish(metadata(hf, params, source_json, *inputs, *planning)));
+  local.planning = plan.planning;
+  local.wall_s = seconds_since(t0);
+  if (report) *report = local;
+  return Status::ok_status();
+}
+
+Result<std::string> pack_metadata(const Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
+                                  const PackPlan& plan) {
+  if (!source_json.empty() && !nlohmann::json::accept(source_json)) {
+    return invalid_argument("pack source description is not valid JSON");
+  }
+  return metadata(hf, params, source_json, plan.inputs, plan.planning);
+}
+
+Status build_pack(const Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
+                  const std::string& out_path, const fields::ProgressFn& progress, PackBuildReport* report) {
+  const auto t0 = Clock::now();
+  if (!source_json.empty() && !nlohmann::json::accept(source_json)) {
+    return invalid_argument("pack source description is not valid JSON");
+  }
+  Result<PackPlan> plan = plan_pack(hf, params);
+  if (!plan.ok()) return plan.status();
+  Result<std::unique_ptr<PackWriter>> writer = PackWriter::create(out_path, plan->layout);
+  if (!writer.ok()) return writer.status();
+  PackWriter& w = **writer;
+  PackBuildReport local;
+  VISVOL_RETURN_IF_ERROR(build_pack_share(*plan, params, BuildShare{}, w, progress, &local));
+  Result<std::string> meta = pack_metadata(hf, params, source_json, *plan);
+  if (!meta.ok()) return meta.status();
+  VISVOL_RETURN_IF_ERROR(w.finish(*meta));
   local.file_bytes = w.file_bytes();
-  local.planning = *planning;
   local.planning.recorded = true;
   local.wall_s = seconds_since(t0);
   if (report) *report = local;

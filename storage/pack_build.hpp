@@ -3,6 +3,11 @@
 // tile to a PackWriter. Working memory is one band of 16 rows of the field
 // plus the builder's own window: a field far larger than memory is fine.
 //
+// A build may be split among processes (visvol-build-mpi): each builds a
+// share of every level's rows into its own tiles, and one of them writes the
+// tables. The pack is the same byte for byte however it is split (every tile
+// is built from the whole terrain; F_p's sums are integers).
+//
 // Offline only (threads, blocking I/O).
 #pragma once
 
@@ -14,9 +19,11 @@
 #include "base/status.hpp"
 #include "fields/field_params.hpp"
 #include "fields/heightfield.hpp"
+#include "fields/pyramid.hpp"
 #include "fields/terrain_force.hpp"
 #include "fields/visibility_builder.hpp"
 #include "storage/pack_format.hpp"
+#include "storage/pack_writer.hpp"
 #include "storage/planning_bounds.hpp"
 
 namespace visvol::storage {
@@ -49,5 +56,43 @@ const char* tool_version();
 Status build_pack(const fields::Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
                   const std::string& out_path, const fields::ProgressFn& progress = {},
                   PackBuildReport* report = nullptr);
+
+// The pieces of build_pack, for a build split among processes.
+
+// Everything a build decides before its first tile: the levels of detail, the
+// pack's layout and its planning bounds. Refuses what build_pack refuses
+// (parameters, memory plans, empty planning bounds) before anything is written.
+struct PackPlan {
+  std::vector<fields::LodInput> inputs;
+  PackLayout layout;
+  PlanningBounds planning;
+};
+Result<PackPlan> plan_pack(const fields::Heightfield& hf, const PackBuildParams& params);
+
+// Share `index` of a build split `count` ways: its band of each level's tile
+// rows (16-row bricks of F_p and the terrain force field, 64-row height and
+// area tiles), about equal numbers of them. {0, 1} is the whole pack; the
+// shares 0..count-1 together write every tile once.
+struct BuildShare {
+  int index = 0;
+  int count = 1;
+};
+Status validate(const BuildShare& share);
+
+// Tile rows [first, end) of a layer `tiles_y` rows high that a share builds
+// (empty when there are fewer rows than shares).
+struct TileRows {
+  int first = 0, end = 0;
+};
+TileRows share_tile_rows(int tiles_y, BuildShare share);
+
+// Builds one share's tiles into `sink` (a PackWriter of plan.layout, or one
+// that writes at its placement). `report` gets this share's figures.
+Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, BuildShare share, TileSink& sink,
+                        const fields::ProgressFn& progress = {}, PackBuildReport* report = nullptr);
+
+// The pack's metadata (JSON): `source_json` must be a JSON object or empty.
+Result<std::string> pack_metadata(const fields::Heightfield& hf, const PackBuildParams& params,
+                                  const std::string& source_json, const PackPlan& plan);
 
 }  // namespace visvol::storage

@@ -51,34 +51,40 @@ Status validate(const PackLayout& layout) {
   return Status::ok_status();
 }
 
-PackWriter::PackWriter(OutputFile out, PackLayout layout)
-    : out_(std::move(out)), path_(out_.path()), layout_(std::move(layout)) {}
-
-PackWriter::~PackWriter() = default;  // out_ removes an unfinished temporary
-
-Status PackWriter::fail(Status status) {
-  out_.discard();
-  return status;
+std::size_t TilePlacement::payload_bytes(int level, Layer layer) const {
+  return tile_payload_bytes(layer, layout.levels[static_cast<std::size_t>(level)].nz, layout.encoding,
+                            layout.band_levels);
 }
 
-std::size_t PackWriter::payload_bytes(int level, Layer layer) const {
-  return tile_payload_bytes(layer, layout_.levels[static_cast<std::size_t>(level)].nz, layout_.encoding,
-                            layout_.band_levels);
+Result<std::size_t> TilePlacement::find(int level, Layer layer, int tx, int ty, std::size_t bytes) const {
+  if (level < 0 || level >= static_cast<int>(layout.levels.size())) {
+    return invalid_argument("no level " + std::to_string(level));
+  }
+  const LevelEntry& e = layout.levels[static_cast<std::size_t>(level)];
+  const TileGrid g = tile_grid(layer, e.nx, e.ny);
+  if (tx < 0 || ty < 0 || tx >= g.tiles_x || ty >= g.tiles_y) {
+    return invalid_argument("no " + std::string(to_string(layer)) + " tile (" + std::to_string(tx) + ", " +
+                            std::to_string(ty) + ") at level " + std::to_string(level));
+  }
+  if (bytes != payload_bytes(level, layer)) {
+    return invalid_argument(std::string(to_string(layer)) + " tile of " + std::to_string(bytes) + " bytes, expected " +
+                            std::to_string(payload_bytes(level, layer)));
+  }
+  return static_cast<std::size_t>(e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny));
 }
 
-Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout) {
+Result<TilePlacement> place_tiles(PackLayout layout) {
   VISVOL_RETURN_IF_ERROR(validate(layout));
-  Result<OutputFile> out = OutputFile::create(path);
-  if (!out.ok()) return out.status();
-  std::unique_ptr<PackWriter> w(new PackWriter(std::move(out).value(), std::move(layout)));
-  // Every tile's place: level, layer, ty, tx order, each on its own pages.
+  TilePlacement p;
+  p.layout = std::move(layout);
+  // level, layer, ty, tx order, each tile on its own pages
   std::uint64_t offset = kPageBytes;  // after the header
-  for (std::size_t l = 0; l < w->layout_.levels.size(); ++l) {
-    LevelEntry& level = w->layout_.levels[l];
-    level.first_tile = w->tiles_.size();
+  for (std::size_t l = 0; l < p.layout.levels.size(); ++l) {
+    LevelEntry& level = p.layout.levels[l];
+    level.first_tile = p.tiles.size();
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const TileGrid g = tile_grid(static_cast<Layer>(layer), level.nx, level.ny);
-      const std::size_t bytes = round_up_to_page(w->payload_bytes(static_cast<int>(l), static_cast<Layer>(layer)));
+      const std::size_t bytes = round_up_to_page(p.payload_bytes(static_cast<int>(l), static_cast<Layer>(layer)));
       for (int ty = 0; ty < g.tiles_y; ++ty) {
         for (int tx = 0; tx < g.tiles_x; ++tx) {
           TileEntry t{};
@@ -88,53 +94,67 @@ Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, 
           t.layer = static_cast<std::uint16_t>(layer);
           t.tx = static_cast<std::uint16_t>(tx);
           t.ty = static_cast<std::uint16_t>(ty);
-          w->tiles_.push_back(t);
+          p.tiles.push_back(t);
           offset += bytes;
         }
       }
     }
   }
-  w->written_.assign(w->tiles_.size(), 0);
-  w->tables_offset_ = offset;
-  return w;
+  p.tables_offset = offset;
+  return p;
+}
+
+PackWriter::PackWriter(OutputFile out, TilePlacement placement)
+    : out_(std::move(out)), path_(out_.path()), placement_(std::move(placement)) {
+  written_.assign(placement_.tiles.size(), 0);
+}
+
+PackWriter::~PackWriter() = default;  // out_ removes an unfinished temporary
+
+Status PackWriter::fail(Status status) {
+  out_.discard();
+  return status;
+}
+
+Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout) {
+  Result<TilePlacement> placement = place_tiles(std::move(layout));
+  if (!placement.ok()) return placement.status();
+  Result<OutputFile> out = OutputFile::create(path);
+  if (!out.ok()) return out.status();
+  return std::unique_ptr<PackWriter>(new PackWriter(std::move(out).value(), std::move(placement).value()));
 }
 
 Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void* payload, std::size_t bytes) {
   if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
-  if (level < 0 || level >= static_cast<int>(layout_.levels.size())) {
-    return invalid_argument(path_ + ": no level " + std::to_string(level));
+  const Result<std::size_t> index = placement_.find(level, layer, tx, ty, bytes);
+  if (!index.ok()) return invalid_argument(path_ + ": " + index.status().message());
+  TileEntry& t = placement_.tiles[*index];
+  const Result<std::uint32_t> crc = store_tile(
+      t, payload, bytes, [&](const void* data, std::size_t n, std::uint64_t at) { return out_.write_at(data, n, at); });
+  if (!crc.ok()) return crc.status();
+  t.crc32c = *crc;
+  written_[*index] = 1;
+  return Status::ok_status();
+}
+
+Status PackWriter::add_written_tile(std::size_t index, std::uint32_t crc32c) {
+  if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
+  if (index >= placement_.tiles.size()) {
+    return invalid_argument(path_ + ": no tile " + std::to_string(index) + " (the pack has " +
+                            std::to_string(placement_.tiles.size()) + ")");
   }
-  const LevelEntry& e = layout_.levels[static_cast<std::size_t>(level)];
-  const TileGrid g = tile_grid(layer, e.nx, e.ny);
-  if (tx < 0 || ty < 0 || tx >= g.tiles_x || ty >= g.tiles_y) {
-    return invalid_argument(path_ + ": no " + to_string(layer) + " tile (" + std::to_string(tx) + ", " +
-                            std::to_string(ty) + ") at level " + std::to_string(level));
-  }
-  if (bytes != payload_bytes(level, layer)) {
-    return invalid_argument(path_ + ": " + to_string(layer) + " tile of " + std::to_string(bytes) +
-                            " bytes, expected " + std::to_string(payload_bytes(level, layer)));
-  }
-  const std::size_t index = static_cast<std::size_t>(e.first_tile + tile_index_in_level(layer, tx, ty, e.nx, e.ny));
-  TileEntry& t = tiles_[index];
-  // The page padding is zeros: checksum the whole tile as stored.
-  std::uint32_t crc = crc32c(payload, bytes);
-  const std::size_t pad = t.bytes - bytes;
-  if (pad > 0) {
-    static const std::uint8_t zeros[kPageBytes] = {};
-    crc = crc32c(zeros, pad, crc);
-    VISVOL_RETURN_IF_ERROR(out_.write_at(zeros, pad, t.offset + bytes));
-  }
-  VISVOL_RETURN_IF_ERROR(out_.write_at(payload, bytes, t.offset));
-  t.crc32c = crc;
+  placement_.tiles[index].crc32c = crc32c;
   written_[index] = 1;
   return Status::ok_status();
 }
 
 Status PackWriter::finish(const std::string& metadata_json) {
   if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
-  for (std::size_t n = 0; n < tiles_.size(); ++n) {
+  const std::vector<TileEntry>& tiles = placement_.tiles;
+  const std::vector<LevelEntry>& levels = placement_.layout.levels;
+  for (std::size_t n = 0; n < tiles.size(); ++n) {
     if (!written_[n]) {
-      const TileEntry& t = tiles_[n];
+      const TileEntry& t = tiles[n];
       return fail(Status(Errc::state, path_ + ": " + to_string(static_cast<Layer>(t.layer)) + " tile (" +
                                           std::to_string(t.tx) + ", " + std::to_string(t.ty) + ") of level " +
                                           std::to_string(t.level) + " was never written"));
@@ -150,30 +170,31 @@ Status PackWriter::finish(const std::string& metadata_json) {
     const auto* b = static_cast<const std::uint8_t*>(p);
     tables.insert(tables.end(), b, b + n);
   };
-  append(layout_.levels.data(), layout_.levels.size() * sizeof(LevelEntry));
-  append(tiles_.data(), tiles_.size() * sizeof(TileEntry));
+  append(levels.data(), levels.size() * sizeof(LevelEntry));
+  append(tiles.data(), tiles.size() * sizeof(TileEntry));
   append(metadata_json.data(), metadata_json.size());
-  VISVOL_RETURN_IF_ERROR(out_.write_at(tables.data(), tables.size(), tables_offset_));
+  const std::uint64_t tables_offset = placement_.tables_offset;
+  VISVOL_RETURN_IF_ERROR(out_.write_at(tables.data(), tables.size(), tables_offset));
 
   PackHeader h{};
   std::memcpy(h.magic, kPackMagic, sizeof h.magic);
   h.version = kPackVersion;
   h.header_bytes = sizeof(PackHeader);
   h.page_bytes = kPageBytes;
-  h.level_count = static_cast<std::uint32_t>(layout_.levels.size());
-  h.level_table_offset = tables_offset_;
+  h.level_count = static_cast<std::uint32_t>(levels.size());
+  h.level_table_offset = tables_offset;
   h.level_entry_bytes = sizeof(LevelEntry);
   h.tile_entry_bytes = sizeof(TileEntry);
-  h.tile_table_offset = tables_offset_ + layout_.levels.size() * sizeof(LevelEntry);
-  h.tile_count = tiles_.size();
-  h.metadata_offset = h.tile_table_offset + tiles_.size() * sizeof(TileEntry);
+  h.tile_table_offset = tables_offset + levels.size() * sizeof(LevelEntry);
+  h.tile_count = tiles.size();
+  h.metadata_offset = h.tile_table_offset + tiles.size() * sizeof(TileEntry);
   h.metadata_bytes = metadata_json.size();
   h.file_bytes = h.metadata_offset + h.metadata_bytes;
   h.tile2d_posts = kTile2dPosts;
   h.brick_posts = kBrickPosts;
-  h.visibility_encoding = static_cast<std::uint32_t>(layout_.encoding);
-  h.band_levels = static_cast<std::uint32_t>(layout_.band_levels);
-  h.band_offset_m = layout_.band_offset_m;
+  h.visibility_encoding = static_cast<std::uint32_t>(placement_.layout.encoding);
+  h.band_levels = static_cast<std::uint32_t>(placement_.layout.band_levels);
+  h.band_offset_m = placement_.layout.band_offset_m;
   h.tables_crc32c = crc32c(tables.data(), tables.size());
   h.header_crc32c = crc32c(&h, offsetof(PackHeader, header_crc32c));
   VISVOL_RETURN_IF_ERROR(out_.write_at(&h, sizeof h, 0));

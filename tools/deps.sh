@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages a visvol command needs: only the missing ones,
 # quietly, and nothing at all when everything is present.
-#   tools/deps.sh SET...   with SET one of: build storage dds render hil (= can vm) can vm fuzz lint tidy rt all
+#   tools/deps.sh SET...   with SET one of: build storage dds render hil (= can vm) can vm fuzz lint tidy rt mpi all
 set -euo pipefail
 
 build_packages=(
@@ -28,6 +28,7 @@ fuzz_packages=(clang libclang-rt-14-dev)            # libFuzzer targets
 lint_packages=(clang-format)                        # the format check (tools/check_format.sh)
 tidy_packages=(clang-tidy)                          # tools/check_tidy.sh (not a test stage)
 rt_packages=(rt-tests)                              # cyclictest, beside the executive benchmark
+mpi_packages=(openmpi-bin libopenmpi-dev)           # visvol-build-mpi: mpirun, MPI and MPI-IO
 
 wanted=()
 for set in "${@:-build}"; do
@@ -43,11 +44,12 @@ for set in "${@:-build}"; do
     lint) wanted+=("${lint_packages[@]}") ;;
     tidy) wanted+=("${tidy_packages[@]}") ;;
     rt) wanted+=("${rt_packages[@]}") ;;
+    mpi) wanted+=("${mpi_packages[@]}") ;;
     all) wanted+=("${build_packages[@]}" "${storage_packages[@]}" "${dds_packages[@]}"
                   "${render_packages[@]}" "${can_packages[@]}" "${vm_packages[@]}" "${fuzz_packages[@]}"
-                  "${lint_packages[@]}" "${tidy_packages[@]}" "${rt_packages[@]}") ;;
+                  "${lint_packages[@]}" "${tidy_packages[@]}" "${rt_packages[@]}" "${mpi_packages[@]}") ;;
     *) echo "tools/deps.sh: unknown package set '$set'" \
-            "(known: build storage dds render hil can vm fuzz lint tidy rt all)" >&2
+            "(known: build storage dds render hil can vm fuzz lint tidy rt mpi all)" >&2
        exit 2 ;;
   esac
 done

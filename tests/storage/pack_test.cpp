@@ -1,3 +1,4 @@
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -471,6 +472,116 @@ TEST(PackBuild, RefusesBadParametersBeforeWriting) {
   EXPECT_FALSE(build_pack(hf, p, "", path).ok());
   EXPECT_FALSE(build_pack(hf, small_params(), "{not json", path).ok());
   EXPECT_NE(access(path.c_str(), F_OK), 0);
+}
+
+// Another process's writes into the writer's temporary: its own descriptor,
+// pwrite at the placement's offsets, the checksums handed over at the end.
+class ForeignSink final : public TileSink {
+ public:
+  ForeignSink(const TilePlacement& placement, const std::string& path)
+      : placement_(placement), fd_(::open(path.c_str(), O_WRONLY | O_NOFOLLOW | O_CLOEXEC)) {}
+  ~ForeignSink() override { ::close(fd_); }
+  Status write_tile(int level, Layer layer, int tx, int ty, const void* payload, std::size_t bytes) override {
+    const Result<std::size_t> index = placement_.find(level, layer, tx, ty, bytes);
+    if (!index.ok()) return index.status();
+    const Result<std::uint32_t> crc =
+        store_tile(placement_.tiles[*index], payload, bytes, [&](const void* data, std::size_t n, std::uint64_t at) {
+          return ::pwrite(fd_, data, n, static_cast<off_t>(at)) == static_cast<ssize_t>(n)
+                     ? Status::ok_status()
+                     : Status(Errc::output, "pwrite failed");
+        });
+    if (!crc.ok()) return crc.status();
+    written.emplace_back(*index, *crc);
+    return Status::ok_status();
+  }
+  std::vector<std::pair<std::size_t, std::uint32_t>> written;
+
+ private:
+  const TilePlacement& placement_;
+  int fd_;
+};
+
+// The file with its metadata's build time blanked (a split build ends at another second).
+std::vector<char> without_build_time(const std::string& path) {
+  std::vector<char> bytes = read_file(path);
+  const Result<std::shared_ptr<const Pack>> pack = Pack::open(path);
+  EXPECT_TRUE(pack.ok());
+  if (!pack.ok()) return bytes;
+  const std::string key = "\"created_utc\": \"";
+  const std::size_t meta = (*pack)->header().metadata_offset;
+  const std::string& json = (*pack)->metadata().json;
+  const std::size_t at = json.find(key);
+  EXPECT_NE(at, std::string::npos);
+  for (std::size_t n = at + key.size(); n < json.size() && json[n] != '"'; ++n) bytes[meta + n] = 'T';
+  // and the two checksums that cover it
+  std::memset(&bytes[offsetof(PackHeader, tables_crc32c)], 0, 4);
+  std::memset(&bytes[offsetof(PackHeader, header_crc32c)], 0, 4);
+  return bytes;
+}
+
+TEST(PackBuild, ABuildSplitIntoSharesIsTheWholeBuildByteForByte) {
+  // 70 rows: 5 brick rows and 2 height-tile rows at level 0, 3 and 1 at
+  // level 1: shares with none, one or several rows of each.
+  const Heightfield hf = fractal(70, 8);
+  PackBuildParams p = small_params();
+  p.field.range_posts = 12;  // a share's rows need observers of its neighbours' rows
+  const std::string whole = temp_path("whole"), split = temp_path("split");
+  ASSERT_TRUE(build_pack(hf, p, R"({"path":"fractal"})", whole).ok());
+  for (const int count : {2, 3, 7}) {
+    Result<PackPlan> plan = plan_pack(hf, p);
+    ASSERT_TRUE(plan.ok()) << plan.status().message();
+    Result<std::unique_ptr<PackWriter>> w = PackWriter::create(split, plan->layout);
+    ASSERT_TRUE(w.ok());
+    // share 0 through the writer, the others as other processes would
+    ASSERT_TRUE(build_pack_share(*plan, p, BuildShare{0, count}, **w).ok());
+    for (int index = 1; index < count; ++index) {
+      ForeignSink other((*w)->placement(), (*w)->write_path());
+      ASSERT_TRUE(build_pack_share(*plan, p, BuildShare{index, count}, other).ok());
+      for (const auto& [tile, crc] : other.written) ASSERT_TRUE((*w)->add_written_tile(tile, crc).ok());
+    }
+    Result<std::string> meta = pack_metadata(hf, p, R"({"path":"fractal"})", *plan);
+    ASSERT_TRUE(meta.ok());
+    ASSERT_TRUE((*w)->finish(*meta).ok());
+    EXPECT_TRUE(without_build_time(split) == without_build_time(whole)) << count << " shares";
+    const Result<std::shared_ptr<const Pack>> pack = Pack::open(split);
+    ASSERT_TRUE(pack.ok());
+    EXPECT_TRUE((*pack)->verify().ok());
+  }
+  std::remove(whole.c_str());
+  std::remove(split.c_str());
+}
+
+TEST(PackBuild, AShareLeftOutIsNamedAndNothingIsWritten) {
+  const Heightfield hf = fractal(40, 2);
+  const PackBuildParams p = small_params();
+  const std::string path = temp_path("share_left_out");
+  Result<PackPlan> plan = plan_pack(hf, p);
+  ASSERT_TRUE(plan.ok());
+  Result<std::unique_ptr<PackWriter>> w = PackWriter::create(path, plan->layout);
+  ASSERT_TRUE(w.ok());
+  ASSERT_TRUE(build_pack_share(*plan, p, BuildShare{0, 2}, **w).ok());
+  const Status st = (*w)->finish("{}");
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("was never written"), std::string::npos) << st.message();
+  EXPECT_NE(access(path.c_str(), F_OK), 0);
+  EXPECT_FALSE(build_pack_share(*plan, p, BuildShare{2, 2}, **w).ok());
+  EXPECT_FALSE(build_pack_share(*plan, p, BuildShare{0, 0}, **w).ok());
+  EXPECT_FALSE((*w)->add_written_tile(plan->layout.levels.size() * 1000000, 0).ok());
+}
+
+TEST(PackBuild, SharesCoverEveryTileRowOnce) {
+  for (const int rows : {0, 1, 5, 64, 1251}) {
+    for (const int count : {1, 2, 3, 7, 64}) {
+      int next = 0;
+      for (int index = 0; index < count; ++index) {
+        const TileRows r = share_tile_rows(rows, BuildShare{index, count});
+        EXPECT_EQ(r.first, next);
+        EXPECT_LE(r.end - r.first, rows / count + 1);
+        next = r.end;
+      }
+      EXPECT_EQ(next, rows);
+    }
+  }
 }
 
 TEST(PackReader, MissingFileNamesIt) {

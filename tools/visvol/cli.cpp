@@ -9,11 +9,16 @@
 
 namespace visvol::cli {
 
-int fail(const std::string& command, const Status& status) {
-  std::fprintf(stderr, "visvol %s: %s\n", command.c_str(), status.message().c_str());
+int exit_code(const Status& status) {
+  if (status.ok()) return kExitOk;
   const bool input = status.code() == Errc::invalid_argument || status.code() == Errc::io ||
                      status.code() == Errc::corrupt || status.code() == Errc::unsupported;
   return input ? kExitUsage : kExitFailure;
+}
+
+int fail(const std::string& command, const Status& status) {
+  std::fprintf(stderr, "visvol %s: %s\n", command.c_str(), status.message().c_str());
+  return exit_code(status);
 }
 
 Status write_text_file(const std::string& path, const std::string& text) { return write_file_atomically(path, text); }

@@ -14,8 +14,10 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitUsage = 2;
 
-// Prints "visvol <command>: <message>" on stderr and returns the exit status for
-// the status: 2 for bad arguments or input, 1 otherwise.
+// The exit status for a status: 0 ok, 2 bad arguments or input, 1 otherwise.
+int exit_code(const Status& status);
+
+// Prints "visvol <command>: <message>" on stderr and returns exit_code(status).
 int fail(const std::string& command, const Status& status);
 
 // Writes a small text file whole or not at all (temporary file, fsync, rename).

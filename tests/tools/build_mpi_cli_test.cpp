@@ -1,0 +1,197 @@
+// visvol-build-mpi under mpirun on this machine (2 and 3 ranks, shared memory
+// and loopback only): the pack of `visvol build`, byte for byte; a killed rank
+// or bad input leaves no pack; bad input exits 2 naming it.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <dirent.h>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli_runner.hpp"
+#include "storage/pack_format.hpp"
+#include "storage/pack_reader.hpp"
+
+namespace visvol {
+namespace {
+
+using test::Outcome;
+
+// Shared memory between the ranks, loopback for mpirun's own traffic.
+const std::string kMpirun = std::string(VISVOL_MPIEXEC) +
+                            " --oversubscribe --allow-run-as-root --mca btl self,vader --mca oob_tcp_if_include lo";
+
+Outcome run(const std::string& cmd) {
+  const std::string dir = ::testing::TempDir();
+  const std::string out = dir + "/mpi_out_" + std::to_string(getpid()),
+                    err = dir + "/mpi_err_" + std::to_string(getpid());
+  const int rc = std::system((cmd + " </dev/null >" + out + " 2>" + err).c_str());
+  Outcome r;
+  r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  r.out = test::slurp(out);
+  r.err = test::slurp(err);
+  std::remove(out.c_str());
+  std::remove(err.c_str());
+  return r;
+}
+
+Outcome build_mpi(int ranks, const std::string& args) {
+  return run(kMpirun + " -np " + std::to_string(ranks) + " " + VISVOL_BUILD_MPI_BIN + " " + args);
+}
+
+std::string temp(const std::string& stem) {
+  return ::testing::TempDir() + "/" + stem + "_" + std::to_string(getpid()) + ".vvp";
+}
+
+std::vector<char> read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+// The pack's bytes with its build time and the two checksums over it blanked.
+std::vector<char> without_build_time(const std::string& path) {
+  std::vector<char> bytes = read_bytes(path);
+  const Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path);
+  EXPECT_TRUE(pack.ok()) << path;
+  if (!pack.ok()) return {};
+  const std::string key = "\"created_utc\": \"";
+  const std::string& json = (*pack)->metadata().json;
+  const std::size_t at = json.find(key), meta = (*pack)->header().metadata_offset;
+  EXPECT_NE(at, std::string::npos);
+  for (std::size_t n = at + key.size(); n < json.size() && json[n] != '"'; ++n) bytes[meta + n] = 'T';
+  std::memset(&bytes[offsetof(storage::PackHeader, tables_crc32c)], 0, 4);
+  std::memset(&bytes[offsetof(storage::PackHeader, header_crc32c)], 0, 4);
+  return bytes;
+}
+
+// Files next to `path` whose names start with its own (temporaries).
+std::vector<std::string> leftovers(const std::string& path) {
+  const std::string dir = path.substr(0, path.rfind('/')), stem = path.substr(path.rfind('/') + 1);
+  std::vector<std::string> found;
+  if (DIR* d = ::opendir(dir.c_str())) {
+    while (const dirent* e = ::readdir(d)) {
+      const std::string name = e->d_name;
+      if (name.rfind(stem + ".tmp", 0) == 0) found.push_back(name);
+    }
+    ::closedir(d);
+  }
+  return found;
+}
+
+TEST(BuildMpi, TwoAndThreeRanksWriteTheSingleProcessPackByteForByte) {
+  const std::string one = temp("mpi_one"), many = temp("mpi_many");
+  // 40 x 40 posts: level 0 has 3 rows of bricks and 1 of height tiles, so
+  // some ranks build no height tiles and rows straddle the ranks' bands.
+  const std::string options = test::kDem + " " + test::kSmallPackOptions;
+  const Outcome single = test::visvol("build " + options + " -o " + one);
+  ASSERT_EQ(single.status, 0) << single.err;
+  for (const int ranks : {2, 3}) {
+    const Outcome r = build_mpi(ranks, options + " -o " + many);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("on " + std::to_string(ranks) + " ranks"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("MiB written"), std::string::npos) << r.out;  // the per-rank table
+    EXPECT_TRUE(without_build_time(many) == without_build_time(one)) << ranks << " ranks";
+    const Outcome verified = test::visvol("verify " + many);
+    EXPECT_EQ(verified.status, 0) << verified.err;
+    std::remove(many.c_str());
+  }
+  std::remove(one.c_str());
+}
+
+// The pid of the rank `rank` of a running visvol-build-mpi job (from the
+// environment mpirun gives it), or -1.
+pid_t rank_pid(int rank) {
+  const std::string want = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
+  DIR* proc = ::opendir("/proc");
+  pid_t found = -1;
+  while (const dirent* e = proc ? ::readdir(proc) : nullptr) {
+    const pid_t pid = static_cast<pid_t>(std::atoi(e->d_name));
+    if (pid <= 0) continue;
+    const std::string cmdline = test::slurp("/proc/" + std::to_string(pid) + "/cmdline");
+    if (cmdline.find("visvol-build-mpi") == std::string::npos) continue;
+    const std::string env = test::slurp("/proc/" + std::to_string(pid) + "/environ");
+    std::size_t at = 0;
+    for (std::size_t end; (end = env.find('\0', at)) != std::string::npos; at = end + 1) {
+      if (env.compare(at, end - at, want) == 0) found = pid;
+    }
+  }
+  if (proc) ::closedir(proc);
+  return found;
+}
+
+TEST(BuildMpi, AKilledRankFailsTheJobAndLeavesTheOldPack) {
+  const std::string path = temp("mpi_killed");
+  const Outcome first = test::visvol("build " + test::kDem + " " + test::kSmallPackOptions + " -o " + path);
+  ASSERT_EQ(first.status, 0) << first.err;
+  const std::vector<char> before = read_bytes(path);
+  // the whole DEM at 64 levels: a few seconds a rank
+  const std::string cmd = kMpirun + " -np 2 " + VISVOL_BUILD_MPI_BIN + " " + test::kDem +
+                          " --fill-nodata --range 24 --levels 64 --lod 2 -o " + path;
+  const std::string err = ::testing::TempDir() + "/mpi_killed_err_" + std::to_string(getpid());
+  const pid_t job = fork();
+  if (job == 0) {
+    ::execl("/bin/sh", "sh", "-c", (cmd + " >/dev/null 2>" + err).c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // kill rank 1 once the build's temporary exists (the tiles are being written)
+  pid_t victim = -1;
+  for (int i = 0; i < 400 && victim < 0; ++i) {
+    if (!leftovers(path).empty()) victim = rank_pid(1);
+    if (victim < 0) ::usleep(25 * 1000);
+  }
+  ASSERT_GT(victim, 0) << "rank 1 never started";
+  ::kill(victim, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(::waitpid(job, &status, 0), job);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_NE(WEXITSTATUS(status), 0);
+  const std::string said = test::slurp(err);
+  std::remove(err.c_str());
+  EXPECT_NE(said.find("rank 1"), std::string::npos) << said;
+  EXPECT_NE(said.find("signal 9"), std::string::npos) << said;
+  EXPECT_TRUE(read_bytes(path) == before);  // the old pack, untouched
+  for (int i = 0; i < 100 && !leftovers(path).empty(); ++i) ::usleep(20 * 1000);
+  EXPECT_TRUE(leftovers(path).empty()) << leftovers(path).front();
+  std::remove(path.c_str());
+}
+
+TEST(BuildMpi, BadInputExitsTwoNamingItAndWritesNothing) {
+  const std::string path = temp("mpi_bad");
+  Outcome r = build_mpi(2, test::kDem + " " + test::kSmallPackOptions + " --range -3 -o " + path);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("range"), std::string::npos) << r.err;
+  r = build_mpi(2, "/nonexistent/dem.tif -o " + path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("/nonexistent/dem.tif"), std::string::npos) << r.err;
+  r = build_mpi(2, test::kDem + " " + test::kSmallPackOptions);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--output"), std::string::npos) << r.err;
+  EXPECT_NE(::access(path.c_str(), F_OK), 0);
+  // an output that is a link: refused, its target untouched
+  const std::string target = temp("mpi_link_target");
+  std::ofstream(target) << "keep";
+  ASSERT_EQ(::symlink(target.c_str(), path.c_str()), 0);
+  r = build_mpi(2, test::kDem + " " + test::kSmallPackOptions + " -o " + path);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(test::slurp(target), "keep");
+  EXPECT_TRUE(leftovers(path).empty());
+  std::remove(path.c_str());
+  std::remove(target.c_str());
+}
+
+TEST(BuildMpi, HelpNamesTheLauncherAndEveryBuildOption) {
+  const Outcome r = run(std::string(VISVOL_BUILD_MPI_BIN) + " --help");
+  EXPECT_EQ(r.status, 0) << r.err;
+  for (const char* word : {"mpirun", "--output", "--range", "--lod", "--threads", "--area", "--fill-nodata"}) {
+    EXPECT_NE(r.out.find(word), std::string::npos) << word;
+  }
+}
+
+}  // namespace
+}  // namespace visvol

@@ -1,0 +1,49 @@
+// The few collective steps visvol-build-mpi takes, over one communicator,
+// with visvol's Status for errors. MPI calls are collective: every rank of
+// the communicator makes each call, in the same order.
+#pragma once
+
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "base/status.hpp"
+#include "fields/heightfield.hpp"
+
+namespace visvol::cli {
+
+std::string mpi_error_text(int code);
+
+struct Comm {
+  explicit Comm(MPI_Comm c);
+  MPI_Comm comm;
+  int rank = 0, size = 1;
+
+  // Every rank's status combined: ok when all are, otherwise the status of
+  // the lowest rank that failed (its message prefixed with the rank when
+  // that is not rank 0), the same on every rank.
+  Status agree(const Status& local) const;
+
+  // Rank 0's value on every rank; the bytes sent to the other ranks.
+  double broadcast(std::string& text) const;
+  double broadcast(std::vector<float>& values) const;
+  double broadcast(fields::Heightfield& terrain) const;
+
+  // Every rank's values on rank 0, in rank order (empty elsewhere); rank 0
+  // adds the bytes it received to `*received_bytes`. Counts are MPI ints: a
+  // pack's tiles (about 2^24 for the largest grid) fit.
+  std::vector<std::uint64_t> gather(const std::vector<std::uint64_t>& values, double* received_bytes) const;
+  std::vector<std::uint32_t> gather(const std::vector<std::uint32_t>& values, double* received_bytes) const;
+  std::vector<double> gather(const std::vector<double>& values, double* received_bytes) const;
+};
+
+// Opens `path` (made by rank 0, shared by all) for writing on every rank,
+// refusing anything but a regular file (a link planted in its place) on
+// any rank before any opens it.
+Status open_for_writing(const Comm& world, const std::string& path, MPI_File* file);
+// Collective: every rank's writes are done and flushed when it returns.
+Status close_file(MPI_File* file, const std::string& path);
+
+}  // namespace visvol::cli

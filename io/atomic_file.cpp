@@ -322,6 +322,18 @@ Result<OutputFile> OutputFile::create_for_library(const std::string& path) {
   return f;
 }
 
+Result<OutputFile> OutputFile::create_shared(const std::string& path) {
+  Result<OutputFile> f = create_for_library(path);
+  if (!f.ok()) return f;
+  f->fd_ = ::open(f->write_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (f->fd_ < 0) {
+    const int e = errno;
+    f->discard();
+    return creation_error(e, path, f->write_path_);
+  }
+  return f;
+}
+
 OutputFile::OutputFile(OutputFile&& other) noexcept { *this = std::move(other); }
 
 OutputFile& OutputFile::operator=(OutputFile&& other) noexcept {

@@ -38,6 +38,12 @@ class OutputFile {
   // fd() is -1.
   static Result<OutputFile> create_for_library(const std::string& path);
 
+  // For a file other processes of this user write too, opening it by name
+  // (visvol-build-mpi's ranks): the file is made, open (fd()), at write_path()
+  // inside such a private directory, where nobody else can put a link or
+  // another file in its place.
+  static Result<OutputFile> create_shared(const std::string& path);
+
   OutputFile(OutputFile&& other) noexcept;
   OutputFile& operator=(OutputFile&& other) noexcept;
   OutputFile(const OutputFile&) = delete;

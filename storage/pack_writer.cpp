@@ -117,9 +117,17 @@ Status PackWriter::fail(Status status) {
 }
 
 Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout) {
+  return create(path, std::move(layout), false);
+}
+
+Result<std::unique_ptr<PackWriter>> PackWriter::create_shared(const std::string& path, PackLayout layout) {
+  return create(path, std::move(layout), true);
+}
+
+Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, PackLayout layout, bool shared) {
   Result<TilePlacement> placement = place_tiles(std::move(layout));
   if (!placement.ok()) return placement.status();
-  Result<OutputFile> out = OutputFile::create(path);
+  Result<OutputFile> out = shared ? OutputFile::create_shared(path) : OutputFile::create(path);
   if (!out.ok()) return out.status();
   return std::unique_ptr<PackWriter>(new PackWriter(std::move(out).value(), std::move(placement).value()));
 }

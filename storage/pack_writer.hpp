@@ -64,6 +64,9 @@ class TileSink {
 class PackWriter final : public TileSink {
  public:
   static Result<std::unique_ptr<PackWriter>> create(const std::string& path, PackLayout layout);
+  // The same, its temporary in a private directory (OutputFile::create_shared)
+  // for other processes of the build to open by name and write their tiles.
+  static Result<std::unique_ptr<PackWriter>> create_shared(const std::string& path, PackLayout layout);
   ~PackWriter();
   PackWriter(const PackWriter&) = delete;
   PackWriter& operator=(const PackWriter&) = delete;
@@ -91,6 +94,7 @@ class PackWriter final : public TileSink {
 
  private:
   PackWriter(OutputFile out, TilePlacement placement);
+  static Result<std::unique_ptr<PackWriter>> create(const std::string& path, PackLayout layout, bool shared);
   Status fail(Status status);
 
   OutputFile out_;  // the temporary until finish() renames it

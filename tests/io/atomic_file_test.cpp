@@ -147,6 +147,30 @@ TEST_F(AtomicFile, ALibraryWritesInsideAPrivateDirectoryThenItIsRenamed) {
   EXPECT_FALSE(exists(own_temp(out)));
 }
 
+TEST_F(AtomicFile, ASharedFileIsOpenInsideAPrivateDirectoryThenRenamedOrRemoved) {
+  const std::string out = dir_ + "/pack.vvp";
+  write_text(out, "old");
+  for (const bool keep : {false, true}) {
+    {
+      Result<OutputFile> f = OutputFile::create_shared(out);
+      ASSERT_TRUE(f.ok()) << f.status().message();
+      ASSERT_GE(f->fd(), 0);
+      EXPECT_EQ(type_of(own_temp(out)), S_IFDIR);
+      EXPECT_EQ(f->write_path(), own_temp(out) + "/pack.vvp");
+      EXPECT_EQ(type_of(f->write_path()), S_IFREG);
+      struct stat st {};
+      ASSERT_EQ(::stat(own_temp(out).c_str(), &st), 0);
+      EXPECT_EQ(st.st_mode & 0777, 0700u);
+      ASSERT_TRUE(f->write_at("shared", 6, 0).ok());
+      if (keep) {
+        ASSERT_TRUE(f->commit().ok());
+      }
+    }  // dropped, committed or not
+    EXPECT_EQ(read_text(out), keep ? "shared" : "old");
+    EXPECT_FALSE(exists(own_temp(out)));
+  }
+}
+
 TEST_F(AtomicFile, StaleTemporariesOfDeadProcessesAreSweptThoseOfLiveOnesKept) {
   const std::string out = dir_ + "/sf.vvp", victim = dir_ + "/victim";
   const std::string dead = out + ".tmp." + std::to_string(dead_pid());

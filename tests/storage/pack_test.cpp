@@ -14,6 +14,7 @@
 #include "../fields/terrains.hpp"
 #include "fields/pyramid.hpp"
 #include "fields/sampler.hpp"
+#include "pack_bytes.hpp"
 #include "storage/crc32c.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
@@ -24,6 +25,7 @@ namespace {
 
 using namespace visvol::fields::testing;
 using fields::Heightfield;
+using testing::without_build_time;
 
 std::string temp_path(const std::string& stem) {
   return ::testing::TempDir() + "/" + stem + "_" + std::to_string(::getpid()) + ".vvp";
@@ -501,24 +503,6 @@ class ForeignSink final : public TileSink {
   int fd_;
 };
 
-// The file with its metadata's build time blanked (a split build ends at another second).
-std::vector<char> without_build_time(const std::string& path) {
-  std::vector<char> bytes = read_file(path);
-  const Result<std::shared_ptr<const Pack>> pack = Pack::open(path);
-  EXPECT_TRUE(pack.ok());
-  if (!pack.ok()) return bytes;
-  const std::string key = "\"created_utc\": \"";
-  const std::size_t meta = (*pack)->header().metadata_offset;
-  const std::string& json = (*pack)->metadata().json;
-  const std::size_t at = json.find(key);
-  EXPECT_NE(at, std::string::npos);
-  for (std::size_t n = at + key.size(); n < json.size() && json[n] != '"'; ++n) bytes[meta + n] = 'T';
-  // and the two checksums that cover it
-  std::memset(&bytes[offsetof(PackHeader, tables_crc32c)], 0, 4);
-  std::memset(&bytes[offsetof(PackHeader, header_crc32c)], 0, 4);
-  return bytes;
-}
-
 TEST(PackBuild, ABuildSplitIntoSharesIsTheWholeBuildByteForByte) {
   // 70 rows: 5 brick rows and 2 height-tile rows at level 0, 3 and 1 at
   // level 1: shares with none, one or several rows of each.
@@ -530,7 +514,7 @@ TEST(PackBuild, ABuildSplitIntoSharesIsTheWholeBuildByteForByte) {
   for (const int count : {2, 3, 7}) {
     Result<PackPlan> plan = plan_pack(hf, p);
     ASSERT_TRUE(plan.ok()) << plan.status().message();
-    Result<std::unique_ptr<PackWriter>> w = PackWriter::create(split, plan->layout);
+    Result<std::unique_ptr<PackWriter>> w = PackWriter::create_shared(split, plan->layout);
     ASSERT_TRUE(w.ok());
     // share 0 through the writer, the others as other processes would
     ASSERT_TRUE(build_pack_share(*plan, p, BuildShare{0, count}, **w).ok());
@@ -564,9 +548,15 @@ TEST(PackBuild, AShareLeftOutIsNamedAndNothingIsWritten) {
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.message().find("was never written"), std::string::npos) << st.message();
   EXPECT_NE(access(path.c_str(), F_OK), 0);
-  EXPECT_FALSE(build_pack_share(*plan, p, BuildShare{2, 2}, **w).ok());
-  EXPECT_FALSE(build_pack_share(*plan, p, BuildShare{0, 0}, **w).ok());
-  EXPECT_FALSE((*w)->add_written_tile(plan->layout.levels.size() * 1000000, 0).ok());
+  Result<std::unique_ptr<PackWriter>> fresh = PackWriter::create(path, plan->layout);
+  ASSERT_TRUE(fresh.ok());
+  EXPECT_FALSE(build_pack_share(*plan, p, BuildShare{2, 2}, **fresh).ok());
+  EXPECT_FALSE(build_pack_share(*plan, p, BuildShare{0, 0}, **fresh).ok());
+  const std::size_t tiles = (*fresh)->placement().tiles.size();
+  const Status st2 = (*fresh)->add_written_tile(tiles, 0);
+  EXPECT_EQ(st2.code(), Errc::invalid_argument);
+  EXPECT_NE(st2.message().find("no tile " + std::to_string(tiles)), std::string::npos) << st2.message();
+  EXPECT_TRUE((*fresh)->add_written_tile(tiles - 1, 0).ok());
 }
 
 TEST(PackBuild, SharesCoverEveryTileRowOnce) {

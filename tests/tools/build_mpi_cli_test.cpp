@@ -14,13 +14,14 @@
 #include <string>
 #include <vector>
 
+#include "../storage/pack_bytes.hpp"
 #include "cli_runner.hpp"
-#include "storage/pack_format.hpp"
-#include "storage/pack_reader.hpp"
 
 namespace visvol {
 namespace {
 
+using storage::testing::read_bytes;
+using storage::testing::without_build_time;
 using test::Outcome;
 
 // Shared memory between the ranks, loopback for mpirun's own traffic.
@@ -47,27 +48,6 @@ Outcome build_mpi(int ranks, const std::string& args) {
 
 std::string temp(const std::string& stem) {
   return ::testing::TempDir() + "/" + stem + "_" + std::to_string(getpid()) + ".vvp";
-}
-
-std::vector<char> read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-// The pack's bytes with its build time and the two checksums over it blanked.
-std::vector<char> without_build_time(const std::string& path) {
-  std::vector<char> bytes = read_bytes(path);
-  const Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path);
-  EXPECT_TRUE(pack.ok()) << path;
-  if (!pack.ok()) return {};
-  const std::string key = "\"created_utc\": \"";
-  const std::string& json = (*pack)->metadata().json;
-  const std::size_t at = json.find(key), meta = (*pack)->header().metadata_offset;
-  EXPECT_NE(at, std::string::npos);
-  for (std::size_t n = at + key.size(); n < json.size() && json[n] != '"'; ++n) bytes[meta + n] = 'T';
-  std::memset(&bytes[offsetof(storage::PackHeader, tables_crc32c)], 0, 4);
-  std::memset(&bytes[offsetof(storage::PackHeader, header_crc32c)], 0, 4);
-  return bytes;
 }
 
 // Files next to `path` whose names start with its own (temporaries).
@@ -104,15 +84,30 @@ TEST(BuildMpi, TwoAndThreeRanksWriteTheSingleProcessPackByteForByte) {
   std::remove(one.c_str());
 }
 
-// The pid of the rank `rank` of a running visvol-build-mpi job (from the
-// environment mpirun gives it), or -1.
-pid_t rank_pid(int rank) {
+pid_t parent_of(pid_t pid) {
+  const std::string stat = test::slurp("/proc/" + std::to_string(pid) + "/stat");
+  const std::size_t close = stat.rfind(')');  // the name may hold spaces
+  int ppid = -1;
+  if (close != std::string::npos) std::sscanf(stat.c_str() + close + 1, " %*c %d", &ppid);
+  return static_cast<pid_t>(ppid);
+}
+
+bool descends_from(pid_t pid, pid_t ancestor) {
+  for (int depth = 0; pid > 1 && depth < 16; ++depth, pid = parent_of(pid)) {
+    if (pid == ancestor) return true;
+  }
+  return false;
+}
+
+// The pid of rank `rank` of the visvol-build-mpi job started as `job` (from
+// the environment mpirun gives its ranks), or -1.
+pid_t rank_pid(pid_t job, int rank) {
   const std::string want = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
   DIR* proc = ::opendir("/proc");
   pid_t found = -1;
   while (const dirent* e = proc ? ::readdir(proc) : nullptr) {
     const pid_t pid = static_cast<pid_t>(std::atoi(e->d_name));
-    if (pid <= 0) continue;
+    if (pid <= 0 || !descends_from(pid, job)) continue;
     const std::string cmdline = test::slurp("/proc/" + std::to_string(pid) + "/cmdline");
     if (cmdline.find("visvol-build-mpi") == std::string::npos) continue;
     const std::string env = test::slurp("/proc/" + std::to_string(pid) + "/environ");
@@ -125,6 +120,51 @@ pid_t rank_pid(int rank) {
   return found;
 }
 
+// A job in its own process group, ended with the group whatever the test's outcome.
+struct Job {
+  pid_t pid = -1;
+  explicit Job(const std::string& cmd) {
+    pid = ::fork();
+    if (pid == 0) {
+      ::setpgid(0, 0);
+      ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::setpgid(pid, pid);
+  }
+  ~Job() {
+    if (pid <= 0) return;
+    ::kill(-pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+  }
+  int wait() {
+    int status = 0;
+    const pid_t done = ::waitpid(pid, &status, 0);
+    pid = -1;
+    return done > 0 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+};
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string all;
+  for (const std::string& n : names) all += n + " ";
+  return all;
+}
+
+TEST(BuildMpi, TheGivenPlanningMarginReachesEveryRank) {
+  // a range wider than half the 40-post crop: only --planning-margin leaves bounds
+  const std::string one = temp("mpi_margin_one"), many = temp("mpi_margin_many");
+  const std::string options = test::kDem + " " + test::kCrop +
+                              " --levels 16 --range 24 --lod 1 --tff-offset 60 --tff-levels 6 --planning-margin 150";
+  const Outcome single = test::visvol("build " + options + " -o " + one);
+  ASSERT_EQ(single.status, 0) << single.err;
+  const Outcome r = build_mpi(2, options + " -o " + many);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(without_build_time(many) == without_build_time(one));
+  std::remove(one.c_str());
+  std::remove(many.c_str());
+}
+
 TEST(BuildMpi, AKilledRankFailsTheJobAndLeavesTheOldPack) {
   const std::string path = temp("mpi_killed");
   const Outcome first = test::visvol("build " + test::kDem + " " + test::kSmallPackOptions + " -o " + path);
@@ -134,30 +174,24 @@ TEST(BuildMpi, AKilledRankFailsTheJobAndLeavesTheOldPack) {
   const std::string cmd = kMpirun + " -np 2 " + VISVOL_BUILD_MPI_BIN + " " + test::kDem +
                           " --fill-nodata --range 24 --levels 64 --lod 2 -o " + path;
   const std::string err = ::testing::TempDir() + "/mpi_killed_err_" + std::to_string(getpid());
-  const pid_t job = fork();
-  if (job == 0) {
-    ::execl("/bin/sh", "sh", "-c", (cmd + " >/dev/null 2>" + err).c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  Job job(cmd + " >/dev/null 2>" + err);
   // kill rank 1 once the build's temporary exists (the tiles are being written)
   pid_t victim = -1;
   for (int i = 0; i < 400 && victim < 0; ++i) {
-    if (!leftovers(path).empty()) victim = rank_pid(1);
+    if (!leftovers(path).empty()) victim = rank_pid(job.pid, 1);
     if (victim < 0) ::usleep(25 * 1000);
   }
   ASSERT_GT(victim, 0) << "rank 1 never started";
   ::kill(victim, SIGKILL);
-  int status = 0;
-  ASSERT_EQ(::waitpid(job, &status, 0), job);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_NE(WEXITSTATUS(status), 0);
+  const int status = job.wait();
+  EXPECT_NE(status, 0);
   const std::string said = test::slurp(err);
   std::remove(err.c_str());
   EXPECT_NE(said.find("rank 1"), std::string::npos) << said;
   EXPECT_NE(said.find("signal 9"), std::string::npos) << said;
   EXPECT_TRUE(read_bytes(path) == before);  // the old pack, untouched
   for (int i = 0; i < 100 && !leftovers(path).empty(); ++i) ::usleep(20 * 1000);
-  EXPECT_TRUE(leftovers(path).empty()) << leftovers(path).front();
+  EXPECT_TRUE(leftovers(path).empty()) << joined(leftovers(path));
   std::remove(path.c_str());
 }
 

@@ -18,17 +18,19 @@
 //
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
 #include <mpi.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include <sched.h>
 
 #include <CLI/CLI.hpp>
+
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <memory>
 #include <new>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -75,7 +77,7 @@ class MpiTileSink final : public storage::TileSink {
     return Status::ok_status();
   }
 
-  std::vector<std::uint64_t> indices;    // of the tiles written, in placement order
+  std::vector<std::uint64_t> indices;    // of the tiles written (placement entries), in the order written
   std::vector<std::uint32_t> checksums;  // theirs
   std::uint64_t bytes_written = 0;
   double write_s = 0;
@@ -101,29 +103,39 @@ class MpiTileSink final : public storage::TileSink {
 };
 
 // One rank's figures, gathered to rank 0 for the report.
-struct RankFigures {
-  double fp_s = 0, hull_s = 0, scatter_s = 0, tff_s = 0, write_s = 0, share_s = 0, wait_s = 0;
-  double level0_rows = 0, hull_cells = 0, bytes_written = 0, tiles = 0, threads = 0;
+enum Figure : std::size_t {
+  kFpS,
+  kHullS,
+  kScatterS,
+  kTffS,
+  kWriteS,
+  kShareS,
+  kWaitS,
+  kLevel0Rows,
+  kTiles,
+  kMibWritten,
+  kThreads,
+  kFigureCount
 };
-constexpr int kFigureCount = sizeof(RankFigures) / sizeof(double);
-static_assert(sizeof(RankFigures) == kFigureCount * sizeof(double));
+using RankFigures = std::array<double, kFigureCount>;
 
-void print_ranks(const std::vector<RankFigures>& ranks, double exchanged_bytes, double exchange_s) {
+void print_ranks(const std::vector<double>& all, double exchanged_bytes, double exchange_s) {
   std::printf(
       "\nrank  threads  level-0 rows  F_p s   hull s  scatter s  tff s   write s  share s  wait s  tiles  "
       "MiB written\n");
-  for (std::size_t r = 0; r < ranks.size(); ++r) {
-    const RankFigures& f = ranks[r];
-    std::printf("%4zu  %7.0f  %12.0f  %6.2f  %6.2f  %9.2f  %6.2f  %7.2f  %7.2f  %6.2f  %5.0f  %11.1f\n", r, f.threads,
-                f.level0_rows, f.fp_s, f.hull_s, f.scatter_s, f.tff_s, f.write_s, f.share_s, f.wait_s, f.tiles,
-                f.bytes_written / (1024.0 * 1024.0));
+  for (std::size_t r = 0; r < all.size() / kFigureCount; ++r) {
+    const double* f = &all[r * kFigureCount];
+    std::printf("%4zu  %7.0f  %12.0f  %6.2f  %6.2f  %9.2f  %6.2f  %7.2f  %7.2f  %6.2f  %5.0f  %11.1f\n", r, f[kThreads],
+                f[kLevel0Rows], f[kFpS], f[kHullS], f[kScatterS], f[kTffS], f[kWriteS], f[kShareS], f[kWaitS],
+                f[kTiles], f[kMibWritten]);
   }
   std::printf("exchanged  %.2f MiB between ranks (terrain out, checksums and figures back) in %.2f s\n",
               exchanged_bytes / (1024.0 * 1024.0), exchange_s);
 }
 
-// Worker threads a rank takes for --threads 0: the cores of its node shared
-// among the ranks on that node.
+// Worker threads a rank takes for --threads 0: the cores it may run on
+// (mpirun may bind it to some), shared with the other ranks of its node
+// where it is not bound.
 int threads_per_rank(const Comm& world) {
   MPI_Comm node = MPI_COMM_NULL;
   MPI_Comm_split_type(world.comm, MPI_COMM_TYPE_SHARED, world.rank, MPI_INFO_NULL, &node);
@@ -133,27 +145,39 @@ int threads_per_rank(const Comm& world) {
     MPI_Comm_free(&node);
   }
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  const int usable = ::sched_getaffinity(0, sizeof allowed, &allowed) == 0 ? CPU_COUNT(&allowed) : cores;
+  if (usable < cores) return std::max(1, usable);  // bound: those cores are this rank's
   return std::max(1, cores / std::max(1, on_node));
 }
 
-// The job's rank that failed stops it: message first, then the abort (which
+// The rank that failed stops the job: message first, then the abort (which
 // makes mpirun end the others). Rank 0 drops its temporary before.
 [[noreturn]] void abort_job(const Comm& world, const Status& status, std::unique_ptr<storage::PackWriter>& writer) {
   std::fprintf(stderr, "visvol-build-mpi: rank %d of %d: %s\n", world.rank, world.size, status.message().c_str());
   std::fflush(stderr);
   writer.reset();  // removes the temporary (rank 0)
-  MPI_Abort(world.comm, status.code() == Errc::invalid_argument ? kExitUsage : kExitFailure);
+  MPI_Abort(world.comm, exit_code(status));
   std::_Exit(kExitFailure);  // MPI_Abort does not return
 }
 
-int run(const Comm& world, BuildOptions o) {
-  const auto t0 = Clock::now();
-  double exchange_s = 0, exchanged = 0;
-  if (o.threads == 0) o.threads = threads_per_rank(world);
+// Ends a run whose failure every rank agreed on: rank 0 says why.
+int agreed_failure(const Comm& world, const Status& status) {
+  return world.rank == 0 ? fail_here(status) : exit_code(status);
+}
 
-  // Rank 0 imports and checks; every rank then has its terrain and parameters.
-  PreparedBuild b;
+// Rank 0 imports and checks the DEM; every rank then has the terrain, the
+// field's and the pack's parameters and the plan, rank 0's exactly.
+struct Job {
+  PreparedBuild build;
+  storage::PackBuildParams params;
+  storage::PackPlan plan;
+  double exchanged_bytes = 0, exchange_s = 0;
+};
+Status prepare(const Comm& world, const BuildOptions& o, Job& job) {
   Status ready = Status::ok_status();
+  PreparedBuild& b = job.build;
   if (world.rank == 0) {
     Result<PreparedBuild> prepared = prepare_build(o);
     if (prepared.ok()) {
@@ -162,54 +186,87 @@ int run(const Comm& world, BuildOptions o) {
       ready = prepared.status();
     }
   }
-  auto t_x = Clock::now();
-  ready = world.agree(ready);
-  if (!ready.ok()) return world.rank == 0 ? fail_here(ready) : exit_code(ready);
-  exchanged += world.broadcast(b.terrain);
-  exchanged += world.broadcast(b.params.weights);
-  exchange_s += seconds_since(t_x);
+  VISVOL_RETURN_IF_ERROR(world.agree(ready));
+  const auto t0 = Clock::now();
+  job.exchanged_bytes += world.broadcast(b.terrain);
+  job.exchanged_bytes += world.broadcast(b.params.weights);
+  // the planning margin rank 0 decided (given, or the one an --area crop needs)
+  job.exchanged_bytes += world.broadcast(b.input.planning_margin_m);
+  job.exchange_s += seconds_since(t0);
   if (world.rank != 0) {
     Result<fields::FieldParams> params = make_params(o, b.terrain, &b.params.weights);
     ready = params.ok() ? Status::ok_status() : params.status();
     if (params.ok()) b.params = std::move(*params);
   }
-  ready = world.agree(ready);  // the same parameters as rank 0's
-  if (!ready.ok()) return world.rank == 0 ? fail_here(ready) : exit_code(ready);
+  VISVOL_RETURN_IF_ERROR(world.agree(ready));
+  job.params = pack_build_params(o, b);
+  Result<storage::PackPlan> plan = storage::plan_pack(b.terrain, job.params);
+  VISVOL_RETURN_IF_ERROR(world.agree(plan.ok() ? Status::ok_status() : plan.status()));
+  job.plan = std::move(*plan);
+  return Status::ok_status();
+}
 
-  const storage::PackBuildParams pp = pack_build_params(o, b);
-  Result<storage::PackPlan> plan = storage::plan_pack(b.terrain, pp);
-  ready = world.agree(plan.ok() ? Status::ok_status() : plan.status());
-  if (!ready.ok()) return world.rank == 0 ? fail_here(ready) : exit_code(ready);
+// This rank's figures.
+RankFigures figures_of(const Comm& world, const Job& job, const storage::PackBuildReport& report,
+                       const MpiTileSink& sink, int threads) {
+  RankFigures f{};
+  for (const fields::BuildStats& s : report.levels) {
+    f[kFpS] += s.wall_s;
+    f[kHullS] += s.hull_s;
+    f[kScatterS] += s.scatter_s;
+  }
+  const fields::Heightfield& t = job.build.terrain;
+  const storage::TileRows rows = storage::share_tile_rows(
+      storage::tile_grid(storage::Layer::visibility, t.nx, t.ny).tiles_y, storage::BuildShare{world.rank, world.size});
+  f[kLevel0Rows] = std::min(t.ny, rows.end * storage::kBrickPosts) - rows.first * storage::kBrickPosts;
+  f[kTffS] = report.tff_s;
+  f[kWriteS] = sink.write_s;
+  f[kTiles] = static_cast<double>(sink.indices.size());
+  f[kMibWritten] = static_cast<double>(sink.bytes_written) / (1024.0 * 1024.0);
+  f[kThreads] = threads;
+  return f;
+}
 
-  // Rank 0 makes the temporary (refusing links and planted files); every rank opens it by name.
+int run(const Comm& world, BuildOptions o) {
+  const auto t0 = Clock::now();
+  if (o.threads == 0) o.threads = threads_per_rank(world);
+  Job job;
+  if (const Status st = prepare(world, o, job); !st.ok()) return agreed_failure(world, st);
+
+  // Rank 0 makes the temporary in a private directory; every rank opens it by name.
   std::unique_ptr<storage::PackWriter> writer;
   std::string write_path;
+  Status made = Status::ok_status();
   if (world.rank == 0) {
-    Result<std::unique_ptr<storage::PackWriter>> w = storage::PackWriter::create(o.out, plan->layout);
+    Result<std::unique_ptr<storage::PackWriter>> w = storage::PackWriter::create_shared(o.out, job.plan.layout);
     if (w.ok()) {
       writer = std::move(*w);
       write_path = writer->write_path();
     } else {
-      ready = w.status();
+      made = w.status();
     }
   }
-  ready = world.agree(ready);
-  if (!ready.ok()) return world.rank == 0 ? fail_here(ready) : exit_code(ready);
-  exchanged += world.broadcast(write_path);
-  Result<storage::TilePlacement> placement = storage::place_tiles(plan->layout);
-  if (!placement.ok()) abort_job(world, placement.status(), writer);
+  if (const Status st = world.agree(made); !st.ok()) return agreed_failure(world, st);
+  job.exchanged_bytes += world.broadcast(write_path);
+  if (const Status st = world.agree(check_shared_file(write_path)); !st.ok()) return agreed_failure(world, st);
+  std::optional<storage::TilePlacement> own;  // rank 0 has the writer's
+  if (world.rank != 0) {
+    Result<storage::TilePlacement> placed = storage::place_tiles(job.plan.layout);
+    if (!placed.ok()) abort_job(world, placed.status(), writer);
+    own = std::move(*placed);
+  }
+  const storage::TilePlacement& placement = world.rank == 0 ? writer->placement() : *own;
   MPI_File file = MPI_FILE_NULL;
-  const Status opened = open_for_writing(world, write_path, &file);
-  if (!opened.ok()) abort_job(world, opened, writer);
+  if (const Status st = open_for_writing(world, write_path, &file); !st.ok()) abort_job(world, st, writer);
 
   // This rank's share.
-  MpiTileSink sink(*placement, file, write_path);
+  MpiTileSink sink(placement, file, write_path);
   storage::PackBuildReport report;
   {
     std::unique_ptr<Progress> progress;
     if (world.rank == 0) progress = std::make_unique<Progress>("building " + o.out + " (rank 0's share)");
     const Status built = storage::build_pack_share(
-        *plan, pp, storage::BuildShare{world.rank, world.size}, sink,
+        job.plan, job.params, storage::BuildShare{world.rank, world.size}, sink,
         [&](double f) {
           if (progress) progress->update(f);
         },
@@ -217,58 +274,36 @@ int run(const Comm& world, BuildOptions o) {
     if (!built.ok()) abort_job(world, built, writer);
     if (progress) progress->finish();
   }
-  const double share_s = seconds_since(t0);
+  RankFigures mine = figures_of(world, job, report, sink, o.threads);
+  mine[kShareS] = seconds_since(t0);
   const auto t_wait = Clock::now();
-  const Status closed = close_file(&file, write_path);  // collective: every rank's tiles are written
-  if (!closed.ok()) abort_job(world, closed, writer);
-  const double wait_s = seconds_since(t_wait);
+  if (const Status st = close_file(&file, write_path); !st.ok()) abort_job(world, st, writer);  // every rank's tiles
+  mine[kWaitS] = seconds_since(t_wait);
 
   // The checksums, gathered in rank order; rank 0 writes the tables.
-  t_x = Clock::now();
-  const std::vector<std::uint64_t> indices = world.gather(sink.indices, &exchanged);
-  const std::vector<std::uint32_t> checksums = world.gather(sink.checksums, &exchanged);
-  RankFigures mine;
-  for (const fields::BuildStats& s : report.levels) {
-    mine.fp_s += s.wall_s;
-    mine.hull_s += s.hull_s;
-    mine.scatter_s += s.scatter_s;
-    mine.hull_cells += static_cast<double>(s.hull_cells);
-  }
-  const storage::TileRows rows =
-      storage::share_tile_rows(storage::tile_grid(storage::Layer::visibility, b.terrain.nx, b.terrain.ny).tiles_y,
-                               storage::BuildShare{world.rank, world.size});
-  mine.level0_rows = std::min(b.terrain.ny, rows.end * storage::kBrickPosts) - rows.first * storage::kBrickPosts;
-  mine.tff_s = report.tff_s;
-  mine.write_s = sink.write_s;
-  mine.share_s = share_s;
-  mine.wait_s = wait_s;
-  mine.bytes_written = static_cast<double>(sink.bytes_written);
-  mine.tiles = static_cast<double>(sink.indices.size());
-  mine.threads = o.threads;
-  const std::vector<double> figures =
-      world.gather(std::vector<double>(&mine.fp_s, &mine.fp_s + kFigureCount), &exchanged);
-  exchange_s += seconds_since(t_x);
+  const auto t_x = Clock::now();
+  const std::vector<std::uint64_t> indices = world.gather(sink.indices, &job.exchanged_bytes);
+  const std::vector<std::uint32_t> checksums = world.gather(sink.checksums, &job.exchanged_bytes);
+  const std::vector<double> figures = world.gather(std::vector<double>(mine.begin(), mine.end()), &job.exchanged_bytes);
+  job.exchange_s += seconds_since(t_x);
   Status done = Status::ok_status();
   if (world.rank == 0) {
-    for (std::size_t n = 0; n < indices.size() && done.ok(); ++n)
+    for (std::size_t n = 0; n < indices.size() && done.ok(); ++n) {
       done = writer->add_written_tile(indices[n], checksums[n]);
-    Result<std::string> meta = storage::pack_metadata(b.terrain, pp, build_source_json(o, b), *plan);
+    }
+    Result<std::string> meta =
+        storage::pack_metadata(job.build.terrain, job.params, build_source_json(o, job.build), job.plan);
     if (done.ok()) done = meta.ok() ? writer->finish(*meta) : meta.status();
   }
-  done = world.agree(done);
-  if (!done.ok()) return world.rank == 0 ? fail_here(done) : exit_code(done);
+  if (const Status st = world.agree(done); !st.ok()) return agreed_failure(world, st);
   if (world.rank == 0) {
     report.file_bytes = writer->file_bytes();
     report.planning.recorded = true;
     report.wall_s = seconds_since(t0);
-    print_pack_summary(o, b, report);
+    print_pack_summary(o, job.build, report);
     std::printf("(the level times above are rank 0's share; every rank's below)\n");
-    std::vector<RankFigures> ranks(static_cast<std::size_t>(world.size));
-    for (std::size_t r = 0; r < ranks.size(); ++r) {
-      std::copy_n(&figures[r * kFigureCount], kFigureCount, &ranks[r].fp_s);
-    }
-    print_ranks(ranks, exchanged, exchange_s);
-    std::printf("total      %.2f s on %d ranks\n", report.wall_s, world.size);
+    print_ranks(figures, job.exchanged_bytes, job.exchange_s);
+    std::printf("total      %.2f s on %d rank%s\n", report.wall_s, world.size, world.size == 1 ? "" : "s");
   }
   return kExitOk;
 }

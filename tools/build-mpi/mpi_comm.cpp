@@ -71,7 +71,7 @@ Status Comm::agree(const Status& local) const {
   MPI_Bcast(&n, 1, MPI_UINT64_T, first, comm);
   message.resize(n);
   MPI_Bcast(message.data(), static_cast<int>(n), MPI_CHAR, first, comm);
-  if (first != 0) message = "rank " + std::to_string(first) + ": " + message;
+  if (first != 0) message = "rank " + std::to_string(first) + " of " + std::to_string(size) + ": " + message;
   return Status(static_cast<Errc>(code), message);
 }
 
@@ -100,27 +100,34 @@ double Comm::broadcast(fields::Heightfield& t) const {
   return static_cast<double>(sizeof grid + sizeof place) * (size - 1) + broadcast(t.crs_wkt) + broadcast(t.height_m);
 }
 
-std::vector<std::uint64_t> Comm::gather(const std::vector<std::uint64_t>& values, double* sent_bytes) const {
-  return gather_values(*this, values, MPI_UINT64_T, sent_bytes);
+double Comm::broadcast(std::optional<double>& value) const {
+  double v[2] = {value ? 1.0 : 0.0, value.value_or(0.0)};
+  MPI_Bcast(v, 2, MPI_DOUBLE, 0, comm);
+  value = v[0] != 0 ? std::optional<double>(v[1]) : std::nullopt;
+  return sizeof v * static_cast<double>(size - 1);
 }
-std::vector<std::uint32_t> Comm::gather(const std::vector<std::uint32_t>& values, double* sent_bytes) const {
-  return gather_values(*this, values, MPI_UINT32_T, sent_bytes);
+
+std::vector<std::uint64_t> Comm::gather(const std::vector<std::uint64_t>& values, double* received_bytes) const {
+  return gather_values(*this, values, MPI_UINT64_T, received_bytes);
 }
-std::vector<double> Comm::gather(const std::vector<double>& values, double* sent_bytes) const {
-  return gather_values(*this, values, MPI_DOUBLE, sent_bytes);
+std::vector<std::uint32_t> Comm::gather(const std::vector<std::uint32_t>& values, double* received_bytes) const {
+  return gather_values(*this, values, MPI_UINT32_T, received_bytes);
+}
+std::vector<double> Comm::gather(const std::vector<double>& values, double* received_bytes) const {
+  return gather_values(*this, values, MPI_DOUBLE, received_bytes);
+}
+
+Status check_shared_file(const std::string& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode)) return Status::ok_status();
+  return output_error(path +
+                      ": the build's temporary is not a regular file here (is the output's directory shared "
+                      "by every rank?)");
 }
 
 Status open_for_writing(const Comm& world, const std::string& path, MPI_File* file) {
-  // Rank 0 made it with O_EXCL|O_NOFOLLOW in the output's directory: only
-  // someone who may write there could put a link in its place since.
-  struct stat st {};
-  Status seen = Status::ok_status();
-  if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
-    seen = output_error(path +
-                        ": the build's temporary is not a regular file here (is the output's directory "
-                        "shared by every rank?)");
-  }
-  VISVOL_RETURN_IF_ERROR(world.agree(seen));  // every rank opens, or none
+  // Rank 0 made it inside a private directory (OutputFile::create_shared):
+  // nobody but this user can have put anything at that name.
   const int rc = MPI_File_open(world.comm, path.c_str(), MPI_MODE_WRONLY, MPI_INFO_NULL, file);
   if (rc != MPI_SUCCESS) return output_error(path + ": cannot open for writing: " + mpi_error_text(rc));
   return Status::ok_status();

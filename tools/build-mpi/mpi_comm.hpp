@@ -6,6 +6,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,7 +23,7 @@ struct Comm {
   int rank = 0, size = 1;
 
   // Every rank's status combined: ok when all are, otherwise the status of
-  // the lowest rank that failed (its message prefixed with the rank when
+  // the lowest rank that failed (its message prefixed "rank R of N: " when
   // that is not rank 0), the same on every rank.
   Status agree(const Status& local) const;
 
@@ -30,6 +31,7 @@ struct Comm {
   double broadcast(std::string& text) const;
   double broadcast(std::vector<float>& values) const;
   double broadcast(fields::Heightfield& terrain) const;
+  double broadcast(std::optional<double>& value) const;
 
   // Every rank's values on rank 0, in rank order (empty elsewhere); rank 0
   // adds the bytes it received to `*received_bytes`. Counts are MPI ints: a
@@ -39,9 +41,10 @@ struct Comm {
   std::vector<double> gather(const std::vector<double>& values, double* received_bytes) const;
 };
 
-// Opens `path` (made by rank 0, shared by all) for writing on every rank,
-// refusing anything but a regular file (a link planted in its place) on
-// any rank before any opens it.
+// Whether `path` (made by rank 0, shared by all) is a regular file here: a
+// rank that does not see it is on another file system.
+Status check_shared_file(const std::string& path);
+// Opens `path` for writing on every rank (collective).
 Status open_for_writing(const Comm& world, const std::string& path, MPI_File* file);
 // Collective: every rank's writes are done and flushed when it returns.
 Status close_file(MPI_File* file, const std::string& path);

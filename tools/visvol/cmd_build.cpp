@@ -1,10 +1,9 @@
 // visvol build DEM: the visibility field and its levels of detail, with a summary.
 #include <nlohmann/json.hpp>
 
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
-#include <optional>
 
 #include "build_cli.hpp"
 #include "cli.hpp"
@@ -12,10 +11,8 @@
 #include "fields/gdal/dem_io.hpp"
 #include "fields/pyramid.hpp"
 #include "fields/sampler.hpp"
-#include "import_cli.hpp"
 #include "io/json_text.hpp"
 #include "storage/pack_build.hpp"
-#include "storage/planning_bounds.hpp"
 
 namespace visvol::cli {
 

@@ -41,6 +41,10 @@ def main():
     p.add_argument("--link-gib-s", type=float, default=10.0, help="network bandwidth a rank (terrain broadcast)")
     p.add_argument("--threads", type=int, default=1, help="cores a rank (default 1)")
     p.add_argument("--ranks", type=int, nargs="+", default=[16, 64, 256])
+    p.add_argument("--split", choices=["rows", "observers"], default="rows",
+                   help="rows: today's bands, each rank computing the hulls of its halo again; observers: each "
+                        "hull once, the partial sums of the 2 x range rows beside a band sent to its neighbour "
+                        "(not built: the model of the next step)")
     a = p.parse_args()
 
     # the calibration run's work in interior observers (hull, scatter) and posts (terrain force field)
@@ -53,13 +57,16 @@ def main():
     bytes_per_post = a.nz * 2 + 24 * 4 * 2 + 8  # uint16 F_p, 24-sample terrain force band, height and area
 
     def rank_time(ranks):
-        hull = scatter = tff = write = 0.0
+        hull = scatter = tff = write = exchange = 0.0
         for level in range(a.lod):
             n = math.ceil(a.posts / 2 ** level)
             bricks = math.ceil(n / 16)
             rows = min(n, 16 * math.ceil(bricks / ranks))  # the busiest rank's rows
-            observers_rows = min(n, rows + (2 * a.range if ranks > 1 else 0))
+            halo = 2 * a.range if ranks > 1 and a.split == "rows" else 0
+            observers_rows = min(n, rows + halo)
             hull += observers_rows * n * hull_us
+            if ranks > 1 and a.split == "observers":  # int32 partial sums of (nz + 1) levels, both sides
+                exchange += 2 * min(n, a.range) * n * (a.nz + 1) * 4 / (a.link_gib_s * 2 ** 30)
             scatter += rows * n * scatter_us
             tff += rows * n * tff_us
             write += rows * n * bytes_per_post
@@ -70,21 +77,21 @@ def main():
             "scatter": scatter / cores / 1e6,
             "tff": tff / cores / 1e6,
             "write": write / (a.write_mib_s * 2 ** 20),
-            "broadcast": broadcast,
+            "broadcast": broadcast + exchange,
         }
 
     serial = sum(rank_time(1).values())
-    print(f"{a.posts} x {a.posts} x {a.nz} posts, {a.lod} levels of detail, range {a.range} posts, "
+    print(f"split by {a.split}: {a.posts} x {a.posts} x {a.nz} posts, {a.lod} levels of detail, range {a.range} posts, "
           f"{a.threads} core(s) a rank; interior hull {hull_us:.1f} us an observer, scatter {scatter_us:.1f} us, "
           f"terrain force field {tff_us:.1f} us a post; write {a.write_mib_s:.0f} MiB/s a rank, "
           f"broadcast {a.link_gib_s:.0f} GiB/s")
     print(f"one rank: {serial / 3600:.1f} h")
-    print("ranks  hull s  scatter s  tff s  write s  broadcast s  wall     efficiency  terrain a rank")
+    print("ranks  hull s  scatter s  tff s  write s  exchange s  wall     efficiency  terrain a rank")
     for ranks in a.ranks:
         t = rank_time(ranks)
         wall = sum(t.values())
         print(f"{ranks:5d}  {t['hull']:6.0f}  {t['scatter']:9.0f}  {t['tff']:5.0f}  {t['write']:7.0f}  "
-              f"{t['broadcast']:11.1f}  {wall / 60:5.1f} min  {serial / (ranks * wall):10.2f}  "
+              f"{t['broadcast']:10.1f}  {wall / 60:5.1f} min  {serial / (ranks * wall):10.2f}  "
               f"{(a.posts + 2 * a.range) ** 2 * 4 / 2 ** 30:.1f} GiB")
 
 

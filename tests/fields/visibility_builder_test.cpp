@@ -207,6 +207,47 @@ TEST(VisibilityField, ABandOfRowsIsTheWholeBuildsRows) {
   EXPECT_TRUE(sink.order.empty());
 }
 
+// The parameters with a memory limit that leaves the builder `batch` observer
+// rows at a time (the limit it takes for a field far larger than memory).
+FieldParams with_batch_rows(FieldParams p, const Heightfield& hf, int batch) {
+  double lo = 0, hi = 1024;  // MiB; the batch grows with the limit
+  for (int it = 0; it < 60; ++it) {
+    p.max_memory_mib = 0.5 * (lo + hi);
+    const Result<BuildPlan> plan = plan_visibility_build(hf, p);
+    (plan.ok() && plan->batch_rows >= batch ? hi : lo) = p.max_memory_mib;
+  }
+  p.max_memory_mib = hi;
+  return p;
+}
+
+// A memory limit that leaves one or two observer rows a batch: the rows
+// leave the window as soon as no later observer reaches them, band or not.
+TEST(VisibilityField, BandsBuiltInBatchesOfOneOrTwoRowsAreTheWholeBuildsRows) {
+  const Heightfield hf = fractal(41, 7);
+  const FieldParams p = small_params(RangeShape::cube, 6, 24);
+  const DenseVolume whole = build(hf, p);
+  const VolumeGeometry& g = whole.geometry;
+  for (const int batch : {1, 2}) {
+    const FieldParams tight = with_batch_rows(p, hf, batch);
+    const Result<BuildPlan> plan = plan_visibility_build(hf, tight);
+    ASSERT_TRUE(plan.ok());
+    ASSERT_EQ(plan->batch_rows, batch);
+    for (const RowBand band : {RowBand{0, 41}, RowBand{0, 16}, RowBand{16, 32}, RowBand{32, 41}, RowBand{13, 14}}) {
+      RowCollector sink(g);
+      ASSERT_TRUE(build_visibility_rows(hf, tight, band, sink).ok());
+      ASSERT_EQ(sink.order.size(), static_cast<std::size_t>(band.end - band.first));
+      for (int j = band.first; j < band.end; ++j) {
+        ASSERT_EQ(sink.order[static_cast<std::size_t>(j - band.first)], j);
+        for (int k = 0; k < g.nz; ++k) {
+          ASSERT_EQ(0, std::memcmp(&sink.rows[j][static_cast<std::size_t>(k) * static_cast<std::size_t>(g.nx)],
+                                   &whole.values[g.index(0, j, k)], static_cast<std::size_t>(g.nx) * sizeof(float)))
+              << "batch " << batch << " row " << j << " level " << k << " of band " << band.first << ".." << band.end;
+        }
+      }
+    }
+  }
+}
+
 TEST(VisibilityField, BelowTheTerrainIsZero) {
   const Heightfield hf = fractal(32, 4);
   const DenseVolume f = build(hf, small_params(RangeShape::cube, 8));

@@ -326,7 +326,10 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", visvol::version_line("visvol-build-mpi"));
   add_build_options(&app, o);
   app.add_option("-o,--output", o.out, "Field pack to write (written whole or not at all)")->required();
-  app.get_option("--threads")->description("Worker threads per rank, 0 for the node's cores shared among its ranks");
+  app.get_option("--threads")
+      ->description(
+          "Worker threads per rank; 0: the cores mpirun bound the rank to, or its node's cores shared among the node's "
+          "ranks");
   int code = kExitOk;
   try {
     app.parse(argc, argv);

@@ -300,11 +300,6 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
                         const fields::ProgressFn& progress, PackBuildReport* report) {
   const auto t0 = Clock::now();
   VISVOL_RETURN_IF_ERROR(validate(share));
-  const PackLayout& layout = plan.layout;
-  const auto brick_bytes = [&](int level, Layer layer) {
-    return tile_payload_bytes(layer, layout.levels[static_cast<std::size_t>(level)].nz, layout.encoding,
-                              layout.band_levels);
-  };
   // Progress: the field is most of the work; the terrain force field the rest.
   double total = 0, done = 0;
   for (const fields::LodInput& in : plan.inputs) total += static_cast<double>(in.terrain.size());
@@ -323,7 +318,7 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
     }
     fields::BuildStats stats;
     if (bricks.first < bricks.end) {
-      BrickSink bricks_out(sink, brick_bytes(level, Layer::visibility), level, t.nx, t.ny, in.params.nz,
+      BrickSink bricks_out(sink, payload_bytes(plan.layout, level, Layer::visibility), level, t.nx, t.ny, in.params.nz,
                            params.encoding);
       const fields::RowBand rows{bricks.first * kBrickPosts, std::min(t.ny, bricks.end * kBrickPosts)};
       Status st = fields::build_visibility_rows(
@@ -334,7 +329,8 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
           &stats);
       if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
       const auto t_tff = Clock::now();
-      VISVOL_RETURN_IF_ERROR(write_tff(sink, brick_bytes(level, Layer::tff), level, t, params.tff, bricks, pool));
+      VISVOL_RETURN_IF_ERROR(
+          write_tff(sink, payload_bytes(plan.layout, level, Layer::tff), level, t, params.tff, bricks, pool));
       local.tff_s += seconds_since(t_tff);
     }
     local.levels.push_back(stats);
@@ -349,9 +345,7 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
 
 Result<std::string> pack_metadata(const Heightfield& hf, const PackBuildParams& params, const std::string& source_json,
                                   const PackPlan& plan) {
-  if (!source_json.empty() && !nlohmann::json::accept(source_json)) {
-    return invalid_argument("pack source description is not valid JSON");
-  }
+  VISVOL_RETURN_IF_ERROR(check_source_json(source_json));
   return metadata(hf, params, source_json, plan.inputs, plan.planning);
 }
 

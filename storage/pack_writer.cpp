@@ -51,7 +51,7 @@ Status validate(const PackLayout& layout) {
   return Status::ok_status();
 }
 
-std::size_t TilePlacement::payload_bytes(int level, Layer layer) const {
+std::size_t payload_bytes(const PackLayout& layout, int level, Layer layer) {
   return tile_payload_bytes(layer, layout.levels[static_cast<std::size_t>(level)].nz, layout.encoding,
                             layout.band_levels);
 }
@@ -134,14 +134,15 @@ Result<std::unique_ptr<PackWriter>> PackWriter::create(const std::string& path, 
 
 Status PackWriter::write_tile(int level, Layer layer, int tx, int ty, const void* payload, std::size_t bytes) {
   if (out_.fd() < 0 || finished_) return Status(Errc::state, path_ + ": writer is closed");
-  const Result<std::size_t> index = placement_.find(level, layer, tx, ty, bytes);
-  if (!index.ok()) return invalid_argument(path_ + ": " + index.status().message());
-  TileEntry& t = placement_.tiles[*index];
-  const Result<std::uint32_t> crc = store_tile(
-      t, payload, bytes, [&](const void* data, std::size_t n, std::uint64_t at) { return out_.write_at(data, n, at); });
-  if (!crc.ok()) return crc.status();
-  t.crc32c = *crc;
-  written_[*index] = 1;
+  const Result<TilePlacement::Stored> stored =
+      placement_.store(level, layer, tx, ty, payload, bytes,
+                       [&](const void* data, std::size_t n, std::uint64_t at) { return out_.write_at(data, n, at); });
+  if (!stored.ok()) {  // a tile that is not the layout's, or the write's own error (which names the file)
+    const Status& st = stored.status();
+    return st.code() == Errc::invalid_argument ? st.with_context(path_) : st;
+  }
+  placement_.tiles[stored->index].crc32c = stored->crc32c;
+  written_[stored->index] = 1;
   return Status::ok_status();
 }
 

@@ -32,6 +32,9 @@ struct PackLayout {
 // Checks a layout's sizes before anything is written.
 Status validate(const PackLayout& layout);
 
+// Payload size of a tile of `layer` at `level` of a layout (before page padding).
+std::size_t payload_bytes(const PackLayout& layout, int level, Layer layer);
+
 // Where every tile of a layout lies in the file: entries in file order
 // (level, layer, ty, tx; checksums zero), each tile on its own pages after the
 // header, then the tables. The same for every process that places the same
@@ -41,10 +44,18 @@ struct TilePlacement {
   std::vector<TileEntry> tiles;
   std::uint64_t tables_offset = 0;  // the end of the tiles
 
-  // Expected payload size of a tile of `layer` at `level` (before page padding).
-  std::size_t payload_bytes(int level, Layer layer) const;
+  std::size_t payload_bytes(int level, Layer layer) const { return storage::payload_bytes(layout, level, layer); }
   // The entry of a tile, after checking the level, the tile and the payload size.
   Result<std::size_t> find(int level, Layer layer, int tx, int ty, std::size_t bytes) const;
+  // Checks a tile (find), then writes it as stored (store_tile) through
+  // `write_at(data, bytes, offset)`: its entry and checksum.
+  struct Stored {
+    std::size_t index = 0;
+    std::uint32_t crc32c = 0;
+  };
+  template <class WriteAt>
+  Result<Stored> store(int level, Layer layer, int tx, int ty, const void* payload, std::size_t bytes,
+                       WriteAt&& write_at) const;
 };
 Result<TilePlacement> place_tiles(PackLayout layout);
 
@@ -116,6 +127,16 @@ Result<std::uint32_t> store_tile(const TileEntry& entry, const void* payload, st
   }
   VISVOL_RETURN_IF_ERROR(write_at(payload, bytes, entry.offset));
   return crc;
+}
+
+template <class WriteAt>
+Result<TilePlacement::Stored> TilePlacement::store(int level, Layer layer, int tx, int ty, const void* payload,
+                                                   std::size_t bytes, WriteAt&& write_at) const {
+  const Result<std::size_t> index = find(level, layer, tx, ty, bytes);
+  if (!index.ok()) return index.status();
+  const Result<std::uint32_t> crc = store_tile(tiles[*index], payload, bytes, write_at);
+  if (!crc.ok()) return crc.status();
+  return Stored{*index, *crc};
 }
 
 }  // namespace visvol::storage

@@ -484,16 +484,14 @@ class ForeignSink final : public TileSink {
       : placement_(placement), fd_(::open(path.c_str(), O_WRONLY | O_NOFOLLOW | O_CLOEXEC)) {}
   ~ForeignSink() override { ::close(fd_); }
   Status write_tile(int level, Layer layer, int tx, int ty, const void* payload, std::size_t bytes) override {
-    const Result<std::size_t> index = placement_.find(level, layer, tx, ty, bytes);
-    if (!index.ok()) return index.status();
-    const Result<std::uint32_t> crc =
-        store_tile(placement_.tiles[*index], payload, bytes, [&](const void* data, std::size_t n, std::uint64_t at) {
+    const Result<TilePlacement::Stored> stored =
+        placement_.store(level, layer, tx, ty, payload, bytes, [&](const void* data, std::size_t n, std::uint64_t at) {
           return ::pwrite(fd_, data, n, static_cast<off_t>(at)) == static_cast<ssize_t>(n)
                      ? Status::ok_status()
                      : Status(Errc::output, "pwrite failed");
         });
-    if (!crc.ok()) return crc.status();
-    written.emplace_back(*index, *crc);
+    if (!stored.ok()) return stored.status();
+    written.emplace_back(stored->index, stored->crc32c);
     return Status::ok_status();
   }
   std::vector<std::pair<std::size_t, std::uint32_t>> written;

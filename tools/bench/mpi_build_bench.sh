@@ -40,8 +40,9 @@ for ((i = 1; i <= runs; ++i)); do
   two_threads+=("$(seconds "$visvol" build "${options[@]}" --threads 2 -o "$work/ref.vvp")")
   one_thread+=("$(seconds "$visvol" build "${options[@]}" --threads 1 -o "$work/ref.vvp")")
   one_rank+=("$(seconds "${mpirun[@]}" -np 1 "$mpi" "${options[@]}" --threads 1 -o "$work/one.vvp")")
+  sed -n '/^rank /,/^exchanged/p' "$work/last" | sed "s/^/run $i, 1 rank:  /" >>"$work/ranks.txt"
   two_ranks+=("$(seconds "${mpirun[@]}" -np 2 "$mpi" "${options[@]}" --threads 1 -o "$work/two.vvp")")
-  cp "$work/last" "$work/two_ranks.txt"
+  sed -n '/^rank /,/^exchanged/p' "$work/last" | sed "s/^/run $i, 2 ranks: /" >>"$work/ranks.txt"
 done
 t1=$(median "${one_rank[@]}")
 t2=$(median "${two_ranks[@]}")
@@ -51,5 +52,5 @@ printf '   %-40s %7.2f s\n' "visvol build, 2 threads" "$(median "${two_threads[@
 printf '   %-40s %7.2f s\n' "visvol-build-mpi, 1 rank x 1 thread" "$t1"
 printf '   %-40s %7.2f s\n' "visvol-build-mpi, 2 ranks x 1 thread" "$t2"
 printf '   %-40s %7.2f\n' "parallel efficiency 1 -> 2 ranks" "$(awk -v a="$t1" -v b="$t2" 'BEGIN { print a / (2 * b) }')"
-echo "== the last 2-rank run's figures (wall times include mpirun's start and end)"
-sed -n '/^rank /,$p' "$work/two_ranks.txt"
+echo "== every run's rank lines (hull, scatter, terrain force field: the model's --measured from the 1-rank ones)"
+cat "$work/ranks.txt"

@@ -38,7 +38,8 @@ def main():
     p.add_argument("--calibration-posts", type=int, default=512, help="posts a side of the calibration grid")
     p.add_argument("--calibration-lod", type=int, default=3, help="its levels of detail")
     p.add_argument("--write-mib-s", type=float, default=500.0, help="a rank's write rate to the shared file system")
-    p.add_argument("--link-gib-s", type=float, default=10.0, help="network bandwidth a rank (terrain broadcast)")
+    p.add_argument("--link-gib-s", type=float, default=10.0,
+                   help="network bandwidth a rank (the terrain's broadcast, the observer split's partial sums)")
     p.add_argument("--threads", type=int, default=1, help="cores a rank (default 1)")
     p.add_argument("--ranks", type=int, nargs="+", default=[16, 64, 256])
     p.add_argument("--split", choices=["rows", "observers"], default="rows",
@@ -86,13 +87,17 @@ def main():
           f"terrain force field {tff_us:.1f} us a post; write {a.write_mib_s:.0f} MiB/s a rank, "
           f"broadcast {a.link_gib_s:.0f} GiB/s")
     print(f"one rank: {serial / 3600:.1f} h")
+    # a rank's terrain: its plan's levels of detail, the builder's copy padded by the range and the per-post
+    # observer weights (rank 0 also keeps the imported DEM)
+    terrain_gib = sum(math.ceil(a.posts / 2 ** l) ** 2 for l in range(a.lod)) * 4
+    terrain_gib = (terrain_gib + (a.posts + 2 * a.range) ** 2 * 4 + a.posts ** 2 * 4) / 2 ** 30
     print("ranks  hull s  scatter s  tff s  write s  exchange s  wall     efficiency  terrain a rank")
     for ranks in a.ranks:
         t = rank_time(ranks)
         wall = sum(t.values())
         print(f"{ranks:5d}  {t['hull']:6.0f}  {t['scatter']:9.0f}  {t['tff']:5.0f}  {t['write']:7.0f}  "
               f"{t['broadcast']:10.1f}  {wall / 60:5.1f} min  {serial / (ranks * wall):10.2f}  "
-              f"{(a.posts + 2 * a.range) ** 2 * 4 / 2 ** 30:.1f} GiB")
+              f"{terrain_gib:.1f} GiB")
 
 
 if __name__ == "__main__":

@@ -64,15 +64,13 @@ class MpiTileSink final : public storage::TileSink {
 
   Status write_tile(int level, storage::Layer layer, int tx, int ty, const void* payload, std::size_t bytes) override {
     const auto t0 = Clock::now();
-    const Result<std::size_t> index = placement_.find(level, layer, tx, ty, bytes);
-    if (!index.ok()) return invalid_argument(path_ + ": " + index.status().message());
-    const Result<std::uint32_t> crc =
-        storage::store_tile(placement_.tiles[*index], payload, bytes,
-                            [&](const void* data, std::size_t n, std::uint64_t at) { return write_at(data, n, at); });
-    if (!crc.ok()) return crc.status();
-    indices.push_back(*index);
-    checksums.push_back(*crc);
-    bytes_written += placement_.tiles[*index].bytes;
+    const Result<storage::TilePlacement::Stored> stored =
+        placement_.store(level, layer, tx, ty, payload, bytes,
+                         [&](const void* data, std::size_t n, std::uint64_t at) { return write_at(data, n, at); });
+    if (!stored.ok()) return stored.status().with_context(path_);
+    indices.push_back(stored->index);
+    checksums.push_back(stored->crc32c);
+    bytes_written += placement_.tiles[stored->index].bytes;
     write_s += seconds_since(t0);
     return Status::ok_status();
   }
@@ -91,7 +89,7 @@ class MpiTileSink final : public storage::TileSink {
     int count = 0;
     if (rc == MPI_SUCCESS) MPI_Get_count(&st, MPI_BYTE, &count);
     if (rc != MPI_SUCCESS || static_cast<std::size_t>(count) != bytes) {
-      return output_error(path_ + ": writing " + std::to_string(bytes) + " bytes at " + std::to_string(offset) +
+      return output_error("writing " + std::to_string(bytes) + " bytes at " + std::to_string(offset) +
                           " failed: " + mpi_error_text(rc));
     }
     return Status::ok_status();
@@ -133,23 +131,34 @@ void print_ranks(const std::vector<double>& all, double exchanged_bytes, double 
               exchanged_bytes / (1024.0 * 1024.0), exchange_s);
 }
 
-// Worker threads a rank takes for --threads 0: the cores it may run on
-// (mpirun may bind it to some), shared with the other ranks of its node
-// where it is not bound.
+// Worker threads a rank takes for --threads 0: the cores it may run on,
+// shared with the ranks of its node that may run on any of them (mpirun binds
+// ranks to a core or a socket, or not at all; a cpuset may hold every rank of
+// a node on the same cores).
 int threads_per_rank(const Comm& world) {
+  cpu_set_t mine;
+  CPU_ZERO(&mine);
+  if (::sched_getaffinity(0, sizeof mine, &mine) != 0) {
+    for (unsigned c = 0; c < std::max(1u, std::thread::hardware_concurrency()) && c < CPU_SETSIZE; ++c) {
+      CPU_SET(c, &mine);
+    }
+  }
   MPI_Comm node = MPI_COMM_NULL;
   MPI_Comm_split_type(world.comm, MPI_COMM_TYPE_SHARED, world.rank, MPI_INFO_NULL, &node);
   int on_node = 1;
+  if (node != MPI_COMM_NULL) MPI_Comm_size(node, &on_node);
+  std::vector<cpu_set_t> sets(static_cast<std::size_t>(on_node), mine);
   if (node != MPI_COMM_NULL) {
-    MPI_Comm_size(node, &on_node);
+    MPI_Allgather(&mine, sizeof mine, MPI_BYTE, sets.data(), sizeof mine, MPI_BYTE, node);
     MPI_Comm_free(&node);
   }
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  cpu_set_t allowed;
-  CPU_ZERO(&allowed);
-  const int usable = ::sched_getaffinity(0, sizeof allowed, &allowed) == 0 ? CPU_COUNT(&allowed) : cores;
-  if (usable < cores) return std::max(1, usable);  // bound: those cores are this rank's
-  return std::max(1, cores / std::max(1, on_node));
+  int sharing = 0;  // ranks (this one too) that may run on this rank's cores
+  for (cpu_set_t& other : sets) {
+    cpu_set_t both;
+    CPU_AND(&both, &other, &mine);
+    if (CPU_COUNT(&both) > 0) ++sharing;
+  }
+  return std::max(1, CPU_COUNT(&mine) / std::max(1, sharing));
 }
 
 // The rank that failed stops the job: message first, then the abort (which
@@ -203,6 +212,8 @@ Status prepare(const Comm& world, const BuildOptions& o, Job& job) {
   Result<storage::PackPlan> plan = storage::plan_pack(b.terrain, job.params);
   VISVOL_RETURN_IF_ERROR(world.agree(plan.ok() ? Status::ok_status() : plan.status()));
   job.plan = std::move(*plan);
+  // the plan holds every level's terrain; rank 0 keeps the DEM for its summary
+  if (world.rank != 0) std::vector<float>().swap(b.terrain.height_m);
   return Status::ok_status();
 }
 
@@ -316,8 +327,15 @@ int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-build-mpi")) return 0;
   // mpirun ends a failed job with SIGTERM: rank 0's temporary goes with it
   visvol::install_output_cleanup_on_signals();
-  MPI_Init(&argc, &argv);
+  // the worker threads never call MPI: the main thread makes every call
+  int provided = MPI_THREAD_SINGLE;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
   const Comm world(MPI_COMM_WORLD);
+  if (provided < MPI_THREAD_FUNNELED) {
+    if (world.rank == 0) std::fprintf(stderr, "visvol-build-mpi: this MPI does not allow threads beside MPI calls\n");
+    MPI_Finalize();
+    return kExitFailure;
+  }
   BuildOptions o;
   CLI::App app{
       "visvol-build-mpi: visvol build split among the processes of an MPI job (mpirun -np N visvol-build-mpi DEM -o "

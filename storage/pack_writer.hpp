@@ -47,8 +47,9 @@ struct TilePlacement {
   std::size_t payload_bytes(int level, Layer layer) const { return storage::payload_bytes(layout, level, layer); }
   // The entry of a tile, after checking the level, the tile and the payload size.
   Result<std::size_t> find(int level, Layer layer, int tx, int ty, std::size_t bytes) const;
-  // Checks a tile (find), then writes it as stored (store_tile) through
-  // `write_at(data, bytes, offset)`: its entry and checksum.
+  // Checks a tile (find), then writes it as stored (the payload, then zeros
+  // to the end of its pages) through `write_at(data, bytes, offset)`: its
+  // entry and the checksum of its stored bytes.
   struct Stored {
     std::size_t index = 0;
     std::uint32_t crc32c = 0;
@@ -58,11 +59,6 @@ struct TilePlacement {
                        WriteAt&& write_at) const;
 };
 Result<TilePlacement> place_tiles(PackLayout layout);
-
-// Writes one tile as stored: `payload`, then zeros to the end of its pages,
-// through `write_at(data, bytes, offset)`. Returns the tile's checksum.
-template <class WriteAt>
-Result<std::uint32_t> store_tile(const TileEntry& entry, const void* payload, std::size_t bytes, WriteAt&& write_at);
 
 // Receives a pack's tiles, in any order, from one thread.
 class TileSink {
@@ -117,7 +113,11 @@ class PackWriter final : public TileSink {
 };
 
 template <class WriteAt>
-Result<std::uint32_t> store_tile(const TileEntry& entry, const void* payload, std::size_t bytes, WriteAt&& write_at) {
+Result<TilePlacement::Stored> TilePlacement::store(int level, Layer layer, int tx, int ty, const void* payload,
+                                                   std::size_t bytes, WriteAt&& write_at) const {
+  const Result<std::size_t> index = find(level, layer, tx, ty, bytes);
+  if (!index.ok()) return index.status();
+  const TileEntry& entry = tiles[*index];
   std::uint32_t crc = crc32c(payload, bytes);
   const std::size_t pad = entry.bytes - bytes;
   if (pad > 0) {
@@ -126,17 +126,7 @@ Result<std::uint32_t> store_tile(const TileEntry& entry, const void* payload, st
     VISVOL_RETURN_IF_ERROR(write_at(zeros, pad, entry.offset + bytes));
   }
   VISVOL_RETURN_IF_ERROR(write_at(payload, bytes, entry.offset));
-  return crc;
-}
-
-template <class WriteAt>
-Result<TilePlacement::Stored> TilePlacement::store(int level, Layer layer, int tx, int ty, const void* payload,
-                                                   std::size_t bytes, WriteAt&& write_at) const {
-  const Result<std::size_t> index = find(level, layer, tx, ty, bytes);
-  if (!index.ok()) return index.status();
-  const Result<std::uint32_t> crc = store_tile(tiles[*index], payload, bytes, write_at);
-  if (!crc.ok()) return crc.status();
-  return Stored{*index, *crc};
+  return Stored{*index, crc};
 }
 
 }  // namespace visvol::storage

@@ -25,16 +25,13 @@ namespace {
 
 using namespace visvol::fields::testing;
 using fields::Heightfield;
+using testing::read_bytes;
 using testing::without_build_time;
 
 std::string temp_path(const std::string& stem) {
   return ::testing::TempDir() + "/" + stem + "_" + std::to_string(::getpid()) + ".vvp";
 }
 
-std::vector<char> read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 void write_file(const std::string& path, const std::vector<char>& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
@@ -168,7 +165,7 @@ TEST_F(PackFile, VerifyPassesAndNamesACorruptTile) {
   EXPECT_TRUE((*pack)->verify().ok());
   const TileEntry t = (*pack)->tile(1, Layer::visibility, 1, 0);
   const std::string bad = temp_path("corrupt_tile");
-  std::vector<char> bytes = read_file(*path_);
+  std::vector<char> bytes = read_bytes(*path_);
   bytes[t.offset + 100] ^= 0x40;
   write_file(bad, bytes);
   Result<std::shared_ptr<const Pack>> corrupted = Pack::open(bad);
@@ -185,7 +182,7 @@ TEST_F(PackFile, VerifyPassesAndNamesACorruptTile) {
 }
 
 TEST_F(PackFile, TruncationHeaderAndTableDamageAreNamed) {
-  const std::vector<char> good = read_file(*path_);
+  const std::vector<char> good = read_bytes(*path_);
   const std::string bad = temp_path("damaged");
   struct Case {
     const char* what;
@@ -236,7 +233,7 @@ std::vector<char> forge(const std::vector<char>& good,
 }
 
 TEST_F(PackFile, ForgedStructuresAreRefusedByName) {
-  const std::vector<char> good = read_file(*path_);
+  const std::vector<char> good = read_bytes(*path_);
   const std::string bad = temp_path("forged");
   auto tile_at = [&](std::vector<char>& b, const PackHeader& h, std::uint64_t n) {
     return reinterpret_cast<TileEntry*>(b.data() + h.tile_table_offset + n * sizeof(TileEntry));
@@ -324,7 +321,7 @@ TEST_F(PackFile, AnInspectedPackChecksItsHeightsAsRead) {
   Result<std::shared_ptr<const Pack>> pack = Pack::open(*path_);
   ASSERT_TRUE(pack.ok());
   const TileEntry t = (*pack)->tile(1, Layer::height, 0, 0);
-  std::vector<char> bytes = read_file(*path_);
+  std::vector<char> bytes = read_bytes(*path_);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(bytes.data() + t.offset + 4 * sizeof(float), &nan, sizeof nan);
   const std::string bad = temp_path("nan_height");
@@ -343,7 +340,7 @@ TEST_F(PackFile, AnInspectedPackChecksItsHeightsAsRead) {
 // end of the file were read through the mapping).
 TEST_F(PackFile, TheTablesOutliveTheFileBeingCutShort) {
   const std::string copy = temp_path("cut_short");
-  write_file(copy, read_file(*path_));
+  write_file(copy, read_bytes(*path_));
   Result<std::shared_ptr<const Pack>> pack = Pack::open(copy);
   ASSERT_TRUE(pack.ok());
   const std::uint64_t count = (*pack)->tile_count();
@@ -360,7 +357,7 @@ TEST(PackWriter, AbandonedWriteLeavesTheOldPackAndNoTemporary) {
   const Heightfield hf = fractal(24, 3);
   const std::string path = temp_path("abandoned");
   ASSERT_TRUE(build_pack(hf, small_params(), "", path).ok());
-  const std::vector<char> before = read_file(path);
+  const std::vector<char> before = read_bytes(path);
   {
     PackLayout layout;
     LevelEntry e{};
@@ -376,7 +373,7 @@ TEST(PackWriter, AbandonedWriteLeavesTheOldPackAndNoTemporary) {
     ASSERT_TRUE((*w)->write_tile(0, Layer::height, 0, 0, tile.data(), tile.size()).ok());
     // finish() never called: the writer is dropped mid-way.
   }
-  EXPECT_EQ(read_file(path), before);
+  EXPECT_EQ(read_bytes(path), before);
   EXPECT_NE(access((path + ".tmp." + std::to_string(getpid())).c_str(), F_OK), 0);
   std::remove(path.c_str());
 }
@@ -385,7 +382,7 @@ TEST(PackWriter, KilledBuildNeverLeavesATornPack) {
   const Heightfield hf = fractal(48, 4);
   const std::string path = temp_path("killed");
   ASSERT_TRUE(build_pack(hf, small_params(), "", path).ok());
-  const std::vector<char> before = read_file(path);
+  const std::vector<char> before = read_bytes(path);
   const pid_t pid = fork();
   if (pid == 0) {
     PackBuildParams p = small_params();
@@ -403,7 +400,7 @@ TEST(PackWriter, KilledBuildNeverLeavesATornPack) {
   ASSERT_TRUE(pack.ok()) << pack.status().message();
   EXPECT_TRUE((*pack)->verify().ok());
   if (WIFSIGNALED(status)) {
-    EXPECT_EQ(read_file(path), before);
+    EXPECT_EQ(read_bytes(path), before);
   }
   std::remove(path.c_str());
   std::remove((path + ".tmp." + std::to_string(pid)).c_str());  // the killed build's stray temporary

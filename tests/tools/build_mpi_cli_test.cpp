@@ -28,22 +28,8 @@ using test::Outcome;
 const std::string kMpirun = std::string(VISVOL_MPIEXEC) +
                             " --oversubscribe --allow-run-as-root --mca btl self,vader --mca oob_tcp_if_include lo";
 
-Outcome run(const std::string& cmd) {
-  const std::string dir = ::testing::TempDir();
-  const std::string out = dir + "/mpi_out_" + std::to_string(getpid()),
-                    err = dir + "/mpi_err_" + std::to_string(getpid());
-  const int rc = std::system((cmd + " </dev/null >" + out + " 2>" + err).c_str());
-  Outcome r;
-  r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-  r.out = test::slurp(out);
-  r.err = test::slurp(err);
-  std::remove(out.c_str());
-  std::remove(err.c_str());
-  return r;
-}
-
 Outcome build_mpi(int ranks, const std::string& args) {
-  return run(kMpirun + " -np " + std::to_string(ranks) + " " + VISVOL_BUILD_MPI_BIN + " " + args);
+  return test::run_command(kMpirun + " -np " + std::to_string(ranks) + " " + VISVOL_BUILD_MPI_BIN + " " + args);
 }
 
 std::string temp(const std::string& stem) {
@@ -225,7 +211,7 @@ TEST(BuildMpi, BadInputExitsTwoNamingItAndWritesNothing) {
 }
 
 TEST(BuildMpi, HelpNamesTheLauncherAndEveryBuildOption) {
-  const Outcome r = run(std::string(VISVOL_BUILD_MPI_BIN) + " --help");
+  const Outcome r = test::run_command(std::string(VISVOL_BUILD_MPI_BIN) + " --help");
   EXPECT_EQ(r.status, 0) << r.err;
   for (const char* word : {"mpirun", "--output", "--range", "--lod", "--threads", "--area", "--fill-nodata"}) {
     EXPECT_NE(r.out.find(word), std::string::npos) << word;

@@ -26,19 +26,23 @@ inline std::string slurp(const std::string& file) {
   return s.str();
 }
 
-inline Outcome visvol(const std::string& args, const std::string& input = "") {
+// Runs a shell command line with `input` on stdin; its status and output.
+inline Outcome run_command(const std::string& command, const std::string& input = "") {
   const std::string dir = ::testing::TempDir();
   const std::string tag = std::to_string(getpid());
   const std::string in = dir + "/cli_in_" + tag, out = dir + "/cli_out_" + tag, err = dir + "/cli_err_" + tag;
   std::ofstream(in) << input;
-  const std::string cmd = std::string(VISVOL_BIN) + " " + args + " <" + in + " >" + out + " 2>" + err;
-  const int rc = std::system(cmd.c_str());
+  const int rc = std::system((command + " <" + in + " >" + out + " 2>" + err).c_str());
   Outcome r;
   r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
   r.out = slurp(out);
   r.err = slurp(err);
   for (const std::string& f : {in, out, err}) std::remove(f.c_str());
   return r;
+}
+
+inline Outcome visvol(const std::string& args, const std::string& input = "") {
+  return run_command(std::string(VISVOL_BIN) + " " + args, input);
 }
 
 // The bundled SF North DEM and a hilly 40 x 40 window of it (pixel edges on

@@ -104,13 +104,13 @@ int run_check(const CheckOptions& o) {
   // every observer: a path zigzagging across the pack millions of times, or
   // hundreds of observers of a long one, would take hours
   const double samples = checker->sample_count(file->points);
-  const double work = samples * static_cast<double>(std::max<std::size_t>(1, spec.constraints.size()));
+  const std::size_t observer_count = std::max<std::size_t>(1, spec.constraints.size());
+  const double work = samples * static_cast<double>(observer_count);
   if (!(work <= rt::PathChecker::kMaxSamples)) {
     char text[240];
     std::snprintf(text, sizeof text,
                   ": %.3g samples of %.2f m along the path, times %zu observers: more than %.0f to check", samples,
-                  checker->spec().sample_step_m, std::max<std::size_t>(1, spec.constraints.size()),
-                  rt::PathChecker::kMaxSamples);
+                  checker->spec().sample_step_m, observer_count, rt::PathChecker::kMaxSamples);
     return fail("check", invalid_argument(o.path + text));
   }
   const rt::PathCheck c = checker->check(file->points);

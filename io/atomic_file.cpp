@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <climits>
 #include <csignal>
@@ -33,7 +34,24 @@ std::string base_of(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-std::string temp_name_for(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
+// This host's name as temporaries carry it: letters, digits and '-' kept,
+// anything else (the dots of a domain) '_', at most 64 characters.
+std::string host_label() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "unnamed";
+  std::string out;
+  for (const char* c = name; *c != '\0' && out.size() < 64; ++c) {
+    out += std::isalnum(static_cast<unsigned char>(*c)) != 0 || *c == '-' ? *c : '_';
+  }
+  return out;
+}
+
+const std::string& this_host() {
+  static const std::string host = host_label();
+  return host;
+}
+
+std::string temp_name_for(const std::string& path) { return temporary_prefix(path) + std::to_string(::getpid()); }
 
 // Failures of the disk or the system, not of the path the user gave.
 bool is_resource_errno(int e) {
@@ -223,6 +241,17 @@ long temporary_pid(const std::string& name, const std::string& prefix) {
   if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
   const long pid = std::stol(digits);
   return pid > 0 ? pid : -1;
+}
+
+// A temporary of output `base` that a process of this host made, and its pid:
+// `base.tmp.<this host>.<pid>`, or `base.tmp.<pid>` as versions before the host
+// was in the name wrote them (`legacy`). Another host's (on a shared file
+// system, whose pids mean nothing here) and any other name: -1.
+long own_temporary_pid(const std::string& name, const std::string& base, bool& legacy) {
+  const std::string prefix = base + ".tmp.";
+  const long pid = temporary_pid(name, prefix + this_host() + ".");
+  legacy = pid < 0;
+  return legacy ? temporary_pid(name, prefix) : pid;
 }
 
 // --- checks ------------------------------------------------------------------
@@ -441,17 +470,20 @@ void install_output_cleanup_on_signals() {
   }
 }
 
+std::string temporary_prefix(const std::string& path) { return path + ".tmp." + this_host() + "."; }
+
 void sweep_stale_temporaries(const std::string& path) {
-  const std::string prefix = base_of(path) + ".tmp.";
+  const std::string base = base_of(path);
   DIR* d = ::opendir(directory_of(path).c_str());
   if (d == nullptr) return;
   const int dir_fd = ::dirfd(d);
   const long self = static_cast<long>(::getpid());
   while (const dirent* e = ::readdir(d)) {
-    const long pid = temporary_pid(e->d_name, prefix);
+    bool legacy = false;
+    const long pid = own_temporary_pid(e->d_name, base, legacy);
     if (pid < 0) continue;
     // one of ours that is still being written, or one of another running process
-    if (pid == self ? is_live(temp_name_for(path)) : process_runs(pid)) continue;
+    if (pid == self ? !legacy && is_live(temp_name_for(path)) : process_runs(pid)) continue;
     struct stat st {};
     if (::fstatat(dir_fd, e->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
     if (st.st_uid != ::geteuid()) continue;  // never another user's files

@@ -1,14 +1,16 @@
 // Output files that appear whole or not at all, and never through a link.
 //
 // Every writer of visvol goes through OutputFile: it creates the temporary
-// `PATH.tmp.<pid>` next to the destination with O_CREAT|O_EXCL|O_NOFOLLOW (so a
+// `PATH.tmp.<host>.<pid>` next to the destination with O_CREAT|O_EXCL|O_NOFOLLOW (so a
 // link or file planted at that name is refused, never followed), refuses a
 // destination that exists and is not a regular file (symlink, device, FIFO,
 // directory: left untouched), and commit() fsyncs the data, renames it over the
 // destination and fsyncs the directory. A crash or a kill before the rename
 // leaves the old file (or none); the temporary is removed on every error, on
 // SIGINT/SIGTERM where install_output_cleanup_on_signals() was called, and a
-// later write to the same output sweeps those of dead processes.
+// later write to the same output sweeps those of dead processes of this host
+// (the host's name in the temporary's: on a file system several hosts share,
+// a pid that runs on another host means nothing here).
 //
 // Errors: Errc::invalid_argument when the path cannot be an output (not a
 // regular file, no such directory, a planted temporary: bad input, exit 2);
@@ -33,7 +35,7 @@ class OutputFile {
   static Result<OutputFile> create(const std::string& path);
 
   // For a library that must create its file by path (GDAL): a private
-  // directory `PATH.tmp.<pid>` (mode 0700, made with mkdir, which never follows
+  // directory `PATH.tmp.<host>.<pid>` (mode 0700, made with mkdir, which never follows
   // a link) and write_path() inside it, where nobody else can plant anything.
   // fd() is -1.
   static Result<OutputFile> create_for_library(const std::string& path);
@@ -94,9 +96,16 @@ Status write_file_atomically(const std::string& path, const std::string& bytes);
 // before any other handler is installed.
 void install_output_cleanup_on_signals();
 
-// Removes `NAME.tmp.<pid>` temporaries next to `path` left by processes that no
-// longer run (regular files and the private directories of create_for_library,
-// owned by this user). OutputFile::create calls it; public for tests.
+// The name every temporary of `path` made on this host starts with, the pid
+// following: `PATH.tmp.<host>.`, <host> this host's name with anything but
+// letters, digits and '-' as '_' (at most 64 characters).
+std::string temporary_prefix(const std::string& path);
+
+// Removes `NAME.tmp.<host>.<pid>` temporaries next to `path` left by processes
+// of this host that no longer run (regular files and the private directories
+// of create_for_library, owned by this user), and the `NAME.tmp.<pid>` of
+// earlier versions likewise; another host's are left. OutputFile::create
+// calls it; public for tests.
 void sweep_stale_temporaries(const std::string& path);
 
 }  // namespace visvol

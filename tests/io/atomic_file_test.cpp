@@ -45,7 +45,7 @@ std::string device_node(const std::string& dir) {
   return ::mknod(node.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0 ? node : "/dev/null";
 }
 
-std::string own_temp(const std::string& path) { return path + ".tmp." + std::to_string(::getpid()); }
+std::string own_temp(const std::string& path) { return temporary_prefix(path) + std::to_string(::getpid()); }
 
 // A pid that ran and has ended (and was reaped).
 pid_t dead_pid() {
@@ -173,11 +173,16 @@ TEST_F(AtomicFile, ASharedFileIsOpenInsideAPrivateDirectoryThenRenamedOrRemoved)
 
 TEST_F(AtomicFile, StaleTemporariesOfDeadProcessesAreSweptThoseOfLiveOnesKept) {
   const std::string out = dir_ + "/sf.vvp", victim = dir_ + "/victim";
-  const std::string dead = out + ".tmp." + std::to_string(dead_pid());
-  const std::string dead_dir = out + ".tmp." + std::to_string(dead_pid());
-  const std::string dead_link = out + ".tmp." + std::to_string(dead_pid());
-  const std::string live = out + ".tmp." + std::to_string(::getppid());
-  const std::string other = dir_ + "/other.vvp.tmp." + std::to_string(dead_pid());
+  const std::string dead = temporary_prefix(out) + std::to_string(dead_pid());
+  const std::string dead_dir = temporary_prefix(out) + std::to_string(dead_pid());
+  const std::string dead_link = temporary_prefix(out) + std::to_string(dead_pid());
+  const std::string live = temporary_prefix(out) + std::to_string(::getppid());
+  const std::string other = temporary_prefix(dir_ + "/other.vvp") + std::to_string(dead_pid());
+  // before the host was in the name: swept like this host's
+  const std::string legacy = out + ".tmp." + std::to_string(dead_pid());
+  // another host's on a shared file system: its pid means nothing here
+  const std::string other_host =
+      out + ".tmp.x" + temporary_prefix(out).substr(out.size() + 5) + std::to_string(dead_pid());
   write_text(dead, "600 MB of a killed build");
   ASSERT_EQ(::mkdir(dead_dir.c_str(), 0700), 0);
   write_text(dead_dir + "/sf.vvp", "half a GeoTIFF");
@@ -185,7 +190,11 @@ TEST_F(AtomicFile, StaleTemporariesOfDeadProcessesAreSweptThoseOfLiveOnesKept) {
   ASSERT_EQ(::symlink(victim.c_str(), dead_link.c_str()), 0);
   write_text(live, "a build still running");
   write_text(other, "another output's");
+  write_text(legacy, "an older version's");
+  write_text(other_host, "a build running on another host");
   ASSERT_TRUE(write_file_atomically(out, "pack").ok());
+  EXPECT_FALSE(exists(legacy));
+  EXPECT_TRUE(exists(other_host));
   EXPECT_FALSE(exists(dead));
   EXPECT_FALSE(exists(dead_dir));
   EXPECT_EQ(type_of(dead_link), S_IFLNK);  // never created by us: left
@@ -252,7 +261,7 @@ std::string killed_while_writing(const std::string& out, int sig, bool library, 
   char byte = 0;
   const bool told = ::read(ready[0], &byte, 1) == 1;
   ::close(ready[0]);
-  const std::string temp = out + ".tmp." + std::to_string(pid);
+  const std::string temp = temporary_prefix(out) + std::to_string(pid);
   const bool was_there = exists(temp);
   ::kill(pid, sig);
   ::waitpid(pid, &wait_status, 0);

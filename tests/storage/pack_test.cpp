@@ -14,6 +14,7 @@
 #include "../fields/terrains.hpp"
 #include "fields/pyramid.hpp"
 #include "fields/sampler.hpp"
+#include "io/atomic_file.hpp"
 #include "pack_bytes.hpp"
 #include "storage/crc32c.hpp"
 #include "storage/pack_build.hpp"
@@ -374,7 +375,7 @@ TEST(PackWriter, AbandonedWriteLeavesTheOldPackAndNoTemporary) {
     // finish() never called: the writer is dropped mid-way.
   }
   EXPECT_EQ(read_bytes(path), before);
-  EXPECT_NE(access((path + ".tmp." + std::to_string(getpid())).c_str(), F_OK), 0);
+  EXPECT_NE(access((temporary_prefix(path) + std::to_string(getpid())).c_str(), F_OK), 0);
   std::remove(path.c_str());
 }
 
@@ -403,7 +404,7 @@ TEST(PackWriter, KilledBuildNeverLeavesATornPack) {
     EXPECT_EQ(read_bytes(path), before);
   }
   std::remove(path.c_str());
-  std::remove((path + ".tmp." + std::to_string(pid)).c_str());  // the killed build's stray temporary
+  std::remove((temporary_prefix(path) + std::to_string(pid)).c_str());  // the killed build's stray temporary
 }
 
 TEST(PackWriter, RefusesMissingTilesAndWrongSizes) {

@@ -16,9 +16,11 @@
 #include <thread>
 
 #include "cli_runner.hpp"
+#include "io/atomic_file.hpp"
 
 namespace {
 
+using visvol::temporary_prefix;
 using visvol::test::kCrop;
 using visvol::test::kDem;
 using visvol::test::kSmallPackOptions;
@@ -97,12 +99,12 @@ class Outputs : public ::testing::Test {
 std::string* Outputs::dir_ = nullptr;
 std::string* Outputs::pack_ = nullptr;
 
-// The temporary's name is predictable (NAME.tmp.<pid>): the shell that execs
-// visvol plants a link there first. The build refuses it; the target is intact.
+// The temporary's name is predictable (NAME.tmp.<host>.<pid>): the shell that
+// execs visvol plants a link there first. The build refuses it; the target is intact.
 TEST_F(Outputs, ALinkPlantedAtTheTemporaryNameIsRefused) {
   const std::string out = *dir_ + "/planted.vvp";
-  const Outcome r = run_limited("sh -c 'ln -s " + victim() + " " + out + ".tmp.$$ && exec " + VISVOL_BIN + " build " +
-                                kDem + " " + kSmallPackOptions + " -o " + out + "'");
+  const Outcome r = run_limited("sh -c 'ln -s " + victim() + " " + temporary_prefix(out) + "$$ && exec " + VISVOL_BIN +
+                                " build " + kDem + " " + kSmallPackOptions + " -o " + out + "'");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("already exists (a symbolic link); not following or replacing it"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(victim()), "precious");
@@ -193,19 +195,26 @@ TEST_F(Outputs, AFifoAsInputExitsTwoAtOnce) {
   std::remove(grid.c_str());
 }
 
-// A killed build leaves NAME.tmp.<pid>; the next write of that output removes
-// it (the process is gone), and keeps one of a process that still runs.
+// A killed build leaves NAME.tmp.<host>.<pid>; the next write of that output
+// removes it (the process is gone), and keeps one of a process that still
+// runs, and another host's (a shared file system: its pids mean nothing here).
 TEST_F(Outputs, StaleTemporariesOfDeadProcessesAreSweptByTheNextWrite) {
   const std::string out = *dir_ + "/swept.vvp";
-  const std::string stale = out + ".tmp." + std::to_string(dead_pid());
-  const std::string live = out + ".tmp." + std::to_string(getpid());
+  const std::string stale = temporary_prefix(out) + std::to_string(dead_pid());
+  const std::string live = temporary_prefix(out) + std::to_string(getpid());
+  // "<host>.tmp.x<this host>.<pid>": a name this host never gives
+  const std::string other_host =
+      out + ".tmp.x" + temporary_prefix(out).substr(out.size() + 5) + std::to_string(dead_pid());
   std::ofstream(stale) << "what a killed build left";
   std::ofstream(live) << "a build still running";
+  std::ofstream(other_host) << "a build running on another host";
   const Outcome r = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + out);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_FALSE(exists(stale));
   EXPECT_TRUE(exists(live));
+  EXPECT_TRUE(exists(other_host));
   std::remove(live.c_str());
+  std::remove(other_host.c_str());
   std::remove(out.c_str());
 }
 
@@ -221,7 +230,7 @@ TEST_F(Outputs, AKilledBuildLeavesNoTemporary) {
               static_cast<char*>(nullptr));
       ::_exit(127);
     }
-    const std::string temp = out + ".tmp." + std::to_string(pid);
+    const std::string temp = temporary_prefix(out) + std::to_string(pid);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (!exists(temp) && std::chrono::steady_clock::now() < deadline) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -45,7 +45,7 @@ int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol")) return 0;
   using namespace visvol::cli;
-  // Ctrl-C or a kill during a build leaves no PACK.tmp.<pid> behind
+  // Ctrl-C or a kill during a build leaves no PACK.tmp.<host>.<pid> behind
   visvol::install_output_cleanup_on_signals();
   CLI::App app{
       "visvol: visibility volumes above terrain (the field F_p of Srikanth et al., "

@@ -101,6 +101,8 @@ Status ArticulatedRope::reset(const Vec3* polyline, int points, int segments) {
   ends_.start_m = polyline[0];
   ends_.end_m = polyline[points - 1];
   grasp_active_ = false;
+  fire_share_ = p_.fire_mixing;
+  fire_downhill_steps_ = 0;
   // Equal capsules on a bent polyline leave small gaps: close them.
   for (int it = 0; it < 6; ++it) {
     build_joints();
@@ -325,6 +327,7 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
     solve_chain();
     apply_impulses(false);
   }
+  if (p_.fire_mixing > 0) fire_adjust_velocities();
   // positions and orientations
   for (int i = 0; i < n_; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
@@ -341,6 +344,35 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
     apply_impulses(true);
   }
   update_vertices();
+}
+
+void ArticulatedRope::fire_adjust_velocities() {
+  double power_w = 0, speed2 = 0, force2 = 0;
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    power_w += force_[k].dot(v_[k]) + torque_[k].dot(w_[k]);
+    speed2 += v_[k].squaredNorm();
+    force2 += force_[k].squaredNorm();
+  }
+  if (!(power_w > 0)) {  // uphill (or still): stop, and start mixing afresh
+    for (int i = 0; i < n_; ++i) {
+      v_[static_cast<std::size_t>(i)].setZero();
+      w_[static_cast<std::size_t>(i)].setZero();
+    }
+    fire_share_ = p_.fire_mixing;
+    fire_downhill_steps_ = 0;
+    return;
+  }
+  if (fire_share_ <= 0) fire_share_ = p_.fire_mixing;
+  const double to_speed = force2 > 0 ? std::sqrt(speed2 / force2) : 0.0;  // |v| / |F|, s/kg
+  for (int i = 0; i < n_; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    v_[k] = (1 - fire_share_) * v_[k] + fire_share_ * to_speed * force_[k];
+  }
+  // FIRE's constants: five steps downhill before the share starts shrinking
+  constexpr int kDownhillSteps = 5;
+  constexpr double kShareDecay = 0.99;
+  if (++fire_downhill_steps_ > kDownhillSteps) fire_share_ *= kShareDecay;
 }
 
 // A vertex is the middle of the joint between two capsules; a fixed end is

@@ -98,6 +98,8 @@ class ArticulatedRope final : public Rope {
   void apply_impulses(bool positions);
   void accumulate_forces(const RopeEnvironment& env);
   void add_joint_springs();
+  // FIRE (RopeParams::fire_mixing): after the joint impulses, before the positions.
+  void fire_adjust_velocities();
   void update_vertices();
 
   RopeParams p_;
@@ -123,6 +125,9 @@ class ArticulatedRope final : public Rope {
   int grasp_segment_ = 0;
   double grasp_fraction_ = 0;
   Vec3 grasp_force_n_ = Vec3::Zero();
+  // FIRE's state: the share mixed in now, steps downhill since the last stop
+  double fire_share_ = 0;
+  int fire_downhill_steps_ = 0;
 };
 
 }  // namespace visvol::rt

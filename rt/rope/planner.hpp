@@ -10,7 +10,8 @@
 //    first (from the level the global search's start was found on, else the
 //    coarsest), then the finer ones, until it reaches equilibrium on the finest.
 //    An inextensible (articulated) rope gets `slack` extra length, bent
-//    sideways (rt/rope/slack.hpp). Equilibrium: over the last half second the
+//    sideways (rt/rope/slack.hpp), and settles by FIRE (a minimiser:
+//    RopeParams::fire_mixing). Equilibrium: over the last half second the
 //    rope's RMS speed stays under a tenth of a post spacing per second and F_c
 //    changes by less than 0.2% of itself per second (plus 1e-6).
 // 3. Every path seen (the start, each search, the rope every
@@ -142,6 +143,11 @@ std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m)
 
 // Points of the slack rope as laid (the rope resamples them to its segments).
 inline constexpr int kLaidSegments = 128;
+
+// The planner's articulated rope: FIRE's share and the viscous damping (1/s)
+// left beside it (the console's rope: none and 6 /s).
+inline constexpr double kPlanFireMixing = 0.1;
+inline constexpr double kPlanFireDamping_per_s = 0.2;
 
 namespace detail {
 
@@ -318,8 +324,15 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
                                  rope_length, floor_m, finest.geometry(),
                                  [&](double x, double y) { return judge.terrain_height_m(x, y); }, laid.data());
   }
-  const RopeParams rp = scaled_rope_params(request.model, request.segments, rope_length / request.segments,
-                                           request.stiffness, judge.reference_acceleration());
+  RopeParams rp = scaled_rope_params(request.model, request.segments, rope_length / request.segments, request.stiffness,
+                                     judge.reference_acceleration());
+  if (request.model == RopeModel::articulated) {
+    // Offline, the rope need only come to rest: FIRE with little viscous drag
+    // settles the same paths in a quarter fewer steps (tools/bench/README.md,
+    // "Plans", stop 31).
+    rp.fire_mixing = kPlanFireMixing;
+    rp.linear_damping_per_s = rp.angular_damping_per_s = kPlanFireDamping_per_s;
+  }
   Result<std::unique_ptr<Rope>> made = make_rope(rp);
   if (!made.ok()) return made.status();
   Rope& rope = **made;

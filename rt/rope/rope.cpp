@@ -60,6 +60,14 @@ Status validate(const RopeParams& p) {
     msg << "rope: " << p.projection_iterations << " projection iterations is outside 0..10";
     return invalid_argument(msg.str());
   }
+  if (!(p.fire_mixing >= 0 && p.fire_mixing <= 1)) {
+    msg << "rope: FIRE mixing " << p.fire_mixing << " is outside [0, 1]";
+    return invalid_argument(msg.str());
+  }
+  if (p.fire_mixing > 0 && p.model != RopeModel::articulated) {
+    msg << "rope: FIRE mixing applies to the articulated rope only";
+    return invalid_argument(msg.str());
+  }
   return Status::ok_status();
 }
 
@@ -73,7 +81,8 @@ bool params_valid(const RopeParams& p) {
          positive(p.capsule_radius_m) && non_negative(p.stretch_stiffness_n_per_m) &&
          non_negative(p.stretch_damping_n_s_per_m) && non_negative(p.bend_spring_n_per_m) &&
          positive(p.rest_length_factor) && p.verlet_damping >= 0 && p.verlet_damping <= 1 &&
-         p.projection_iterations >= 0 && p.projection_iterations <= 10;
+         p.projection_iterations >= 0 && p.projection_iterations <= 10 && p.fire_mixing >= 0 && p.fire_mixing <= 1 &&
+         (!(p.fire_mixing > 0) || p.model == RopeModel::articulated);
 }
 
 Result<std::unique_ptr<Rope>> make_rope(const RopeParams& params) {

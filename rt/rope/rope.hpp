@@ -51,6 +51,14 @@ struct RopeParams {
   double twist_damping_n_m_s_per_rad = 0.2;  // of the relative twisting spin
   double capsule_radius_m = 1.0;             // for the inertia only
   int projection_iterations = 2;             // position projections after each step
+  // Articulated, offline minimisation only (the planner; the console's rope
+  // stays physical): FIRE, molecular dynamics' minimiser. 0: off. Otherwise,
+  // at each step where the applied forces do no positive work every velocity
+  // is zeroed; where they do, the capsules' velocities are turned towards
+  // their forces by this share (v <- (1 - a) v + a |v| F / |F|, norms over
+  // the whole rope), the share shrinking 1% a step after five such steps.
+  // Never adds energy. In [0, 1].
+  double fire_mixing = 0.0;
   // Spring-mass (paper): stretch springs K_S, K_V, bending springs between i and
   // i + 2, and the Verlet damping factor d in [0, 1].
   double stretch_stiffness_n_per_m = 4000.0;

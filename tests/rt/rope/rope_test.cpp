@@ -58,6 +58,18 @@ TEST(Rope, ParametersAreValidated) {
   p = RopeParams{};
   p.max_segments = 1;
   EXPECT_FALSE(make_rope(p).ok());
+  for (const double share : {-0.1, 1.5, std::nan("")}) {
+    p = RopeParams{};
+    p.fire_mixing = share;
+    EXPECT_NE(validate(p).message().find("FIRE mixing"), std::string::npos) << share;
+    EXPECT_FALSE(params_valid(p)) << share;
+  }
+  p = RopeParams{};
+  p.fire_mixing = 0.1;
+  EXPECT_TRUE(validate(p).ok());
+  p.model = RopeModel::spring;
+  EXPECT_NE(validate(p).message().find("articulated rope only"), std::string::npos);
+  EXPECT_FALSE(params_valid(p));
   EXPECT_TRUE(parse_rope_model("spring").ok());
   EXPECT_FALSE(parse_rope_model("noodle").ok());
 }
@@ -229,6 +241,44 @@ TEST(Rope, SettlesUnderAUniformPull) {
     for (int t = 0; t < 30000; ++t) rope->step(0.001, down);
     EXPECT_LT(rope->kinetic_energy_j(), 1e-3) << to_string(model);
     EXPECT_LT(rope->vertices()[16].z(), -100.0) << to_string(model);  // it sags
+  }
+}
+
+// FIRE (the planner's minimiser) comes to rest where the physical rope does,
+// in fewer steps, and stays inextensible and finite in a field that is no
+// potential (where zeroing and turning velocities could otherwise pump).
+TEST(ArticulatedRope, FireSettlesWhereThePhysicalRopeDoesInFewerSteps) {
+  auto physical = laid_rope(RopeModel::articulated, 32, 0.3, {0, 0, 0}, {1000, 0, 0});
+  auto fire = laid_rope(RopeModel::articulated, 32, 0.3, {0, 0, 0}, {1000, 0, 0});
+  RopeParams p = fire->params();
+  p.fire_mixing = kPlanFireMixing;
+  p.linear_damping_per_s = p.angular_damping_per_s = kPlanFireDamping_per_s;
+  ASSERT_EQ(fire->set_params(p), Errc::ok);
+  Uniform down;
+  down.a = {0, 0, -1000};
+  // steps until at rest (kinetic energy under 1e-3 J for 200 steps running)
+  auto settle = [&](Rope& rope) {
+    int quiet = 0;
+    for (int t = 1; t <= 30000; ++t) {
+      rope.step(0.001, down);
+      quiet = rope.kinetic_energy_j() < 1e-3 ? quiet + 1 : 0;
+      if (quiet == 200) return t;
+    }
+    return 30001;
+  };
+  const int physical_steps = settle(*physical), fire_steps = settle(*fire);
+  EXPECT_LE(physical_steps, 30000);
+  EXPECT_LT(fire_steps, physical_steps);
+  for (int i = 0; i <= 32; ++i) {
+    EXPECT_LT((fire->vertices()[i] - physical->vertices()[i]).norm(), 1.0) << "vertex " << i;
+  }
+  auto& a = dynamic_cast<ArticulatedRope&>(*fire);
+  const double segment = a.length_m() / 32;
+  Wavy field;
+  for (int t = 0; t < 3000; ++t) {
+    a.step(0.001, field);
+    ASSERT_TRUE(std::isfinite(a.kinetic_energy_j())) << "step " << t;
+    ASSERT_LT(a.max_joint_gap_m(), 1e-4 * segment) << "step " << t;
   }
 }
 

@@ -7,7 +7,6 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <cctype>
 #include <cerrno>
 #include <climits>
 #include <csignal>
@@ -41,7 +40,8 @@ std::string host_label() {
   if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "unnamed";
   std::string out;
   for (const char* c = name; *c != '\0' && out.size() < 64; ++c) {
-    out += std::isalnum(static_cast<unsigned char>(*c)) != 0 || *c == '-' ? *c : '_';
+    const bool kept = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') || *c == '-';
+    out += kept ? *c : '_';  // ASCII only, whatever the locale
   }
   return out;
 }

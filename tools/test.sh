@@ -65,9 +65,12 @@ build_tree() {  # build_tree BUILD_DIR [cmake options...] [-- targets...]
       echo "== ${o#*=} not found (tools/deps.sh fuzz installs it)" >&2
       return 1
     }
+    compiler=$(readlink -f "$compiler")
   done
-  if [[ -n $compiler && -f "$dir/CMakeCache.txt" ]] &&
-    ! grep -qx "CMAKE_CXX_COMPILER:[A-Z]*=$compiler" "$dir/CMakeCache.txt"; then
+  local cached=""
+  [[ ! -f "$dir/CMakeCache.txt" ]] ||
+    cached=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$dir/CMakeCache.txt")
+  if [[ -n $compiler && -n $cached && $(readlink -f "$cached") != "$compiler" ]]; then
     echo "== $dir: configured with another compiler; building it again"
     rm -rf "$dir"
   fi

@@ -58,6 +58,10 @@ class ArticulatedRope final : public Rope {
     if (params.model != p_.model || params.max_segments != p_.max_segments || !params_valid(params)) {
       return Errc::invalid_argument;
     }
+    if (params.fire_mixing != p_.fire_mixing) {  // FIRE starts afresh with its new share
+      fire_share_ = params.fire_mixing;
+      fire_downhill_steps_ = 0;
+    }
     p_ = params;
     return Errc::ok;
   }
@@ -98,8 +102,10 @@ class ArticulatedRope final : public Rope {
   void apply_impulses(bool positions);
   void accumulate_forces(const RopeEnvironment& env);
   void add_joint_springs();
-  // FIRE (RopeParams::fire_mixing): after the joint impulses, before the positions.
-  void fire_adjust_velocities();
+  // FIRE (RopeParams::fire_mixing): after the joint impulses, before the
+  // positions; the joints' velocities solved again after (Baumgarte term as
+  // the step's).
+  void fire_adjust_velocities(double dt_s, double baumgarte);
   void update_vertices();
 
   RopeParams p_;

@@ -88,7 +88,9 @@ struct PlanRequest {
   // Time step at most (the planner takes less where the rope's springs or
   // the clearance push need it: stable_step_s). Offline there is no 1 kHz
   // loop to keep: 4 ms settles the same paths as 1 ms (visvol-planbench, same
-  // F_c to 4 digits, same simulated time to equilibrium), a quarter the work.
+  // F_c to 4 digits, same simulated time to equilibrium, measured before the
+  // rope settled by FIRE, whose constants are per step; planner_test's
+  // TheStepDoesNotChangeTheAnswer checks the paths still agree), a quarter the work.
   double dt_s = 0.004;
   double max_seconds_per_level = 40.0;
   double candidate_interval_s = 0.25;       // rope states judged this often on the finest level

@@ -40,8 +40,9 @@ Status validate(const VehicleEnvelope& v) {
     msg << "vehicle " << v.name << ": " << key << " " << value << " " << what;
     return invalid_argument(msg.str());
   };
-  if (!(std::isfinite(v.speed_m_per_s) && v.speed_m_per_s > 0 && v.speed_m_per_s <= 1000)) {
-    return bad("speed", v.speed_m_per_s, "is outside (0, 1000] m/s");
+  // at least 0.1 m/s: a speed of 5e-324 m/s gave an exposure time of inf s
+  if (!(std::isfinite(v.speed_m_per_s) && v.speed_m_per_s >= 0.1 && v.speed_m_per_s <= 1000)) {
+    return bad("speed", v.speed_m_per_s, "is outside [0.1, 1000] m/s");
   }
   if (!(v.max_climb_deg > 0 && v.max_climb_deg <= 90))
     return bad("max-climb", v.max_climb_deg, "is outside (0, 90] deg");

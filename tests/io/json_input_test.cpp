@@ -35,6 +35,32 @@ TEST(JsonInput, RefusesNestingBeyondTheLimitNamingTheInput) {
   EXPECT_TRUE(parse_json_input(objects, "o.json", kMaxJsonDepth + 2).ok());
 }
 
+// Brackets inside strings, escaped quotes among them, are text, not levels.
+TEST(JsonInput, BracketsInStringsAreNotLevels) {
+  const std::string brackets = nested(kMaxJsonDepth + 10, '[', ']') + nested(kMaxJsonDepth + 10, '{', '}');
+  const std::string text = R"({"a": "\"[[\\", "b": ")" + brackets + R"(", "c": [[1]]})";
+  const Result<nlohmann::json> j = parse_json_input(text, "s.json");
+  ASSERT_TRUE(j.ok()) << j.status().message();
+  EXPECT_EQ((*j)["a"], "\"[[\\");
+  EXPECT_EQ((*j)["b"], brackets);
+  EXPECT_EQ((*j)["c"][0][0], 1);
+  // a quote escaped inside a string does not end it: the brackets after it are text
+  EXPECT_TRUE(parse_json_input(R"(["\")" + nested(kMaxJsonDepth + 1, '[', ']') + R"("])", "e.json").ok());
+}
+
+// Many small objects in one array (a QGroundControl plan's mission items):
+// the whole array, every object in it. (nlohmann's depth callback made this
+// quadratic: 400,000 took 35 s; README.md, "Hostile input".)
+TEST(JsonInput, ManyObjectsInOneArrayAreAllRead) {
+  constexpr int kObjects = 200000;
+  std::string text = "{\"items\":[";
+  for (int k = 0; k < kObjects; ++k) text += k == 0 ? "{}" : ",{}";
+  text += "]}";
+  const Result<nlohmann::json> j = parse_json_input(text, "many.json");
+  ASSERT_TRUE(j.ok()) << j.status().message();
+  EXPECT_EQ((*j)["items"].size(), static_cast<std::size_t>(kObjects));
+}
+
 TEST(JsonInput, NamesTheInputOfTextThatIsNotJson) {
   const Result<nlohmann::json> j = parse_json_input("{\"a\": ", "cut.json");
   ASSERT_FALSE(j.ok());

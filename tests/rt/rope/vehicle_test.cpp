@@ -34,6 +34,8 @@ TEST(Vehicle, BadValuesAreRefusedByKey) {
   refused([](VehicleEnvelope& v) { v.max_descent_deg = 91; }, "max-descent");
   refused([](VehicleEnvelope& v) { v.min_turn_radius_m = -1; }, "min-turn-radius");
   refused([](VehicleEnvelope& v) { v.speed_m_per_s = 0; }, "speed");
+  refused([](VehicleEnvelope& v) { v.speed_m_per_s = 4.9e-324; }, "speed");  // denormal: inf s of exposure
+  refused([](VehicleEnvelope& v) { v.speed_m_per_s = 0.05; }, "[0.1, 1000] m/s");
   refused([](VehicleEnvelope& v) { v.clearance_m = std::nan(""); }, "clearance");
   refused([](VehicleEnvelope& v) { v.max_altitude_m = std::nan(""); }, "max-altitude");
   // contradictory: a ceiling under the clearance

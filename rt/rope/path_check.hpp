@@ -33,6 +33,10 @@ namespace visvol::rt {
 enum class ConstraintKind : std::uint8_t { hidden_from = 0, visible_to = 1 };
 const char* to_string(ConstraintKind kind);  // "hidden-from", "visible-to"
 
+// The highest an observer may stand or fly, metres above the datum: higher is
+// a mistyped number (a point 1e300 m up was accepted, and seen by no path).
+inline constexpr double kMaxObserverAltitudeM = 1.0e5;
+
 // An observer as a user names it: a point at or above the finest terrain
 // (pack CRS metres), whose eye is `eye_height_m` above it.
 struct ConstraintPoint {

@@ -1,6 +1,9 @@
 #include "rt/rope/point_hull_maker.hpp"
 
+#include "rt/rope/path_check.hpp"
+
 #include <cmath>
+#include <sstream>
 #include <string>
 
 namespace visvol::rt {
@@ -9,6 +12,11 @@ Result<PointHull> PointHullMaker::operator()(const Vec3& p, const char* name) co
   int pi = 0, pj = 0;
   if (!p.allFinite() || !hull_post(g_, p, pi, pj)) {
     return invalid_argument(std::string(name) + ": point is outside the pack");
+  }
+  if (p.z() > kMaxObserverAltitudeM) {
+    std::ostringstream msg;
+    msg << name << ": point is " << p.z() << " m up, above the " << kMaxObserverAltitudeM << " m an observer may be";
+    return invalid_argument(msg.str());
   }
   if (p.z() < hf_.at(pi, pj)) {
     return invalid_argument(std::string(name) + ": point is " + std::to_string(hf_.at(pi, pj) - p.z()) +

@@ -212,6 +212,8 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--hidden-from 1 2", "--hidden-from"},
       {too_many, "--hidden-from: at most 256 points"},
       {"--visible-to 1 2 nan", "--visible-to"},
+      {"--visible-to " + xyz({post(40, 40, 0)[0], post(40, 40, 0)[1], 1e300}),
+       "Z 1e+300 m is above the 100000 m an observer may be"},
       {"--eye-height -1", "--eye-height"},
       {"--max-observers 513", "--max-observers: must be in 0..512"},
       {"--max-observers 1 --hidden-from" + p + " --visible-to" + p, "--max-observers: 1 is fewer than the 2"},

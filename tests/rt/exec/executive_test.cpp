@@ -627,6 +627,15 @@ TEST_F(ExecutiveTest, HiddenFromAndVisibleToConstraintsComeIntoForce) {
   EXPECT_EQ(a.result, msg::AckResult::failed);
   EXPECT_NE(std::string(a.reason).find("below the terrain"), std::string::npos) << a.reason;
   EXPECT_EQ(next_ack().result, msg::AckResult::applied);
+  msg::Command high = command(msg::CommandKind::set_constraints, 4);
+  high.constraints.count = 1;
+  high.constraints.items[0].kind = msg::ConstraintKind::visible_to;
+  high.constraints.items[0].position = {p.x(), p.y(), 1e300};
+  ASSERT_TRUE(commands_.try_push(high));
+  run(*e, 1);
+  const msg::CommandAck h = next_ack();
+  EXPECT_EQ(h.result, msg::AckResult::failed);
+  EXPECT_NE(std::string(h.reason).find("above 100 km"), std::string::npos) << h.reason;
   wait_for_sets(*e, 2);
   EXPECT_EQ(e->counters().hull_sets, 2u);
   EXPECT_EQ(e->forces().hidden_from(), nullptr);
@@ -741,6 +750,14 @@ TEST_F(ExecutiveTest, ConfiguredObserversComeIntoForceWithTheBuilder) {
   ASSERT_FALSE(under.ok());
   EXPECT_NE(under.status().message().find("visible-to point"), std::string::npos) << under.status().message();
   EXPECT_NE(under.status().message().find("below the terrain"), std::string::npos) << under.status().message();
+  // or 1e300 m up (a mistyped number)
+  c = config_;
+  c.observers.visible_to_m[0][2] = 1e300;
+  auto high = Executive::create(c, *field_, nullptr, nullptr, nullptr, ExecutiveOutputs{});
+  ASSERT_FALSE(high.ok());
+  EXPECT_NE(high.status().message().find("visible-to point 1: Z 1e+300 m is above the 100000 m an observer may be"),
+            std::string::npos)
+      << high.status().message();
 }
 
 // Commands that cannot be had fail with a reason and change nothing.

@@ -5,7 +5,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <sstream>
 #include <tuple>
 
 #include "io/input_file.hpp"
@@ -159,11 +158,7 @@ Result<std::vector<rt::ConstraintPoint>> constraint_points(const ConstraintOptio
       if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
         return invalid_argument(std::string(option) + ": a point is three finite numbers X Y Z (m)");
       }
-      if (p[2] > rt::kMaxObserverAltitudeM) {
-        std::ostringstream msg;
-        msg << option << ": Z " << p[2] << " m is above the " << rt::kMaxObserverAltitudeM << " m an observer may be";
-        return invalid_argument(msg.str());
-      }
+      VISVOL_RETURN_IF_ERROR(rt::check_observer_altitude(option, p[2]));
       out.push_back({kind, rt::Vec3(p[0], p[1], p[2]), o.eye_height_m});
     }
   }

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <string>
 
@@ -267,11 +266,7 @@ Status Executive::check_observers(const HullRequest& r) const {
     const std::string name = std::string(hidden ? "hidden-from point " : "visible-to point ") +
                              std::to_string(1 + (hidden ? k : k - r.hidden_count));
     VISVOL_RETURN_IF_ERROR(check_point(name.c_str(), p, g, finest_.height(p.x(), p.y()) - kHeightTolM));
-    if (p.z() > kMaxObserverAltitudeM) {
-      char text[96];
-      std::snprintf(text, sizeof text, ": Z %g m is above the %g m an observer may be", p.z(), kMaxObserverAltitudeM);
-      return invalid_argument(name + text);
-    }
+    VISVOL_RETURN_IF_ERROR(check_observer_altitude(name, p.z()));
     int pi = 0, pj = 0;
     if (!hull_post(field_.level(config_.level).geometry(), p, pi, pj)) {
       return invalid_argument("executive: " + name + " is outside level " + std::to_string(config_.level) +

@@ -316,18 +316,11 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
     v_[k] = (v_[k] + dt / p_.mass_kg * force_[k]) * lin;
     w_[k] = (w_[k] + dt * (inv_inertia_[k] * torque_[k])) * ang;
   }
-  // joint impulses: relative velocity at every joint to -beta * gap / dt
-  constexpr double kBaumgarte = 0.2;
   if (joint_count_ > 0) {
     factor_chain();  // reused by the projections below: the configuration barely moves in a step
-    for (int k = 0; k < joint_count_; ++k) {
-      const Joint& j = joints_[static_cast<std::size_t>(k)];
-      rhs_[static_cast<std::size_t>(k)] = -joint_velocity(j) - (kBaumgarte / dt) * joint_error(j);
-    }
-    solve_chain();
-    apply_impulses(false);
+    solve_joint_velocities(dt);
   }
-  if (p_.fire_mixing > 0) fire_adjust_velocities(dt, kBaumgarte);
+  if (p_.fire_mixing > 0) fire_adjust_velocities(dt);
   // positions and orientations
   for (int i = 0; i < n_; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
@@ -346,7 +339,19 @@ void ArticulatedRope::step(double dt, const RopeEnvironment& env) {
   update_vertices();
 }
 
-void ArticulatedRope::fire_adjust_velocities(double dt_s, double baumgarte) {
+// Joint impulses (with this step's factors): relative velocity at every joint
+// to -beta * gap / dt.
+void ArticulatedRope::solve_joint_velocities(double dt_s) {
+  constexpr double kBaumgarte = 0.2;
+  for (int k = 0; k < joint_count_; ++k) {
+    const Joint& j = joints_[static_cast<std::size_t>(k)];
+    rhs_[static_cast<std::size_t>(k)] = -joint_velocity(j) - (kBaumgarte / dt_s) * joint_error(j);
+  }
+  solve_chain();
+  apply_impulses(false);
+}
+
+void ArticulatedRope::fire_adjust_velocities(double dt_s) {
   double power_w = 0, speed2_m2_per_s2 = 0, force2_n2 = 0;
   for (int i = 0; i < n_; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
@@ -371,16 +376,9 @@ void ArticulatedRope::fire_adjust_velocities(double dt_s, double baumgarte) {
     const std::size_t k = static_cast<std::size_t>(i);
     v_[k] = (1 - fire_share_) * v_[k] + fire_share_ * to_speed_s_per_kg * force_[k];
   }
-  // The turned velocities pull on the joints: solved again with this step's
-  // factors, so the positions move with velocities the joints allow.
-  if (joint_count_ > 0) {
-    for (int k = 0; k < joint_count_; ++k) {
-      const Joint& j = joints_[static_cast<std::size_t>(k)];
-      rhs_[static_cast<std::size_t>(k)] = -joint_velocity(j) - (baumgarte / dt_s) * joint_error(j);
-    }
-    solve_chain();
-    apply_impulses(false);
-  }
+  // The turned velocities pull on the joints: solved again, so the positions
+  // move with velocities the joints allow.
+  if (joint_count_ > 0) solve_joint_velocities(dt_s);
   // FIRE's constants, per step as its authors give them (five steps
   // downhill, then 1% less a step): the step changes the share's decay in
   // simulated time. Tried per simulated second (stop 31, the same at the

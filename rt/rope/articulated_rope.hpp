@@ -102,10 +102,10 @@ class ArticulatedRope final : public Rope {
   void apply_impulses(bool positions);
   void accumulate_forces(const RopeEnvironment& env);
   void add_joint_springs();
+  void solve_joint_velocities(double dt_s);
   // FIRE (RopeParams::fire_mixing): after the joint impulses, before the
-  // positions; the joints' velocities solved again after (Baumgarte term as
-  // the step's).
-  void fire_adjust_velocities(double dt_s, double baumgarte);
+  // positions; the joints' velocities solved again after.
+  void fire_adjust_velocities(double dt_s);
   void update_vertices();
 
   RopeParams p_;

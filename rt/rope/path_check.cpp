@@ -104,6 +104,13 @@ Result<PathChecker> PathChecker::create(fields::Heightfield terrain, const PathF
   return c;
 }
 
+Status check_observer_altitude(const std::string& name, double z_m) {
+  if (!(z_m > kMaxObserverAltitudeM)) return Status::ok_status();
+  std::ostringstream msg;
+  msg << name << ": Z " << z_m << " m is above the " << kMaxObserverAltitudeM << " m an observer may be";
+  return invalid_argument(msg.str());
+}
+
 double PathChecker::ground_m(double x, double y) const {
   return fields::bilinear_height(terrain_, terrain_.i_of(x), terrain_.j_of(y));  // clamped to the grid
 }

@@ -36,6 +36,9 @@ const char* to_string(ConstraintKind kind);  // "hidden-from", "visible-to"
 // The highest an observer may stand or fly, metres above the datum: higher is
 // a mistyped number (a point 1e300 m up was accepted, and seen by no path).
 inline constexpr double kMaxObserverAltitudeM = 1.0e5;
+// "NAME: Z 1e+300 m is above the 100000 m an observer may be" where `z_m` is
+// over kMaxObserverAltitudeM (the options, the console, the hull maker).
+Status check_observer_altitude(const std::string& name, double z_m);
 
 // An observer as a user names it: a point at or above the finest terrain
 // (pack CRS metres), whose eye is `eye_height_m` above it.

@@ -3,7 +3,6 @@
 #include "rt/rope/path_check.hpp"
 
 #include <cmath>
-#include <sstream>
 #include <string>
 
 namespace visvol::rt {
@@ -13,11 +12,7 @@ Result<PointHull> PointHullMaker::operator()(const Vec3& p, const char* name) co
   if (!p.allFinite() || !hull_post(g_, p, pi, pj)) {
     return invalid_argument(std::string(name) + ": point is outside the pack");
   }
-  if (p.z() > kMaxObserverAltitudeM) {
-    std::ostringstream msg;
-    msg << name << ": point is " << p.z() << " m up, above the " << kMaxObserverAltitudeM << " m an observer may be";
-    return invalid_argument(msg.str());
-  }
+  VISVOL_RETURN_IF_ERROR(check_observer_altitude(name, p.z()));
   if (p.z() < hf_.at(pi, pj)) {
     return invalid_argument(std::string(name) + ": point is " + std::to_string(hf_.at(pi, pj) - p.z()) +
                             " m below the terrain");

@@ -229,14 +229,13 @@ std::uint64_t scatter_row(Build& b, int batch_first, int batch_rows, int y) {
   return cells;
 }
 
-// Prefix sums up each column of row y, converted to F_p in place (float bits
-// in the int32 slab, still column-major).
-void finish_row(Build& b, int y) {
-  std::int32_t* slab = b.slab(y);
+// Prefix sums up each column of a row's sums (column-major, as in the
+// window), converted to F_p in place (float bits in the int32s).
+void finish_sums(const Build& b, std::int32_t* sums) {
   const float norm = static_cast<float>(b.weights.norm);
   const std::size_t col_ints = static_cast<std::size_t>(b.geom.nz + 1);
   for (int x = 0; x < b.hf.nx; ++x) {
-    std::int32_t* col = slab + static_cast<std::size_t>(x) * col_ints;
+    std::int32_t* col = sums + static_cast<std::size_t>(x) * col_ints;
     std::int32_t acc = 0;
     for (int k = 0; k < b.geom.nz; ++k) {
       acc += col[k];
@@ -247,12 +246,11 @@ void finish_row(Build& b, int y) {
 }
 
 // Copies a finished row into level-major order for the sink.
-void transpose_row(const Build& b, int y, std::vector<float>& out) {
-  const std::int32_t* slab = b.slab(y);
+void transpose_row(const Build& b, const std::int32_t* sums, std::vector<float>& out) {
   const std::size_t col_ints = static_cast<std::size_t>(b.geom.nz + 1);
   const std::size_t nx = static_cast<std::size_t>(b.hf.nx);
   for (std::size_t x = 0; x < nx; ++x) {
-    const std::int32_t* col = slab + x * col_ints;
+    const std::int32_t* col = sums + x * col_ints;
     for (std::size_t k = 0; k < static_cast<std::size_t>(b.geom.nz); ++k) {
       std::memcpy(&out[k * nx + x], &col[k], sizeof(float));
     }
@@ -263,20 +261,91 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Target rows [band.first, band.end): the observers within the range of
-// them, in batches; each row is handed to the sink once no later observer
-// reaches it.
-Status run_build(Build& b, RowBand band, VolumeRowSink& sink, const ProgressFn& progress, WorkerPool& pool,
-                 BuildStats& stats) {
+// How the rows of a build are shared: by rows (a share computes the hulls of
+// every observer within range of its band: `bands` null) or by observers
+// (its band's observers only; the sums over other shares' rows travel).
+struct Split {
+  const std::vector<RowBand>* bands = nullptr;
+  int index = 0;
+  RowExchange* exchange = nullptr;
+
+  bool by_observers() const { return bands != nullptr; }
+  // The share whose band holds row y.
+  int owner(int y) const {
+    for (std::size_t q = 0; q < bands->size(); ++q)
+      if (y >= (*bands)[q].first && y < (*bands)[q].end) return static_cast<int>(q);
+    return -1;  // validated: the bands cover the grid
+  }
+  // Every other share with an observer row within `radius` of row y.
+  template <class Fn>
+  void for_each_source(int y, int radius, Fn&& fn) const {
+    for (std::size_t q = 0; q < bands->size(); ++q) {
+      const RowBand& o = (*bands)[q];
+      if (static_cast<int>(q) != index && o.first < o.end && o.first <= y + radius && o.end - 1 >= y - radius)
+        fn(static_cast<int>(q));
+    }
+  }
+};
+
+// A row of the band that another share's observers reach: it waits for
+// their sums (split by observers only).
+bool needs_other_shares(const Split& split, RowBand band, int ny, int radius, int y) {
+  return split.by_observers() &&
+         ((band.first > 0 && y - radius < band.first) || (band.end < ny && y + radius >= band.end));
+}
+
+// The rows of the band that waited for other shares' sums, in increasing j:
+// theirs added to this share's, then finished and handed to the sink.
+Status finish_held_rows(Build& b, const Split& split, std::vector<std::pair<int, std::vector<std::int32_t>>>& held,
+                        VolumeRowSink& sink, std::vector<float>& staging, BuildStats& stats) {
+  std::vector<std::int32_t> incoming(b.slab_ints);
+  for (auto& row : held) {
+    const int y = row.first;  // (a structured binding cannot be captured before C++20)
+    std::vector<std::int32_t>& sums = row.second;
+    const auto t0 = std::chrono::steady_clock::now();
+    Status received = Status::ok_status();
+    split.for_each_source(y, b.radius, [&](int from) {
+      if (!received.ok()) return;
+      received = split.exchange->receive(from, y, incoming.data(), incoming.size());
+      for (std::size_t n = 0; n < sums.size() && received.ok(); ++n) sums[n] += incoming[n];
+      stats.received_bytes += incoming.size() * sizeof(std::int32_t);
+    });
+    stats.exchange_s += seconds_since(t0);
+    VISVOL_RETURN_IF_ERROR(received);
+    finish_sums(b, sums.data());
+    transpose_row(b, sums.data(), staging);
+    VISVOL_RETURN_IF_ERROR(sink.write_row(y, staging.data()));
+    std::vector<std::int32_t>().swap(sums);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  VISVOL_RETURN_IF_ERROR(split.exchange->finish());
+  stats.exchange_s += seconds_since(t0);
+  return Status::ok_status();
+}
+
+// Target rows [band.first, band.end). Split by rows: the observers within the
+// range of them. Split by observers: the band's observers, over the target
+// rows within their range. In batches of observer rows; each target row leaves
+// the window once no later observer reaches it: to the sink, to the share that
+// owns it, or held for the other shares' sums.
+Status run_build(Build& b, RowBand band, const Split& split, VolumeRowSink& sink, const ProgressFn& progress,
+                 WorkerPool& pool, BuildStats& stats) {
   const int batch = b.plan.batch_rows;
-  const int obs_lo = std::max(0, band.first - b.radius);
-  const int obs_hi = std::min(b.hf.ny, band.end + b.radius);
+  const int ny = b.hf.ny;
+  const bool by_observers = split.by_observers();
+  const int obs_lo = by_observers ? band.first : std::max(0, band.first - b.radius);
+  const int obs_hi = by_observers ? band.end : std::min(ny, band.end + b.radius);
+  const int target_lo = by_observers ? std::max(0, band.first - b.radius) : band.first;
+  const int target_hi = by_observers ? std::min(ny, band.end + b.radius) : band.end;
+  auto in_band = [&](int y) { return y >= band.first && y < band.end; };
+  auto finished_here = [&](int y) { return in_band(y) && !needs_other_shares(split, band, ny, b.radius, y); };
   const std::size_t ring_floats = static_cast<std::size_t>(ring_size(std::max(b.radius, 1))) * kLanes;
   std::vector<std::vector<float>> ring_a(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   std::vector<std::vector<float>> ring_b(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   b.cells_per_worker.assign(static_cast<std::size_t>(pool.size()), 0);
-  int rows_out = band.first;  // rows handed to the sink
+  int rows_out = target_lo;  // rows that left the window
   std::vector<float> staging(static_cast<std::size_t>(b.geom.nz) * static_cast<std::size_t>(b.hf.nx));
+  std::vector<std::pair<int, std::vector<std::int32_t>>> held;  // rows waiting for other shares' sums
   for (int first = obs_lo; first < obs_hi; first += batch) {
     const int rows = std::min(batch, obs_hi - first);
     // phase 1: hull levels of the batch's observers
@@ -287,26 +356,35 @@ Status run_build(Build& b, RowBand band, VolumeRowSink& sink, const ProgressFn& 
     stats.hull_s += seconds_since(t0);
     // phase 2: scatter into target rows; finish rows no later observer reaches
     t0 = std::chrono::steady_clock::now();
-    const int y_lo = std::max(band.first, first - b.radius);
-    const int y_hi = std::min(band.end - 1, first + rows - 1 + b.radius);
+    const int y_lo = std::max(target_lo, first - b.radius);
+    const int y_hi = std::min(target_hi - 1, first + rows - 1 + b.radius);
     const bool last_batch = first + rows == obs_hi;
-    const int finished_to = last_batch ? band.end : std::clamp(first + rows - b.radius, band.first, band.end);
+    const int finished_to = last_batch ? target_hi : std::clamp(first + rows - b.radius, target_lo, target_hi);
     pool.run(y_hi - y_lo + 1, [&](int item, int worker) {
       const int y = y_lo + item;
       b.cells_per_worker[static_cast<std::size_t>(worker)] += scatter_row(b, first, rows, y);
-      if (y < finished_to) finish_row(b, y);
+      if (y < finished_to && finished_here(y)) finish_sums(b, b.slab(y));
     });
-    // hand finished rows to the sink in order and recycle their slabs
+    // rows done here leave in order, and their slabs are recycled
     for (; rows_out < finished_to; ++rows_out) {
       std::int32_t* slab = b.slab(rows_out);
-      transpose_row(b, rows_out, staging);
-      VISVOL_RETURN_IF_ERROR(sink.write_row(rows_out, staging.data()));
+      if (!in_band(rows_out)) {
+        const int to = split.owner(rows_out);
+        VISVOL_RETURN_IF_ERROR(split.exchange->send(to, rows_out, slab, b.slab_ints));
+        stats.sent_bytes += b.slab_ints * sizeof(std::int32_t);
+      } else if (!finished_here(rows_out)) {
+        held.emplace_back(rows_out, std::vector<std::int32_t>(slab, slab + b.slab_ints));
+      } else {
+        transpose_row(b, slab, staging);
+        VISVOL_RETURN_IF_ERROR(sink.write_row(rows_out, staging.data()));
+      }
       std::fill(slab, slab + b.slab_ints, 0);
     }
     stats.scatter_s += seconds_since(t0);
     if (progress) progress(static_cast<double>(first + rows - obs_lo) / (obs_hi - obs_lo));
   }
-  return Status::ok_status();
+  if (!by_observers) return Status::ok_status();
+  return finish_held_rows(b, split, held, sink, staging, stats);
 }
 
 }  // namespace
@@ -368,12 +446,10 @@ Status build_visibility(const Heightfield& hf, const FieldParams& params, Volume
   return build_visibility_rows(hf, params, RowBand{0, hf.ny}, sink, progress, stats);
 }
 
-Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, RowBand band, VolumeRowSink& sink,
-                             const ProgressFn& progress, BuildStats* stats) {
-  if (band.first < 0 || band.end > hf.ny || band.first >= band.end) {
-    return invalid_argument("field build: rows " + std::to_string(band.first) + ".." + std::to_string(band.end) +
-                            " are not a band of the grid's " + std::to_string(hf.ny));
-  }
+namespace {
+
+Status build_band(const Heightfield& hf, const FieldParams& params, RowBand band, const Split& split,
+                  VolumeRowSink& sink, const ProgressFn& progress, BuildStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   Result<BuildPlan> plan = plan_visibility_build(hf, params);
   if (!plan.ok()) return plan.status();
@@ -384,7 +460,7 @@ Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, R
     b.window.assign(static_cast<std::size_t>(b.win) * b.slab_ints, 0);
     WorkerPool pool(params.threads);
     BuildStats local;
-    VISVOL_RETURN_IF_ERROR(run_build(b, band, sink, progress, pool, local));
+    VISVOL_RETURN_IF_ERROR(run_build(b, band, split, sink, progress, pool, local));
     if (stats) {
       *stats = local;
       stats->wall_s = seconds_since(t0);
@@ -398,6 +474,42 @@ Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, R
                           " MiB of working memory");
   }
   return Status::ok_status();
+}
+
+}  // namespace
+
+Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, RowBand band, VolumeRowSink& sink,
+                             const ProgressFn& progress, BuildStats* stats) {
+  if (band.first < 0 || band.end > hf.ny || band.first >= band.end) {
+    return invalid_argument("field build: rows " + std::to_string(band.first) + ".." + std::to_string(band.end) +
+                            " are not a band of the grid's " + std::to_string(hf.ny));
+  }
+  return build_band(hf, params, band, Split{}, sink, progress, stats);
+}
+
+Status build_visibility_share(const Heightfield& hf, const FieldParams& params, const std::vector<RowBand>& bands,
+                              int index, RowExchange& exchange, VolumeRowSink& sink, const ProgressFn& progress,
+                              BuildStats* stats) {
+  int next = 0;  // the bands must cover rows 0..ny in order
+  bool in_order = !bands.empty();
+  for (const RowBand& band : bands) {
+    in_order = in_order && band.first == next && band.end >= band.first;
+    next = band.end;
+  }
+  if (!in_order || next != hf.ny) {
+    return invalid_argument("field build: the " + std::to_string(bands.size()) +
+                            " bands of the split do not cover the grid's " + std::to_string(hf.ny) + " rows in order");
+  }
+  if (index < 0 || index >= static_cast<int>(bands.size())) {
+    return invalid_argument("field build: share " + std::to_string(index) + " is not one of the split's " +
+                            std::to_string(bands.size()));
+  }
+  const RowBand band = bands[static_cast<std::size_t>(index)];
+  if (band.first == band.end) {  // no observers, no rows: nothing to send or wait for
+    if (stats) *stats = BuildStats{};
+    return Status::ok_status();
+  }
+  return build_band(hf, params, band, Split{&bands, index, &exchange}, sink, progress, stats);
 }
 
 namespace {

@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "base/status.hpp"
 #include "fields/field_params.hpp"
@@ -53,6 +54,10 @@ struct BuildStats {
   double wall_s = 0;
   double hull_s = 0;     // phase 1: hull levels
   double scatter_s = 0;  // phase 2: scatter, prefix sums, hand-off
+  // A build split by observers (build_visibility_share): waiting for and
+  // adding the other shares' partial sums, and the bytes of them.
+  double exchange_s = 0;
+  std::uint64_t sent_bytes = 0, received_bytes = 0;
   int threads = 0;
   BuildPlan plan;
   std::uint64_t hull_cells = 0;  // (observer, target column) pairs evaluated
@@ -80,6 +85,37 @@ struct RowBand {
 // the range around it.
 Status build_visibility_rows(const Heightfield& hf, const FieldParams& params, RowBand band, VolumeRowSink& sink,
                              const ProgressFn& progress = {}, BuildStats* stats = nullptr);
+
+// The transport between the shares of a build split by observers: the
+// partial sums of one target row (nx * (nz + 1) int32 values), exact. A row
+// travels once from each share whose observers reach it to the share that
+// owns it. Called from the building thread only.
+class RowExchange {
+ public:
+  virtual ~RowExchange() = default;
+  // Row j's partial sums for share `to`; returns without waiting for `to`
+  // (the values are copied or sent before it returns).
+  virtual Status send(int to, int j, const std::int32_t* sums, std::size_t count) = 0;
+  // Share `from`'s partial sums of row j into `sums`; waits for them.
+  virtual Status receive(int from, int j, std::int32_t* sums, std::size_t count) = 0;
+  // Waits until every row this share sent has left.
+  virtual Status finish() = 0;
+};
+
+// Rows [band.first, band.end) of F_p, computed from the observers of the
+// band only: `bands` partition the grid's rows in order (empty bands
+// allowed), one per share, and this is share `index`. Each observer's hull
+// is computed once in the whole build (build_visibility_rows computes those
+// within range of a band again in every band that they reach); the sums
+// over the target rows within range of another share's observers travel
+// through `exchange`, as integers, so every row is the whole build's, byte for
+// byte. Every share runs this at once with the same `bands` (a share's rows
+// near its band's edges wait for its neighbours' sums). The sink gets
+// rows in increasing j, but for those within range of another share's
+// observers, which come last.
+Status build_visibility_share(const Heightfield& hf, const FieldParams& params, const std::vector<RowBand>& bands,
+                              int index, RowExchange& exchange, VolumeRowSink& sink, const ProgressFn& progress = {},
+                              BuildStats* stats = nullptr);
 
 // Builds F_p into memory.
 Result<DenseVolume> build_visibility_dense(const Heightfield& hf, const FieldParams& params,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -50,34 +51,36 @@ Status write_2d(TileSink& w, int level, Layer layer, const Heightfield& hf, cons
 }
 
 // Collects field rows into bands of kBrickPosts rows and writes each band's
-// bricks as soon as it is complete.
+// bricks as soon as it is complete. Rows may come in any order (a build split
+// by observers finishes the rows near its band's edges last); a band waits
+// in memory until its last row.
 class BrickSink final : public fields::VolumeRowSink {
  public:
   BrickSink(TileSink& w, std::size_t brick_bytes, int level, int nx, int ny, int nz, VisibilityEncoding enc)
-      : w_(w),
-        level_(level),
-        nx_(nx),
-        ny_(ny),
-        nz_(nz),
-        enc_(enc),
-        band_(static_cast<std::size_t>(kBrickPosts) * static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx),
-              0.0f),
-        brick_(brick_bytes) {}
+      : w_(w), level_(level), nx_(nx), ny_(ny), nz_(nz), enc_(enc), brick_(brick_bytes) {}
 
   Status write_row(int j, const float* values) override {
-    const int y = j % kBrickPosts;
-    for (int k = 0; k < nz_; ++k) {
-      std::memcpy(&band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) *
-                         static_cast<std::size_t>(nx_)],
-                  values + static_cast<std::size_t>(k) * static_cast<std::size_t>(nx_),
-                  static_cast<std::size_t>(nx_) * sizeof(float));
+    const int ty = j / kBrickPosts, y = j % kBrickPosts;
+    Band& band = bands_[ty];
+    if (band.values.empty()) {
+      band.values.assign(static_cast<std::size_t>(kBrickPosts) * row_floats(), 0.0f);
+      band.missing = std::min(kBrickPosts, ny_ - ty * kBrickPosts);
     }
-    if (y == kBrickPosts - 1 || j == ny_ - 1) return flush(j / kBrickPosts, y + 1);
-    return Status::ok_status();
+    std::memcpy(&band.values[static_cast<std::size_t>(y) * row_floats()], values, row_floats() * sizeof(float));
+    if (--band.missing > 0) return Status::ok_status();
+    const Status st = flush(ty, std::min(kBrickPosts, ny_ - ty * kBrickPosts), band.values);
+    bands_.erase(ty);
+    return st;
   }
 
  private:
-  Status flush(int ty, int rows) {
+  struct Band {
+    std::vector<float> values;  // kBrickPosts rows of nz x nx values
+    int missing = 0;            // rows not yet written
+  };
+  std::size_t row_floats() const { return static_cast<std::size_t>(nz_) * static_cast<std::size_t>(nx_); }
+
+  Status flush(int ty, int rows, const std::vector<float>& band) {
     const int tiles_x = tile_grid(Layer::visibility, nx_, ny_).tiles_x;
     for (int tx = 0; tx < tiles_x; ++tx) {
       std::fill(brick_.begin(), brick_.end(), std::uint8_t{0});
@@ -87,9 +90,8 @@ class BrickSink final : public fields::VolumeRowSink {
             const int i = tx * kBrickPosts + x;
             if (i >= nx_) break;
             const float f =
-                band_[(static_cast<std::size_t>(y) * static_cast<std::size_t>(nz_) + static_cast<std::size_t>(k)) *
-                          static_cast<std::size_t>(nx_) +
-                      static_cast<std::size_t>(i)];
+                band[static_cast<std::size_t>(y) * row_floats() +
+                     static_cast<std::size_t>(k) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
             const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + y) * kBrickPosts + x);
             if (enc_ == VisibilityEncoding::uint16) {
               const std::uint16_t q = quantise_visibility(f);
@@ -108,7 +110,7 @@ class BrickSink final : public fields::VolumeRowSink {
   TileSink& w_;
   int level_, nx_, ny_, nz_;
   VisibilityEncoding enc_;
-  std::vector<float> band_;          // kBrickPosts rows of nz x nx values
+  std::map<int, Band> bands_;        // brick rows being filled, by index
   std::vector<std::uint8_t> brick_;  // one encoded brick
 };
 
@@ -296,6 +298,23 @@ Result<PackPlan> plan_pack(const Heightfield& hf, const PackBuildParams& params)
   return plan;
 }
 
+namespace {
+
+// A share's rows of F_p at a level of `t`'s size: its brick rows'.
+fields::RowBand brick_band(const Heightfield& t, BuildShare share) {
+  const TileRows bricks = share_tile_rows(tile_grid(Layer::visibility, t.nx, t.ny).tiles_y, share);
+  return {std::min(t.ny, bricks.first * kBrickPosts), std::min(t.ny, bricks.end * kBrickPosts)};
+}
+
+// Every share's, in order: they cover the rows.
+std::vector<fields::RowBand> brick_bands(const Heightfield& t, int count) {
+  std::vector<fields::RowBand> bands;
+  for (int q = 0; q < count; ++q) bands.push_back(brick_band(t, BuildShare{q, count}));
+  return bands;
+}
+
+}  // namespace
+
 Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, BuildShare share, TileSink& sink,
                         const fields::ProgressFn& progress, PackBuildReport* report) {
   const auto t0 = Clock::now();
@@ -320,13 +339,14 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
     if (bricks.first < bricks.end) {
       BrickSink bricks_out(sink, payload_bytes(plan.layout, level, Layer::visibility), level, t.nx, t.ny, in.params.nz,
                            params.encoding);
-      const fields::RowBand rows{bricks.first * kBrickPosts, std::min(t.ny, bricks.end * kBrickPosts)};
-      Status st = fields::build_visibility_rows(
-          t, in.params, rows, bricks_out,
-          [&](double f) {
-            if (progress) progress(done + share_of_total * 0.9 * f);
-          },
-          &stats);
+      const fields::ProgressFn field_progress = [&](double f) {
+        if (progress) progress(done + share_of_total * 0.9 * f);
+      };
+      Status st =
+          share.exchange
+              ? fields::build_visibility_share(t, in.params, brick_bands(t, share.count), share.index, *share.exchange,
+                                               bricks_out, field_progress, &stats)
+              : fields::build_visibility_rows(t, in.params, brick_band(t, share), bricks_out, field_progress, &stats);
       if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
       const auto t_tff = Clock::now();
       VISVOL_RETURN_IF_ERROR(

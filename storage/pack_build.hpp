@@ -73,9 +73,16 @@ Result<PackPlan> plan_pack(const fields::Heightfield& hf, const PackBuildParams&
 // rows (16-row bricks of F_p and the terrain force field, 64-row height and
 // area tiles), about equal numbers of them. {0, 1} is the whole pack; the
 // shares 0..count-1 together write every tile once.
+//
+// Without `exchange`, a share computes the hulls of every observer within
+// range of its band (split by rows: shares run alone, in any order). With it,
+// only its band's observers, and the sums over rows of other shares' bands
+// travel through it (split by observers: fields::build_visibility_share;
+// every share runs at once, each with its own end of one exchange).
 struct BuildShare {
   int index = 0;
   int count = 1;
+  fields::RowExchange* exchange = nullptr;
 };
 Status validate(const BuildShare& share);
 

@@ -8,11 +8,13 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <thread>
 
 #include "fields/exact_visibility.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/hull_kernel.hpp"
 #include "terrains.hpp"
+#include "tests/support/local_row_exchange.hpp"
 
 namespace visvol::fields {
 namespace {
@@ -246,6 +248,97 @@ TEST(VisibilityField, BandsBuiltInBatchesOfOneOrTwoRowsAreTheWholeBuildsRows) {
       }
     }
   }
+}
+
+// The shares of a build split by observers, each in its own thread as
+// processes would run, through one mailbox: what each share wrote, its
+// figures and its status.
+struct SplitRun {
+  std::vector<RowCollector> sinks;
+  std::vector<BuildStats> stats;
+  std::vector<Status> status;
+  std::uint64_t rows_sent = 0;
+};
+
+SplitRun run_split(const Heightfield& hf, const FieldParams& p, const std::vector<RowBand>& bands) {
+  const std::size_t n = bands.size();
+  SplitRun run{std::vector<RowCollector>(n, RowCollector(volume_geometry(hf, p))), std::vector<BuildStats>(n),
+               std::vector<Status>(n, Status::ok_status()), 0};
+  test::LocalRowMail mail(static_cast<int>(n));
+  std::vector<std::thread> shares;
+  for (std::size_t q = 0; q < n; ++q) {
+    shares.emplace_back([&, q] {
+      run.status[q] = build_visibility_share(hf, p, bands, static_cast<int>(q), mail.share(static_cast<int>(q)),
+                                             run.sinks[q], {}, &run.stats[q]);
+    });
+  }
+  for (std::thread& t : shares) t.join();
+  run.rows_sent = mail.rows_sent();
+  return run;
+}
+
+// Split by observers (each hull computed once, the sums over rows another
+// share owns sent to it): every row is the whole build's, byte for byte,
+// written once by its owner, for narrow, wide and empty bands, every range
+// shape, and batches of one observer row; and the shares together evaluate
+// each (observer, target) pair once, as the whole build does.
+TEST(VisibilityField, ABuildSplitByObserversIsTheWholeBuildsRows) {
+  const Heightfield hf = fractal(41, 5);
+  const std::vector<std::vector<RowBand>> splits = {
+      {{0, 20}, {20, 41}},
+      {{0, 9}, {9, 10}, {10, 29}, {29, 29}, {29, 41}},  // a band narrower than the range, an empty one
+      {{0, 3}, {3, 6}, {6, 9}, {9, 12}, {12, 41}},      // rows reached by several shares' observers
+  };
+  for (const RangeShape shape : {RangeShape::cube, RangeShape::sphere, RangeShape::none}) {
+    for (const int batch : {0, 1}) {
+      const FieldParams wide = small_params(shape, 6, 24);
+      const FieldParams p = batch ? with_batch_rows(wide, hf, batch) : wide;
+      BuildStats whole_stats;
+      Result<DenseVolume> whole = build_visibility_dense(hf, wide, {}, &whole_stats);
+      ASSERT_TRUE(whole.ok()) << whole.status().message();
+      const VolumeGeometry& g = whole->geometry;
+      for (const std::vector<RowBand>& bands : splits) {
+        SplitRun run = run_split(hf, p, bands);
+        std::uint64_t cells = 0;
+        for (std::size_t q = 0; q < bands.size(); ++q) {
+          ASSERT_TRUE(run.status[q].ok()) << run.status[q].message();
+          cells += run.stats[q].hull_cells;
+          const RowCollector& sink = run.sinks[q];
+          ASSERT_EQ(sink.order.size(), static_cast<std::size_t>(bands[q].end - bands[q].first))
+              << to_string(shape) << " share " << q;
+          for (int j = bands[q].first; j < bands[q].end; ++j) {
+            ASSERT_EQ(sink.rows.count(j), 1u) << "share " << q << " row " << j;
+            for (int k = 0; k < g.nz; ++k) {
+              ASSERT_EQ(0,
+                        std::memcmp(&sink.rows.at(j)[static_cast<std::size_t>(k) * static_cast<std::size_t>(g.nx)],
+                                    &whole->values[g.index(0, j, k)], static_cast<std::size_t>(g.nx) * sizeof(float)))
+                  << to_string(shape) << " batch " << batch << " share " << q << " row " << j << " level " << k;
+            }
+          }
+        }
+        EXPECT_EQ(cells, whole_stats.hull_cells) << to_string(shape);
+        EXPECT_GT(run.rows_sent, 0u);
+      }
+    }
+  }
+}
+
+TEST(VisibilityField, ASplitThatDoesNotCoverTheGridIsRefused) {
+  const Heightfield hf = fractal(20, 3);
+  const FieldParams p = small_params(RangeShape::cube, 4, 16);
+  test::LocalRowMail mail(3);
+  RowCollector sink(volume_geometry(hf, p));
+  for (const std::vector<RowBand>& bands : std::vector<std::vector<RowBand>>{
+           {}, {{0, 10}}, {{0, 10}, {11, 20}}, {{0, 20}, {19, 20}}, {{0, 12}, {12, 10}, {10, 20}}}) {
+    const Status st = build_visibility_share(hf, p, bands, 0, mail.share(0), sink);
+    ASSERT_FALSE(st.ok()) << bands.size() << " bands";
+    EXPECT_NE(st.message().find("do not cover the grid's 20 rows"), std::string::npos) << st.message();
+  }
+  const Status st = build_visibility_share(hf, p, {{0, 10}, {10, 20}}, 2, mail.share(0), sink);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("share 2 is not one of the split's 2"), std::string::npos) << st.message();
+  EXPECT_TRUE(sink.order.empty());
+  EXPECT_EQ(mail.rows_sent(), 0u);
 }
 
 TEST(VisibilityField, BelowTheTerrainIsZero) {

@@ -9,7 +9,10 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <thread>
+#include <vector>
 
 #include "../fields/terrains.hpp"
 #include "fields/pyramid.hpp"
@@ -20,6 +23,7 @@
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
 #include "storage/pack_writer.hpp"
+#include "tests/support/local_row_exchange.hpp"
 
 namespace visvol::storage {
 namespace {
@@ -499,6 +503,38 @@ class ForeignSink final : public TileSink {
   int fd_;
 };
 
+// Every share of a split build, share 0 through `writer`, the others as other
+// processes would write: split by rows one after the other, split by
+// observers at once (threads here, processes under MPI), each computing its
+// band's hulls only and sending the sums over other bands' rows to their
+// owners through one mailbox. Returns the rows sent.
+std::uint64_t build_shares(const PackPlan& plan, const PackBuildParams& p, int count, bool by_observers,
+                           PackWriter& writer) {
+  test::LocalRowMail mail(count);
+  std::vector<std::unique_ptr<ForeignSink>> others;
+  for (int index = 1; index < count; ++index)
+    others.push_back(std::make_unique<ForeignSink>(writer.placement(), writer.write_path()));
+  std::vector<Status> built(static_cast<std::size_t>(count), Status::ok_status());
+  auto share = [&](int index) {
+    TileSink& sink = index == 0 ? static_cast<TileSink&>(writer) : *others[static_cast<std::size_t>(index - 1)];
+    built[static_cast<std::size_t>(index)] =
+        build_pack_share(plan, p, BuildShare{index, count, by_observers ? &mail.share(index) : nullptr}, sink);
+  };
+  std::vector<std::thread> threads;
+  for (int index = 0; index < count; ++index) {
+    if (by_observers) {
+      threads.emplace_back(share, index);
+    } else {
+      share(index);
+    }
+  }
+  for (std::thread& t : threads) t.join();
+  for (const Status& st : built) EXPECT_TRUE(st.ok()) << st.message();
+  for (const auto& other : others)
+    for (const auto& [tile, crc] : other->written) EXPECT_TRUE(writer.add_written_tile(tile, crc).ok());
+  return mail.rows_sent();
+}
+
 TEST(PackBuild, ABuildSplitIntoSharesIsTheWholeBuildByteForByte) {
   // 70 rows: 5 brick rows and 2 height-tile rows at level 0, 3 and 1 at
   // level 1: shares with none, one or several rows of each.
@@ -507,25 +543,23 @@ TEST(PackBuild, ABuildSplitIntoSharesIsTheWholeBuildByteForByte) {
   p.field.range_posts = 12;  // a share's rows need observers of its neighbours' rows
   const std::string whole = temp_path("whole"), split = temp_path("split");
   ASSERT_TRUE(build_pack(hf, p, R"({"path":"fractal"})", whole).ok());
-  for (const int count : {2, 3, 7}) {
-    Result<PackPlan> plan = plan_pack(hf, p);
-    ASSERT_TRUE(plan.ok()) << plan.status().message();
-    Result<std::unique_ptr<PackWriter>> w = PackWriter::create_shared(split, plan->layout);
-    ASSERT_TRUE(w.ok());
-    // share 0 through the writer, the others as other processes would
-    ASSERT_TRUE(build_pack_share(*plan, p, BuildShare{0, count}, **w).ok());
-    for (int index = 1; index < count; ++index) {
-      ForeignSink other((*w)->placement(), (*w)->write_path());
-      ASSERT_TRUE(build_pack_share(*plan, p, BuildShare{index, count}, other).ok());
-      for (const auto& [tile, crc] : other.written) ASSERT_TRUE((*w)->add_written_tile(tile, crc).ok());
+  for (const bool by_observers : {false, true}) {
+    for (const int count : {2, 3, 7}) {
+      Result<PackPlan> plan = plan_pack(hf, p);
+      ASSERT_TRUE(plan.ok()) << plan.status().message();
+      Result<std::unique_ptr<PackWriter>> w = PackWriter::create_shared(split, plan->layout);
+      ASSERT_TRUE(w.ok());
+      const std::uint64_t rows_sent = build_shares(*plan, p, count, by_observers, **w);
+      EXPECT_EQ(rows_sent > 0, by_observers);
+      Result<std::string> meta = pack_metadata(hf, p, R"({"path":"fractal"})", *plan);
+      ASSERT_TRUE(meta.ok());
+      ASSERT_TRUE((*w)->finish(*meta).ok());
+      EXPECT_TRUE(without_build_time(split) == without_build_time(whole))
+          << count << " shares, split by " << (by_observers ? "observers" : "rows");
+      const Result<std::shared_ptr<const Pack>> pack = Pack::open(split);
+      ASSERT_TRUE(pack.ok());
+      EXPECT_TRUE((*pack)->verify().ok());
     }
-    Result<std::string> meta = pack_metadata(hf, p, R"({"path":"fractal"})", *plan);
-    ASSERT_TRUE(meta.ok());
-    ASSERT_TRUE((*w)->finish(*meta).ok());
-    EXPECT_TRUE(without_build_time(split) == without_build_time(whole)) << count << " shares";
-    const Result<std::shared_ptr<const Pack>> pack = Pack::open(split);
-    ASSERT_TRUE(pack.ok());
-    EXPECT_TRUE((*pack)->verify().ok());
   }
   std::remove(whole.c_str());
   std::remove(split.c_str());

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../storage/pack_bytes.hpp"
@@ -57,12 +58,15 @@ TEST(BuildMpi, TwoAndThreeRanksWriteTheSingleProcessPackByteForByte) {
   const std::string options = test::kDem + " " + test::kSmallPackOptions;
   const Outcome single = test::visvol("build " + options + " -o " + one);
   ASSERT_EQ(single.status, 0) << single.err;
-  for (const int ranks : {2, 3}) {
-    const Outcome r = build_mpi(ranks, options + " -o " + many);
+  // split by observers (the default: the sums over rows of other bands sent
+  // between the ranks) and by rows
+  for (const auto& [ranks, split] :
+       {std::pair<int, std::string>{2, ""}, {3, " --split observers"}, {2, " --split rows"}}) {
+    const Outcome r = build_mpi(ranks, options + split + " -o " + many);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("on " + std::to_string(ranks) + " ranks"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("MiB written"), std::string::npos) << r.out;  // the per-rank table
-    EXPECT_TRUE(without_build_time(many) == without_build_time(one)) << ranks << " ranks";
+    EXPECT_NE(r.out.find("sums MiB sent"), std::string::npos) << r.out;  // the per-rank table
+    EXPECT_TRUE(without_build_time(many) == without_build_time(one)) << ranks << " ranks" << split;
     const Outcome verified = test::visvol("verify " + many);
     EXPECT_EQ(verified.status, 0) << verified.err;
     std::remove(many.c_str());
@@ -197,6 +201,9 @@ TEST(BuildMpi, BadInputExitsTwoNamingItAndWritesNothing) {
   r = build_mpi(2, test::kDem + " " + test::kSmallPackOptions);
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--output"), std::string::npos) << r.err;
+  r = build_mpi(2, test::kDem + " " + test::kSmallPackOptions + " --split tiles -o " + path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--split"), std::string::npos) << r.err;
   EXPECT_NE(::access(path.c_str(), F_OK), 0);
   // an output that is a link: refused, its target untouched
   const std::string target = temp("mpi_link_target");
@@ -213,7 +220,8 @@ TEST(BuildMpi, BadInputExitsTwoNamingItAndWritesNothing) {
 TEST(BuildMpi, HelpNamesTheLauncherAndEveryBuildOption) {
   const Outcome r = test::run_command(std::string(VISVOL_BUILD_MPI_BIN) + " --help");
   EXPECT_EQ(r.status, 0) << r.err;
-  for (const char* word : {"mpirun", "--output", "--range", "--lod", "--threads", "--area", "--fill-nodata"}) {
+  for (const char* word :
+       {"mpirun", "--output", "--range", "--lod", "--threads", "--area", "--fill-nodata", "--split"}) {
     EXPECT_NE(r.out.find(word), std::string::npos) << word;
   }
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The MPI pack build side by side with one process: parallel efficiency from
-# 1 to 2 ranks, each rank's time split (hull, scatter, terrain force field,
-# write, waiting for the others) and the bytes exchanged, medians of N runs.
+# 1 to 2 ranks, split by observers (the default) and by rows, each rank's time
+# split (hull, scatter, the other ranks' sums, terrain force field, write,
+# waiting for the others) and the bytes exchanged, medians of N runs.
 #
 #   tools/bench/mpi_build_bench.sh [BUILD_DIR] [N] [-- visvol build options...]
 #
@@ -34,7 +35,7 @@ seconds() {  # seconds COMMAND...: wall time of COMMAND, its output in $work/las
 }
 median() { printf '%s\n' "$@" | sort -g | awk '{v[NR]=$1} END {print (NR % 2) ? v[(NR+1)/2] : (v[NR/2]+v[NR/2+1])/2}'; }
 
-one_thread=() two_threads=() one_rank=() two_ranks=()
+one_thread=() two_threads=() one_rank=() two_ranks=() two_ranks_rows=()
 for ((i = 1; i <= runs; ++i)); do
   echo "run $i of $runs" >&2
   two_threads+=("$(seconds "$visvol" build "${options[@]}" --threads 2 -o "$work/ref.vvp")")
@@ -43,14 +44,20 @@ for ((i = 1; i <= runs; ++i)); do
   sed -n '/^rank /,/^exchanged/p' "$work/last" | sed "s/^/run $i, 1 rank:  /" >>"$work/ranks.txt"
   two_ranks+=("$(seconds "${mpirun[@]}" -np 2 "$mpi" "${options[@]}" --threads 1 -o "$work/two.vvp")")
   sed -n '/^rank /,/^exchanged/p' "$work/last" | sed "s/^/run $i, 2 ranks: /" >>"$work/ranks.txt"
+  two_ranks_rows+=("$(seconds "${mpirun[@]}" -np 2 "$mpi" "${options[@]}" --threads 1 --split rows -o "$work/two.vvp")")
+  sed -n '/^rank /,/^exchanged/p' "$work/last" | sed "s/^/run $i, 2 ranks, --split rows: /" >>"$work/ranks.txt"
 done
 t1=$(median "${one_rank[@]}")
 t2=$(median "${two_ranks[@]}")
+t2_rows=$(median "${two_ranks_rows[@]}")
 echo "== visvol build ${options[*]} ($(nproc) cores, median of $runs)"
 printf '   %-40s %7.2f s\n' "visvol build, 1 thread" "$(median "${one_thread[@]}")"
 printf '   %-40s %7.2f s\n' "visvol build, 2 threads" "$(median "${two_threads[@]}")"
 printf '   %-40s %7.2f s\n' "visvol-build-mpi, 1 rank x 1 thread" "$t1"
 printf '   %-40s %7.2f s\n' "visvol-build-mpi, 2 ranks x 1 thread" "$t2"
-printf '   %-40s %7.2f\n' "parallel efficiency 1 -> 2 ranks" "$(awk -v a="$t1" -v b="$t2" 'BEGIN { print a / (2 * b) }')"
+printf '   %-40s %7.2f s\n' "the same, --split rows" "$t2_rows"
+efficiency() { awk -v a="$1" -v b="$2" 'BEGIN { print a / (2 * b) }'; }
+printf '   %-40s %7.2f (--split rows: %.2f)\n' "parallel efficiency 1 -> 2 ranks" "$(efficiency "$t1" "$t2")" \
+  "$(efficiency "$t1" "$t2_rows")"
 echo "== every run's rank lines (hull, scatter, terrain force field: the model's --measured from the 1-rank ones)"
 cat "$work/ranks.txt"

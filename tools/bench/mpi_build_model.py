@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
 """A model of visvol-build-mpi at theatre scale, from costs measured here.
 
-Each rank builds a band of every level's rows (whole 16-row bricks): the hulls
-of the observers in its band and within range around it (the halo, computed
-again by its neighbours), the scatter and the terrain force field of its own
-rows, and writes its tiles. Rank 0 imports the DEM and broadcasts it. The
+Each rank builds a band of every level's rows (whole 16-row bricks), the
+scatter and the terrain force field of its own rows, and writes its tiles.
+Split by observers (visvol-build-mpi's default), it computes the hulls of its
+band's observers only and sends the int32 partial sums of the rows within range
+beside its band to the ranks that own them; split by rows (--split rows), the
+hulls of the observers within range around its band too (the halo, computed
+again by its neighbours). Rank 0 imports the DEM and broadcasts it. The
 slowest rank (an interior one, with the most bricks) sets the time.
 
     tools/bench/mpi_build_model.py --measured HULL_S SCATTER_S TFF_S [options]
@@ -42,10 +45,10 @@ def main():
                    help="network bandwidth a rank (the terrain's broadcast, the observer split's partial sums)")
     p.add_argument("--threads", type=int, default=1, help="cores a rank (default 1)")
     p.add_argument("--ranks", type=int, nargs="+", default=[16, 64, 256])
-    p.add_argument("--split", choices=["rows", "observers"], default="rows",
-                   help="rows: today's bands, each rank computing the hulls of its halo again; observers: each "
-                        "hull once, the partial sums of the 2 x range rows beside a band sent to its neighbour "
-                        "(not built: the model of the next step)")
+    p.add_argument("--split", choices=["rows", "observers"], default="observers",
+                   help="observers (the default): each hull once, the partial sums of the 2 x range rows beside a "
+                        "band sent to the ranks that own them; rows: each rank computing the hulls of its halo "
+                        "again")
     a = p.parse_args()
 
     # the calibration run's work in interior observers (hull, scatter) and posts (terrain force field)

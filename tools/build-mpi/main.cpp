@@ -5,12 +5,18 @@
 //
 // Rank 0 imports the DEM and sends the terrain to every rank. Each rank builds
 // its share of every level's rows (storage::build_pack_share: its band of
-// rows, with the observers within range around it) and writes its tiles into
+// rows) and writes its tiles into
 // the pack's temporary file with MPI-IO, at offsets every rank knows from the
 // layout. Rank 0 gathers the tiles' checksums, writes the tables and renames
 // the pack into place. The pack is `visvol build`'s, byte for byte (but for
 // its build time). PACK's directory must be one every rank sees (the DEM is
 // read by rank 0 only).
+//
+// --split observers (the default): a rank computes the hulls of its band's
+// observers only, and sends the sums over the rows of other bands within
+// their range to the ranks that own them (MpiRowExchange): each hull once in
+// the whole job. --split rows: a rank computes the hulls of every observer
+// within range of its band, its neighbours' too, and exchanges nothing.
 //
 // A rank that fails prints why and ends the job (MPI_Abort); mpirun ends a job
 // one of whose ranks was killed. Either way rank 0 removes the temporary (on
@@ -113,22 +119,26 @@ enum Figure : std::size_t {
   kTiles,
   kMibWritten,
   kThreads,
+  kSumsS,       // waiting for and adding the other ranks' sums (--split observers)
+  kSumsMibOut,  // the sums sent
   kFigureCount
 };
 using RankFigures = std::array<double, kFigureCount>;
 
 void print_ranks(const std::vector<double>& all, double exchanged_bytes, double exchange_s) {
   std::printf(
-      "\nrank  threads  level-0 rows  F_p s   hull s  scatter s  tff s   write s  share s  wait s  tiles  "
-      "MiB written\n");
+      "\nrank  threads  level-0 rows  F_p s   hull s  scatter s  sums s  tff s   write s  share s  wait s  tiles  "
+      "MiB written  sums MiB sent\n");
   for (std::size_t r = 0; r < all.size() / kFigureCount; ++r) {
     const double* f = &all[r * kFigureCount];
-    std::printf("%4zu  %7.0f  %12.0f  %6.2f  %6.2f  %9.2f  %6.2f  %7.2f  %7.2f  %6.2f  %5.0f  %11.1f\n", r, f[kThreads],
-                f[kLevel0Rows], f[kFpS], f[kHullS], f[kScatterS], f[kTffS], f[kWriteS], f[kShareS], f[kWaitS],
-                f[kTiles], f[kMibWritten]);
+    std::printf("%4zu  %7.0f  %12.0f  %6.2f  %6.2f  %9.2f  %6.2f  %6.2f  %7.2f  %7.2f  %6.2f  %5.0f  %11.1f  %13.1f\n",
+                r, f[kThreads], f[kLevel0Rows], f[kFpS], f[kHullS], f[kScatterS], f[kSumsS], f[kTffS], f[kWriteS],
+                f[kShareS], f[kWaitS], f[kTiles], f[kMibWritten], f[kSumsMibOut]);
   }
-  std::printf("exchanged  %.2f MiB between ranks (terrain out, checksums and figures back) in %.2f s\n",
-              exchanged_bytes / (1024.0 * 1024.0), exchange_s);
+  std::printf(
+      "exchanged  %.2f MiB between ranks (terrain out, checksums and figures back) in %.2f s, besides the sums "
+      "above\n",
+      exchanged_bytes / (1024.0 * 1024.0), exchange_s);
 }
 
 // Worker threads a rank takes for --threads 0: the cores it may run on,
@@ -225,6 +235,8 @@ RankFigures figures_of(const Comm& world, const Job& job, const storage::PackBui
     f[kFpS] += s.wall_s;
     f[kHullS] += s.hull_s;
     f[kScatterS] += s.scatter_s;
+    f[kSumsS] += s.exchange_s;
+    f[kSumsMibOut] += static_cast<double>(s.sent_bytes) / (1024.0 * 1024.0);
   }
   const fields::Heightfield& t = job.build.terrain;
   const storage::TileRows rows = storage::share_tile_rows(
@@ -238,7 +250,7 @@ RankFigures figures_of(const Comm& world, const Job& job, const storage::PackBui
   return f;
 }
 
-int run(const Comm& world, BuildOptions o) {
+int run(const Comm& world, BuildOptions o, bool by_observers) {
   const auto t0 = Clock::now();
   if (o.threads == 0) o.threads = threads_per_rank(world);
   Job job;
@@ -272,12 +284,13 @@ int run(const Comm& world, BuildOptions o) {
 
   // This rank's share.
   MpiTileSink sink(placement, file, write_path);
+  MpiRowExchange sums(world);
   storage::PackBuildReport report;
   {
     std::unique_ptr<Progress> progress;
     if (world.rank == 0) progress = std::make_unique<Progress>("building " + o.out + " (rank 0's share)");
     const Status built = storage::build_pack_share(
-        job.plan, job.params, storage::BuildShare{world.rank, world.size}, sink,
+        job.plan, job.params, storage::BuildShare{world.rank, world.size, by_observers ? &sums : nullptr}, sink,
         [&](double f) {
           if (progress) progress->update(f);
         },
@@ -348,10 +361,16 @@ int main(int argc, char** argv) {
       ->description(
           "Worker threads per rank; 0: the cores mpirun bound the rank to, or its node's cores shared among the node's "
           "ranks");
+  std::string split = "observers";
+  app.add_option("--split", split,
+                 "observers: a rank computes its band's hulls only and sends the sums over other bands' rows; rows: "
+                 "it computes every hull within range of its band and sends nothing")
+      ->check(CLI::IsMember({"observers", "rows"}))
+      ->capture_default_str();
   int code = kExitOk;
   try {
     app.parse(argc, argv);
-    code = run(world, o);
+    code = run(world, o, split == "observers");
   } catch (const CLI::ParseError& e) {
     if (world.rank == 0) {
       if (e.get_exit_code() == 0) {

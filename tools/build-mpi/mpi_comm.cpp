@@ -3,6 +3,8 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <limits>
+#include <string>
 
 namespace visvol::cli {
 
@@ -45,6 +47,69 @@ std::vector<T> gather_values(const Comm& c, const std::vector<T>& values, MPI_Da
 }
 
 }  // namespace
+
+MpiRowExchange::MpiRowExchange(const Comm& world) : world_(world) {
+  void* value = nullptr;
+  int found = 0;
+  MPI_Comm_get_attr(world.comm, MPI_TAG_UB, &value, &found);
+  if (found && value) tag_ub_ = *static_cast<int*>(value);
+}
+
+MpiRowExchange::~MpiRowExchange() {
+  if (!requests_.empty()) MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+}
+
+Status MpiRowExchange::check(int rank, int j, std::size_t count) const {
+  if (rank < 0 || rank >= world_.size || rank == world_.rank) {
+    return invalid_argument("row " + std::to_string(j) + ": rank " + std::to_string(rank) + " is not another rank");
+  }
+  if (j < 0 || j > tag_ub_) {
+    return invalid_argument("row " + std::to_string(j) + " is past this MPI's largest message tag " +
+                            std::to_string(tag_ub_) + ": split the DEM");
+  }
+  if (count > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    return invalid_argument("row " + std::to_string(j) + ": " + std::to_string(count) +
+                            " sums are too many for one message");
+  }
+  return Status::ok_status();
+}
+
+Status MpiRowExchange::send(int to, int j, const std::int32_t* sums, std::size_t count) {
+  VISVOL_RETURN_IF_ERROR(check(to, j, count));
+  copies_.emplace_back(sums, sums + count);  // the vector's buffer stays put when copies_ grows
+  requests_.emplace_back();
+  const int rc =
+      MPI_Isend(copies_.back().data(), static_cast<int>(count), MPI_INT32_T, to, j, world_.comm, &requests_.back());
+  if (rc != MPI_SUCCESS) return output_error("sending row " + std::to_string(j) + ": " + mpi_error_text(rc));
+  return Status::ok_status();
+}
+
+Status MpiRowExchange::receive(int from, int j, std::int32_t* sums, std::size_t count) {
+  VISVOL_RETURN_IF_ERROR(check(from, j, count));
+  MPI_Status status;
+  const int rc = MPI_Recv(sums, static_cast<int>(count), MPI_INT32_T, from, j, world_.comm, &status);
+  if (rc != MPI_SUCCESS) {
+    return output_error("receiving row " + std::to_string(j) + " from rank " + std::to_string(from) + ": " +
+                        mpi_error_text(rc));
+  }
+  int received = 0;
+  MPI_Get_count(&status, MPI_INT32_T, &received);
+  if (static_cast<std::size_t>(received) != count) {
+    return output_error("row " + std::to_string(j) + " from rank " + std::to_string(from) + ": " +
+                        std::to_string(received) + " sums instead of " + std::to_string(count));
+  }
+  return Status::ok_status();
+}
+
+Status MpiRowExchange::finish() {
+  const int rc = requests_.empty()
+                     ? MPI_SUCCESS
+                     : MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+  requests_.clear();
+  copies_.clear();
+  if (rc != MPI_SUCCESS) return output_error("sending rows: " + mpi_error_text(rc));
+  return Status::ok_status();
+}
 
 std::string mpi_error_text(int code) {
   char text[MPI_MAX_ERROR_STRING];

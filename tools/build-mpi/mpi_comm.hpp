@@ -12,6 +12,7 @@
 
 #include "base/status.hpp"
 #include "fields/heightfield.hpp"
+#include "fields/visibility_builder.hpp"
 
 namespace visvol::cli {
 
@@ -39,6 +40,31 @@ struct Comm {
   std::vector<std::uint64_t> gather(const std::vector<std::uint64_t>& values, double* received_bytes) const;
   std::vector<std::uint32_t> gather(const std::vector<std::uint32_t>& values, double* received_bytes) const;
   std::vector<double> gather(const std::vector<double>& values, double* received_bytes) const;
+};
+
+// The sums of a build split by observers (storage::BuildShare::exchange)
+// between the ranks, a rank a share: one message a row, tagged with the row.
+// MPI delivers two ranks' messages of one tag in the order they were sent, so
+// the levels of detail, built one after the other, never mix. Sends are
+// non-blocking, on a copy kept until finish(); the main thread makes every call.
+class MpiRowExchange final : public fields::RowExchange {
+ public:
+  explicit MpiRowExchange(const Comm& world);
+  MpiRowExchange(const MpiRowExchange&) = delete;
+  MpiRowExchange& operator=(const MpiRowExchange&) = delete;
+  ~MpiRowExchange() override;  // waits for sends still in flight
+
+  Status send(int to, int j, const std::int32_t* sums, std::size_t count) override;
+  Status receive(int from, int j, std::int32_t* sums, std::size_t count) override;
+  Status finish() override;
+
+ private:
+  Status check(int rank, int j, std::size_t count) const;
+
+  const Comm& world_;
+  int tag_ub_ = 32767;  // the largest tag (MPI_TAG_UB); MPI promises at least this
+  std::vector<std::vector<std::int32_t>> copies_;
+  std::vector<MPI_Request> requests_;
 };
 
 // Whether `path` (made by rank 0, shared by all) is a regular file here: a

@@ -276,7 +276,9 @@ struct Split {
       if (y >= (*bands)[q].first && y < (*bands)[q].end) return static_cast<int>(q);
     return -1;  // validated: the bands cover the grid
   }
-  // Every other share with an observer row within `radius` of row y.
+  // Every other share with an observer row within `radius` of row y: those
+  // that send their sums of row y (their targets are the rows within range of
+  // their band). The only rule of who sends what.
   template <class Fn>
   void for_each_source(int y, int radius, Fn&& fn) const {
     for (std::size_t q = 0; q < bands->size(); ++q) {
@@ -287,17 +289,21 @@ struct Split {
   }
 };
 
-// A row of the band that another share's observers reach: it waits for
-// their sums (split by observers only).
-bool needs_other_shares(const Split& split, RowBand band, int ny, int radius, int y) {
-  return split.by_observers() &&
-         ((band.first > 0 && y - radius < band.first) || (band.end < ny && y + radius >= band.end));
+// A row that another share's observers reach: it waits for their sums
+// (split by observers only).
+bool needs_other_shares(const Split& split, int radius, int y) {
+  bool reached = false;
+  if (split.by_observers()) split.for_each_source(y, radius, [&](int) { reached = true; });
+  return reached;
 }
+
+// Rows of the band waiting for other shares' sums, with this share's, by row.
+using HeldRows = std::vector<std::pair<int, std::vector<std::int32_t>>>;
 
 // The rows of the band that waited for other shares' sums, in increasing j:
 // theirs added to this share's, then finished and handed to the sink.
-Status finish_held_rows(Build& b, const Split& split, std::vector<std::pair<int, std::vector<std::int32_t>>>& held,
-                        VolumeRowSink& sink, std::vector<float>& staging, BuildStats& stats) {
+Status finish_held_rows(Build& b, const Split& split, HeldRows& held, VolumeRowSink& sink, std::vector<float>& staging,
+                        BuildStats& stats) {
   std::vector<std::int32_t> incoming(b.slab_ints);
   for (auto& row : held) {
     const int y = row.first;  // (a structured binding cannot be captured before C++20)
@@ -308,7 +314,6 @@ Status finish_held_rows(Build& b, const Split& split, std::vector<std::pair<int,
       if (!received.ok()) return;
       received = split.exchange->receive(from, y, incoming.data(), incoming.size());
       for (std::size_t n = 0; n < sums.size() && received.ok(); ++n) sums[n] += incoming[n];
-      stats.received_bytes += incoming.size() * sizeof(std::int32_t);
     });
     stats.exchange_s += seconds_since(t0);
     VISVOL_RETURN_IF_ERROR(received);
@@ -338,14 +343,14 @@ Status run_build(Build& b, RowBand band, const Split& split, VolumeRowSink& sink
   const int target_lo = by_observers ? std::max(0, band.first - b.radius) : band.first;
   const int target_hi = by_observers ? std::min(ny, band.end + b.radius) : band.end;
   auto in_band = [&](int y) { return y >= band.first && y < band.end; };
-  auto finished_here = [&](int y) { return in_band(y) && !needs_other_shares(split, band, ny, b.radius, y); };
+  auto finished_here = [&](int y) { return in_band(y) && !needs_other_shares(split, b.radius, y); };
   const std::size_t ring_floats = static_cast<std::size_t>(ring_size(std::max(b.radius, 1))) * kLanes;
   std::vector<std::vector<float>> ring_a(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   std::vector<std::vector<float>> ring_b(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   b.cells_per_worker.assign(static_cast<std::size_t>(pool.size()), 0);
   int rows_out = target_lo;  // rows that left the window
   std::vector<float> staging(static_cast<std::size_t>(b.geom.nz) * static_cast<std::size_t>(b.hf.nx));
-  std::vector<std::pair<int, std::vector<std::int32_t>>> held;  // rows waiting for other shares' sums
+  HeldRows held;
   for (int first = obs_lo; first < obs_hi; first += batch) {
     const int rows = std::min(batch, obs_hi - first);
     // phase 1: hull levels of the batch's observers
@@ -354,6 +359,7 @@ Status run_build(Build& b, RowBand band, const Split& split, VolumeRowSink& sink
       hull_phase(b, first, item, ring_a[static_cast<std::size_t>(worker)], ring_b[static_cast<std::size_t>(worker)]);
     });
     stats.hull_s += seconds_since(t0);
+    stats.observer_rows += rows;
     // phase 2: scatter into target rows; finish rows no later observer reaches
     t0 = std::chrono::steady_clock::now();
     const int y_lo = std::max(target_lo, first - b.radius);

@@ -55,9 +55,10 @@ struct BuildStats {
   double hull_s = 0;     // phase 1: hull levels
   double scatter_s = 0;  // phase 2: scatter, prefix sums, hand-off
   // A build split by observers (build_visibility_share): waiting for and
-  // adding the other shares' partial sums, and the bytes of them.
+  // adding the other shares' partial sums, and the bytes of those sent.
   double exchange_s = 0;
-  std::uint64_t sent_bytes = 0, received_bytes = 0;
+  std::uint64_t sent_bytes = 0;
+  int observer_rows = 0;  // rows of observers whose hulls were computed
   int threads = 0;
   BuildPlan plan;
   std::uint64_t hull_cells = 0;  // (observer, target column) pairs evaluated

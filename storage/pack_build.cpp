@@ -61,7 +61,7 @@ class BrickSink final : public fields::VolumeRowSink {
 
   Status write_row(int j, const float* values) override {
     const int ty = j / kBrickPosts, y = j % kBrickPosts;
-    Band& band = bands_[ty];
+    BrickRow& band = rows_[ty];
     if (band.values.empty()) {
       band.values.assign(static_cast<std::size_t>(kBrickPosts) * row_floats(), 0.0f);
       band.missing = std::min(kBrickPosts, ny_ - ty * kBrickPosts);
@@ -69,12 +69,12 @@ class BrickSink final : public fields::VolumeRowSink {
     std::memcpy(&band.values[static_cast<std::size_t>(y) * row_floats()], values, row_floats() * sizeof(float));
     if (--band.missing > 0) return Status::ok_status();
     const Status st = flush(ty, std::min(kBrickPosts, ny_ - ty * kBrickPosts), band.values);
-    bands_.erase(ty);
+    rows_.erase(ty);
     return st;
   }
 
  private:
-  struct Band {
+  struct BrickRow {
     std::vector<float> values;  // kBrickPosts rows of nz x nx values
     int missing = 0;            // rows not yet written
   };
@@ -110,7 +110,7 @@ class BrickSink final : public fields::VolumeRowSink {
   TileSink& w_;
   int level_, nx_, ny_, nz_;
   VisibilityEncoding enc_;
-  std::map<int, Band> bands_;        // brick rows being filled, by index
+  std::map<int, BrickRow> rows_;     // brick rows being filled, by index
   std::vector<std::uint8_t> brick_;  // one encoded brick
 };
 

@@ -280,8 +280,9 @@ SplitRun run_split(const Heightfield& hf, const FieldParams& p, const std::vecto
 // Split by observers (each hull computed once, the sums over rows another
 // share owns sent to it): every row is the whole build's, byte for byte,
 // written once by its owner, for narrow, wide and empty bands, every range
-// shape, and batches of one observer row; and the shares together evaluate
-// each (observer, target) pair once, as the whole build does.
+// shape, and batches of one observer row; the shares together compute each
+// observer row's hulls once and evaluate each (observer, target) pair once,
+// as the whole build does.
 TEST(VisibilityField, ABuildSplitByObserversIsTheWholeBuildsRows) {
   const Heightfield hf = fractal(41, 5);
   const std::vector<std::vector<RowBand>> splits = {
@@ -300,9 +301,11 @@ TEST(VisibilityField, ABuildSplitByObserversIsTheWholeBuildsRows) {
       for (const std::vector<RowBand>& bands : splits) {
         SplitRun run = run_split(hf, p, bands);
         std::uint64_t cells = 0;
+        int observer_rows = 0;
         for (std::size_t q = 0; q < bands.size(); ++q) {
           ASSERT_TRUE(run.status[q].ok()) << run.status[q].message();
           cells += run.stats[q].hull_cells;
+          observer_rows += run.stats[q].observer_rows;
           const RowCollector& sink = run.sinks[q];
           ASSERT_EQ(sink.order.size(), static_cast<std::size_t>(bands[q].end - bands[q].first))
               << to_string(shape) << " share " << q;
@@ -316,6 +319,7 @@ TEST(VisibilityField, ABuildSplitByObserversIsTheWholeBuildsRows) {
             }
           }
         }
+        EXPECT_EQ(observer_rows, hf.ny) << to_string(shape);  // each observer's hull once
         EXPECT_EQ(cells, whole_stats.hull_cells) << to_string(shape);
         EXPECT_GT(run.rows_sent, 0u);
       }

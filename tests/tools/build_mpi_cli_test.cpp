@@ -9,8 +9,10 @@
 
 #include <dirent.h>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,6 +53,20 @@ std::vector<std::string> leftovers(const std::string& path) {
   return found;
 }
 
+// The last column of the per-rank table: MiB of sums each rank sent.
+std::vector<double> sums_sent_mib(const std::string& out) {
+  std::vector<double> mib;
+  std::istringstream lines(out.substr(std::min(out.size(), out.find("\nrank  threads"))));
+  std::string line;
+  std::getline(lines, line);  // the blank line before the header
+  std::getline(lines, line);  // the header
+  while (std::getline(lines, line) && line.rfind("exchanged", 0) != 0) {
+    const std::size_t last = line.find_last_of(' ');
+    if (last != std::string::npos) mib.push_back(std::atof(line.c_str() + last + 1));
+  }
+  return mib;
+}
+
 TEST(BuildMpi, TwoAndThreeRanksWriteTheSingleProcessPackByteForByte) {
   const std::string one = temp("mpi_one"), many = temp("mpi_many");
   // 40 x 40 posts: level 0 has 3 rows of bricks and 1 of height tiles, so
@@ -65,7 +81,10 @@ TEST(BuildMpi, TwoAndThreeRanksWriteTheSingleProcessPackByteForByte) {
     const Outcome r = build_mpi(ranks, options + split + " -o " + many);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("on " + std::to_string(ranks) + " ranks"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("sums MiB sent"), std::string::npos) << r.out;  // the per-rank table
+    // the per-rank table: every rank sent sums split by observers, none by rows
+    const std::vector<double> sent = sums_sent_mib(r.out);
+    ASSERT_EQ(sent.size(), static_cast<std::size_t>(ranks)) << r.out;
+    for (const double mib : sent) EXPECT_EQ(mib > 0, split != " --split rows") << r.out;
     EXPECT_TRUE(without_build_time(many) == without_build_time(one)) << ranks << " ranks" << split;
     const Outcome verified = test::visvol("verify " + many);
     EXPECT_EQ(verified.status, 0) << verified.err;

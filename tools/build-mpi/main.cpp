@@ -131,7 +131,7 @@ void print_ranks(const std::vector<double>& all, double exchanged_bytes, double 
       "MiB written  sums MiB sent\n");
   for (std::size_t r = 0; r < all.size() / kFigureCount; ++r) {
     const double* f = &all[r * kFigureCount];
-    std::printf("%4zu  %7.0f  %12.0f  %6.2f  %6.2f  %9.2f  %6.2f  %6.2f  %7.2f  %7.2f  %6.2f  %5.0f  %11.1f  %13.1f\n",
+    std::printf("%4zu  %7.0f  %12.0f  %6.2f  %6.2f  %9.2f  %6.2f  %6.2f  %7.2f  %7.2f  %6.2f  %5.0f  %11.1f  %13.2f\n",
                 r, f[kThreads], f[kLevel0Rows], f[kFpS], f[kHullS], f[kScatterS], f[kSumsS], f[kTffS], f[kWriteS],
                 f[kShareS], f[kWaitS], f[kTiles], f[kMibWritten], f[kSumsMibOut]);
   }
@@ -255,6 +255,12 @@ int run(const Comm& world, BuildOptions o, bool by_observers) {
   if (o.threads == 0) o.threads = threads_per_rank(world);
   Job job;
   if (const Status st = prepare(world, o, job); !st.ok()) return agreed_failure(world, st);
+  MpiRowExchange sums(world);
+  if (by_observers) {  // level 0 has the most rows; every rank decides the same
+    if (const Status st = sums.check_rows(job.plan.inputs.front().terrain.ny); !st.ok()) {
+      return agreed_failure(world, st);
+    }
+  }
 
   // Rank 0 makes the temporary in a private directory; every rank opens it by name.
   std::unique_ptr<storage::PackWriter> writer;
@@ -284,7 +290,7 @@ int run(const Comm& world, BuildOptions o, bool by_observers) {
 
   // This rank's share.
   MpiTileSink sink(placement, file, write_path);
-  MpiRowExchange sums(world);
+
   storage::PackBuildReport report;
   {
     std::unique_ptr<Progress> progress;

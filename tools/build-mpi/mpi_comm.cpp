@@ -63,15 +63,18 @@ Status MpiRowExchange::check(int rank, int j, std::size_t count) const {
   if (rank < 0 || rank >= world_.size || rank == world_.rank) {
     return invalid_argument("row " + std::to_string(j) + ": rank " + std::to_string(rank) + " is not another rank");
   }
-  if (j < 0 || j > tag_ub_) {
-    return invalid_argument("row " + std::to_string(j) + " is past this MPI's largest message tag " +
-                            std::to_string(tag_ub_) + ": split the DEM");
-  }
+  if (j < 0 || j > tag_ub_) return check_rows(j + 1);
   if (count > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
     return invalid_argument("row " + std::to_string(j) + ": " + std::to_string(count) +
                             " sums are too many for one message");
   }
   return Status::ok_status();
+}
+
+Status MpiRowExchange::check_rows(int rows) const {
+  if (rows - 1 <= tag_ub_) return Status::ok_status();
+  return invalid_argument("a grid of " + std::to_string(rows) + " rows is past this MPI's largest message tag " +
+                          std::to_string(tag_ub_) + " (a tag a row, --split observers): use --split rows");
 }
 
 Status MpiRowExchange::send(int to, int j, const std::int32_t* sums, std::size_t count) {

@@ -54,6 +54,10 @@ class MpiRowExchange final : public fields::RowExchange {
   MpiRowExchange& operator=(const MpiRowExchange&) = delete;
   ~MpiRowExchange() override;  // waits for sends still in flight
 
+  // Whether rows 0..rows-1 fit this MPI's message tags: checked before a
+  // build, not hours into it.
+  Status check_rows(int rows) const;
+
   Status send(int to, int j, const std::int32_t* sums, std::size_t count) override;
   Status receive(int from, int j, std::int32_t* sums, std::size_t count) override;
   Status finish() override;

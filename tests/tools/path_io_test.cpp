@@ -421,6 +421,49 @@ TEST_F(PathIo, PlanWaypointsAboveHomeAreLiftedByHomesAltitude) {
   EXPECT_NEAR((*lon_lat)[0].y(), 37.79, 1e-8);
 }
 
+// The aircraft flies to spline waypoints and loiters too: they are vertices
+// (a loiter at its centre), so a check sees them; speed, camera and jump
+// items move nothing and are left out.
+TEST_F(PathIo, PlanSplineWaypointsAndLoitersAreVerticesOtherItemsAreLeftOut) {
+  const std::string f = file_with(
+      "mixed.plan",
+      plan_text(waypoint(0, "37.790", "-122.430", "50") + "," + waypoint(0, "37.789", "-122.429", "5", 82) + "," +
+                waypoint(0, "0", "0", "0", 178) + "," +   // DO_CHANGE_SPEED
+                waypoint(0, "0", "0", "0", 2000) + "," +  // IMAGE_START_CAPTURE
+                waypoint(0, "37.788", "-122.428", "60", 19) + "," + waypoint(0, "37.787", "-122.427", "61", 17) + "," +
+                waypoint(0, "37.786", "-122.426", "62", 18) + "," + waypoint(0, "0", "0", "0", 177) + "," +
+                waypoint(0, "37.785", "-122.425", "63", mavlink::kCmdNavLoiterToAlt) + "," +
+                waypoint(0, "37.785", "-122.425", "0", mavlink::kCmdNavLand)));
+  Result<PathFile> path = read_path_file(f, wkt_);
+  ASSERT_TRUE(path.ok()) << path.status().message();
+  ASSERT_EQ(path->points.size(), 6u);
+  EXPECT_NEAR(path->points[1].z(), 5.0, 1e-9);  // the spline waypoint, low: a check must see it
+  EXPECT_NEAR(path->points[5].z(), 63.0, 1e-9);
+}
+
+// A first line with a number in it is a point, mistyped or not: never taken
+// for a header and dropped. A header without numbers and a byte order mark
+// are fine.
+TEST_F(PathIo, TextFirstLineIsAHeaderOnlyWithoutNumbers) {
+  Result<PathFile> typo = read_path_file(file_with("typo.txt", "550300 4181900 2O\n550500 4182100 200\n"), wkt_);
+  ASSERT_FALSE(typo.ok());
+  EXPECT_NE(typo.status().message().find("typo.txt: line 1: '550300 4181900 2O' is not numbers x y [z]"),
+            std::string::npos)
+      << typo.status().message();
+  const std::string bom = "\xEF\xBB\xBF";
+  for (const std::string& text :
+       {std::string("x y z\n1 2 3\n4 5 6\n"), bom + "1 2 3\n4 5 6\n", bom + "east north up\n1 2 3\n4 5 6\n"}) {
+    Result<PathFile> path = read_path_file(file_with("ok.txt", text), wkt_);
+    ASSERT_TRUE(path.ok()) << path.status().message();
+    ASSERT_EQ(path->points.size(), 2u);
+    EXPECT_EQ(path->points[0], Vec3(1, 2, 3));
+  }
+  const PathReport r = report(preset("fixed-wing"));  // a visvol GeoJSON saved by an editor with a byte order mark
+  Result<PathFile> geojson = read_path_file(file_with("bom.geojson", bom + slurp(write(r) + ".geojson")), wkt_);
+  ASSERT_TRUE(geojson.ok()) << geojson.status().message();
+  EXPECT_EQ(geojson->format, PathFormat::geojson);
+}
+
 TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
   const std::string wp = waypoint(mavlink::kFrameGlobal, "37.79", "-122.43", "50");
   const struct {
@@ -446,7 +489,21 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
       {"params.plan", plan_text(wp + R"(,{"type":"SimpleItem","command":16,"frame":0,"params":[1,2,3]})"),
        "params.plan: mission.items[1]: params is missing or not an array of 7"},
       {"one.plan", plan_text(wp),
-       "one.plan: 1 NAV_WAYPOINT (16) items in mission.items (of 1); a path needs at least 2"},
+       "one.plan: 1 waypoints (waypoint, spline waypoint or loiter items) in mission.items (of 1); a path needs at "
+       "least 2"},
+      // items that move the aircraft without a position visvol can check,
+      // and numbers that are no command: refused, never left out unseen
+      {"orbit.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 34) + "," + wp),
+       "orbit.plan: mission.items[1] (doJumpId 1): command 34 moves the aircraft without a position visvol can "
+       "check"},
+      {"climb.plan", plan_text(wp + "," + waypoint(0, "0", "0", "500", 113) + "," + wp),
+       "climb.plan: mission.items[1] (doJumpId 1): command 113 moves the aircraft"},
+      {"unknown.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 50) + "," + wp),
+       "unknown.plan: mission.items[1] (doJumpId 1): command 50 moves the aircraft"},
+      {"negative.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", -1) + "," + wp),
+       "negative.plan: mission.items[1] (doJumpId 1): command -1 moves the aircraft"},
+      {"huge.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 31000) + "," + wp),
+       "huge.plan: mission.items[1] (doJumpId 1): command 31000 moves the aircraft"},
       {"survey.plan", plan_text(wp + R"(,{"type":"ComplexItem","complexItemType":"survey"},)" + wp),
        "survey.plan: mission.items[1]: a ComplexItem (survey): its flown path is not in the file"},
       {"home.plan", plan_text(wp + "," + waypoint(3, "37.78", "-122.42", "60"), "[37.79, -122.43]"),

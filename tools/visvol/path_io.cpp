@@ -109,7 +109,11 @@ Result<PathFile> parse_text_points(const std::string& text, const std::string& p
   const Status s = for_each_line(text, [&](const std::string& line, int line_no) {
     const std::string where = path + ": line " + std::to_string(line_no) + ": ";
     if (!parse_numbers(line, v)) {
-      if (columns == 0 && line_no == 1) return Status::ok_status();  // a header
+      // a header ("x y z"); a first line with a number in it is a mistyped
+      // point, not a header, and is never dropped
+      if (columns == 0 && line_no == 1 && line.find_first_of("0123456789") == std::string::npos) {
+        return Status::ok_status();
+      }
       return invalid_argument(where + "'" + quoted(line) + "' is not numbers x y [z]");
     }
     if (v.size() != 2 && v.size() != 3) {
@@ -389,7 +393,53 @@ Status read_home_altitude(const nlohmann::json& mission, const std::string& wher
   return Status::ok_status();
 }
 
-// The NAV_WAYPOINT items of a QGroundControl .plan, to the pack's CRS.
+// What a mission item is to the flown path, by its MAV_CMD number.
+enum class ItemRole : std::uint8_t {
+  vertex,     // flown at its position: a vertex of the path
+  end,        // takeoff, landing, return to launch: the mission's ends, not checked
+  no_motion,  // moves nothing (conditions, delays, camera, gimbal, speed, DO_JUMP...)
+  moves,      // moves the aircraft without a position visvol can check, or unknown
+};
+
+ItemRole item_role(long long command) {
+  using namespace mavlink;
+  constexpr long long kLandLocal = 23, kTakeoffLocal = 24, kNavRoi = 80, kNavDelay = 93;
+  constexpr long long kConditionChangeAlt = 113, kDoChangeAltitude = 186, kDoGoAround = 191, kDoReposition = 192;
+  switch (command) {
+    case kCmdNavWaypoint:
+    case kCmdNavLoiterUnlim:
+    case kCmdNavLoiterTurns:
+    case kCmdNavLoiterTime:
+    case kCmdNavLoiterToAlt:
+    case kCmdNavSplineWaypoint: return ItemRole::vertex;
+    case kCmdNavReturnToLaunch:
+    case kCmdNavLand:
+    case kCmdNavTakeoff:
+    case kLandLocal:
+    case kTakeoffLocal:
+    case kCmdNavVtolTakeoff:
+    case kCmdNavVtolLand: return ItemRole::end;
+    case kNavRoi:
+    case kNavDelay: return ItemRole::no_motion;
+    case kConditionChangeAlt:
+    case kDoChangeAltitude:
+    case kDoGoAround:
+    case kDoReposition: return ItemRole::moves;
+    default: break;
+  }
+  // Conditions (112..159), DO_ items (176..), camera, gimbal and the like
+  // point or trigger things. The NAV range (16..95) flies, and what visvol
+  // does not know there (follow, orbit, altitude changes, payload place,
+  // guided) is refused rather than left out unseen; so are the user-defined
+  // waypoint and spatial commands (31000..31009), which carry positions.
+  constexpr long long kFirstCondition = 112, kLargestCommand = 65535;
+  constexpr long long kFirstUserWaypoint = 31000, kLastUserSpatial = 31009;
+  if (command >= kFirstUserWaypoint && command <= kLastUserSpatial) return ItemRole::moves;
+  return command >= kFirstCondition && command <= kLargestCommand ? ItemRole::no_motion : ItemRole::moves;
+}
+
+// The waypoints of a QGroundControl .plan (waypoints, spline waypoints and
+// loiters, a loiter at its centre), to the pack's CRS.
 Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
   const std::string file = path + ": ";
   if (!j["fileType"].is_string() || j["fileType"].get<std::string>() != "Plan") {
@@ -436,7 +486,13 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       const std::string given = item.contains("command") ? json_brief(item["command"]) : "missing";
       return invalid_argument(where + "command " + given + " is not an integer");
     }
-    if (command != mavlink::kCmdNavWaypoint) continue;  // takeoff, land, loiter, DO_...: not the path
+    const ItemRole role = item_role(command);
+    if (role == ItemRole::moves) {
+      return invalid_argument(where + "command " + std::to_string(command) +
+                              " moves the aircraft without a position visvol can check; the path is read from "
+                              "waypoints (16), spline waypoints (82) and loiters (17, 18, 19, 31)");
+    }
+    if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
     long long frame = 0;
     if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
       return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
@@ -478,11 +534,15 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               ") is not supported; visvol reads waypoints in frame 0 (MAV_FRAME_GLOBAL, above mean "
                               "sea level) or 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, above the planned home)");
     }
+    // a loiter over the waypoint before it (the landing circle of visvol's
+    // own plans) adds no path
+    const bool loiter = command != mavlink::kCmdNavWaypoint && command != mavlink::kCmdNavSplineWaypoint;
+    if (loiter && !out.points.empty() && out.points.back() == Vec3(lon, lat, altitude_m)) continue;
     out.points.push_back({lon, lat, altitude_m});
   }
   if (out.points.size() < 2) {
-    return invalid_argument(file + std::to_string(out.points.size()) + " NAV_WAYPOINT (" +
-                            std::to_string(mavlink::kCmdNavWaypoint) + ") items in mission.items (of " +
+    return invalid_argument(file + std::to_string(out.points.size()) +
+                            " waypoints (waypoint, spline waypoint or loiter items) in mission.items (of " +
                             std::to_string(items.size()) + "); a path needs at least 2");
   }
   if (crs_wkt.empty()) {
@@ -511,6 +571,8 @@ Result<PathFile> parse_json_path(const std::string& text, const std::string& pat
 Result<PathFile> read_path_file(const std::string& path, const std::string& crs_wkt) {
   Result<std::string> text = read_whole_file(path);
   if (!text.ok()) return text.status();
+  // a UTF-8 byte order mark, as editors on some systems save text
+  if (text->compare(0, 3, "\xEF\xBB\xBF") == 0) text->erase(0, 3);
   const std::size_t first = text->find_first_not_of(" \t\r\n");
   if (first != std::string::npos && (*text)[first] == '{') return parse_json_path(*text, path, crs_wkt);
   if (is_plan_csv(*text)) return parse_plan_csv(*text, path);

@@ -54,6 +54,13 @@ using rt::Vec3;
 // MAVLink and QGroundControl numbers the .plan writer and reader use.
 namespace mavlink {
 inline constexpr int kCmdNavWaypoint = 16;            // MAV_CMD_NAV_WAYPOINT
+inline constexpr int kCmdNavLoiterUnlim = 17;         // MAV_CMD_NAV_LOITER_UNLIM
+inline constexpr int kCmdNavLoiterTurns = 18;         // MAV_CMD_NAV_LOITER_TURNS
+inline constexpr int kCmdNavLoiterTime = 19;          // MAV_CMD_NAV_LOITER_TIME
+inline constexpr int kCmdNavReturnToLaunch = 20;      // MAV_CMD_NAV_RETURN_TO_LAUNCH
+inline constexpr int kCmdNavSplineWaypoint = 82;      // MAV_CMD_NAV_SPLINE_WAYPOINT
+inline constexpr int kCmdNavVtolTakeoff = 84;         // MAV_CMD_NAV_VTOL_TAKEOFF
+inline constexpr int kCmdNavVtolLand = 85;            // MAV_CMD_NAV_VTOL_LAND
 inline constexpr int kCmdNavLand = 21;                // MAV_CMD_NAV_LAND
 inline constexpr int kCmdNavTakeoff = 22;             // MAV_CMD_NAV_TAKEOFF
 inline constexpr int kCmdNavLoiterToAlt = 31;         // MAV_CMD_NAV_LOITER_TO_ALT

@@ -103,7 +103,8 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--max-descent", o.max_descent_deg, "Steepest descent of a segment, deg");
   c.add_option("--min-turn-radius", o.min_turn_radius_m, "Tightest turn at a waypoint, m (0: none)");
   c.add_option("--clearance", o.clearance_m, "Least height above the terrain, m (default 30)");
-  c.add_option("--max-agl", o.max_agl_m, "Highest height above the terrain, m (default: the field's top bounds it)");
+  c.add_option("--max-agl", o.max_agl_m,
+               "Highest height above the terrain, m (default none; a planned path stays under the field's top)");
   c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
   c.add_option("--autopilot", o.autopilot,
                "The vehicle's flight stack, px4 or ardupilot: a .plan mission's firmware (default: the vehicle's)");

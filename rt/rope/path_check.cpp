@@ -51,7 +51,7 @@ std::vector<std::string> PathCheck::unmet() const {
     s.precision(1);
     s << std::fixed << to_string(c.constraint.kind) << " (" << c.constraint.point_m.x() << ", "
       << c.constraint.point_m.y() << ", " << c.constraint.point_m.z() << "): holds on " << std::setprecision(3)
-      << c.satisfied_fraction << " of the length";
+      << fraction_shown(c.satisfied_fraction) << " of the length";
     out.push_back(s.str());
   }
   for (const LimitResult& l : envelope) {
@@ -59,13 +59,13 @@ std::vector<std::string> PathCheck::unmet() const {
     std::ostringstream s;
     s.precision(1);
     s << std::fixed << l.name << " " << l.limit << " " << l.unit << ": worst " << l.worst << " " << l.unit
-      << ", holds on " << std::setprecision(3) << l.satisfied_fraction << " of the length";
+      << ", holds on " << std::setprecision(3) << fraction_shown(l.satisfied_fraction) << " of the length";
     out.push_back(s.str());
   }
   if (!inside_planning_bounds) {
     std::ostringstream s;
     s.precision(3);
-    s << "planning bounds: " << inside_bounds_fraction << " of the length inside";
+    s << "planning bounds: " << fraction_shown(inside_bounds_fraction) << " of the length inside";
     out.push_back(s.str());
   }
   return out;

@@ -19,6 +19,8 @@
 // Thread-compatible: check() is const and may run on several threads.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -56,6 +58,14 @@ struct PathCheckSpec {
   double curvature_coeff = 0;  // the pack's Earth curvature and refraction
   double sample_step_m = 0;    // 0: a quarter of the terrain's post spacing
 };
+
+// A satisfied fraction as reports print it (3 decimals), rounded down: a
+// requirement held on 0.9996 of the length reads 0.999, never the 1.000 of
+// one that is met.
+inline double fraction_shown(double fraction) {
+  if (fraction >= 1) return 1;
+  return std::min(std::floor(fraction * 1000.0 + 1e-9) / 1000.0, 0.999);
+}
 
 struct ConstraintResult {
   ConstraintPoint constraint;

@@ -52,8 +52,8 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
   for (const rt::ConstraintResult& r : c.constraints) {
     const rt::Vec3& p = r.constraint.point_m;
     std::printf("constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the length, in sight %.0f m (%.0f s) %s\n",
-                rt::to_string(r.constraint.kind), p.x(), p.y(), p.z(), r.satisfied_fraction, r.seen_m,
-                r.seen_m / e.speed_m_per_s, r.met ? "met" : "NOT MET");
+                rt::to_string(r.constraint.kind), p.x(), p.y(), p.z(), rt::fraction_shown(r.satisfied_fraction),
+                r.seen_m, r.seen_m / e.speed_m_per_s, r.met ? "met" : "NOT MET");
   }
   for (const rt::LimitResult& l : c.envelope) {
     if (!std::isfinite(l.limit)) {
@@ -61,10 +61,11 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
       continue;
     }
     std::printf("envelope   %s %.1f %s: worst %.1f %s, holds on %.3f of the length %s\n", l.name.c_str(), l.limit,
-                l.unit.c_str(), l.worst, l.unit.c_str(), l.satisfied_fraction, l.met ? "met" : "NOT MET");
+                l.unit.c_str(), l.worst, l.unit.c_str(), rt::fraction_shown(l.satisfied_fraction),
+                l.met ? "met" : "NOT MET");
   }
-  std::printf("bounds     %.3f of the length inside the planning bounds %s\n", c.inside_bounds_fraction,
-              c.inside_planning_bounds ? "met" : "NOT MET");
+  std::printf("bounds     %.3f of the length inside the planning bounds %s\n",
+              rt::fraction_shown(c.inside_bounds_fraction), c.inside_planning_bounds ? "met" : "NOT MET");
   if (c.all_met) {
     std::printf("requirements all met (sight lines and limits checked on the finest terrain)\n");
     return;

@@ -107,6 +107,25 @@ TEST_F(WallTerrain, EnvelopeLimitsAreMeasuredPerSegmentAndSample) {
   EXPECT_TRUE(limit("min-turn-radius").met);
 }
 
+// A requirement unmet by a hair never reads "holds on 1.000" in a report.
+TEST(PathCheckReport, AFractionUnderOneIsNeverShownAsOne) {
+  EXPECT_EQ(fraction_shown(1.0), 1.0);
+  EXPECT_EQ(fraction_shown(0.9996), 0.999);
+  EXPECT_EQ(fraction_shown(1.0 - 1e-15), 0.999);
+  EXPECT_EQ(fraction_shown(0.5), 0.5);
+  EXPECT_EQ(fraction_shown(0.0), 0.0);
+  PathCheck c;
+  LimitResult l;
+  l.name = "min-turn-radius";
+  l.unit = "m";
+  l.limit = 80;
+  l.satisfied_fraction = 0.9999;
+  l.met = false;
+  c.envelope.push_back(l);
+  ASSERT_EQ(c.unmet().size(), 1u);
+  EXPECT_NE(c.unmet()[0].find("holds on 0.999 of the length"), std::string::npos) << c.unmet()[0];
+}
+
 TEST(TurnRadii, NeighbouringTurnsShareTheirSegment) {
   // a zig-zag of right angles every 100 m: each arc gets half of each segment
   const std::vector<Vec3> zig = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}, {200, 100, 0}, {200, 200, 0}};

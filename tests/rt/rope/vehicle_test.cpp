@@ -38,6 +38,9 @@ TEST(Vehicle, BadValuesAreRefusedByKey) {
   refused([](VehicleEnvelope& v) { v.speed_m_per_s = 0.05; }, "[0.1, 1000] m/s");
   refused([](VehicleEnvelope& v) { v.clearance_m = std::nan(""); }, "clearance");
   refused([](VehicleEnvelope& v) { v.max_altitude_m = std::nan(""); }, "max-altitude");
+  refused([](VehicleEnvelope& v) { v.max_altitude_m = -1e300; }, "max-altitude -1e+300 is not a height in");
+  refused([](VehicleEnvelope& v) { v.max_altitude_m = -VehicleEnvelope::kNone; }, "max-altitude");
+  refused([](VehicleEnvelope& v) { v.max_altitude_m = 1.5e5; }, "max-altitude");
   // contradictory: a ceiling under the clearance
   refused([](VehicleEnvelope& v) { v.max_agl_m = 20; }, "max-agl");
 }

@@ -247,7 +247,8 @@ Status validate_ceilings(const cli::EnvelopeOptions& e) {
                               ": no height is allowed");
     }
   }
-  if (e.max_altitude_m && !(std::isfinite(*e.max_altitude_m) && std::fabs(*e.max_altitude_m) <= 1e5)) {
+  if (e.max_altitude_m &&
+      !(std::isfinite(*e.max_altitude_m) && std::fabs(*e.max_altitude_m) <= rt::VehicleEnvelope::kMaxAltitudeRangeM)) {
     return invalid_argument("--max-altitude: must be a height in -100000..100000 m");
   }
   return {};

@@ -28,7 +28,9 @@
 
 namespace visvol::fields {
 
-// Receives finished rows of the field in increasing j, from one thread.
+// Receives finished rows of the field, each once, from one thread: in
+// increasing j, but for a build split by observers, whose rows within range of
+// another share's band come last (build_visibility_share).
 class VolumeRowSink {
  public:
   virtual ~VolumeRowSink() = default;

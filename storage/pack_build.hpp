@@ -1,7 +1,8 @@
 // Builds a field pack from a heightfield: every level of detail's terrain,
 // area factor, visibility field F_p and terrain force field, streamed tile by
 // tile to a PackWriter. Working memory is one band of 16 rows of the field
-// plus the builder's own window: a field far larger than memory is fine.
+// plus the builder's own window (split by observers, also the rows waiting for
+// other shares' sums): a field far larger than memory is fine.
 //
 // A build may be split among processes (visvol-build-mpi): each builds a
 // share of every level's rows into its own tiles, and one of them writes the

@@ -65,7 +65,7 @@ Status validate(const VehicleEnvelope& v) {
   // none (infinite), or a height as the console's option takes it: -1e300 m
   // was accepted, a ceiling no path can be under
   if (v.max_altitude_m != VehicleEnvelope::kNone &&
-      !(std::isfinite(v.max_altitude_m) && std::fabs(v.max_altitude_m) <= 1e5)) {
+      !(std::isfinite(v.max_altitude_m) && std::fabs(v.max_altitude_m) <= VehicleEnvelope::kMaxAltitudeRangeM)) {
     return bad("max-altitude", v.max_altitude_m, "is not a height in -100000..100000 m");
   }
   return Status::ok_status();

@@ -35,6 +35,8 @@ bool parse_autopilot(const std::string& text, Autopilot& out);
 
 struct VehicleEnvelope {
   static constexpr double kNone = std::numeric_limits<double>::infinity();
+  // A max-altitude, when there is one, lies within this of the datum, m.
+  static constexpr double kMaxAltitudeRangeM = 1.0e5;
 
   std::string name = "fixed-wing";  // preset or file it came from
   VehicleType type = VehicleType::fixed_wing;

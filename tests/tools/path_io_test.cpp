@@ -422,18 +422,25 @@ TEST_F(PathIo, PlanWaypointsAboveHomeAreLiftedByHomesAltitude) {
 }
 
 // The aircraft flies to spline waypoints and loiters too: they are vertices
-// (a loiter at its centre), so a check sees them; speed, camera and jump
-// items move nothing and are left out.
+// (a loiter at its centre), so a check sees them; speed, camera, ROI and
+// delay items move nothing and are left out, as are takeoff, landing and
+// return to launch (the mission's ends).
 TEST_F(PathIo, PlanSplineWaypointsAndLoitersAreVerticesOtherItemsAreLeftOut) {
   const std::string f = file_with(
       "mixed.plan",
-      plan_text(waypoint(0, "37.790", "-122.430", "50") + "," + waypoint(0, "37.789", "-122.429", "5", 82) + "," +
-                waypoint(0, "0", "0", "0", 178) + "," +   // DO_CHANGE_SPEED
-                waypoint(0, "0", "0", "0", 2000) + "," +  // IMAGE_START_CAPTURE
+      plan_text(waypoint(0, "37.790", "-122.430", "50", mavlink::kCmdNavTakeoff) + "," +
+                waypoint(0, "37.790", "-122.430", "50") + "," + waypoint(0, "37.789", "-122.429", "5", 82) + "," +
+                waypoint(0, "0", "0", "0", 178) + "," +         // DO_CHANGE_SPEED
+                waypoint(0, "0", "0", "0", 2000) + "," +        // IMAGE_START_CAPTURE
+                waypoint(0, "0", "0", "0", 206) + "," +         // DO_SET_CAM_TRIGG_DIST
+                waypoint(0, "37.7", "-122.4", "0", 80) + "," +  // NAV_ROI
+                waypoint(0, "0", "0", "0", 93) + "," +          // NAV_DELAY
                 waypoint(0, "37.788", "-122.428", "60", 19) + "," + waypoint(0, "37.787", "-122.427", "61", 17) + "," +
-                waypoint(0, "37.786", "-122.426", "62", 18) + "," + waypoint(0, "0", "0", "0", 177) + "," +
+                waypoint(0, "37.786", "-122.426", "62", 18) + "," +
                 waypoint(0, "37.785", "-122.425", "63", mavlink::kCmdNavLoiterToAlt) + "," +
-                waypoint(0, "37.785", "-122.425", "0", mavlink::kCmdNavLand)));
+                waypoint(0, "37.785", "-122.425", "0", mavlink::kCmdNavLand) + "," +
+                waypoint(0, "37.785", "-122.425", "0", mavlink::kCmdNavVtolLand) + "," +
+                waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch)));
   Result<PathFile> path = read_path_file(f, wkt_);
   ASSERT_TRUE(path.ok()) << path.status().message();
   ASSERT_EQ(path->points.size(), 6u);
@@ -494,16 +501,25 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
       // items that move the aircraft without a position visvol can check,
       // and numbers that are no command: refused, never left out unseen
       {"orbit.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 34) + "," + wp),
-       "orbit.plan: mission.items[1] (doJumpId 1): command 34 moves the aircraft without a position visvol can "
-       "check"},
+       "orbit.plan: mission.items[1] (doJumpId 1): command 34 moves the aircraft along a path visvol cannot read "
+       "from the file"},
       {"climb.plan", plan_text(wp + "," + waypoint(0, "0", "0", "500", 113) + "," + wp),
        "climb.plan: mission.items[1] (doJumpId 1): command 113 moves the aircraft"},
+      // a jump flies the leg back to its target again, unseen in the file
+      {"jump.plan", plan_text(wp + "," + waypoint(0, "1", "2", "0", 177) + "," + wp),
+       "jump.plan: mission.items[1] (doJumpId 1): command 177 moves the aircraft"},
+      {"sethome.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 179) + "," + wp),
+       "sethome.plan: mission.items[1] (doJumpId 1): command 179 moves the aircraft"},
+      {"script.plan", plan_text(wp + "," + waypoint(0, "0", "0", "0", 42702) + "," + wp),
+       "script.plan: mission.items[1] (doJumpId 1): command 42702 moves the aircraft"},
+      {"user.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 31000) + "," + wp),
+       "user.plan: mission.items[1] (doJumpId 1): command 31000 moves the aircraft"},
       {"unknown.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 50) + "," + wp),
-       "unknown.plan: mission.items[1] (doJumpId 1): command 50 moves the aircraft"},
+       "unknown.plan: mission.items[1] (doJumpId 1): command 50 is not a MAVLink command visvol knows"},
       {"negative.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", -1) + "," + wp),
-       "negative.plan: mission.items[1] (doJumpId 1): command -1 moves the aircraft"},
-      {"huge.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 31000) + "," + wp),
-       "huge.plan: mission.items[1] (doJumpId 1): command 31000 moves the aircraft"},
+       "negative.plan: mission.items[1] (doJumpId 1): command -1 is not a MAVLink command visvol knows"},
+      {"huge.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 70000) + "," + wp),
+       "huge.plan: mission.items[1] (doJumpId 1): command 70000 is not a MAVLink command visvol knows"},
       {"survey.plan", plan_text(wp + R"(,{"type":"ComplexItem","complexItemType":"survey"},)" + wp),
        "survey.plan: mission.items[1]: a ComplexItem (survey): its flown path is not in the file"},
       {"home.plan", plan_text(wp + "," + waypoint(3, "37.78", "-122.42", "60"), "[37.79, -122.43]"),

@@ -160,6 +160,23 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
   // relative to a home 150 m above sea level: 300 m above it
   EXPECT_NEAR(j["per_vertex"][0]["z_m"].get<double>(), 300.0, 0.5);
   EXPECT_TRUE(j.contains("duration_s"));
+  // a spline waypoint 1 m above sea level, under the ground: a vertex the
+  // check sees (it was left out, and the mission read as met)
+  nlohmann::json low = mission;
+  low["mission"]["items"].insert(low["mission"]["items"].begin() + 1,
+                                 nlohmann::json{{"type", "SimpleItem"},
+                                                {"command", 82},
+                                                {"frame", 0},
+                                                {"autoContinue", true},
+                                                {"doJumpId", 9},
+                                                {"params", {0, 0, 0, nullptr, 37.7890, -122.4320, 1.0}}});
+  std::ofstream(plan) << low.dump(2);
+  const Outcome under = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor");
+  EXPECT_EQ(under.status, 1) << under.out << under.err;
+  const std::size_t clearance = under.out.find("envelope   clearance");
+  ASSERT_NE(clearance, std::string::npos) << under.out;
+  EXPECT_NE(under.out.substr(clearance, under.out.find('\n', clearance) - clearance).find("NOT MET"), std::string::npos)
+      << under.out;
   std::remove(plan.c_str());
 }
 

@@ -397,14 +397,42 @@ Status read_home_altitude(const nlohmann::json& mission, const std::string& wher
 enum class ItemRole : std::uint8_t {
   vertex,     // flown at its position: a vertex of the path
   end,        // takeoff, landing, return to launch: the mission's ends, not checked
-  no_motion,  // moves nothing (conditions, delays, camera, gimbal, speed, DO_JUMP...)
-  moves,      // moves the aircraft without a position visvol can check, or unknown
+  no_motion,  // moves nothing (conditions, delays, camera, gimbal, speed, ROI...)
+  moves,      // moves the aircraft along what visvol cannot read from the file
+  unknown,    // no MAV_CMD visvol knows: it may move the aircraft
 };
+
+// The commands past the NAV range that move the aircraft (ArduPilot counts
+// some as NAV commands): a jump repeats legs, a mode or home change moves
+// it or what its altitudes mean.
+bool moves_outside_nav_range(long long command) {
+  constexpr long long kDoSetMode = 176, kDoJump = 177, kDoSetHome = 179, kDoChangeAltitude = 186;
+  constexpr long long kDoRallyLand = 190, kDoGoAround = 191, kDoReposition = 192, kNavSetYawSpeed = 213;
+  constexpr long long kDoJumpTag = 601, kNavScriptTime = 42702, kNavAttitudeTime = 42703;
+  constexpr long long kConditionChangeAlt = 113;
+  constexpr long long kFirstUserWaypoint = 31000, kLastUserSpatial = 31009;  // user commands with positions
+  switch (command) {
+    case kConditionChangeAlt:
+    case kDoSetMode:
+    case kDoJump:
+    case kDoSetHome:
+    case kDoChangeAltitude:
+    case kDoRallyLand:
+    case kDoGoAround:
+    case kDoReposition:
+    case kNavSetYawSpeed:
+    case kDoJumpTag:
+    case kNavScriptTime:
+    case kNavAttitudeTime: return true;
+    default: return command >= kFirstUserWaypoint && command <= kLastUserSpatial;
+  }
+}
 
 ItemRole item_role(long long command) {
   using namespace mavlink;
   constexpr long long kLandLocal = 23, kTakeoffLocal = 24, kNavRoi = 80, kNavDelay = 93;
-  constexpr long long kConditionChangeAlt = 113, kDoChangeAltitude = 186, kDoGoAround = 191, kDoReposition = 192;
+  constexpr long long kNavFollow = 25, kContinueAndChangeAlt = 30, kDoFollow = 32, kDoFollowReposition = 33;
+  constexpr long long kDoOrbit = 34, kNavPathPlanning = 81, kNavGuidedEnable = 92, kNavPayloadPlace = 94;
   switch (command) {
     case kCmdNavWaypoint:
     case kCmdNavLoiterUnlim:
@@ -421,21 +449,22 @@ ItemRole item_role(long long command) {
     case kCmdNavVtolLand: return ItemRole::end;
     case kNavRoi:
     case kNavDelay: return ItemRole::no_motion;
-    case kConditionChangeAlt:
-    case kDoChangeAltitude:
-    case kDoGoAround:
-    case kDoReposition: return ItemRole::moves;
+    case kNavFollow:
+    case kContinueAndChangeAlt:
+    case kDoFollow:
+    case kDoFollowReposition:
+    case kDoOrbit:
+    case kNavPathPlanning:
+    case kNavGuidedEnable:
+    case kNavPayloadPlace: return ItemRole::moves;
     default: break;
   }
   // Conditions (112..159), DO_ items (176..), camera, gimbal and the like
-  // point or trigger things. The NAV range (16..95) flies, and what visvol
-  // does not know there (follow, orbit, altitude changes, payload place,
-  // guided) is refused rather than left out unseen; so are the user-defined
-  // waypoint and spatial commands (31000..31009), which carry positions.
+  // point or trigger things, but for those that move the aircraft; in the
+  // NAV range (..111) and past 16 bits, a number visvol does not know.
   constexpr long long kFirstCondition = 112, kLargestCommand = 65535;
-  constexpr long long kFirstUserWaypoint = 31000, kLastUserSpatial = 31009;
-  if (command >= kFirstUserWaypoint && command <= kLastUserSpatial) return ItemRole::moves;
-  return command >= kFirstCondition && command <= kLargestCommand ? ItemRole::no_motion : ItemRole::moves;
+  if (command < kFirstCondition || command > kLargestCommand) return ItemRole::unknown;
+  return moves_outside_nav_range(command) ? ItemRole::moves : ItemRole::no_motion;
 }
 
 // The waypoints of a QGroundControl .plan (waypoints, spline waypoints and
@@ -487,10 +516,14 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       return invalid_argument(where + "command " + given + " is not an integer");
     }
     const ItemRole role = item_role(command);
-    if (role == ItemRole::moves) {
+    if (role == ItemRole::moves || role == ItemRole::unknown) {
       return invalid_argument(where + "command " + std::to_string(command) +
-                              " moves the aircraft without a position visvol can check; the path is read from "
-                              "waypoints (16), spline waypoints (82) and loiters (17, 18, 19, 31)");
+                              (role == ItemRole::moves
+                                   ? " moves the aircraft along a path visvol cannot read from the file (a jump, "
+                                     "orbit, follow, mode, home or altitude change...)"
+                                   : " is not a MAVLink command visvol knows, and it may move the aircraft") +
+                              "; the path is read from waypoints (16), spline waypoints (82) and loiters (17, 18, "
+                              "19, 31): write the mission with those, or check the path as flown");
     }
     if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
     long long frame = 0;

@@ -9,11 +9,13 @@
 // written (never orthometric heights labelled ellipsoidal), and a GeoJSON with
 // heights is not read.
 //
-// In (read_path_file), four formats told apart by their content:
+// In (read_path_file), four formats told apart by their content (a UTF-8
+// byte order mark before any of them is skipped):
 //   - text: points "x y" (lifted to the clearance above the terrain, densely,
 //     as the paper's tracing tool does) or "x y z", in the pack's CRS;
 //     separators are spaces, tabs or commas; '#' starts a comment; a first
-//     line that is not numbers is a header;
+//     line without digits is a header (one with digits that does not parse
+//     is refused: a mistyped first point is never dropped);
 //   - the CSV `visvol plan` writes: '#' comment lines, then a header naming
 //     x_m, y_m and z_m (pack CRS, metres) and optionally fp; other columns
 //     are ignored;
@@ -26,10 +28,14 @@
 //     level)") is read with its heights as they are. properties.vertex_fp,
 //     when present, is the F_p of each vertex;
 //   - a QGroundControl .plan (JSON with "fileType": "Plan", version 1): the
-//     path is its NAV_WAYPOINT (16) items in order; takeoff, land, loiter and
-//     DO_ items are not part of it (so a .plan `visvol plan` wrote reads back
-//     to its vertices); a ComplexItem (survey, landing pattern, ...) is
-//     refused, its flown path not being in the file. Frames: MAV_FRAME_GLOBAL
+//     path is its waypoint, spline waypoint and loiter items in order (a
+//     loiter at its centre; one over the waypoint before it adds nothing, so
+//     a .plan `visvol plan` wrote reads back to its vertices); takeoff,
+//     landing, return to launch and items that move nothing are not part of
+//     it; an item that moves the aircraft otherwise (a jump, orbit, mode,
+//     home or altitude change...), an unknown command and a ComplexItem
+//     (survey, landing pattern, ...) are refused, their flown path not being
+//     in the file. Frames: MAV_FRAME_GLOBAL
 //     (0, and 5, its _INT twin: altitude above mean sea level, the DEM's
 //     heights) and MAV_FRAME_GLOBAL_RELATIVE_ALT (3, and 6: above the planned
 //     home position, whose altitude is added); any other frame (terrain

@@ -28,6 +28,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -570,8 +571,16 @@ TEST_F(Hil, SilenceZeroesForceOnBothSidesAndForcesReturnAfterANewGrasp) {
   check_common(o);  // includes: no force later than 10 ms after the last position
   EXPECT_TRUE(o.saw_fault(FaultReason::position_timeout));
   EXPECT_GE(o.sim.at("watchdog_trips"), 1.0);
-  // 300 at 1 kHz; an emulated VM on a loaded host has run at under a third of that
-  EXPECT_GT(o.sim.at("rx_ignored"), 30.0) << "the console kept sending (zero) commands into the silence";
+  // 300 at 1 kHz; an emulated VM on a loaded host has run at under a third of
+  // that, and at a tenth with a parallel build beside it (29): the bound
+  // follows the rate the device saw commands at outside the silence (under a
+  // third of it, for an uneven host), at most 30 and never under 10, far above
+  // the few a console that stopped sending leaves
+  const double outside_silence_s = std::max(2.2 - o.sim.at("first_operational_s") - 0.3, 0.1);
+  const double command_rate_per_s = o.sim.at("commands") / outside_silence_s;
+  const double least_ignored = std::clamp(0.3 * 0.3 * command_rate_per_s, 10.0, 30.0);
+  EXPECT_GT(o.sim.at("rx_ignored"), least_ignored)
+      << "the console kept sending (zero) commands into the silence (at " << command_rate_per_s << " a second)";
   EXPECT_GT(o.max_force(1.7, 2.3), 1.0) << "forces back after the new grasp";
 }
 

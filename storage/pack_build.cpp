@@ -64,11 +64,11 @@ class BrickSink final : public fields::VolumeRowSink {
     BrickRow& band = rows_[ty];
     if (band.values.empty()) {
       band.values.assign(static_cast<std::size_t>(kBrickPosts) * row_floats(), 0.0f);
-      band.missing = std::min(kBrickPosts, ny_ - ty * kBrickPosts);
+      band.missing = posts_high(ty);
     }
     std::memcpy(&band.values[static_cast<std::size_t>(y) * row_floats()], values, row_floats() * sizeof(float));
     if (--band.missing > 0) return Status::ok_status();
-    const Status st = flush(ty, std::min(kBrickPosts, ny_ - ty * kBrickPosts), band.values);
+    const Status st = flush(ty, posts_high(ty), band.values);
     rows_.erase(ty);
     return st;
   }
@@ -79,6 +79,8 @@ class BrickSink final : public fields::VolumeRowSink {
     int missing = 0;            // rows not yet written
   };
   std::size_t row_floats() const { return static_cast<std::size_t>(nz_) * static_cast<std::size_t>(nx_); }
+  // Rows of brick row `ty` (the last may be short).
+  int posts_high(int ty) const { return std::min(kBrickPosts, ny_ - ty * kBrickPosts); }
 
   Status flush(int ty, int rows, const std::vector<float>& band) {
     const int tiles_x = tile_grid(Layer::visibility, nx_, ny_).tiles_x;
@@ -298,18 +300,17 @@ Result<PackPlan> plan_pack(const Heightfield& hf, const PackBuildParams& params)
   return plan;
 }
 
-namespace {
-
-// A share's rows of F_p at a level of `t`'s size: its brick rows'.
-fields::RowBand brick_band(const Heightfield& t, BuildShare share) {
-  const TileRows bricks = share_tile_rows(tile_grid(Layer::visibility, t.nx, t.ny).tiles_y, share);
-  return {std::min(t.ny, bricks.first * kBrickPosts), std::min(t.ny, bricks.end * kBrickPosts)};
+fields::RowBand share_field_rows(int nx, int ny, BuildShare share) {
+  const TileRows bricks = share_tile_rows(tile_grid(Layer::visibility, nx, ny).tiles_y, share);
+  return {std::min(ny, bricks.first * kBrickPosts), std::min(ny, bricks.end * kBrickPosts)};
 }
 
-// Every share's, in order: they cover the rows.
-std::vector<fields::RowBand> brick_bands(const Heightfield& t, int count) {
+namespace {
+
+// Every share's rows of F_p at a level of `t`'s size, in order: they cover the rows.
+std::vector<fields::RowBand> share_field_bands(const Heightfield& t, int count) {
   std::vector<fields::RowBand> bands;
-  for (int q = 0; q < count; ++q) bands.push_back(brick_band(t, BuildShare{q, count}));
+  for (int q = 0; q < count; ++q) bands.push_back(share_field_rows(t.nx, t.ny, BuildShare{q, count}));
   return bands;
 }
 
@@ -342,11 +343,11 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
       const fields::ProgressFn field_progress = [&](double f) {
         if (progress) progress(done + share_of_total * 0.9 * f);
       };
-      Status st =
-          share.exchange
-              ? fields::build_visibility_share(t, in.params, brick_bands(t, share.count), share.index, *share.exchange,
-                                               bricks_out, field_progress, &stats)
-              : fields::build_visibility_rows(t, in.params, brick_band(t, share), bricks_out, field_progress, &stats);
+      Status st = share.exchange
+                      ? fields::build_visibility_share(t, in.params, share_field_bands(t, share.count), share.index,
+                                                       *share.exchange, bricks_out, field_progress, &stats)
+                      : fields::build_visibility_rows(t, in.params, share_field_rows(t.nx, t.ny, share), bricks_out,
+                                                      field_progress, &stats);
       if (!st.ok()) return st.with_context("level of detail " + std::to_string(level));
       const auto t_tff = Clock::now();
       VISVOL_RETURN_IF_ERROR(

@@ -94,6 +94,10 @@ struct TileRows {
 };
 TileRows share_tile_rows(int tiles_y, BuildShare share);
 
+// The rows of F_p a share builds at a level `nx` x `ny` posts: its brick
+// rows', in posts (empty when it has none).
+fields::RowBand share_field_rows(int nx, int ny, BuildShare share);
+
 // Builds one share's tiles into `sink` (a PackWriter of plan.layout, or one
 // that writes at its placement). `report` gets this share's figures.
 Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, BuildShare share, TileSink& sink,

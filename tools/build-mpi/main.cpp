@@ -239,9 +239,8 @@ RankFigures figures_of(const Comm& world, const Job& job, const storage::PackBui
     f[kSumsMibOut] += static_cast<double>(s.sent_bytes) / (1024.0 * 1024.0);
   }
   const fields::Heightfield& t = job.build.terrain;
-  const storage::TileRows rows = storage::share_tile_rows(
-      storage::tile_grid(storage::Layer::visibility, t.nx, t.ny).tiles_y, storage::BuildShare{world.rank, world.size});
-  f[kLevel0Rows] = std::min(t.ny, rows.end * storage::kBrickPosts) - rows.first * storage::kBrickPosts;
+  const fields::RowBand rows = storage::share_field_rows(t.nx, t.ny, storage::BuildShare{world.rank, world.size});
+  f[kLevel0Rows] = rows.end - rows.first;
   f[kTffS] = report.tff_s;
   f[kWriteS] = sink.write_s;
   f[kTiles] = static_cast<double>(sink.indices.size());
@@ -290,7 +289,6 @@ int run(const Comm& world, BuildOptions o, bool by_observers) {
 
   // This rank's share.
   MpiTileSink sink(placement, file, write_path);
-
   storage::PackBuildReport report;
   {
     std::unique_ptr<Progress> progress;

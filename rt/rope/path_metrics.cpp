@@ -84,22 +84,35 @@ double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c) {
 std::vector<double> turn_radii_m(const Vec3* v, int count) {
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = count > 0 ? static_cast<std::size_t>(count) : 0;
-  std::vector<double> t(n, 0.0), radius(n, inf);
-  for (std::size_t i = 1; i + 1 < n; ++i) {
-    const Eigen::Vector2d u(v[i].x() - v[i - 1].x(), v[i].y() - v[i - 1].y()),
-        w(v[i + 1].x() - v[i].x(), v[i + 1].y() - v[i].y());
-    const double lu = u.norm(), lw = w.norm();
-    if (lu < 1e-9 || lw < 1e-9) continue;  // a vertical segment: climb limits judge it
-    const double turn = std::acos(std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0));
-    t[i] = turn > 1e-9 ? std::tan(0.5 * std::min(turn, M_PI - 1e-9)) : 0.0;
+  std::vector<double> radius(n, inf);
+  // The horizontal track: each run of vertices within kSameSpotM of the run's
+  // first is one spot (a repeated waypoint, a climb on the spot), so the turn
+  // there is judged between the segments either side of the run.
+  std::vector<std::size_t> spot_first(n), spot_of(n);
+  std::size_t spots = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool same = spots > 0 && std::hypot(v[i].x() - v[spot_first[spots - 1]].x(),
+                                              v[i].y() - v[spot_first[spots - 1]].y()) < kSameSpotM;
+    if (!same) spot_first[spots++] = i;
+    spot_of[i] = spots - 1;
   }
-  for (std::size_t i = 0; i + 1 < n; ++i) {
-    const double tangents = t[i] + t[i + 1];
+  auto xy = [&](std::size_t s) { return Eigen::Vector2d(v[spot_first[s]].x(), v[spot_first[s]].y()); };
+  // t = tan(turn / 2) at each interior spot
+  std::vector<double> t(spots, 0.0), spot_radius(spots, inf);
+  for (std::size_t s = 1; s + 1 < spots; ++s) {
+    const Eigen::Vector2d u = xy(s) - xy(s - 1), w = xy(s + 1) - xy(s);
+    const double turn = std::acos(std::clamp(u.dot(w) / (u.norm() * w.norm()), -1.0, 1.0));
+    t[s] = turn > 1e-9 ? std::tan(0.5 * std::min(turn, M_PI - 1e-9)) : 0.0;
+  }
+  for (std::size_t s = 0; s + 1 < spots; ++s) {
+    const double tangents = t[s] + t[s + 1];
     if (tangents <= 0) continue;
-    const double bound = std::hypot(v[i + 1].x() - v[i].x(), v[i + 1].y() - v[i].y()) / tangents;
-    if (t[i] > 0) radius[i] = std::min(radius[i], bound);
-    if (t[i + 1] > 0) radius[i + 1] = std::min(radius[i + 1], bound);
+    const double bound = (xy(s + 1) - xy(s)).norm() / tangents;
+    if (t[s] > 0) spot_radius[s] = std::min(spot_radius[s], bound);
+    if (t[s + 1] > 0) spot_radius[s + 1] = std::min(spot_radius[s + 1], bound);
   }
+  // the path's ends are never turns, even where a run joins them
+  for (std::size_t i = 1; i + 1 < n; ++i) radius[i] = spot_radius[spot_of[i]];
   return radius;
 }
 

@@ -52,7 +52,11 @@ double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c);
 // R tan(theta / 2) before it, and two fillets may not overlap, so every
 // segment i of horizontal length L_i needs R (t_i + t_(i+1)) <= L_i with
 // t = tan(theta / 2). A vertex's radius is the smaller of its two segments'
-// bounds; straight vertices and the ends are infinite.
+// bounds; straight vertices and the ends are infinite. Vertices closer than
+// kSameSpotM horizontally are one spot (a repeated waypoint, a climb on the
+// spot): each of them gets the turn between the segments either side of the
+// run, which a vertex 1e-8 m from its neighbour does not make a hairpin of.
+inline constexpr double kSameSpotM = 0.01;
 std::vector<double> turn_radii_m(const Vec3* vertices, int count);
 
 }  // namespace visvol::rt

@@ -471,6 +471,51 @@ TEST_F(PathIo, TextFirstLineIsAHeaderOnlyWithoutNumbers) {
   EXPECT_EQ(geojson->format, PathFormat::geojson);
 }
 
+// Numbers in text and CSV paths are decimal: strtod's hexadecimal, "inf"
+// and "nan" are typing mistakes there, and a header with digits is pointed
+// at the '#' that makes it a comment.
+TEST_F(PathIo, TextAndCsvNumbersAreDecimalOnly) {
+  for (const char* bad : {"0x1p20", "0x10", "inf", "nan", "1e400", "1.2.3", "+", "1e", ".", "1,5e"}) {
+    const std::string text = std::string(bad) + " 4181900 200\n550500 4182100 200\n";
+    Result<PathFile> path = read_path_file(file_with("bad.txt", text), wkt_);
+    ASSERT_FALSE(path.ok()) << bad;
+    EXPECT_NE(path.status().message().find("bad.txt: line 1:"), std::string::npos) << path.status().message();
+    const std::string csv = "i,x_m,y_m,z_m\n0," + std::string(bad) + ",4181900,200\n1,550500,4182100,200\n";
+    Result<PathFile> plan_csv = read_path_file(file_with("bad.csv", csv), wkt_);
+    ASSERT_FALSE(plan_csv.ok()) << bad;
+    EXPECT_NE(plan_csv.status().message().find("bad.csv: line 2:"), std::string::npos) << plan_csv.status().message();
+  }
+  for (const char* good : {"550300", "+550300", "550300.", "550300.25", "5.503e5", "5503E+2", ".5e6"}) {
+    const std::string text = std::string(good) + " 4181900 200\n550500 4182100 200\n";
+    Result<PathFile> path = read_path_file(file_with("good.txt", text), wkt_);
+    ASSERT_TRUE(path.ok()) << good << ": " << path.status().message();
+    EXPECT_GT(path->points[0].x(), 5e4);
+  }
+  Result<PathFile> header = read_path_file(file_with("hdr.txt", "E_32633 N Z\n1 2 3\n4 5 6\n"), wkt_);
+  ASSERT_FALSE(header.ok());
+  EXPECT_NE(header.status().message().find("start it with '#'"), std::string::npos) << header.status().message();
+  Result<PathFile> commented = read_path_file(file_with("hdr.txt", "# E_32633 N Z\n1 2 3\n4 5 6\n"), wkt_);
+  EXPECT_TRUE(commented.ok()) << commented.status().message();
+  // past the first line, no hint: a bad point is not a header
+  Result<PathFile> later = read_path_file(file_with("late.txt", "1 2 3\nE_32633 N Z\n4 5 6\n"), wkt_);
+  ASSERT_FALSE(later.ok());
+  EXPECT_EQ(later.status().message().find("'#'"), std::string::npos) << later.status().message();
+}
+
+// A path that goes nowhere would pass every limit: refused in every format.
+TEST_F(PathIo, APathWhosePointsAreAllTheSameIsRefused) {
+  Result<PathFile> same = read_path_file(file_with("same.txt", "1 2 3\n1 2 3\n1 2 3.001\n"), wkt_);
+  ASSERT_FALSE(same.ok());
+  EXPECT_NE(same.status().message().find("same.txt: all 3 points are the same position"), std::string::npos)
+      << same.status().message();
+  EXPECT_TRUE(read_path_file(file_with("climb.txt", "1 2 3\n1 2 13\n"), wkt_).ok());  // straight up is a path
+  const std::string wp = waypoint(mavlink::kFrameGlobal, "37.79", "-122.43", "50");
+  Result<PathFile> plan = read_path_file(file_with("same.plan", plan_text(wp + "," + wp)), wkt_);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_NE(plan.status().message().find("all 2 points are the same position"), std::string::npos)
+      << plan.status().message();
+}
+
 TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
   const std::string wp = waypoint(mavlink::kFrameGlobal, "37.79", "-122.43", "50");
   const struct {

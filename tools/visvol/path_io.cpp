@@ -32,6 +32,39 @@ constexpr std::uintmax_t kMaxPathFileBytes = 64u << 20;
 // Characters of a bad line quoted in a message.
 constexpr std::size_t kQuotedChars = 40;
 
+// Whether `s` is a decimal number as people write them: [+-] digits, a
+// point, [eE] exponent. strtod also reads hexadecimal ("0x1A" is 26),
+// "inf" and "nan", which in a path file are mistakes, not positions.
+bool is_decimal(const std::string& s) {
+  std::size_t i = 0;
+  const auto digits = [&] {
+    const std::size_t from = i;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+    return i - from;
+  };
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+  std::size_t mantissa = digits();
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == s.size();
+}
+
+// A decimal number that fits a double (1e400 does not).
+bool decimal_number(const std::string& s, double& v) {
+  if (!is_decimal(s)) return false;
+  errno = 0;
+  v = std::strtod(s.c_str(), nullptr);
+  return errno != ERANGE || std::fabs(v) < 1;  // underflow to (near) zero is fine
+}
+
 // Numbers of a line: separators are spaces, tabs and commas.
 bool parse_numbers(std::string line, std::vector<double>& out) {
   for (char& c : line) {
@@ -41,10 +74,8 @@ bool parse_numbers(std::string line, std::vector<double>& out) {
   out.clear();
   std::string word;
   while (in >> word) {
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(word.c_str(), &end);
-    if (end == word.c_str() || *end != '\0' || errno == ERANGE) return false;
+    double v = 0;
+    if (!decimal_number(word, v)) return false;
     out.push_back(v);
   }
   return true;
@@ -56,6 +87,17 @@ std::string fixed(double v, int decimals) {
   s.precision(decimals);
   s << v;
   return s.str();
+}
+
+// A number for a message: fixed decimals, or 6 significant digits where that
+// would print hundreds of digits (a mistyped 1e308).
+std::string shown(double v, int decimals) {
+  if (!(std::fabs(v) < 1e9)) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+  return fixed(v, decimals);
 }
 
 // A line for a message: at most kQuotedChars, unprintable bytes as '?', so a
@@ -114,7 +156,9 @@ Result<PathFile> parse_text_points(const std::string& text, const std::string& p
       if (columns == 0 && line_no == 1 && line.find_first_of("0123456789") == std::string::npos) {
         return Status::ok_status();
       }
-      return invalid_argument(where + "'" + quoted(line) + "' is not numbers x y [z]");
+      const bool first = columns == 0 && line_no == 1;
+      return invalid_argument(where + "'" + quoted(line) + "' is not numbers x y [z]" +
+                              (first ? " (if it is a header, start it with '#')" : ""));
     }
     if (v.size() != 2 && v.size() != 3) {
       return invalid_argument(where + std::to_string(v.size()) + " numbers; expected x y or x y z");
@@ -123,10 +167,7 @@ Result<PathFile> parse_text_points(const std::string& text, const std::string& p
     if (static_cast<int>(v.size()) != columns) {
       return invalid_argument(where + std::to_string(v.size()) + " numbers, earlier lines " + std::to_string(columns));
     }
-    for (double d : v) {
-      if (!std::isfinite(d)) return invalid_argument(where + "not finite");
-    }
-    out.points.push_back({v[0], v[1], v.size() == 3 ? v[2] : 0.0});
+    out.points.push_back({v[0], v[1], v.size() == 3 ? v[2] : 0.0});  // finite: decimal_number()
     return Status::ok_status();
   });
   VISVOL_RETURN_IF_ERROR(s);
@@ -146,12 +187,7 @@ std::vector<std::string> split_commas(const std::string& line) {
   return out;
 }
 
-bool finite_number(const std::string& s, double& v) {
-  char* end = nullptr;
-  errno = 0;
-  v = std::strtod(s.c_str(), &end);
-  return !s.empty() && *end == '\0' && errno != ERANGE && std::isfinite(v);
-}
+bool finite_number(const std::string& s, double& v) { return decimal_number(s, v) && std::isfinite(v); }
 
 // The first line that is not blank or a comment names x_m: a plan CSV.
 bool is_plan_csv(const std::string& text) {
@@ -290,7 +326,7 @@ Status read_positions(const nlohmann::json& coordinates, const std::string& path
       v[k] = c[k].get<double>();
     }
     if (std::fabs(v[0]) > 180 || std::fabs(v[1]) > 90) {
-      return invalid_argument(where + "(" + fixed(v[0], 6) + ", " + fixed(v[1], 6) +
+      return invalid_argument(where + "(" + shown(v[0], 6) + ", " + shown(v[1], 6) +
                               ") is not a WGS84 longitude and latitude in degrees");
     }
     out.points.push_back({v[0], v[1], v[2]});
@@ -547,7 +583,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     }
     const double lat = v[0], lon = v[1];
     if (std::fabs(lat) > 90 || std::fabs(lon) > 180) {
-      return invalid_argument(where + "latitude " + fixed(lat, 6) + ", longitude " + fixed(lon, 6) +
+      return invalid_argument(where + "latitude " + shown(lat, 6) + ", longitude " + shown(lon, 6) +
                               " is not a WGS84 position in degrees");
     }
     double altitude_m = v[2];
@@ -601,15 +637,32 @@ Result<PathFile> parse_json_path(const std::string& text, const std::string& pat
 
 }  // namespace
 
+namespace {
+
+Result<PathFile> parse_path_text(std::string& text, const std::string& path, const std::string& crs_wkt) {
+  // a UTF-8 byte order mark, as editors on some systems save text
+  if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '{') return parse_json_path(text, path, crs_wkt);
+  if (is_plan_csv(text)) return parse_plan_csv(text, path);
+  return parse_text_points(text, path);
+}
+
+}  // namespace
+
 Result<PathFile> read_path_file(const std::string& path, const std::string& crs_wkt) {
   Result<std::string> text = read_whole_file(path);
   if (!text.ok()) return text.status();
-  // a UTF-8 byte order mark, as editors on some systems save text
-  if (text->compare(0, 3, "\xEF\xBB\xBF") == 0) text->erase(0, 3);
-  const std::size_t first = text->find_first_not_of(" \t\r\n");
-  if (first != std::string::npos && (*text)[first] == '{') return parse_json_path(*text, path, crs_wkt);
-  if (is_plan_csv(*text)) return parse_plan_csv(*text, path);
-  return parse_text_points(*text, path);
+  Result<PathFile> read = parse_path_text(*text, path, crs_wkt);
+  if (!read.ok()) return read;
+  // a path that goes nowhere would pass every check it is given
+  const std::vector<Vec3>& p = read->points;
+  const bool moves = std::any_of(p.begin(), p.end(), [&](const Vec3& q) { return (q - p.front()).norm() >= 0.01; });
+  if (!moves) {
+    return invalid_argument(path + ": all " + std::to_string(p.size()) +
+                            " points are the same position (within 1 cm): a path needs two different points");
+  }
+  return read;
 }
 
 std::vector<Vec3> lift_polyline(const std::vector<Vec3>& points, double clearance_m, double step_m,
@@ -771,8 +824,8 @@ Result<GeoidShift> shift_heights(const std::vector<Vec3>& lon_lat_h, bool to_ell
         proj_trans(chosen.get(), to_ellipsoidal ? PJ_FWD : PJ_INV, proj_coord(p.x(), p.y(), p.z(), 0));
     if (!std::isfinite(shifted.xyz.z) || shifted.xyz.z == HUGE_VAL) {
       const int err = proj_context_errno(ctx.get());
-      return invalid_argument("point " + std::to_string(i) + " (longitude " + fixed(p.x(), 6) + ", latitude " +
-                              fixed(p.y(), 6) + "): no EGM96 geoid height there" +
+      return invalid_argument("point " + std::to_string(i) + " (longitude " + shown(p.x(), 6) + ", latitude " +
+                              shown(p.y(), 6) + "): no EGM96 geoid height there" +
                               (err != 0 ? std::string(" (") + proj_context_errno_string(ctx.get(), err) + ")" : ""));
     }
     out.points.push_back({p.x(), p.y(), shifted.xyz.z});

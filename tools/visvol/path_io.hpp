@@ -97,7 +97,8 @@ struct PathFile {
   std::vector<double> fp;    // F_p per point from the file (plan CSV, GeoJSON), or empty
   PathFormat format = PathFormat::text;
 };
-// At least 2 points, all finite. crs_wkt is the pack's CRS: a GeoJSON or
+// At least 2 points, all finite, not all at one spot (within 1 cm), numbers
+// in decimal (text and CSV: no hexadecimal, inf or nan). crs_wkt is the pack's CRS: a GeoJSON or
 // .plan path needs it (an error names the file otherwise); the other formats
 // ignore it. Errors name the file and the line (or the JSON member, or the
 // .plan's item index) and the problem.

@@ -139,6 +139,35 @@ TEST(TurnRadii, NeighbouringTurnsShareTheirSegment) {
   EXPECT_NEAR(turn_radii_m(split.data(), 5)[1], 50.0, 1e-9);
 }
 
+// A repeated waypoint or a climb on the spot is one spot of the horizontal
+// track: the turn there is judged between the segments either side (a
+// hairpin through a repeated waypoint is no longer unchecked), and a vertex a
+// hair from its neighbour makes no hairpin of its own.
+TEST(TurnRadii, RepeatedSpotsAreJudgedAsOneTurn) {
+  const std::vector<Vec3> corner = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}};
+  const double right_angle = turn_radii_m(corner.data(), 3)[1];
+  EXPECT_NEAR(right_angle, 100.0, 1e-9);
+  for (const std::vector<Vec3>& run : {
+           std::vector<Vec3>{{0, 0, 0}, {100, 0, 0}, {100, 0, 0}, {100, 100, 0}},          // repeated
+           std::vector<Vec3>{{0, 0, 0}, {100, 0, 0}, {100, 0, 40}, {100, 100, 40}},        // climb on the spot
+           std::vector<Vec3>{{0, 0, 0}, {100, 0, 0}, {100, 1e-8, 0}, {100, 100, 0}},       // a hair apart
+           std::vector<Vec3>{{0, 0, 0}, {100, 0, 0}, {100.004, -0.004, 0}, {100, 100, 0}}  // under a centimetre
+       }) {
+    const std::vector<double> r = turn_radii_m(run.data(), 4);
+    EXPECT_TRUE(std::isinf(r[0]) && std::isinf(r[3]));
+    EXPECT_NEAR(r[1], right_angle, 1e-3) << run[2].transpose();
+    EXPECT_NEAR(r[2], right_angle, 1e-3) << run[2].transpose();
+  }
+  // a hairpin through a repeated waypoint cannot be flown
+  const std::vector<Vec3> hairpin = {{0, 0, 0}, {300, 0, 0}, {300, 0, 0}, {0, 10, 0}};
+  const std::vector<double> r = turn_radii_m(hairpin.data(), 4);
+  EXPECT_LT(r[1], 5.0);
+  EXPECT_EQ(r[1], r[2]);
+  // a run at an end is part of the end: no turn
+  const std::vector<Vec3> ends = {{0, 0, 0}, {0, 0, 0}, {100, 0, 0}, {100, 0, 50}};
+  for (double radius : turn_radii_m(ends.data(), 4)) EXPECT_TRUE(std::isinf(radius));
+}
+
 TEST(FilletRadius, MatchesTheTangentArcThatFits) {
   // straight on: no turn
   EXPECT_TRUE(std::isinf(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {200, 0, 0})));

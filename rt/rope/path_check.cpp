@@ -28,8 +28,10 @@ struct Tally {
   double fraction() const { return weight > 0 ? ok_weight / weight : (failed ? 0.0 : 1.0); }
 };
 
-LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t) {
+LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t,
+                  bool lower = false) {
   LimitResult r;
+  r.lower = lower;
   r.name = name;
   r.unit = unit;
   r.limit = limit_value;
@@ -40,6 +42,16 @@ LimitResult limit(const char* name, const char* unit, double limit_value, double
 }
 
 }  // namespace
+
+int worst_decimals(const LimitResult& l) {
+  if (l.met || !std::isfinite(l.worst) || !std::isfinite(l.limit)) return 1;
+  for (int decimals = 1; decimals < 4; ++decimals) {
+    const double scale = std::pow(10.0, decimals);
+    const double shown = std::round(l.worst * scale) / scale, limit_shown = std::round(l.limit * scale) / scale;
+    if (l.lower ? shown < limit_shown : shown > limit_shown) return decimals;
+  }
+  return 4;
+}
 
 const char* to_string(ConstraintKind kind) { return kind == ConstraintKind::visible_to ? "visible-to" : "hidden-from"; }
 
@@ -58,8 +70,9 @@ std::vector<std::string> PathCheck::unmet() const {
     if (l.met) continue;
     std::ostringstream s;
     s.precision(1);
-    s << std::fixed << l.name << " " << l.limit << " " << l.unit << ": worst " << l.worst << " " << l.unit
-      << ", holds on " << std::setprecision(3) << fraction_shown(l.satisfied_fraction) << " of the length";
+    s << std::fixed << l.name << " " << l.limit << " " << l.unit << ": worst " << std::setprecision(worst_decimals(l))
+      << l.worst << " " << l.unit << ", holds on " << std::setprecision(3) << fraction_shown(l.satisfied_fraction)
+      << " of the length";
     out.push_back(s.str());
   }
   if (!inside_planning_bounds) {
@@ -220,12 +233,12 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
     r.met = !constraint_tally[c].failed;
     out.constraints.push_back(r);
   }
-  out.envelope.push_back(limit("clearance", "m", e.clearance_m, lowest, clearance));
+  out.envelope.push_back(limit("clearance", "m", e.clearance_m, lowest, clearance, true));
   out.envelope.push_back(limit("max-agl", "m", e.max_agl_m, highest_agl, agl));
   out.envelope.push_back(limit("max-altitude", "m", e.max_altitude_m, highest, altitude));
   out.envelope.push_back(limit("max-climb", "deg", e.max_climb_deg, steepest_climb, climb));
   out.envelope.push_back(limit("max-descent", "deg", e.max_descent_deg, steepest_descent, descent));
-  out.envelope.push_back(limit("min-turn-radius", "m", e.min_turn_radius_m, tightest, turn));
+  out.envelope.push_back(limit("min-turn-radius", "m", e.min_turn_radius_m, tightest, turn, true));
   out.inside_bounds_fraction = bounds.fraction();
   out.inside_planning_bounds = !bounds.failed;
 

@@ -81,7 +81,13 @@ struct LimitResult {
   double worst = 0;  // the path's worst value (lowest for a lower limit, highest for an upper)
   double satisfied_fraction = 1;  // of the path's length
   bool met = true;
+  bool lower = false;  // a lower limit (clearance, min-turn-radius): the worst is the lowest
 };
+
+// Decimals to print an unmet limit's worst value with (1 to 4): enough that it
+// reads past the limit ("clearance 30.0 m: worst 29.96 m", never "worst
+// 30.0 m ... NOT MET"). 1 for a met limit.
+int worst_decimals(const LimitResult& l);
 
 struct VertexCheck {
   double fp = 0;              // F_p of the field at the vertex (informative)
@@ -117,13 +123,14 @@ class PathChecker {
   // below it, naming the point's option ("--hidden-from").
   static Result<PathChecker> create(fields::Heightfield terrain, const PathField* field, PathCheckSpec spec);
 
-  // Samples a segment takes at most: a longer one is sampled more sparsely
-  // (only a path far beyond any pack has one; callers refuse those first,
-  // with sample_count()).
-  static constexpr int kMaxSegmentSamples = 1 << 22;
   // Samples a whole check takes at most, times its observers (each sample
   // draws a sight line to each): about ten seconds of work.
   static constexpr double kMaxSamples = 1e7;
+  // Samples a segment takes at most: a longer one is sampled more sparsely.
+  // Above kMaxSamples, so a path that callers let through sample_count()
+  // is never thinned (a bound for the conversion, not for the work).
+  static constexpr int kMaxSegmentSamples = 1 << 24;
+  static_assert(kMaxSegmentSamples > kMaxSamples, "a path callers accept is sampled as promised");
 
   PathCheck check(const Vec3* vertices, int count) const;
   PathCheck check(const std::vector<Vec3>& path) const { return check(path.data(), static_cast<int>(path.size())); }

@@ -71,16 +71,6 @@ PathMetrics path_metrics(const Vec3* v, int count, const PathField& field, int s
   return m;
 }
 
-double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Eigen::Vector2d u(b.x() - a.x(), b.y() - a.y()), w(c.x() - b.x(), c.y() - b.y());
-  const double lu = u.norm(), lw = w.norm();
-  if (lu < 1e-9 || lw < 1e-9) return std::numeric_limits<double>::infinity();
-  const double cos_turn = std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0);
-  const double turn = std::acos(cos_turn);
-  if (turn < 1e-9) return std::numeric_limits<double>::infinity();
-  return 0.5 * std::min(lu, lw) / std::tan(0.5 * turn);
-}
-
 std::vector<double> turn_radii_m(const Vec3* v, int count) {
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = count > 0 ? static_cast<std::size_t>(count) : 0;

@@ -42,11 +42,6 @@ double path_fc(const Vec3* vertices, int count, const PathField& field, int samp
 PathMetrics path_metrics(const Vec3* vertices, int count, const PathField& field, int samples, double clearance_step_m,
                          Importance importance = nullptr);
 
-// The fillet radius at vertex b between segments a-b and b-c (horizontal
-// plane) when each fillet may use half of each segment, infinite for a
-// straight continuation.
-double fillet_radius_m(const Vec3& a, const Vec3& b, const Vec3& c);
-
 // The largest turn radius flyable at each vertex of a path (horizontal
 // plane): a fillet of radius R at a vertex turning by theta starts
 // R tan(theta / 2) before it, and two fillets may not overlap, so every

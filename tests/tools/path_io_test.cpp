@@ -252,6 +252,30 @@ TEST_F(PathIo, EarlierVisvolGeoJsonWithOrthometricHeightsIsReadAsItIs) {
   EXPECT_NEAR(path->points[1].z(), 120.0, 1e-9);
 }
 
+// A GeoJSON that names its vertical datum is read by it: mean sea level
+// (EGM96) as it is, the ellipsoid converted, anything else refused by name.
+TEST_F(PathIo, GeoJsonVerticalDatumIsHonouredOrRefused) {
+  auto with_datum = [&](const std::string& datum) {
+    return file_with("datum.geojson", R"j({"type":"Feature","properties":{"vertical_datum":)j" + datum +
+                                          R"(},"geometry":{"type":"LineString","coordinates":)"
+                                          R"([[-122.43,37.79,100.0],[-122.42,37.78,120.0]]}})");
+  };
+  for (const char* msl : {R"("EGM96 geoid")", R"("mean sea level")"}) {
+    Result<PathFile> path = read_path_file(with_datum(msl), wkt_);
+    ASSERT_TRUE(path.ok()) << path.status().message();
+    EXPECT_NEAR(path->points[0].z(), 100.0, 1e-9) << msl;
+  }
+  Result<PathFile> ellipsoid = read_path_file(with_datum(R"j("WGS 84 ellipsoid (EPSG:4979)")j"), wkt_);
+  ASSERT_TRUE(ellipsoid.ok()) << ellipsoid.status().message();
+  EXPECT_GT(100.0 - ellipsoid->points[0].z(), kSfUndulationLowM);
+  for (const char* other : {R"("NAVD88")", "42"}) {
+    Result<PathFile> path = read_path_file(with_datum(other), wkt_);
+    ASSERT_FALSE(path.ok()) << other;
+    EXPECT_NE(path.status().message().find("datum.geojson: vertical_datum"), std::string::npos)
+        << path.status().message();
+  }
+}
+
 // ---- CSV ----
 
 TEST_F(PathIo, CsvStatesItsCrsAndDatumsThenAHeaderRowAndReadsBack) {
@@ -480,6 +504,9 @@ TEST_F(PathIo, TextAndCsvNumbersAreDecimalOnly) {
     Result<PathFile> path = read_path_file(file_with("bad.txt", text), wkt_);
     ASSERT_FALSE(path.ok()) << bad;
     EXPECT_NE(path.status().message().find("bad.txt: line 1:"), std::string::npos) << path.status().message();
+    // a line that begins with a number is a mistyped point, not a header
+    const bool header_like = std::isalpha(static_cast<unsigned char>(bad[0])) != 0;
+    EXPECT_EQ(path.status().message().find("'#'") != std::string::npos, header_like) << path.status().message();
     const std::string csv = "i,x_m,y_m,z_m\n0," + std::string(bad) + ",4181900,200\n1,550500,4182100,200\n";
     Result<PathFile> plan_csv = read_path_file(file_with("bad.csv", csv), wkt_);
     ASSERT_FALSE(plan_csv.ok()) << bad;
@@ -500,6 +527,27 @@ TEST_F(PathIo, TextAndCsvNumbersAreDecimalOnly) {
   Result<PathFile> later = read_path_file(file_with("late.txt", "1 2 3\nE_32633 N Z\n4 5 6\n"), wkt_);
   ASSERT_FALSE(later.ok());
   EXPECT_EQ(later.status().message().find("'#'"), std::string::npos) << later.status().message();
+}
+
+// A takeoff, landing or return between waypoints flies legs the file does
+// not hold: refused, naming the item; at the mission's ends they are fine.
+TEST_F(PathIo, PlanEndItemsBetweenWaypointsAreRefused) {
+  const std::string a = waypoint(0, "37.790", "-122.430", "50"), b = waypoint(0, "37.789", "-122.429", "60");
+  const std::string c = waypoint(0, "37.788", "-122.428", "70");
+  const std::string rtl = waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch);
+  const std::string land = waypoint(0, "37.788", "-122.428", "0", mavlink::kCmdNavLand);
+  const std::string takeoff = waypoint(0, "37.790", "-122.430", "50", mavlink::kCmdNavTakeoff);
+  for (const std::string& items :
+       {a + "," + b + "," + rtl + "," + c, a + "," + land + "," + b, takeoff + "," + a + "," + takeoff + "," + b}) {
+    Result<PathFile> path = read_path_file(file_with("mid.plan", plan_text(items)), wkt_);
+    ASSERT_FALSE(path.ok()) << items;
+    EXPECT_NE(path.status().message().find("comes between waypoints"), std::string::npos) << path.status().message();
+    EXPECT_NE(path.status().message().find("mid.plan: mission.items["), std::string::npos) << path.status().message();
+  }
+  Result<PathFile> ends = read_path_file(
+      file_with("ends.plan", plan_text(takeoff + "," + a + "," + b + "," + c + "," + land + "," + rtl)), wkt_);
+  ASSERT_TRUE(ends.ok()) << ends.status().message();
+  EXPECT_EQ(ends->points.size(), 3u);
 }
 
 // A path that goes nowhere would pass every limit: refused in every format.

@@ -245,7 +245,7 @@ TEST_F(RenderCli, BadInputIsRefusedWithTheReason) {
       {p + "--path " + *dir_ + "/fp.csv" + out, "fp.csv: line 3: fp 1.2 is outside [0, 1]"},
       {p + "--path " + *dir_ + "/missing.txt" + out, "missing.txt"},
       {p + "--path " + *dir_ + out, "is a folder, not a path file"},
-      {p + "--path " + *dir_ + "/nan.txt" + out, "nan.txt: line 1: not finite"},
+      {p + "--path " + *dir_ + "/nan.txt" + out, "nan.txt: line 1: '550200 4182500 nan' is not numbers x y [z]"},
       {p + "--path " + *dir_ + "/nan.csv" + out, "nan.csv: line 3: 'nan' is not a finite number"},
       {p + "--path " + *dir_ + "/stray.txt" + out,
        "stray.txt: point 2 (551300.0, 4182100.0) is 140 m outside the pack"},

@@ -156,9 +156,12 @@ Result<PathFile> parse_text_points(const std::string& text, const std::string& p
       if (columns == 0 && line_no == 1 && line.find_first_of("0123456789") == std::string::npos) {
         return Status::ok_status();
       }
-      const bool first = columns == 0 && line_no == 1;
+      // one that begins with a letter may be a header with digits
+      const std::size_t start = line.find_first_not_of(" \t,;");
+      const bool header_like = columns == 0 && line_no == 1 && start != std::string::npos &&
+                               std::isalpha(static_cast<unsigned char>(line[start])) != 0;
       return invalid_argument(where + "'" + quoted(line) + "' is not numbers x y [z]" +
-                              (first ? " (if it is a header, start it with '#')" : ""));
+                              (header_like ? " (if it is a header, start it with '#')" : ""));
     }
     if (v.size() != 2 && v.size() != 3) {
       return invalid_argument(where + std::to_string(v.size()) + " numbers; expected x y or x y z");
@@ -335,12 +338,31 @@ Status read_positions(const nlohmann::json& coordinates, const std::string& path
   return Status::ok_status();
 }
 
+// A JSON value for a message, shortened.
+std::string json_brief(const nlohmann::json& j) { return quoted(json_text(j)); }
+
 // What a visvol GeoJSON written before its heights were ellipsoidal said of
 // them: such a file's heights are the DEM's, read as they are.
 constexpr const char* kOrthometricGeoJsonReference = "the DEM's vertical datum (mean sea level)";
 
-bool heights_are_orthometric(const nlohmann::json& properties) {
-  if (!properties.is_object() || properties.contains("vertical_datum")) return false;
+// Whether a GeoJSON's heights are above mean sea level rather than the WGS84
+// ellipsoid (RFC 7946's, the default): a `vertical_datum` naming EGM96 or
+// mean sea level says so, as does a visvol GeoJSON from before its heights
+// were ellipsoidal. A datum named otherwise is refused: read as ellipsoidal,
+// heights above another datum would be tens of metres off.
+Result<bool> heights_are_orthometric(const nlohmann::json& properties, const std::string& path) {
+  if (!properties.is_object()) return false;
+  const auto datum = properties.find("vertical_datum");
+  if (datum != properties.end()) {
+    std::string name = datum->is_string() ? datum->get<std::string>() : std::string();
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (name.find("ellipsoid") != std::string::npos) return false;
+    if (name.find("egm96") != std::string::npos || name.find("mean sea level") != std::string::npos) return true;
+    return invalid_argument(path + ": vertical_datum " + json_brief(*datum) +
+                            " is not one visvol converts: it reads heights above the WGS 84 ellipsoid (RFC 7946) or "
+                            "above mean sea level (EGM96)");
+  }
   const auto it = properties.find("height_reference");
   return it != properties.end() && it->is_string() && it->get<std::string>() == kOrthometricGeoJsonReference;
 }
@@ -370,7 +392,9 @@ Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path,
                             "to convert it to (use the CSV or x y z text in the pack's CRS)");
   }
   // RFC 7946: heights above the WGS84 ellipsoid; the pack's are the DEM's
-  if (out.has_heights && !heights_are_orthometric(properties)) {
+  Result<bool> orthometric_heights = heights_are_orthometric(properties, path);
+  if (!orthometric_heights.ok()) return orthometric_heights.status();
+  if (out.has_heights && !*orthometric_heights) {
     Result<std::vector<Vec3>> orthometric = ellipsoidal_to_orthometric(out.points);
     if (!orthometric.ok()) return orthometric.status().with_context(path + ": heights");
     out.points = std::move(*orthometric);
@@ -410,8 +434,6 @@ bool integer_of(const nlohmann::json& j, long long& v) {
   v = static_cast<long long>(d);
   return true;
 }
-
-std::string json_brief(const nlohmann::json& j) { return quoted(json_text(j)); }
 
 // mission.plannedHomePosition: [latitude, longitude, altitude above mean sea level].
 Status read_home_altitude(const nlohmann::json& mission, const std::string& where, double& altitude_m) {
@@ -525,6 +547,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   out.format = PathFormat::qgc_plan;
   out.has_heights = true;
   bool have_home = false;
+  std::string end_after_waypoints;  // an end item read after a waypoint (where, command), or empty
   double home_altitude_m = 0;
   for (std::size_t i = 0; i < items.size(); ++i) {
     const nlohmann::json& item = items[i];
@@ -561,7 +584,17 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               "; the path is read from waypoints (16), spline waypoints (82) and loiters (17, 18, "
                               "19, 31): write the mission with those, or check the path as flown");
     }
+    // a takeoff, landing or return between waypoints flies legs that are not
+    // in the file (home and back, a climb out): the path read would skip them
+    if (role == ItemRole::end && !out.points.empty()) {
+      end_after_waypoints = where + "command " + std::to_string(command);
+    }
     if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
+    if (!end_after_waypoints.empty()) {
+      return invalid_argument(end_after_waypoints +
+                              " (a takeoff, landing or return to launch) comes between waypoints: the legs it flies "
+                              "are not in the file; they may come only before the first waypoint or after the last");
+    }
     long long frame = 0;
     if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
       return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +

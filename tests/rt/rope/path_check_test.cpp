@@ -126,6 +126,27 @@ TEST(PathCheckReport, AFractionUnderOneIsNeverShownAsOne) {
   EXPECT_NE(c.unmet()[0].find("holds on 0.999 of the length"), std::string::npos) << c.unmet()[0];
 }
 
+// An unmet limit's worst value reads past the limit, never as the limit itself.
+TEST(WorstDecimals, AnUnmetWorstNeverPrintsAsTheLimit) {
+  LimitResult clearance;
+  clearance.lower = true;
+  clearance.limit = 30;
+  clearance.worst = 29.96;
+  clearance.met = false;
+  EXPECT_EQ(worst_decimals(clearance), 2);
+  clearance.worst = 29.0;
+  EXPECT_EQ(worst_decimals(clearance), 1);
+  clearance.worst = 29.9996;
+  EXPECT_EQ(worst_decimals(clearance), 4);
+  LimitResult climb;  // an upper limit
+  climb.limit = 10;
+  climb.worst = 10.004;
+  climb.met = false;
+  EXPECT_EQ(worst_decimals(climb), 3);
+  climb.met = true;
+  EXPECT_EQ(worst_decimals(climb), 1);
+}
+
 TEST(TurnRadii, NeighbouringTurnsShareTheirSegment) {
   // a zig-zag of right angles every 100 m: each arc gets half of each segment
   const std::vector<Vec3> zig = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}, {200, 100, 0}, {200, 200, 0}};
@@ -147,6 +168,8 @@ TEST(TurnRadii, RepeatedSpotsAreJudgedAsOneTurn) {
   const std::vector<Vec3> corner = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}};
   const double right_angle = turn_radii_m(corner.data(), 3)[1];
   EXPECT_NEAR(right_angle, 100.0, 1e-9);
+  const std::vector<Vec3> climbing = {{0, 0, 0}, {100, 0, 30}, {100, 100, 90}};  // heights do not matter
+  EXPECT_NEAR(turn_radii_m(climbing.data(), 3)[1], right_angle, 1e-9);
   for (const std::vector<Vec3>& run : {
            std::vector<Vec3>{{0, 0, 0}, {100, 0, 0}, {100, 0, 0}, {100, 100, 0}},          // repeated
            std::vector<Vec3>{{0, 0, 0}, {100, 0, 0}, {100, 0, 40}, {100, 100, 40}},        // climb on the spot
@@ -166,17 +189,6 @@ TEST(TurnRadii, RepeatedSpotsAreJudgedAsOneTurn) {
   // a run at an end is part of the end: no turn
   const std::vector<Vec3> ends = {{0, 0, 0}, {0, 0, 0}, {100, 0, 0}, {100, 0, 50}};
   for (double radius : turn_radii_m(ends.data(), 4)) EXPECT_TRUE(std::isinf(radius));
-}
-
-TEST(FilletRadius, MatchesTheTangentArcThatFits) {
-  // straight on: no turn
-  EXPECT_TRUE(std::isinf(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {200, 0, 0})));
-  // 90 degrees between 100 m segments: arc tangent at 50 m from the corner, radius 50 m
-  EXPECT_NEAR(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {100, 100, 0}), 50.0, 1e-9);
-  // a hairpin cannot be flown
-  EXPECT_NEAR(fillet_radius_m({0, 0, 0}, {100, 0, 0}, {0, 0, 0}), 0.0, 1e-9);
-  // heights do not matter, the shorter segment does
-  EXPECT_NEAR(fillet_radius_m({0, 0, 0}, {100, 0, 50}, {100, 20, 80}), 10.0, 1e-9);
 }
 
 TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {

@@ -16,7 +16,8 @@ constexpr double kDegPerRad = 57.29577951308232;
 constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre
 constexpr double kAngleTolDeg = 1e-6;
 
-// Running tally of one requirement over weighted samples.
+// Running tally of one requirement over weighted samples, and points of no
+// weight (the terrain probes) that can only fail it.
 struct Tally {
   double ok_weight = 0, weight = 0;
   bool failed = false;
@@ -25,8 +26,53 @@ struct Tally {
     if (ok) ok_weight += w;
     failed = failed || !ok;
   }
-  double fraction() const { return weight > 0 ? ok_weight / weight : (failed ? 0.0 : 1.0); }
+  void probe(bool ok) { failed = failed || !ok; }
+  // a requirement that fails somewhere never holds on all of the length
+  double fraction() const {
+    const double f = weight > 0 ? ok_weight / weight : (failed ? 0.0 : 1.0);
+    return failed ? std::min(f, std::nextafter(1.0, 0.0)) : f;
+  }
 };
+
+// Calls probe(p) at the points of segment a-b where its height above the
+// bilinear terrain can be extreme: the ends, every grid line it crosses (the
+// terrain is one bilinear piece between them, quadratic along the segment)
+// and, between them, the vertex of that quadratic. The lowest clearance and
+// the highest height above the terrain along the segment are at those points,
+// exactly, whatever the sample step.
+template <class Probe>
+void for_each_terrain_probe(const fields::Heightfield& t, const Vec3& a, const Vec3& b, Probe probe) {
+  const double ia = t.i_of(a.x()), ja = t.j_of(a.y()), ib = t.i_of(b.x()), jb = t.j_of(b.y());
+  std::vector<double> cuts = {0.0, 1.0};
+  auto add_lines = [&](double from, double to) {
+    if (std::fabs(to - from) < 1e-12) return;
+    for (double k = std::floor(std::min(from, to)) + 1; k < std::max(from, to); ++k) {
+      cuts.push_back((k - from) / (to - from));
+    }
+  };
+  add_lines(ia, ib);
+  add_lines(ja, jb);
+  std::sort(cuts.begin(), cuts.end());
+  auto at = [&](double u) { return Vec3(a + (b - a) * u); };
+  auto height = [&](double u) {
+    const Vec3 p = at(u);
+    return p.z() - fields::bilinear_height(t, t.i_of(p.x()), t.j_of(p.y()));
+  };
+  probe(a);
+  for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+    const double u0 = cuts[k], u1 = cuts[k + 1];
+    if (u1 - u0 < 1e-12) continue;
+    // the quadratic through the piece's ends and middle, in t in [-1, 1]
+    const double um = 0.5 * (u0 + u1);
+    const double h0 = height(u0), hm = height(um), h1 = height(u1);
+    const double curve = 0.5 * (h0 + h1) - hm, slope = 0.5 * (h1 - h0);
+    if (std::fabs(curve) > 1e-12) {
+      const double vertex = -slope / (2.0 * curve);
+      if (vertex > -1.0 && vertex < 1.0) probe(at(um + vertex * 0.5 * (u1 - u0)));
+    }
+    probe(at(u1));
+  }
+}
 
 LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t,
                   bool lower = false) {
@@ -194,6 +240,13 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
                                               : nullptr;
       sample(p, w, at_vertex);
     }
+    for_each_terrain_probe(terrain_, a, b, [&](const Vec3& p) {
+      const double h = p.z() - ground_m(p.x(), p.y());
+      lowest = std::min(lowest, h);
+      highest_agl = std::max(highest_agl, h);
+      clearance.probe(h >= e.clearance_m - kHeightTolM);
+      agl.probe(h <= e.max_agl_m + kHeightTolM);
+    });
     const double horizontal = std::hypot(b.x() - a.x(), b.y() - a.y());
     const double angle = len > 1e-9 ? std::atan2(b.z() - a.z(), horizontal) * kDegPerRad : 0.0;
     steepest_climb = std::max(steepest_climb, angle);

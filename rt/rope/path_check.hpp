@@ -7,7 +7,11 @@
 //   at most `sample_step_m` apart (default a quarter post spacing), each
 //   sample standing for its share of the path's length.
 // - Clearance, height above the terrain (AGL) and altitude: at the same
-//   samples, against the bilinear finest terrain.
+//   samples, against the bilinear finest terrain, for their share of the
+//   length; and the lowest and highest point above that terrain along each
+//   segment exactly (at every grid line crossed and the extreme between,
+//   where the bilinear terrain is a quadratic along the segment), so a peak
+//   between samples is never missed.
 // - Climb and descent: every segment's angle from the horizontal.
 // - Turn radius: the largest flyable fillet at every interior vertex
 //   (turn_radii_m below), weighted by half of each neighbouring segment.

@@ -191,6 +191,43 @@ TEST(TurnRadii, RepeatedSpotsAreJudgedAsOneTurn) {
   for (double radius : turn_radii_m(ends.data(), 4)) EXPECT_TRUE(std::isinf(radius));
 }
 
+// Clearance and height above the terrain are exact along a segment, not
+// only at the samples: a lone post between samples (a mast, a peak) is seen.
+TEST(PathCheck, ClearanceIsExactBetweenSamples) {
+  fields::Heightfield t = blank(5, 5, 30.0, 0.0f);
+  t.at(2, 2) = 100.0f;  // a spike on a plain
+  const Vec3 peak{t.x_of(2), t.y_of(2), 100.0};
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("multirotor");
+  s.envelope.clearance_m = 30;
+  s.envelope.max_agl_m = 119.5;
+  s.sample_step_m = 7.5;  // samples a quarter post apart: the nearest 3.7 m from the peak
+  const auto checker = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const PathCheck c = checker->check({peak + Vec3(-55.0, 0, 20.0), peak + Vec3(55.0, 0, 20.0)});
+  const LimitResult& clearance = c.envelope[0];
+  ASSERT_EQ(clearance.name, "clearance");
+  EXPECT_NEAR(clearance.worst, 20.0, 1e-9);  // over the peak itself
+  EXPECT_FALSE(clearance.met);
+  EXPECT_LT(clearance.satisfied_fraction, 1.0);
+  EXPECT_LT(fraction_shown(clearance.satisfied_fraction), 1.0);
+  // the highest point above the plain, at the ends, 120 m: over max-agl
+  const LimitResult& agl = c.envelope[1];
+  ASSERT_EQ(agl.name, "max-agl");
+  EXPECT_NEAR(agl.worst, 120.0, 1e-9);
+  EXPECT_FALSE(agl.met);
+  // a path along the diagonal of cells: the lowest clearance inside a cell,
+  // where the bilinear terrain is a curve along the path
+  const Vec3 from{t.x_of(1), t.y_of(1), 60.0}, to{t.x_of(3), t.y_of(3) + 30.0, 60.0};
+  const PathCheck d = checker->check({from, to});
+  double lowest = 1e9;
+  for (int k = 0; k <= 100000; ++k) {
+    const Vec3 p = from + (to - from) * (k / 100000.0);
+    lowest = std::min(lowest, p.z() - checker->ground_m(p.x(), p.y()));
+  }
+  EXPECT_NEAR(d.envelope[0].worst, lowest, 1e-6);
+}
+
 TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
   PathCheckSpec s = spec();
   s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 99.0), 2.0}};  // 1 m under the plain

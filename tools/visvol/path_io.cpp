@@ -21,16 +21,58 @@
 #include "io/input_file.hpp"
 #include "io/json_input.hpp"
 #include "io/json_text.hpp"
+#include "path_io_detail.hpp"
 
 namespace visvol::cli {
+
+namespace detail {
+
+// Characters of a bad line quoted in a message.
+constexpr std::size_t kQuotedChars = 40;
+
+std::string fixed(double v, int decimals) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(decimals);
+  s << v;
+  return s.str();
+}
+
+// A number for a message: fixed decimals, or 6 significant digits where that
+// would print hundreds of digits (a mistyped 1e308).
+std::string shown(double v, int decimals) {
+  if (!(std::fabs(v) < 1e9)) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+  return fixed(v, decimals);
+}
+
+// A line for a message: at most kQuotedChars, unprintable bytes as '?', so a
+// binary file does not spill onto the terminal.
+std::string quoted(const std::string& line) {
+  std::string out;
+  for (char c : line.substr(0, kQuotedChars)) out += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+  if (line.size() > kQuotedChars) out += "...";
+  return out;
+}
+
+// A JSON value for a message, shortened.
+std::string json_brief(const nlohmann::json& j) { return quoted(json_text(j)); }
+
+}  // namespace detail
+
+using detail::fixed;
+using detail::json_brief;
+using detail::quoted;
+using detail::shown;
 
 namespace {
 
 // Path files are small (a 100000-segment plan's GeoJSON is under 20 MiB):
 // anything larger is not a path.
 constexpr std::uintmax_t kMaxPathFileBytes = 64u << 20;
-// Characters of a bad line quoted in a message.
-constexpr std::size_t kQuotedChars = 40;
 
 // Whether `s` is a decimal number as people write them: [+-] digits, a
 // point, [eE] exponent. strtod also reads hexadecimal ("0x1A" is 26),
@@ -79,34 +121,6 @@ bool parse_numbers(std::string line, std::vector<double>& out) {
     out.push_back(v);
   }
   return true;
-}
-
-std::string fixed(double v, int decimals) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(decimals);
-  s << v;
-  return s.str();
-}
-
-// A number for a message: fixed decimals, or 6 significant digits where that
-// would print hundreds of digits (a mistyped 1e308).
-std::string shown(double v, int decimals) {
-  if (!(std::fabs(v) < 1e9)) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-  }
-  return fixed(v, decimals);
-}
-
-// A line for a message: at most kQuotedChars, unprintable bytes as '?', so a
-// binary file does not spill onto the terminal.
-std::string quoted(const std::string& line) {
-  std::string out;
-  for (char c : line.substr(0, kQuotedChars)) out += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
-  if (line.size() > kQuotedChars) out += "...";
-  return out;
 }
 
 Result<std::string> read_whole_file(const std::string& path) {
@@ -338,9 +352,6 @@ Status read_positions(const nlohmann::json& coordinates, const std::string& path
   return Status::ok_status();
 }
 
-// A JSON value for a message, shortened.
-std::string json_brief(const nlohmann::json& j) { return quoted(json_text(j)); }
-
 // What a visvol GeoJSON written before its heights were ellipsoidal said of
 // them: such a file's heights are the DEM's, read as they are.
 constexpr const char* kOrthometricGeoJsonReference = "the DEM's vertical datum (mean sea level)";
@@ -405,266 +416,12 @@ Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path,
   return out;
 }
 
-// ---- QGroundControl .plan ----
-
-const char* frame_name(int frame) {
-  switch (frame) {
-    case mavlink::kFrameGlobal: return "MAV_FRAME_GLOBAL";
-    case 1: return "MAV_FRAME_LOCAL_NED";
-    case 2: return "MAV_FRAME_MISSION";
-    case mavlink::kFrameGlobalRelativeAlt: return "MAV_FRAME_GLOBAL_RELATIVE_ALT";
-    case 4: return "MAV_FRAME_LOCAL_ENU";
-    case mavlink::kFrameGlobalInt: return "MAV_FRAME_GLOBAL_INT";
-    case mavlink::kFrameGlobalRelativeAltInt: return "MAV_FRAME_GLOBAL_RELATIVE_ALT_INT";
-    case mavlink::kFrameGlobalTerrainAlt: return "MAV_FRAME_GLOBAL_TERRAIN_ALT, above the terrain";
-    case 11: return "MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, above the terrain";
-    default: return "not a global frame";
-  }
-}
-
-// A JSON number with an integer value (QGroundControl writes integers; 16.0 is 16).
-bool integer_of(const nlohmann::json& j, long long& v) {
-  if (j.is_number_integer()) {
-    v = j.get<long long>();
-    return true;
-  }
-  if (!j.is_number_float()) return false;
-  const double d = j.get<double>();
-  if (!std::isfinite(d) || d != std::floor(d) || std::fabs(d) > 1e15) return false;
-  v = static_cast<long long>(d);
-  return true;
-}
-
-// mission.plannedHomePosition: [latitude, longitude, altitude above mean sea level].
-Status read_home_altitude(const nlohmann::json& mission, const std::string& where, double& altitude_m) {
-  const auto it = mission.find("plannedHomePosition");
-  if (it == mission.end() || !it->is_array() || it->size() != 3) {
-    return invalid_argument(where + "mission.plannedHomePosition is missing or not [latitude, longitude, altitude]");
-  }
-  for (std::size_t k = 0; k < 3; ++k) {
-    if (!(*it)[k].is_number() || !std::isfinite((*it)[k].get<double>())) {
-      return invalid_argument(where + "mission.plannedHomePosition[" + std::to_string(k) + "] " + json_brief((*it)[k]) +
-                              " is not a finite number");
-    }
-  }
-  altitude_m = (*it)[2].get<double>();
-  return Status::ok_status();
-}
-
-// What a mission item is to the flown path, by its MAV_CMD number.
-enum class ItemRole : std::uint8_t {
-  vertex,     // flown at its position: a vertex of the path
-  end,        // takeoff, landing, return to launch: the mission's ends, not checked
-  no_motion,  // moves nothing (conditions, delays, camera, gimbal, speed, ROI...)
-  moves,      // moves the aircraft along what visvol cannot read from the file
-  unknown,    // no MAV_CMD visvol knows: it may move the aircraft
-};
-
-// The commands past the NAV range that move the aircraft (ArduPilot counts
-// some as NAV commands): a jump repeats legs, a mode or home change moves
-// it or what its altitudes mean.
-bool moves_outside_nav_range(long long command) {
-  constexpr long long kDoSetMode = 176, kDoJump = 177, kDoSetHome = 179, kDoChangeAltitude = 186;
-  constexpr long long kDoRallyLand = 190, kDoGoAround = 191, kDoReposition = 192, kNavSetYawSpeed = 213;
-  constexpr long long kDoJumpTag = 601, kNavScriptTime = 42702, kNavAttitudeTime = 42703;
-  constexpr long long kConditionChangeAlt = 113;
-  constexpr long long kFirstUserWaypoint = 31000, kLastUserSpatial = 31009;  // user commands with positions
-  switch (command) {
-    case kConditionChangeAlt:
-    case kDoSetMode:
-    case kDoJump:
-    case kDoSetHome:
-    case kDoChangeAltitude:
-    case kDoRallyLand:
-    case kDoGoAround:
-    case kDoReposition:
-    case kNavSetYawSpeed:
-    case kDoJumpTag:
-    case kNavScriptTime:
-    case kNavAttitudeTime: return true;
-    default: return command >= kFirstUserWaypoint && command <= kLastUserSpatial;
-  }
-}
-
-ItemRole item_role(long long command) {
-  using namespace mavlink;
-  constexpr long long kLandLocal = 23, kTakeoffLocal = 24, kNavRoi = 80, kNavDelay = 93;
-  constexpr long long kNavFollow = 25, kContinueAndChangeAlt = 30, kDoFollow = 32, kDoFollowReposition = 33;
-  constexpr long long kDoOrbit = 34, kNavPathPlanning = 81, kNavGuidedEnable = 92, kNavPayloadPlace = 94;
-  switch (command) {
-    case kCmdNavWaypoint:
-    case kCmdNavLoiterUnlim:
-    case kCmdNavLoiterTurns:
-    case kCmdNavLoiterTime:
-    case kCmdNavLoiterToAlt:
-    case kCmdNavSplineWaypoint: return ItemRole::vertex;
-    case kCmdNavReturnToLaunch:
-    case kCmdNavLand:
-    case kCmdNavTakeoff:
-    case kLandLocal:
-    case kTakeoffLocal:
-    case kCmdNavVtolTakeoff:
-    case kCmdNavVtolLand: return ItemRole::end;
-    case kNavRoi:
-    case kNavDelay: return ItemRole::no_motion;
-    case kNavFollow:
-    case kContinueAndChangeAlt:
-    case kDoFollow:
-    case kDoFollowReposition:
-    case kDoOrbit:
-    case kNavPathPlanning:
-    case kNavGuidedEnable:
-    case kNavPayloadPlace: return ItemRole::moves;
-    default: break;
-  }
-  // Conditions (112..159), DO_ items (176..), camera, gimbal and the like
-  // point or trigger things, but for those that move the aircraft; in the
-  // NAV range (..111) and past 16 bits, a number visvol does not know.
-  constexpr long long kFirstCondition = 112, kLargestCommand = 65535;
-  if (command < kFirstCondition || command > kLargestCommand) return ItemRole::unknown;
-  return moves_outside_nav_range(command) ? ItemRole::moves : ItemRole::no_motion;
-}
-
-// The waypoints of a QGroundControl .plan (waypoints, spline waypoints and
-// loiters, a loiter at its centre), to the pack's CRS.
-Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
-  const std::string file = path + ": ";
-  if (!j["fileType"].is_string() || j["fileType"].get<std::string>() != "Plan") {
-    return invalid_argument(file + "fileType " + json_brief(j["fileType"]) + "; a QGroundControl plan has \"Plan\"");
-  }
-  long long version = 0;
-  if (!j.contains("version") || !integer_of(j["version"], version) || version != qgc::kPlanVersion) {
-    return invalid_argument(file + "version " + (j.contains("version") ? json_brief(j["version"]) : "missing") +
-                            "; this reader knows QGroundControl plan version " + std::to_string(qgc::kPlanVersion));
-  }
-  if (!j.contains("mission") || !j["mission"].is_object()) return invalid_argument(file + "no mission object");
-  const nlohmann::json& mission = j["mission"];
-  if (!mission.contains("items") || !mission["items"].is_array()) {
-    return invalid_argument(file + "mission.items is missing or not an array");
-  }
-  const nlohmann::json& items = mission["items"];
-  PathFile out;
-  out.format = PathFormat::qgc_plan;
-  out.has_heights = true;
-  bool have_home = false;
-  std::string end_after_waypoints;  // an end item read after a waypoint (where, command), or empty
-  double home_altitude_m = 0;
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    const nlohmann::json& item = items[i];
-    std::string where = file + "mission.items[" + std::to_string(i) + "]";
-    long long jump_id = 0;
-    if (item.is_object() && item.contains("doJumpId") && integer_of(item["doJumpId"], jump_id)) {
-      where += " (doJumpId " + std::to_string(jump_id) + ")";
-    }
-    where += ": ";
-    if (!item.is_object() || !item.contains("type") || !item["type"].is_string()) {
-      return invalid_argument(where + "not a mission item (an object with a type)");
-    }
-    const std::string type = item["type"].get<std::string>();
-    if (type == "ComplexItem") {
-      const std::string kind = item.contains("complexItemType") && item["complexItemType"].is_string()
-                                   ? item["complexItemType"].get<std::string>()
-                                   : std::string("of no complexItemType");
-      return invalid_argument(where + "a ComplexItem (" + kind +
-                              "): its flown path is not in the file; only SimpleItems are read");
-    }
-    if (type != "SimpleItem") return invalid_argument(where + "type '" + quoted(type) + "' is not SimpleItem");
-    long long command = 0;
-    if (!item.contains("command") || !integer_of(item["command"], command)) {
-      const std::string given = item.contains("command") ? json_brief(item["command"]) : "missing";
-      return invalid_argument(where + "command " + given + " is not an integer");
-    }
-    const ItemRole role = item_role(command);
-    if (role == ItemRole::moves || role == ItemRole::unknown) {
-      return invalid_argument(where + "command " + std::to_string(command) +
-                              (role == ItemRole::moves
-                                   ? " moves the aircraft along a path visvol cannot read from the file (a jump, "
-                                     "orbit, follow, mode, home or altitude change...)"
-                                   : " is not a MAVLink command visvol knows, and it may move the aircraft") +
-                              "; the path is read from waypoints (16), spline waypoints (82) and loiters (17, 18, "
-                              "19, 31): write the mission with those, or check the path as flown");
-    }
-    // a takeoff, landing or return between waypoints flies legs that are not
-    // in the file (home and back, a climb out): the path read would skip them
-    if (role == ItemRole::end && !out.points.empty()) {
-      end_after_waypoints = where + "command " + std::to_string(command);
-    }
-    if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
-    if (!end_after_waypoints.empty()) {
-      return invalid_argument(end_after_waypoints +
-                              " (a takeoff, landing or return to launch) comes between waypoints: the legs it flies "
-                              "are not in the file; they may come only before the first waypoint or after the last");
-    }
-    long long frame = 0;
-    if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
-      return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
-                              " is not an integer");
-    }
-    if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
-      return invalid_argument(where + "params is missing or not an array of 7");
-    }
-    const nlohmann::json& params = item["params"];
-    static constexpr std::array<const char*, 3> kNames = {"latitude", "longitude", "altitude"};
-    double v[3] = {0, 0, 0};
-    for (std::size_t k = 0; k < 3; ++k) {
-      const nlohmann::json& p = params[4 + k];
-      if (!p.is_number() || !std::isfinite(p.get<double>())) {
-        return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kNames[k] + ") " + json_brief(p) +
-                                " is not a finite number");
-      }
-      v[k] = p.get<double>();
-    }
-    const double lat = v[0], lon = v[1];
-    if (std::fabs(lat) > 90 || std::fabs(lon) > 180) {
-      return invalid_argument(where + "latitude " + shown(lat, 6) + ", longitude " + shown(lon, 6) +
-                              " is not a WGS84 position in degrees");
-    }
-    double altitude_m = v[2];
-    if (frame == mavlink::kFrameGlobalRelativeAlt || frame == mavlink::kFrameGlobalRelativeAltInt) {
-      if (!have_home) {
-        VISVOL_RETURN_IF_ERROR(read_home_altitude(mission,
-                                                  where + "frame " + std::to_string(frame) + " (" +
-                                                      frame_name(static_cast<int>(frame)) +
-                                                      ", above home) needs the home altitude: ",
-                                                  home_altitude_m));
-        have_home = true;
-      }
-      altitude_m += home_altitude_m;
-    } else if (frame != mavlink::kFrameGlobal && frame != mavlink::kFrameGlobalInt) {
-      return invalid_argument(where + "frame " + std::to_string(frame) + " (" +
-                              frame_name(frame >= 0 && frame < 64 ? static_cast<int>(frame) : -1) +
-                              ") is not supported; visvol reads waypoints in frame 0 (MAV_FRAME_GLOBAL, above mean "
-                              "sea level) or 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, above the planned home)");
-    }
-    // a loiter over the waypoint before it (the landing circle of visvol's
-    // own plans) adds no path
-    const bool loiter = command != mavlink::kCmdNavWaypoint && command != mavlink::kCmdNavSplineWaypoint;
-    if (loiter && !out.points.empty() && out.points.back() == Vec3(lon, lat, altitude_m)) continue;
-    out.points.push_back({lon, lat, altitude_m});
-  }
-  if (out.points.size() < 2) {
-    return invalid_argument(file + std::to_string(out.points.size()) +
-                            " waypoints (waypoint, spline waypoint or loiter items) in mission.items (of " +
-                            std::to_string(items.size()) + "); a path needs at least 2");
-  }
-  if (crs_wkt.empty()) {
-    return invalid_argument(file +
-                            "a .plan is in WGS84 latitude and longitude, and there is no pack CRS to convert "
-                            "it to");
-  }
-  // altitudes above mean sea level: the DEM's heights, kept
-  Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
-  if (!projected.ok()) return projected.status().with_context(path);
-  out.points = std::move(*projected);
-  return out;
-}
-
 // A JSON document: a QGroundControl plan (it has a fileType) or GeoJSON.
 Result<PathFile> parse_json_path(const std::string& text, const std::string& path, const std::string& crs_wkt) {
   Result<nlohmann::json> parsed = parse_json_input(text, path);
   if (!parsed.ok()) return parsed.status();
   const nlohmann::json& j = *parsed;
-  if (j.is_object() && j.contains("fileType")) return parse_qgc_plan(j, path, crs_wkt);
+  if (j.is_object() && j.contains("fileType")) return detail::parse_qgc_plan(j, path, crs_wkt);
   return parse_geojson(j, path, crs_wkt);
 }
 

@@ -1,5 +1,7 @@
 #include "rt/rope/envelope_fit.hpp"
 
+#include "rt/rope/terrain_probe.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -139,9 +141,7 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   const double len = std::hypot(b.x() - a.x(), b.y() - a.y());
   const int k = std::max(2, static_cast<int>(std::ceil(len / step_m)));
   double worst = 0;
-  for (int q = 1; q < k; ++q) {
-    const double f = static_cast<double>(q) / k;
-    const Vec3 p = a + f * (b - a);
+  auto judge = [&](const Vec3& p, double f) {
     const Band band = band_at(s, t, p.x(), p.y());
     const double d = band.lo - p.z(), e = p.z() - band.hi;
     if (d > m.deficit) m.deficit = d;
@@ -150,7 +150,16 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
       worst = std::max(d, e);
       m.worst_t = f;
     }
+  };
+  for (int q = 1; q < k; ++q) {
+    const double f = static_cast<double>(q) / k;
+    judge(a + f * (b - a), f);
   }
+  // and where the terrain under the segment is extreme between the samples
+  // (the checker finds those exactly): the band's terrain terms are held there
+  for_each_terrain_probe(t, a, b, [&](const Vec3& p, double f) {
+    if (f > 0 && f < 1) judge(p, f);
+  });
   return m;
 }
 

@@ -10,8 +10,10 @@
 //    the clearance (and above every visible-to hull) up to the ceiling (terrain
 //    + max AGL, max altitude, the field's top, and under every hidden-from
 //    hull), with every segment within the climb and descent limits. The band
-//    is checked between vertices too (the terrain under a straight segment);
-//    a segment that cannot hold it is split. The ends stay where they are.
+//    is checked between vertices too (the terrain under a straight segment,
+//    at samples and exactly where its height is extreme, as the checker
+//    finds it: rt/rope/terrain_probe.hpp); a segment that cannot hold it is
+//    split. The ends stay where they are.
 //    Heights are chosen by two passes along the path: backwards, the band of
 //    heights from which the end is still reachable; forwards, the height
 //    nearest the path's own inside that band and one segment's climb or

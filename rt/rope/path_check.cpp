@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "fields/exact_visibility.hpp"
+#include "rt/rope/terrain_probe.hpp"
 
 namespace visvol::rt {
 
@@ -33,46 +34,6 @@ struct Tally {
     return failed ? std::min(f, std::nextafter(1.0, 0.0)) : f;
   }
 };
-
-// Calls probe(p) at the points of segment a-b where its height above the
-// bilinear terrain can be extreme: the ends, every grid line it crosses (the
-// terrain is one bilinear piece between them, quadratic along the segment)
-// and, between them, the vertex of that quadratic. The lowest clearance and
-// the highest height above the terrain along the segment are at those points,
-// exactly, whatever the sample step.
-template <class Probe>
-void for_each_terrain_probe(const fields::Heightfield& t, const Vec3& a, const Vec3& b, Probe probe) {
-  const double ia = t.i_of(a.x()), ja = t.j_of(a.y()), ib = t.i_of(b.x()), jb = t.j_of(b.y());
-  std::vector<double> cuts = {0.0, 1.0};
-  auto add_lines = [&](double from, double to) {
-    if (std::fabs(to - from) < 1e-12) return;
-    for (double k = std::floor(std::min(from, to)) + 1; k < std::max(from, to); ++k) {
-      cuts.push_back((k - from) / (to - from));
-    }
-  };
-  add_lines(ia, ib);
-  add_lines(ja, jb);
-  std::sort(cuts.begin(), cuts.end());
-  auto at = [&](double u) { return Vec3(a + (b - a) * u); };
-  auto height = [&](double u) {
-    const Vec3 p = at(u);
-    return p.z() - fields::bilinear_height(t, t.i_of(p.x()), t.j_of(p.y()));
-  };
-  probe(a);
-  for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
-    const double u0 = cuts[k], u1 = cuts[k + 1];
-    if (u1 - u0 < 1e-12) continue;
-    // the quadratic through the piece's ends and middle, in t in [-1, 1]
-    const double um = 0.5 * (u0 + u1);
-    const double h0 = height(u0), hm = height(um), h1 = height(u1);
-    const double curve = 0.5 * (h0 + h1) - hm, slope = 0.5 * (h1 - h0);
-    if (std::fabs(curve) > 1e-12) {
-      const double vertex = -slope / (2.0 * curve);
-      if (vertex > -1.0 && vertex < 1.0) probe(at(um + vertex * 0.5 * (u1 - u0)));
-    }
-    probe(at(u1));
-  }
-}
 
 LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t,
                   bool lower = false) {
@@ -189,7 +150,7 @@ double PathChecker::sample_count(const std::vector<Vec3>& path) const {
   return total;
 }
 
-PathCheck PathChecker::check(const Vec3* v, int count) const {
+PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius_m) const {
   PathCheck out;
   const VehicleEnvelope& e = spec_.envelope;
   const std::size_t nc = spec_.constraints.size();
@@ -240,7 +201,7 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
                                               : nullptr;
       sample(p, w, at_vertex);
     }
-    for_each_terrain_probe(terrain_, a, b, [&](const Vec3& p) {
+    for_each_terrain_probe(terrain_, a, b, [&](const Vec3& p, double) {
       const double h = p.z() - ground_m(p.x(), p.y());
       lowest = std::min(lowest, h);
       highest_agl = std::max(highest_agl, h);
@@ -268,7 +229,8 @@ PathCheck PathChecker::check(const Vec3* v, int count) const {
       vc.climb_deg = d.norm() > 1e-9 ? std::atan2(d.z(), std::hypot(d.x(), d.y())) * kDegPerRad : 0.0;
     }
     if (i > 0 && i + 1 < count) {
-      vc.turn_radius_m = radii[static_cast<std::size_t>(i)];
+      const bool given = turn_radius_m != nullptr && !std::isnan(turn_radius_m[i]);
+      vc.turn_radius_m = given ? turn_radius_m[i] : radii[static_cast<std::size_t>(i)];
       tightest = std::min(tightest, vc.turn_radius_m);
       const double w = 0.5 * ((v[i] - v[i - 1]).norm() + (v[i + 1] - v[i]).norm());
       turn.add(vc.turn_radius_m >= e.min_turn_radius_m - 1e-6, w);

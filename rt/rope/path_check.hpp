@@ -136,7 +136,11 @@ class PathChecker {
   static constexpr int kMaxSegmentSamples = 1 << 24;
   static_assert(kMaxSegmentSamples > kMaxSamples, "a path callers accept is sampled as promised");
 
-  PathCheck check(const Vec3* vertices, int count) const;
+  PathCheck check(const Vec3* vertices, int count) const { return check(vertices, count, nullptr); }
+  // With the turn radius the autopilot flies at each vertex where the caller
+  // knows it (a loiter's circle; NaN elsewhere, and a null array: the
+  // path's geometry decides, turn_radii_m).
+  PathCheck check(const Vec3* vertices, int count, const double* turn_radius_m) const;
   PathCheck check(const std::vector<Vec3>& path) const { return check(path.data(), static_cast<int>(path.size())); }
   // The samples a check of the path takes (infinite for a vertex that is
   // not finite): compare with kMaxSamples before checking outside input.

@@ -470,6 +470,55 @@ TEST_F(PathIo, PlanSplineWaypointsAndLoitersAreVerticesOtherItemsAreLeftOut) {
   ASSERT_EQ(path->points.size(), 6u);
   EXPECT_NEAR(path->points[1].z(), 5.0, 1e-9);  // the spline waypoint, low: a check must see it
   EXPECT_NEAR(path->points[5].z(), 63.0, 1e-9);
+  // the loiters, each at its own vertex (a check flies their circles)
+  ASSERT_EQ(path->loiters.size(), 4u);
+  const LoiterKind kinds[] = {LoiterKind::time, LoiterKind::unlimited, LoiterKind::turns, LoiterKind::to_altitude};
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(path->loiters[k].kind, kinds[k]);
+    EXPECT_EQ(path->loiters[k].vertex, k + 2);
+    EXPECT_FALSE(path->loiters[k].over_waypoint);
+  }
+  EXPECT_EQ(path->loiters[3].item, "mission.items[11] (doJumpId 1)");
+}
+
+// What a loiter item says of its circle, as MAVLink places it: turns or
+// seconds in param 1, the radius in param 3 (LOITER_TO_ALT: param 2),
+// negative counter-clockwise; one over the waypoint before it has no vertex
+// of its own; bad values are refused by item and parameter.
+TEST_F(PathIo, PlanLoitersAreReadWithTheirCircles) {
+  auto item = [](int command, const std::string& params) {
+    return R"({"type":"SimpleItem","autoContinue":true,"doJumpId":7,"command":)" + std::to_string(command) +
+           R"(,"frame":0,"params":[)" + params + "]}";
+  };
+  const std::string a = waypoint(0, "37.790", "-122.430", "50"), b = waypoint(0, "37.789", "-122.429", "60");
+  const std::string f = file_with("loiters.plan", plan_text(a + "," + item(18, "3,0,-120,0,37.790,-122.430,80") + "," +
+                                                            b + "," + item(19, "45,0,90,0,37.788,-122.428,70") + "," +
+                                                            item(31, "0,150,0,0,37.787,-122.427,90")));
+  Result<PathFile> path = read_path_file(f, wkt_);
+  ASSERT_TRUE(path.ok()) << path.status().message();
+  ASSERT_EQ(path->points.size(), 4u);  // a, b and the two loiters' centres
+  ASSERT_EQ(path->loiters.size(), 3u);
+  const LoiterItem& over = path->loiters[0];
+  EXPECT_TRUE(over.over_waypoint);
+  EXPECT_EQ(over.vertex, 0u);
+  EXPECT_EQ(over.kind, LoiterKind::turns);
+  EXPECT_EQ(over.amount, 3.0);
+  EXPECT_EQ(over.radius_m, -120.0);
+  EXPECT_EQ(over.altitude_m, 80.0);
+  EXPECT_EQ(path->loiters[1].kind, LoiterKind::time);
+  EXPECT_EQ(path->loiters[1].amount, 45.0);
+  EXPECT_EQ(path->loiters[1].radius_m, 90.0);
+  EXPECT_EQ(path->loiters[1].vertex, 2u);
+  EXPECT_EQ(path->loiters[2].kind, LoiterKind::to_altitude);
+  EXPECT_EQ(path->loiters[2].radius_m, 150.0);
+  for (const std::string& bad : {item(18, "-1,0,50,0,37.789,-122.429,60"), item(19, "2e6,0,50,0,37.789,-122.429,60"),
+                                 item(18, R"(2,0,"x",0,37.789,-122.429,60)"), item(17, "0,0,1e6,0,37.789,-122.429,60"),
+                                 item(18, "null,0,50,0,37.789,-122.429,60")}) {
+    Result<PathFile> refused = read_path_file(file_with("bad.plan", plan_text(a + "," + bad)), wkt_);
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_NE(refused.status().message().find("bad.plan: mission.items[1] (doJumpId 7): params["), std::string::npos)
+        << refused.status().message();
+  }
 }
 
 // A first line with a number in it is a point, mistyped or not: never taken

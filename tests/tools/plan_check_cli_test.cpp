@@ -180,6 +180,55 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
   std::remove(plan.c_str());
 }
 
+// A loiter is flown as its circle: a fixed-wing's radius under its
+// min-turn-radius is unmet (it read as a point, and met), a wide one is met,
+// and the report says what it flew.
+TEST_F(PlanCheck, CheckFliesALoitersCircle) {
+  const std::string plan = base("loiter") + ".plan";
+  auto mission_with = [&](double radius_m) {
+    nlohmann::json items = nlohmann::json::array();
+    const double points[][4] = {
+        {16, 37.7900, -122.4330, 400}, {18, 37.7880, -122.4310, 400}, {16, 37.7860, -122.4290, 400}};
+    int id = 1;
+    for (const auto& p : points) {
+      const double turns = p[0] == 18 ? 2.0 : 0.0, radius = p[0] == 18 ? radius_m : 0.0;
+      items.push_back({{"type", "SimpleItem"},
+                       {"command", static_cast<int>(p[0])},
+                       {"frame", 0},
+                       {"autoContinue", true},
+                       {"doJumpId", id++},
+                       {"params", {turns, 0, radius, nullptr, p[1], p[2], p[3]}}});
+    }
+    return nlohmann::json{{"fileType", "Plan"},
+                          {"version", 1},
+                          {"mission",
+                           {{"version", 2},
+                            {"firmwareType", 12},
+                            {"vehicleType", 1},
+                            {"plannedHomePosition", {37.7900, -122.4330, 150}},
+                            {"items", items}}}};
+  };
+  std::ofstream(plan) << mission_with(25.0).dump(2);
+  const Outcome tight = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing");
+  EXPECT_EQ(tight.status, 1) << tight.out << tight.err;
+  EXPECT_NE(tight.out.find("loiter     mission.items[1] (doJumpId 2): 2.0 turns of 25 m clockwise"), std::string::npos)
+      << tight.out;
+  EXPECT_NE(tight.out.find("min-turn-radius 80.0 m: worst 25.0 m"), std::string::npos) << tight.out;
+  std::ofstream(plan) << mission_with(-120.0).dump(2);
+  const Outcome wide = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing --json");
+  ASSERT_TRUE(wide.status == 0 || wide.status == 1) << wide.err;
+  const nlohmann::json j = nlohmann::json::parse(wide.out);
+  ASSERT_EQ(j["loiters"].size(), 1u);
+  EXPECT_NE(j["loiters"][0].get<std::string>().find("120 m counter-clockwise"), std::string::npos) << j["loiters"];
+  EXPECT_GT(j["per_vertex"].size(), 2u * 36u);
+  for (const nlohmann::json& limit : j["envelope"]) {
+    if (limit["name"] == "min-turn-radius") {
+      EXPECT_TRUE(limit["met"].get<bool>()) << limit;
+    }
+  }
+  std::remove(plan.c_str());
+}
+
 TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   const std::string b = base("bad");
   const std::string vehicle = ::testing::TempDir() + "/vehicle_" + std::to_string(getpid()) + ".toml";

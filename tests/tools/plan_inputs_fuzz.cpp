@@ -1,7 +1,8 @@
 // libFuzzer target: the files `visvol plan` and `visvol check` read from a
 // user. The first byte picks one: a path file (QGroundControl .plan, GeoJSON,
 // the plan CSV or 'x y z' text: read_path_file tells them apart by content)
-// or a vehicle file (TOML, --vehicle FILE). Any bytes must give a result that
+// or a vehicle file (TOML, --vehicle FILE). A path file read is flown as
+// check flies it (its loiters as circles). Any bytes must give a result that
 // holds what the planner relies on, or an error naming the file: never a
 // crash, a hang or an exception.
 #include <sys/mman.h>
@@ -15,6 +16,7 @@
 #include <string>
 
 #include "app/mission_options.hpp"
+#include "flown_path.hpp"
 #include "path_io.hpp"
 
 namespace {
@@ -48,6 +50,16 @@ void check_path(const std::string& path) {
   expect(f->points.size() >= 2);
   for (const visvol::rt::Vec3& p : f->points) expect(p.allFinite());
   expect(f->fp.empty() || f->fp.size() == f->points.size());
+  // flown by either preset, as check does: finite points, one turn radius each
+  for (const char* preset : {"fixed-wing", "multirotor"}) {
+    visvol::Result<visvol::cli::FlownPath> flown = visvol::cli::fly_path(*f, *visvol::rt::vehicle_preset(preset));
+    if (!flown.ok()) {
+      expect(!flown.status().message().empty());
+      continue;
+    }
+    expect(flown->points.size() == flown->turn_radius_m.size());
+    for (const visvol::rt::Vec3& p : flown->points) expect(p.allFinite());
+  }
 }
 
 void check_vehicle(const std::string& path) {

@@ -11,6 +11,7 @@
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "flown_path.hpp"
 #include "io/json_text.hpp"
 #include "pack_planner.hpp"  // the planner and sampler for packs: compiled in visvol_pack_planner
 #include "path_io.hpp"
@@ -82,6 +83,20 @@ int run_check(const CheckOptions& o) {
       return fail("check", invalid_argument(o.path + text));
     }
   }
+  // the path flown: a .plan's loiters as circles
+  Result<FlownPath> flown = fly_path(*file, *envelope);
+  if (!flown.ok()) return fail("check", flown.status().with_context(o.path));
+  for (const rt::Vec3& v : flown->points) {
+    if (!extent.contains(v.x(), v.y())) {
+      char text[300];
+      std::snprintf(text, sizeof text,
+                    ": a loiter's circle reaches (%.1f, %.1f), outside the pack (x %.1f..%.1f, y %.1f..%.1f): no "
+                    "terrain to judge it on",
+                    v.x(), v.y(), extent.xmin_m, extent.xmax_m, extent.ymin_m, extent.ymax_m);
+      return fail("check", invalid_argument(o.path + text));
+    }
+  }
+  const std::vector<rt::Vec3>& path = flown->points;
   const rt::FieldForces<storage::PackLevel> field(p.levels.front(), rt::ForceGains{});
   rt::PathCheckSpec spec;
   spec.envelope = *envelope;
@@ -103,7 +118,7 @@ int run_check(const CheckOptions& o) {
   // samples every quarter post along the path, a sight line from each to
   // every observer: a path zigzagging across the pack millions of times, or
   // hundreds of observers of a long one, would take hours
-  const double samples = checker->sample_count(file->points);
+  const double samples = checker->sample_count(path);
   const std::size_t observer_count = std::max<std::size_t>(1, spec.constraints.size());
   const double work = samples * static_cast<double>(observer_count);
   if (!(work <= rt::PathChecker::kMaxSamples)) {
@@ -113,23 +128,25 @@ int run_check(const CheckOptions& o) {
                   checker->spec().sample_step_m, observer_count, rt::PathChecker::kMaxSamples);
     return fail("check", invalid_argument(o.path + text));
   }
-  const rt::PathCheck c = checker->check(file->points);
+  const rt::PathCheck c = checker->check(path.data(), static_cast<int>(path.size()), flown->turn_radius_m.data());
 
   if (o.json) {
     nlohmann::json j = check_json(c, *envelope);
     j["pack"] = o.pack;
     j["path"] = o.path;
-    j["per_vertex"] = vertices_json(c, file->points);
+    j["per_vertex"] = vertices_json(c, path);
+    j["loiters"] = flown->loiters;
     // the keys plan's summary has: a path checked had no rope run, so both
     // are its own F_c
     j["fc_start"] = c.fc;
     j["fc_end"] = c.fc;
     std::printf("%s\n", json_text(j, 2).c_str());
   } else {
-    std::printf("path       %s: %zu vertices, %.0f m, %.0f s at %.1f m/s (vehicle %s)\n", o.path.c_str(),
-                file->points.size(), c.length_m, c.duration_s, envelope->speed_m_per_s, envelope->name.c_str());
+    std::printf("path       %s: %zu vertices, %.0f m, %.0f s at %.1f m/s (vehicle %s)\n", o.path.c_str(), path.size(),
+                c.length_m, c.duration_s, envelope->speed_m_per_s, envelope->name.c_str());
+    for (const std::string& l : flown->loiters) std::printf("loiter     %s\n", l.c_str());
     std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
-    print_vertices(c, file->points);
+    print_vertices(c, path);
     print_check(c, *envelope);
   }
   return c.all_met ? kExitOk : kExitFailure;

@@ -91,11 +91,32 @@ inline constexpr int kAltitudeModeAbsolute = 2;  // QGroundControl's AltMode: MA
 
 enum class PathFormat { text, plan_csv, geojson, qgc_plan };
 
+// A .plan's loiter item (MAV_CMD_NAV_LOITER_*) as the file gives it; `check`
+// flies it as a circle (flown_path.hpp).
+enum class LoiterKind : std::uint8_t {
+  unlimited,   // 17: until the operator moves the aircraft on (flown as one turn)
+  turns,       // 18: `amount` turns
+  time,        // 19: `amount` seconds
+  to_altitude  // 31: until its altitude is reached
+};
+struct LoiterItem {
+  std::size_t vertex = 0;      // in PathFile::points: the loiter's centre, or the waypoint it circles over
+  bool over_waypoint = false;  // centred on the waypoint before it: the aircraft flies over it, then circles
+  double altitude_m = 0;       // the circle's altitude (the DEM's datum)
+  double radius_m = 0;         // > 0 clockwise, < 0 counter-clockwise, 0 the autopilot's own radius
+  LoiterKind kind = LoiterKind::unlimited;
+  double amount = 0;  // turns (LoiterKind::turns) or seconds (LoiterKind::time)
+  std::string item;   // "mission.items[5]", for reports
+};
+
 struct PathFile {
   std::vector<Vec3> points;  // pack CRS, metres (z: the DEM's datum, 0 without heights)
   bool has_heights = false;  // every point has a z
   std::vector<double> fp;    // F_p per point from the file (plan CSV, GeoJSON), or empty
   PathFormat format = PathFormat::text;
+  // .plan: the loiters, in mission order. A loiter over the last waypoint
+  // that a landing follows is the landing's approach and is not among them.
+  std::vector<LoiterItem> loiters;
 };
 // At least 2 points, all finite, not all at one spot (within 1 cm), numbers
 // in decimal (text and CSV: no hexadecimal, inf or nan). crs_wkt is the pack's CRS: a GeoJSON or

@@ -130,10 +130,50 @@ ItemRole item_role(long long command) {
   return moves_outside_nav_range(command) ? ItemRole::moves : ItemRole::no_motion;
 }
 
+// A loiter's parameter (params[index]): a finite number in [lo, hi]; null
+// (QGroundControl's NaN) is `if_null` where that is allowed (not NaN).
+Result<double> loiter_param(const nlohmann::json& params, std::size_t index, const char* name, double lo, double hi,
+                            double if_null, const std::string& where) {
+  const nlohmann::json& p = params[index];
+  if (p.is_null() && !std::isnan(if_null)) return if_null;
+  if (!p.is_number() || !std::isfinite(p.get<double>()) || p.get<double>() < lo || p.get<double>() > hi) {
+    return invalid_argument(where + "params[" + std::to_string(index) + "] (" + name + ") " + json_brief(p) +
+                            " is not a number in " + shown(lo, 0) + ".." + shown(hi, 0));
+  }
+  return p.get<double>();
+}
+
+// What a loiter item says of its circle (MAVLink's parameters: turns or
+// seconds first, the radius third; LOITER_TO_ALT's radius second).
+Result<LoiterItem> read_loiter(long long command, const nlohmann::json& params, const std::string& where) {
+  constexpr double kMaxRadiusM = 1e5, kMaxTurns = 1000, kMaxSeconds = 1e6;
+  LoiterItem l;
+  const std::size_t radius_index = command == mavlink::kCmdNavLoiterToAlt ? 1 : 2;
+  Result<double> radius = loiter_param(params, radius_index, "radius, m", -kMaxRadiusM, kMaxRadiusM, 0.0, where);
+  if (!radius.ok()) return radius.status();
+  l.radius_m = *radius;
+  const double no_default = std::nan("");
+  if (command == mavlink::kCmdNavLoiterTurns) {
+    Result<double> turns = loiter_param(params, 0, "turns", 0, kMaxTurns, no_default, where);
+    if (!turns.ok()) return turns.status();
+    l.kind = LoiterKind::turns;
+    l.amount = *turns;
+  } else if (command == mavlink::kCmdNavLoiterTime) {
+    Result<double> seconds = loiter_param(params, 0, "time, s", 0, kMaxSeconds, no_default, where);
+    if (!seconds.ok()) return seconds.status();
+    l.kind = LoiterKind::time;
+    l.amount = *seconds;
+  } else {
+    l.kind = command == mavlink::kCmdNavLoiterToAlt ? LoiterKind::to_altitude : LoiterKind::unlimited;
+  }
+  return l;
+}
+
 }  // namespace
 
 // The waypoints of a QGroundControl .plan (waypoints, spline waypoints and
-// loiters, a loiter at its centre), to the pack's CRS.
+// loiters, a loiter at its centre, or none over the waypoint before it) and
+// its loiters, to the pack's CRS.
 Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
   const std::string file = path + ": ";
   if (!j["fileType"].is_string() || j["fileType"].get<std::string>() != "Plan") {
@@ -243,11 +283,28 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               ") is not supported; visvol reads waypoints in frame 0 (MAV_FRAME_GLOBAL, above mean "
                               "sea level) or 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, above the planned home)");
     }
-    // a loiter over the waypoint before it (the landing circle of visvol's
-    // own plans) adds no path
     const bool loiter = command != mavlink::kCmdNavWaypoint && command != mavlink::kCmdNavSplineWaypoint;
-    if (loiter && !out.points.empty() && out.points.back() == Vec3(lon, lat, altitude_m)) continue;
+    if (loiter) {
+      Result<LoiterItem> l = read_loiter(command, params, where);
+      if (!l.ok()) return l.status();
+      l->item = where.substr(file.size(), where.size() - file.size() - 2);
+      l->altitude_m = altitude_m;
+      // over the waypoint before it: a circle around that waypoint, no vertex of its own
+      l->over_waypoint = !out.points.empty() && out.points.back().x() == lon && out.points.back().y() == lat;
+      if (!l->over_waypoint) out.points.push_back({lon, lat, altitude_m});
+      l->vertex = out.points.size() - 1;
+      out.loiters.push_back(*l);
+      continue;
+    }
     out.points.push_back({lon, lat, altitude_m});
+  }
+  // a landing after the last waypoint: the loiters over it are its approach
+  // (visvol's own plans circle there), flown after the path ends
+  if (!end_after_waypoints.empty()) {
+    while (!out.loiters.empty() && out.loiters.back().over_waypoint &&
+           out.loiters.back().vertex + 1 == out.points.size()) {
+      out.loiters.pop_back();
+    }
   }
   if (out.points.size() < 2) {
     return invalid_argument(file + std::to_string(out.points.size()) +

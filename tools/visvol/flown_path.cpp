@@ -1,0 +1,183 @@
+#include "flown_path.hpp"
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace visvol::cli {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+constexpr double kRadPerDeg = kTwoPi / 360.0;
+// Points closer than this horizontally are one spot (rt::kSameSpotM).
+constexpr double kSpotM = 0.01;
+
+using Vec2 = Eigen::Vector2d;
+
+Vec2 xy(const Vec3& p) { return {p.x(), p.y()}; }
+
+// A circle flown in one sense: sense +1 counter-clockwise (seen from above,
+// x east, y north), -1 clockwise.
+struct Circle {
+  Vec2 centre;
+  double radius_m = 0;
+  double sense = -1;
+  Vec2 at(double angle) const { return centre + radius_m * Vec2(std::cos(angle), std::sin(angle)); }
+  Vec2 velocity(double angle) const { return sense * Vec2(-std::sin(angle), std::cos(angle)); }
+};
+
+// The angle where the circle meets a line through `p` along the direction
+// of flight: arriving from p (`arriving`) or leaving towards p. Outside the
+// circle, the tangent point whose sense matches; inside, straight out (from
+// the centre: along `heading`).
+double tangent_angle(const Circle& c, const Vec2& p, bool arriving, const Vec2& heading) {
+  const Vec2 d = p - c.centre;
+  const double dist = d.norm();
+  if (dist <= c.radius_m) {
+    const Vec2 out = dist > kSpotM ? d : heading;
+    return std::atan2(out.y(), out.x());
+  }
+  const double base = std::atan2(d.y(), d.x()), spread = std::acos(c.radius_m / dist);
+  for (double angle : {base + spread, base - spread}) {
+    const Vec2 along = arriving ? Vec2(c.at(angle) - p) : Vec2(p - c.at(angle));
+    if (along.dot(c.velocity(angle)) > 0) return angle;
+  }
+  return base;  // not reached: one tangent always matches
+}
+
+// The tangent of the steepest climb (dz > 0) or descent the vehicle flies,
+// a hair under it so that a chord at it never reads as over; infinite at 90.
+double steepest_slope(const rt::VehicleEnvelope& e, double dz_m) {
+  const double angle_deg = dz_m > 0 ? e.max_climb_deg : e.max_descent_deg;
+  if (angle_deg >= 90.0 - 1e-9) return std::numeric_limits<double>::infinity();
+  return std::tan(angle_deg * kRadPerDeg) * (1.0 - 1e-9);
+}
+
+// Turns the loiter takes before it leaves for the next vertex. LOITER_TO_ALT
+// climbs (or descends) on its leg in and then on the circle's polygon
+// (`turn_m` long a turn) at the vehicle's steepest slope.
+double loiter_turns(const LoiterItem& l, const rt::VehicleEnvelope& e, double radius_m, double dz_m, double leg_m,
+                    double turn_m) {
+  switch (l.kind) {
+    case LoiterKind::unlimited: return 1.0;
+    case LoiterKind::turns: return l.amount;
+    case LoiterKind::time: return l.amount * e.speed_m_per_s / (kTwoPi * radius_m);
+    case LoiterKind::to_altitude: {
+      const double slope = steepest_slope(e, dz_m);
+      return std::max(0.0, std::fabs(dz_m) - leg_m * slope) / slope / turn_m;
+    }
+  }
+  return 0.0;
+}
+
+std::string describe(const LoiterItem& l, double turns, double radius_m, double sense, std::size_t points) {
+  char text[200];
+  std::snprintf(text, sizeof text, "%s: %.1f turns of %.0f m %s at %.1f m (%zu points)", l.item.c_str(), turns,
+                radius_m, sense > 0 ? "counter-clockwise" : "clockwise", l.altitude_m, points);
+  return text;
+}
+
+class Flight {
+ public:
+  Flight(const PathFile& file, const rt::VehicleEnvelope& e) : file_(file), e_(e) {}
+
+  void add(const Vec3& p, double turn_radius_m = std::numeric_limits<double>::quiet_NaN()) {
+    out_.points.push_back(p);
+    out_.turn_radius_m.push_back(turn_radius_m);
+  }
+
+  // The heading the aircraft arrives with (east when it has not moved).
+  Vec2 heading() const {
+    const std::vector<Vec3>& p = out_.points;
+    for (std::size_t k = p.size(); k-- > 1;) {
+      const Vec2 d = xy(p.back()) - xy(p[k - 1]);
+      if (d.norm() > kSpotM) return d / d.norm();
+    }
+    return {1, 0};
+  }
+
+  // A loiter from where the aircraft is, towards `next` (or none).
+  Status loiter(const LoiterItem& l, const Vec3& centre, const Vec3* next) {
+    const bool hover = e_.type == rt::VehicleType::multirotor;
+    const double radius_m = l.radius_m != 0 ? std::fabs(l.radius_m) : e_.min_turn_radius_m;
+    if (hover || radius_m < kSpotM) {
+      const Vec3 over(centre.x(), centre.y(), l.altitude_m);
+      if (out_.points.empty() || (out_.points.back() - over).norm() >= kSpotM) add(over);
+      char text[160];
+      std::snprintf(text, sizeof text, ": hovers at %.1f m", l.altitude_m);
+      out_.loiters.push_back(l.item + text);
+      return Status::ok_status();
+    }
+    const Circle c{xy(centre), radius_m, l.radius_m < 0 ? 1.0 : -1.0};
+    const Vec3 from = out_.points.empty() ? centre : out_.points.back();
+    const double entry = tangent_angle(c, xy(from), true, heading());
+    const double leg_m = (c.at(entry) - xy(from)).norm(), dz_m = l.altitude_m - from.z();
+    // a turn of the polygon flown: its chords, kLoiterStepDeg of arc at most
+    const double chord_turn_m = kTwoPi * radius_m * std::sin(0.5 * kLoiterStepDeg * kRadPerDeg) /
+                                (0.5 * kLoiterStepDeg * kRadPerDeg);
+    const double turns = loiter_turns(l, e_, radius_m, dz_m, leg_m, chord_turn_m);
+    if (!(turns <= kMaxLoiterTurns)) {
+      char text[160];
+      std::snprintf(text, sizeof text, ": %.0f turns of %.0f m; a check flies at most %.0f", turns, radius_m,
+                    kMaxLoiterTurns);
+      return invalid_argument(l.item + text);
+    }
+    // the arc from the entry to the tangent towards the next vertex
+    double exit_arc = 0;
+    if (next != nullptr) {
+      const double exit = tangent_angle(c, xy(*next), false, c.velocity(entry));
+      exit_arc = std::fmod(c.sense * (exit - entry) + 2 * kTwoPi, kTwoPi);
+    }
+    const double sweep = turns * kTwoPi + exit_arc;
+    const int steps = std::max(1, static_cast<int>(std::ceil(sweep / (kLoiterStepDeg * kRadPerDeg))));
+    // the altitude changes at the vehicle's steepest slope, from the leg in
+    // on, until the loiter's is reached
+    const double slope = steepest_slope(e_, dz_m), sign = dz_m > 0 ? 1.0 : -1.0;
+    double z = from.z(), left_m = std::fabs(dz_m);
+    auto climb_over = [&](double horizontal_m) {
+      const double step = std::min(left_m, horizontal_m * slope);
+      left_m -= step;
+      z += sign * step;
+    };
+    const std::size_t first = out_.points.size();
+    Vec2 last = xy(from);
+    for (int k = 0; k <= (sweep > 0 ? steps : 0); ++k) {
+      const Vec2 p = c.at(entry + c.sense * sweep * k / steps);
+      climb_over((p - last).norm());
+      last = p;
+      add({p.x(), p.y(), z}, radius_m);
+    }
+    out_.loiters.push_back(describe(l, turns, radius_m, c.sense, out_.points.size() - first));
+    return Status::ok_status();
+  }
+
+  Result<FlownPath> fly() {
+    const std::vector<Vec3>& v = file_.points;
+    std::size_t next_loiter = 0;
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      const std::size_t first = next_loiter;
+      while (next_loiter < file_.loiters.size() && file_.loiters[next_loiter].vertex == k) ++next_loiter;
+      // a loiter's own vertex is its centre, which the aircraft circles
+      const bool centre_only = first < next_loiter && !file_.loiters[first].over_waypoint;
+      if (!centre_only) add(v[k]);
+      for (std::size_t i = first; i < next_loiter; ++i) {
+        const Vec3* next = k + 1 < v.size() ? &v[k + 1] : nullptr;
+        VISVOL_RETURN_IF_ERROR(loiter(file_.loiters[i], v[k], next));
+      }
+    }
+    return std::move(out_);
+  }
+
+ private:
+  const PathFile& file_;
+  const rt::VehicleEnvelope& e_;
+  FlownPath out_;
+};
+
+}  // namespace
+
+Result<FlownPath> fly_path(const PathFile& file, const rt::VehicleEnvelope& e) { return Flight(file, e).fly(); }
+
+}  // namespace visvol::cli

@@ -52,12 +52,12 @@ LimitResult limit(const char* name, const char* unit, double limit_value, double
 
 int worst_decimals(const LimitResult& l) {
   if (l.met || !std::isfinite(l.worst) || !std::isfinite(l.limit)) return 1;
-  for (int decimals = 1; decimals < 4; ++decimals) {
+  for (int decimals = 1; decimals < kMaxWorstDecimals; ++decimals) {
     const double scale = std::pow(10.0, decimals);
     const double shown = std::round(l.worst * scale) / scale, limit_shown = std::round(l.limit * scale) / scale;
     if (l.lower ? shown < limit_shown : shown > limit_shown) return decimals;
   }
-  return 4;
+  return kMaxWorstDecimals;
 }
 
 const char* to_string(ConstraintKind kind) { return kind == ConstraintKind::visible_to ? "visible-to" : "hidden-from"; }
@@ -77,7 +77,7 @@ std::vector<std::string> PathCheck::unmet() const {
     if (l.met) continue;
     std::ostringstream s;
     s.precision(1);
-    s << std::fixed << l.name << " " << l.limit << " " << l.unit << ": worst " << std::setprecision(worst_decimals(l))
+    s << std::fixed << std::setprecision(worst_decimals(l)) << l.name << " " << l.limit << " " << l.unit << ": worst "
       << l.worst << " " << l.unit << ", holds on " << std::setprecision(3) << fraction_shown(l.satisfied_fraction)
       << " of the length";
     out.push_back(s.str());

@@ -88,9 +88,11 @@ struct LimitResult {
   bool lower = false;  // a lower limit (clearance, min-turn-radius): the worst is the lowest
 };
 
-// Decimals to print an unmet limit's worst value with (1 to 4): enough that it
-// reads past the limit ("clearance 30.0 m: worst 29.96 m", never "worst
-// 30.0 m ... NOT MET"). 1 for a met limit.
+// Decimals to print an unmet limit and its worst value with (1 to 7): enough
+// that the worst reads past the limit ("clearance 30.00 m: worst 29.96 m",
+// never "worst 30.0 m ... NOT MET"; the tolerances are 1 cm and 1e-6). 1 for
+// a met limit.
+inline constexpr int kMaxWorstDecimals = 7;
 int worst_decimals(const LimitResult& l);
 
 struct VertexCheck {

@@ -21,16 +21,19 @@ namespace visvol::rt {
 // at b).
 template <class Probe>
 inline void for_each_terrain_probe(const fields::Heightfield& t, const Vec3& a, const Vec3& b, Probe probe) {
+  if (!a.allFinite() || !b.allFinite()) return;
   const double ia = t.i_of(a.x()), ja = t.j_of(a.y()), ib = t.i_of(b.x()), jb = t.j_of(b.y());
   std::vector<double> cuts = {0.0, 1.0};
-  auto add_lines = [&](double from, double to) {
+  // the grid lines crossed, those of the grid only: beyond it the terrain
+  // is its border's, so at most nx + ny cuts whatever the segment's length
+  auto add_lines = [&](double from, double to, int posts) {
     if (std::fabs(to - from) < 1e-12) return;
-    for (double k = std::floor(std::min(from, to)) + 1; k < std::max(from, to); ++k) {
-      cuts.push_back((k - from) / (to - from));
-    }
+    const double lo = std::max(std::floor(std::min(from, to)) + 1, 0.0);
+    const double hi = std::min(std::max(from, to), static_cast<double>(posts - 1) + 0.5);
+    for (double k = lo; k < hi; ++k) cuts.push_back((k - from) / (to - from));
   };
-  add_lines(ia, ib);
-  add_lines(ja, jb);
+  add_lines(ia, ib, t.nx);
+  add_lines(ja, jb, t.ny);
   std::sort(cuts.begin(), cuts.end());
   auto at = [&](double u) { return Vec3(a + (b - a) * u); };
   auto height = [&](double u) {

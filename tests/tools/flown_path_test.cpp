@@ -50,10 +50,15 @@ TEST(FlownPath, ALoiterIsACircleJoinedAndLeftAlongTangents) {
     EXPECT_EQ(p.front(), Vec3(-500, 0, 100));
     EXPECT_EQ(p.back(), Vec3(500, 0, 100));
     EXPECT_TRUE(std::isnan(f->turn_radius_m.front()) && std::isnan(f->turn_radius_m.back()));
+    // joined and left along tangents: the geometry judges those two points
+    EXPECT_TRUE(std::isnan(f->turn_radius_m[1]) && std::isnan(f->turn_radius_m[p.size() - 2]));
     double swept = 0;
     for (std::size_t k = 1; k + 1 < p.size(); ++k) {
       EXPECT_NEAR(std::hypot(p[k].x(), p[k].y()), 100.0, 1e-9) << k;
-      EXPECT_EQ(f->turn_radius_m[k], 100.0);
+      if (k > 1 && k + 2 < p.size()) {
+        EXPECT_EQ(f->turn_radius_m[k], 100.0);
+      }
+      EXPECT_EQ(f->vertex_of[k], -1);
       if (k + 2 < p.size()) {
         swept += std::atan2(p[k].x() * p[k + 1].y() - p[k].y() * p[k + 1].x(),
                             p[k].x() * p[k + 1].x() + p[k].y() * p[k + 1].y());
@@ -61,12 +66,20 @@ TEST(FlownPath, ALoiterIsACircleJoinedAndLeftAlongTangents) {
     }
     // clockwise for a positive radius: the angle swept is negative
     EXPECT_GT(std::fabs(swept), 2 * kPi - 1e-6);
-    EXPECT_EQ(swept < 0, radius > 0);
+    EXPECT_EQ(swept<0, radius> 0);
     // tangents: the legs in and out are perpendicular to the radius where they touch
     const Vec3 in = p[1] - p[0], out = p[p.size() - 1] - p[p.size() - 2];
     EXPECT_NEAR(in.x() * p[1].x() + in.y() * p[1].y(), 0.0, 1e-6);
     const Vec3& leave = p[p.size() - 2];
     EXPECT_NEAR(out.x() * leave.x() + out.y() * leave.y(), 0.0, 1e-6);
+    // ... the tangents whose direction is the circle's sense of flight
+    auto along_circle = [&](const Vec3& q) {  // clockwise for a positive radius
+      return radius > 0 ? Vec3(q.y(), -q.x(), 0) : Vec3(-q.y(), q.x(), 0);
+    };
+    EXPECT_GT(in.dot(along_circle(p[1])), 0.0);
+    EXPECT_GT(out.dot(along_circle(leave)), 0.0);
+    EXPECT_EQ(f->vertex_of.front(), 0);
+    EXPECT_EQ(f->vertex_of.back(), 2);
     ASSERT_EQ(f->loiters.size(), 1u);
     EXPECT_NE(f->loiters[0].find("mission.items[2]: 1.0 turns of 100 m"), std::string::npos) << f->loiters[0];
   }
@@ -110,8 +123,18 @@ TEST(FlownPath, AltitudeChangesAtTheSteepestClimbTheVehicleFlies) {
     EXPECT_NEAR(p[p.size() - 2].z(), 600.0, 1e-6);  // it leaves at the loiter's altitude
   }
   Result<FlownPath> spiral = fly_path(through_loiter(loiter(LoiterKind::to_altitude, 100, 0, 600)), e);
+  ASSERT_TRUE(spiral.ok());
   // 500 m at 15 degrees: 1866 m, 457 m of it on the leg in, the rest 2.2 turns
   EXPECT_NE(spiral->loiters[0].find("2.2 turns"), std::string::npos) << spiral->loiters[0];
+  // any loiter reaches its altitude before it leaves, however short it is
+  // asked to be: one 5 m up from a plain at 0, below the legs at 100 m
+  for (LoiterKind kind : {LoiterKind::time, LoiterKind::turns, LoiterKind::unlimited}) {
+    Result<FlownPath> low = fly_path(through_loiter(loiter(kind, 100, 0, 5)), e);
+    ASSERT_TRUE(low.ok());
+    double lowest = 1e9;
+    for (const Vec3& q : low->points) lowest = std::min(lowest, q.z());
+    EXPECT_NEAR(lowest, 5.0, 1e-6);
+  }
 }
 
 // A loiter over the waypoint before it: the aircraft flies over the
@@ -128,15 +151,44 @@ TEST(FlownPath, OverAWaypointAndHovering) {
   Result<FlownPath> fw = fly_path(f, fixed_wing());
   ASSERT_TRUE(fw.ok());
   ASSERT_GE(fw->points.size(), 5u);
-  EXPECT_EQ(fw->points[1], Vec3(0, 0, 100));  // the waypoint itself
+  EXPECT_EQ(fw->points[1], Vec3(0, 0, 100));    // the waypoint itself
   EXPECT_NEAR(fw->points[2].x(), 100.0, 1e-9);  // straight ahead, east
   EXPECT_NEAR(fw->points[2].y(), 0.0, 1e-9);
-  EXPECT_EQ(fw->turn_radius_m[2], 100.0);
+  EXPECT_EQ(fw->turn_radius_m[2], 100.0);  // joined from inside: at the radius
   Result<FlownPath> mr = fly_path(f, *rt::vehicle_preset("multirotor"));
   ASSERT_TRUE(mr.ok());
   ASSERT_EQ(mr->points.size(), 4u);
   EXPECT_EQ(mr->points[2], Vec3(0, 0, 120));  // climbs on the spot
   EXPECT_NE(mr->loiters[0].find("hovers at 120.0 m"), std::string::npos) << mr->loiters[0];
+  // a circle too small to draw turns on the spot at its radius; so does a
+  // fixed-wing of no turn limit asked for the autopilot's radius
+  f.loiters[0].radius_m = 0.005;
+  Result<FlownPath> tiny = fly_path(f, fixed_wing());
+  ASSERT_TRUE(tiny.ok());
+  ASSERT_EQ(tiny->points.size(), 4u);
+  EXPECT_EQ(tiny->turn_radius_m[2], 0.005);
+  EXPECT_NE(tiny->loiters[0].find("turns on the spot"), std::string::npos) << tiny->loiters[0];
+  // two loiters over one point in opposite senses: the reversal where the
+  // second begins is judged by the geometry (a hairpin), not at a radius
+  f.loiters = {l, l};
+  f.loiters[1].radius_m = -100;
+  Result<FlownPath> reverse = fly_path(f, fixed_wing());
+  ASSERT_TRUE(reverse.ok());
+  bool geometry_inside = false;
+  for (std::size_t k = 3; k + 2 < reverse->points.size(); ++k) {
+    geometry_inside = geometry_inside || std::isnan(reverse->turn_radius_m[k]);
+  }
+  EXPECT_TRUE(geometry_inside);
+  // all loiters together fly a bounded number of points
+  f.loiters.assign(40, loiter(LoiterKind::turns, 100, 1000, 100));
+  for (LoiterItem& many : f.loiters) {
+    many.vertex = 1;
+    many.over_waypoint = true;
+    many.item = "mission.items[9]";
+  }
+  Result<FlownPath> too_many = fly_path(f, fixed_wing());
+  ASSERT_FALSE(too_many.ok());
+  EXPECT_NE(too_many.status().message().find("more than"), std::string::npos) << too_many.status().message();
   // no loiters: the file's points as they are
   PathFile plain;
   plain.points = {{0, 0, 10}, {100, 0, 10}};

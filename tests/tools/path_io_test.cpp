@@ -511,6 +511,23 @@ TEST_F(PathIo, PlanLoitersAreReadWithTheirCircles) {
   EXPECT_EQ(path->loiters[1].vertex, 2u);
   EXPECT_EQ(path->loiters[2].kind, LoiterKind::to_altitude);
   EXPECT_EQ(path->loiters[2].radius_m, 150.0);
+  // over the last waypoint before a landing: at its altitude, the landing's
+  // approach (not flown); at another, or before a return to launch, flown
+  const std::string land = waypoint(0, "37.789", "-122.429", "0", mavlink::kCmdNavLand);
+  const std::string rtl = waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch);
+  const std::string circle_at_b = item(31, "0,80,0,0,37.789,-122.429,60");
+  const std::string circle_below_b = item(31, "0,80,0,0,37.789,-122.429,20");
+  const struct {
+    std::string items;
+    std::size_t loiters;
+  } ends[] = {{a + "," + b + "," + circle_at_b + "," + land, 0},
+              {a + "," + b + "," + circle_below_b + "," + land, 1},
+              {a + "," + b + "," + circle_at_b + "," + rtl, 1}};
+  for (const auto& e : ends) {
+    Result<PathFile> read = read_path_file(file_with("end.plan", plan_text(e.items)), wkt_);
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_EQ(read->loiters.size(), e.loiters) << e.items;
+  }
   for (const std::string& bad : {item(18, "-1,0,50,0,37.789,-122.429,60"), item(19, "2e6,0,50,0,37.789,-122.429,60"),
                                  item(18, R"(2,0,"x",0,37.789,-122.429,60)"), item(17, "0,0,1e6,0,37.789,-122.429,60"),
                                  item(18, "null,0,50,0,37.789,-122.429,60")}) {

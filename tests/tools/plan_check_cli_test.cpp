@@ -160,6 +160,13 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
   // relative to a home 150 m above sea level: 300 m above it
   EXPECT_NEAR(j["per_vertex"][0]["z_m"].get<double>(), 300.0, 0.5);
   EXPECT_TRUE(j.contains("duration_s"));
+  // the home it lifted them by, against the terrain there (an autopilot
+  // measures from where it is armed)
+  ASSERT_EQ(j["notes"].size(), 2u) << j["notes"];  // the hover speed, the home
+  EXPECT_NE(
+      j["notes"][1].get<std::string>().find("altitudes above home: the planned home's 150.0 m, the terrain there"),
+      std::string::npos)
+      << j["notes"];
   // a spline waypoint 1 m above sea level, under the ground: a vertex the
   // check sees (it was left out, and the mission read as met)
   nlohmann::json low = mission;
@@ -214,6 +221,25 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   EXPECT_NE(tight.out.find("loiter     mission.items[1] (doJumpId 2): 2.0 turns of 25 m clockwise"), std::string::npos)
       << tight.out;
   EXPECT_NE(tight.out.find("min-turn-radius 80.0 m: worst 25.0 m"), std::string::npos) << tight.out;
+  // what the .plan states of its vehicle: its cruise speed for the times
+  // (unless --speed names one), and its type where it is not the one checked
+  nlohmann::json stated = mission_with(-120.0);
+  stated["mission"]["cruiseSpeed"] = 12.5;
+  stated["mission"]["vehicleType"] = 2;
+  std::ofstream(plan) << stated.dump(2);
+  const Outcome noted = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing");
+  EXPECT_NE(noted.out.find("note       speed 12.5 m/s: the .plan's cruiseSpeed"), std::string::npos) << noted.out;
+  EXPECT_NE(noted.out.find("note       the .plan is for a multirotor (vehicleType 2); checked as fixed-wing"),
+            std::string::npos)
+      << noted.out;
+  const Outcome given = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing --speed 30");
+  EXPECT_EQ(given.out.find("cruiseSpeed"), std::string::npos) << given.out;
+  EXPECT_NE(given.out.find("at 30.0 m/s"), std::string::npos) << given.out;
+  stated["mission"]["cruiseSpeed"] = -3;
+  std::ofstream(plan) << stated.dump(2);
+  const Outcome bad_speed = visvol("check " + *pack_ + " " + plan);
+  EXPECT_EQ(bad_speed.status, 2);
+  EXPECT_NE(bad_speed.err.find("mission.cruiseSpeed -3 is not a speed"), std::string::npos) << bad_speed.err;
   std::ofstream(plan) << mission_with(-120.0).dump(2);
   const Outcome wide = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing --json");
   ASSERT_TRUE(wide.status == 0 || wide.status == 1) << wide.err;
@@ -221,11 +247,15 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   ASSERT_EQ(j["loiters"].size(), 1u);
   EXPECT_NE(j["loiters"][0].get<std::string>().find("120 m counter-clockwise"), std::string::npos) << j["loiters"];
   EXPECT_GT(j["per_vertex"].size(), 2u * 36u);
+  int judged = 0;
   for (const nlohmann::json& limit : j["envelope"]) {
-    if (limit["name"] == "min-turn-radius") {
-      EXPECT_TRUE(limit["met"].get<bool>()) << limit;
-    }
+    if (limit["name"] != "min-turn-radius") continue;
+    ++judged;
+    EXPECT_TRUE(limit["met"].get<bool>()) << limit;
   }
+  EXPECT_EQ(judged, 1);
+  EXPECT_EQ(j["per_vertex"][0]["file_vertex"], 0);
+  EXPECT_TRUE(j["per_vertex"][2]["file_vertex"].is_null());  // on the circle
   std::remove(plan.c_str());
 }
 

@@ -60,9 +60,10 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
       std::printf("envelope   %s none: worst %.1f %s\n", l.name.c_str(), l.worst, l.unit.c_str());
       continue;
     }
-    std::printf("envelope   %s %.1f %s: worst %.*f %s, holds on %.3f of the length %s\n", l.name.c_str(), l.limit,
-                l.unit.c_str(), rt::worst_decimals(l), l.worst, l.unit.c_str(),
-                rt::fraction_shown(l.satisfied_fraction), l.met ? "met" : "NOT MET");
+    const int decimals = rt::worst_decimals(l);  // the limit's too: the worst reads past it
+    std::printf("envelope   %s %.*f %s: worst %.*f %s, holds on %.3f of the length %s\n", l.name.c_str(), decimals,
+                l.limit, l.unit.c_str(), decimals, l.worst, l.unit.c_str(), rt::fraction_shown(l.satisfied_fraction),
+                l.met ? "met" : "NOT MET");
   }
   std::printf("bounds     %.3f of the length inside the planning bounds %s\n",
               rt::fraction_shown(c.inside_bounds_fraction), c.inside_planning_bounds ? "met" : "NOT MET");

@@ -3,6 +3,7 @@
 // way: exact sight lines and limits on the finest terrain.
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -32,20 +33,84 @@ struct CheckOptions {
   bool json = false;
 };
 
-void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path) {
+// One row per point flown; '#' is the file's vertex, '~' a point of a loiter's circle.
+void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path, const std::vector<int>& vertex_of) {
   std::printf("%5s %12s %12s %8s %8s %9s %7s %9s  %s\n", "#", "x_m", "y_m", "z_m", "F_p", "clear_m", "climb", "turn_m",
               "seen by");
   for (std::size_t i = 0; i < path.size(); ++i) {
+    const std::string number = vertex_of[i] >= 0 ? std::to_string(vertex_of[i]) : "~";
     const rt::VertexCheck& v = c.per_vertex[i];
     std::string seen;
     for (std::size_t k = 0; k < v.seen_by.size(); ++k) {
       if (v.seen_by[k]) seen += (seen.empty() ? "" : ",") + std::to_string(k + 1);
     }
-    std::printf("%5zu %12.1f %12.1f %8.1f %8.5f %9.1f %7.1f %9s  %s\n", i, path[i].x(), path[i].y(), path[i].z(), v.fp,
-                v.clearance_m, v.climb_deg,
+    std::printf("%5s %12.1f %12.1f %8.1f %8.5f %9.1f %7.1f %9s  %s\n", number.c_str(), path[i].x(), path[i].y(),
+                path[i].z(), v.fp, v.clearance_m, v.climb_deg,
                 std::isfinite(v.turn_radius_m) ? std::to_string(std::lround(v.turn_radius_m)).c_str() : "-",
                 seen.empty() ? "-" : seen.c_str());
   }
+}
+
+// MAV_TYPEs (a .plan's vehicleType) of multirotors: quadrotor, coaxial,
+// helicopter, hexarotor, octorotor, tricopter, dodecarotor.
+bool multirotor_type(int type) {
+  for (int t : {2, 3, 4, 13, 14, 15, 29}) {
+    if (type == t) return true;
+  }
+  return false;
+}
+
+__attribute__((format(printf, 1, 2))) std::string printed(const char* format, ...) {
+  char text[300];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(text, sizeof text, format, args);
+  va_end(args);
+  return text;
+}
+
+// What a .plan states of its vehicle beside the options: its speed (the
+// exposure times' speed) unless --speed names one, and a note where the
+// mission's speed changes or its vehicle type is not the one checked.
+std::vector<std::string> plan_vehicle_notes(const PathFile& f, bool speed_given, rt::VehicleEnvelope& e) {
+  std::vector<std::string> notes;
+  if (f.format != PathFormat::qgc_plan) return notes;
+  const bool fixed_wing = e.type == rt::VehicleType::fixed_wing;
+  const std::optional<double>& speed = fixed_wing ? f.cruise_speed_m_per_s : f.hover_speed_m_per_s;
+  if (speed && !speed_given) {
+    e.speed_m_per_s = *speed;
+    notes.push_back(printed("speed %.1f m/s: the .plan's %s", *speed, fixed_wing ? "cruiseSpeed" : "hoverSpeed"));
+  }
+  if (f.speed_changes) {
+    notes.push_back(
+        printed("the mission changes speed (DO_CHANGE_SPEED): times are at %.1f m/s throughout", e.speed_m_per_s));
+  }
+  const bool plan_multirotor = multirotor_type(f.vehicle_type),
+             plan_fixed_wing = f.vehicle_type == mavlink::kTypeFixedWing;
+  if ((fixed_wing && plan_multirotor) || (!fixed_wing && plan_fixed_wing)) {
+    notes.push_back("the .plan is for a " + std::string(plan_multirotor ? "multirotor" : "fixed-wing") +
+                    " (vehicleType " + std::to_string(f.vehicle_type) + "); checked as " + rt::to_string(e.type) +
+                    " (--vehicle)");
+  }
+  return notes;
+}
+
+// Altitudes above home are the planned home's: an autopilot measures them
+// from where it is armed. The home's altitude against the terrain there.
+std::string home_note(const Vec3& home, const fields::Bounds2D& extent, const rt::PathChecker& checker) {
+  if (!extent.contains(home.x(), home.y())) {
+    return printed("altitudes above home: the planned home (%.1f, %.1f) lies outside the pack, its ground unchecked",
+                   home.x(), home.y());
+  }
+  const double ground = checker.ground_m(home.x(), home.y()), above = home.z() - ground;
+  std::string note =
+      printed("altitudes above home: the planned home's %.1f m, the terrain there %.1f m", home.z(), ground);
+  constexpr double kHomeToleranceM = 5.0;
+  if (std::fabs(above) > kHomeToleranceM) {
+    note += printed("; armed on that ground, the aircraft flies every waypoint %.1f m ", std::fabs(above));
+    note += above > 0 ? "lower than checked" : "higher than checked";
+  }
+  return note;
 }
 
 // Altitudes a path may name (m from the datum): the packs' heights lie
@@ -60,6 +125,7 @@ int run_check(const CheckOptions& o) {
   if (!envelope.ok()) return fail("check", envelope.status());
   Result<PathFile> file = read_path_file(o.path, p.pack->metadata().crs_wkt);
   if (!file.ok()) return fail("check", file.status());
+  std::vector<std::string> notes = plan_vehicle_notes(*file, o.envelope.speed_m_per_s.has_value(), *envelope);
   if (!file->has_heights) {
     return fail("check", invalid_argument(o.path + ": the path has no heights (x y z or a file with altitudes)"));
   }
@@ -115,6 +181,7 @@ int run_check(const CheckOptions& o) {
   spec.curvature_coeff = p.curvature_coeff;
   Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
   if (!checker.ok()) return fail("check", checker.status());
+  if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
   // samples every quarter post along the path, a sight line from each to
   // every observer: a path zigzagging across the pack millions of times, or
   // hundreds of observers of a long one, would take hours
@@ -135,18 +202,25 @@ int run_check(const CheckOptions& o) {
     j["pack"] = o.pack;
     j["path"] = o.path;
     j["per_vertex"] = vertices_json(c, path);
+    for (std::size_t i = 0; i < path.size(); ++i) {  // the file's vertex, null on a loiter's circle
+      const int v = flown->vertex_of[i];
+      j["per_vertex"][i]["file_vertex"] = v >= 0 ? nlohmann::json(v) : nlohmann::json();
+    }
     j["loiters"] = flown->loiters;
+    j["notes"] = notes;
     // the keys plan's summary has: a path checked had no rope run, so both
     // are its own F_c
     j["fc_start"] = c.fc;
     j["fc_end"] = c.fc;
     std::printf("%s\n", json_text(j, 2).c_str());
   } else {
-    std::printf("path       %s: %zu vertices, %.0f m, %.0f s at %.1f m/s (vehicle %s)\n", o.path.c_str(), path.size(),
-                c.length_m, c.duration_s, envelope->speed_m_per_s, envelope->name.c_str());
+    std::printf("path       %s: %zu vertices (%zu points flown), %.0f m, %.0f s at %.1f m/s (vehicle %s)\n",
+                o.path.c_str(), file->points.size(), path.size(), c.length_m, c.duration_s, envelope->speed_m_per_s,
+                envelope->name.c_str());
+    for (const std::string& n : notes) std::printf("note       %s\n", n.c_str());
     for (const std::string& l : flown->loiters) std::printf("loiter     %s\n", l.c_str());
     std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
-    print_vertices(c, path);
+    print_vertices(c, path, flown->vertex_of);
     print_check(c, *envelope);
   }
   return c.all_met ? kExitOk : kExitFailure;

@@ -13,6 +13,10 @@ constexpr double kTwoPi = 6.283185307179586;
 constexpr double kRadPerDeg = kTwoPi / 360.0;
 // Points closer than this horizontally are one spot (rt::kSameSpotM).
 constexpr double kSpotM = 0.01;
+// A turn radius the path's geometry decides (rt::turn_radii_m).
+constexpr double kGeometry = std::numeric_limits<double>::quiet_NaN();
+// The highest a loiter may be, m from the datum (as `check` takes vertices).
+constexpr double kMaxLoiterAltitudeM = 1e5;
 
 using Vec2 = Eigen::Vector2d;
 
@@ -55,21 +59,23 @@ double steepest_slope(const rt::VehicleEnvelope& e, double dz_m) {
   return std::tan(angle_deg * kRadPerDeg) * (1.0 - 1e-9);
 }
 
-// Turns the loiter takes before it leaves for the next vertex. LOITER_TO_ALT
-// climbs (or descends) on its leg in and then on the circle's polygon
-// (`turn_m` long a turn) at the vehicle's steepest slope.
-double loiter_turns(const LoiterItem& l, const rt::VehicleEnvelope& e, double radius_m, double dz_m, double leg_m,
-                    double turn_m) {
+// The turns a loiter item asks for (LOITER_TO_ALT: none; the altitude, which
+// every loiter reaches before it leaves, asks for its own).
+double loiter_turns(const LoiterItem& l, const rt::VehicleEnvelope& e, double radius_m) {
   switch (l.kind) {
     case LoiterKind::unlimited: return 1.0;
     case LoiterKind::turns: return l.amount;
     case LoiterKind::time: return l.amount * e.speed_m_per_s / (kTwoPi * radius_m);
-    case LoiterKind::to_altitude: {
-      const double slope = steepest_slope(e, dz_m);
-      return std::max(0.0, std::fabs(dz_m) - leg_m * slope) / slope / turn_m;
-    }
+    case LoiterKind::to_altitude: return 0.0;
   }
   return 0.0;
+}
+
+// A number for a message: 1 decimal, or 6 digits where that would be long.
+std::string describe_number(double v) {
+  char text[64];
+  std::snprintf(text, sizeof text, std::fabs(v) < 1e9 ? "%.1f" : "%.6g", v);
+  return text;
 }
 
 std::string describe(const LoiterItem& l, double turns, double radius_m, double sense, std::size_t points) {
@@ -83,9 +89,10 @@ class Flight {
  public:
   Flight(const PathFile& file, const rt::VehicleEnvelope& e) : file_(file), e_(e) {}
 
-  void add(const Vec3& p, double turn_radius_m = std::numeric_limits<double>::quiet_NaN()) {
+  void add(const Vec3& p, double turn_radius_m = kGeometry, int vertex = -1) {
     out_.points.push_back(p);
     out_.turn_radius_m.push_back(turn_radius_m);
+    out_.vertex_of.push_back(vertex);
   }
 
   // The heading the aircraft arrives with (east when it has not moved).
@@ -100,56 +107,81 @@ class Flight {
 
   // A loiter from where the aircraft is, towards `next` (or none).
   Status loiter(const LoiterItem& l, const Vec3& centre, const Vec3* next) {
-    const bool hover = e_.type == rt::VehicleType::multirotor;
-    const double radius_m = l.radius_m != 0 ? std::fabs(l.radius_m) : e_.min_turn_radius_m;
-    if (hover || radius_m < kSpotM) {
-      const Vec3 over(centre.x(), centre.y(), l.altitude_m);
-      if (out_.points.empty() || (out_.points.back() - over).norm() >= kSpotM) add(over);
-      char text[160];
-      std::snprintf(text, sizeof text, ": hovers at %.1f m", l.altitude_m);
-      out_.loiters.push_back(l.item + text);
-      return Status::ok_status();
+    if (!(std::fabs(l.altitude_m) <= kMaxLoiterAltitudeM)) {
+      return invalid_argument(l.item + ": altitude " + describe_number(l.altitude_m) + " m is beyond +-" +
+                              describe_number(kMaxLoiterAltitudeM / 1000) + " km of the datum");
     }
+    if (e_.type == rt::VehicleType::multirotor) return hover(l, centre);
+    const double radius_m = l.radius_m != 0 ? std::fabs(l.radius_m) : e_.min_turn_radius_m;
+    if (radius_m < kSpotM) return turn_on_the_spot(l, centre, radius_m);
     const Circle c{xy(centre), radius_m, l.radius_m < 0 ? 1.0 : -1.0};
     const Vec3 from = out_.points.empty() ? centre : out_.points.back();
     const double entry = tangent_angle(c, xy(from), true, heading());
     const double leg_m = (c.at(entry) - xy(from)).norm(), dz_m = l.altitude_m - from.z();
     // a turn of the polygon flown: its chords, kLoiterStepDeg of arc at most
-    const double chord_turn_m = kTwoPi * radius_m * std::sin(0.5 * kLoiterStepDeg * kRadPerDeg) /
-                                (0.5 * kLoiterStepDeg * kRadPerDeg);
-    const double turns = loiter_turns(l, e_, radius_m, dz_m, leg_m, chord_turn_m);
+    const double chord_turn_m =
+        kTwoPi * radius_m * std::sin(0.5 * kLoiterStepDeg * kRadPerDeg) / (0.5 * kLoiterStepDeg * kRadPerDeg);
+    // the turns the item asks for, or more: the loiter's altitude is reached
+    // on the circle (an autopilot climbs or descends there until it is)
+    const double slope = steepest_slope(e_, dz_m), sign = dz_m > 0 ? 1.0 : -1.0;
+    const double to_altitude = std::max(0.0, std::fabs(dz_m) - leg_m * slope) / slope / chord_turn_m;
+    const double turns = std::max(loiter_turns(l, e_, radius_m), to_altitude);
     if (!(turns <= kMaxLoiterTurns)) {
-      char text[160];
-      std::snprintf(text, sizeof text, ": %.0f turns of %.0f m; a check flies at most %.0f", turns, radius_m,
-                    kMaxLoiterTurns);
-      return invalid_argument(l.item + text);
+      return invalid_argument(l.item + ": " + describe_number(turns) + " turns of " + describe_number(radius_m) +
+                              " m; a check flies at most " + describe_number(kMaxLoiterTurns));
     }
     // the arc from the entry to the tangent towards the next vertex
     double exit_arc = 0;
+    bool exit_inside = false;
     if (next != nullptr) {
       const double exit = tangent_angle(c, xy(*next), false, c.velocity(entry));
       exit_arc = std::fmod(c.sense * (exit - entry) + 2 * kTwoPi, kTwoPi);
+      exit_inside = (xy(*next) - c.centre).norm() < radius_m - kSpotM;
     }
     const double sweep = turns * kTwoPi + exit_arc;
     const int steps = std::max(1, static_cast<int>(std::ceil(sweep / (kLoiterStepDeg * kRadPerDeg))));
-    // the altitude changes at the vehicle's steepest slope, from the leg in
-    // on, until the loiter's is reached
-    const double slope = steepest_slope(e_, dz_m), sign = dz_m > 0 ? 1.0 : -1.0;
     double z = from.z(), left_m = std::fabs(dz_m);
     auto climb_over = [&](double horizontal_m) {
       const double step = std::min(left_m, horizontal_m * slope);
       left_m -= step;
       z += sign * step;
     };
+    // the circle's points turn at its radius; where it is joined or left
+    // along a tangent the geometry judges the join, and from or towards a
+    // point inside the circle (straight out, straight in) it is the radius
+    const bool entry_inside = (xy(from) - c.centre).norm() < radius_m - kSpotM;
+    const int last_step = sweep > 0 ? steps : 0;
     const std::size_t first = out_.points.size();
     Vec2 last = xy(from);
-    for (int k = 0; k <= (sweep > 0 ? steps : 0); ++k) {
+    for (int k = 0; k <= last_step; ++k) {
       const Vec2 p = c.at(entry + c.sense * sweep * k / steps);
       climb_over((p - last).norm());
       last = p;
-      add({p.x(), p.y(), z}, radius_m);
+      const bool join = (k == 0 && !entry_inside) || (k == last_step && !exit_inside);
+      add({p.x(), p.y(), z}, join ? kGeometry : radius_m);
     }
     out_.loiters.push_back(describe(l, turns, radius_m, c.sense, out_.points.size() - first));
+    if (out_.points.size() > kMaxFlownPoints) {
+      return invalid_argument(l.item + ": the loiters so far fly more than " +
+                              describe_number(static_cast<double>(kMaxFlownPoints)) + " points; a check flies fewer");
+    }
+    return Status::ok_status();
+  }
+
+  // A multirotor stops over the point (climbing or descending on the spot).
+  Status hover(const LoiterItem& l, const Vec3& centre) {
+    const Vec3 over(centre.x(), centre.y(), l.altitude_m);
+    if (out_.points.empty() || (out_.points.back() - over).norm() >= kSpotM) add(over);
+    out_.loiters.push_back(l.item + ": hovers at " + describe_number(l.altitude_m) + " m");
+    return Status::ok_status();
+  }
+
+  // A fixed-wing asked for a circle too small to draw: a point that turns at
+  // that radius (min-turn-radius judges it).
+  Status turn_on_the_spot(const LoiterItem& l, const Vec3& centre, double radius_m) {
+    add({centre.x(), centre.y(), l.altitude_m}, radius_m);
+    out_.loiters.push_back(l.item + ": turns on the spot (radius " + describe_number(radius_m) + " m) at " +
+                           describe_number(l.altitude_m) + " m");
     return Status::ok_status();
   }
 
@@ -161,7 +193,7 @@ class Flight {
       while (next_loiter < file_.loiters.size() && file_.loiters[next_loiter].vertex == k) ++next_loiter;
       // a loiter's own vertex is its centre, which the aircraft circles
       const bool centre_only = first < next_loiter && !file_.loiters[first].over_waypoint;
-      if (!centre_only) add(v[k]);
+      if (!centre_only) add(v[k], kGeometry, static_cast<int>(k));
       for (std::size_t i = first; i < next_loiter; ++i) {
         const Vec3* next = k + 1 < v.size() ? &v[k + 1] : nullptr;
         VISVOL_RETURN_IF_ERROR(loiter(file_.loiters[i], v[k], next));

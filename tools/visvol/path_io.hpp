@@ -46,6 +46,7 @@
 
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -114,9 +115,17 @@ struct PathFile {
   bool has_heights = false;  // every point has a z
   std::vector<double> fp;    // F_p per point from the file (plan CSV, GeoJSON), or empty
   PathFormat format = PathFormat::text;
-  // .plan: the loiters, in mission order. A loiter over the last waypoint
-  // that a landing follows is the landing's approach and is not among them.
+  // .plan: the loiters, in mission order. A loiter over the last waypoint,
+  // at its altitude, that a landing follows is the landing's approach and is
+  // not among them.
   std::vector<LoiterItem> loiters;
+  // .plan: what the mission states of its vehicle (absent where it does not)
+  std::optional<double> cruise_speed_m_per_s, hover_speed_m_per_s;
+  int vehicle_type = -1;       // MAV_TYPE (1 fixed wing, 2 quadrotor...)
+  bool speed_changes = false;  // DO_CHANGE_SPEED items: the speed differs along the way
+  // .plan with altitudes above home: the planned home (pack CRS, altitude
+  // above mean sea level) they were lifted by
+  std::optional<Vec3> relative_home;
 };
 // At least 2 points, all finite, not all at one spot (within 1 cm), numbers
 // in decimal (text and CSV: no hexadecimal, inf or nan). crs_wkt is the pack's CRS: a GeoJSON or

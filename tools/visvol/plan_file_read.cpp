@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "path_io_detail.hpp"
 
@@ -41,7 +43,8 @@ bool integer_of(const nlohmann::json& j, long long& v) {
 }
 
 // mission.plannedHomePosition: [latitude, longitude, altitude above mean sea level].
-Status read_home_altitude(const nlohmann::json& mission, const std::string& where, double& altitude_m) {
+// The planned home: longitude, latitude, altitude (above mean sea level).
+Status read_home(const nlohmann::json& mission, const std::string& where, Vec3& lon_lat_alt) {
   const auto it = mission.find("plannedHomePosition");
   if (it == mission.end() || !it->is_array() || it->size() != 3) {
     return invalid_argument(where + "mission.plannedHomePosition is missing or not [latitude, longitude, altitude]");
@@ -52,8 +55,24 @@ Status read_home_altitude(const nlohmann::json& mission, const std::string& wher
                               " is not a finite number");
     }
   }
-  altitude_m = (*it)[2].get<double>();
+  const double lat = (*it)[0].get<double>(), lon = (*it)[1].get<double>();
+  if (std::fabs(lat) > 90 || std::fabs(lon) > 180) {
+    return invalid_argument(where + "mission.plannedHomePosition (" + shown(lat, 6) + ", " + shown(lon, 6) +
+                            ") is not a WGS84 latitude and longitude in degrees");
+  }
+  lon_lat_alt = {lon, lat, (*it)[2].get<double>()};
   return Status::ok_status();
+}
+
+// A speed the mission states (cruiseSpeed, hoverSpeed): none when absent or
+// null, a finite speed in (0, 1000] m/s otherwise.
+Result<std::optional<double>> read_speed(const nlohmann::json& mission, const char* key, const std::string& file) {
+  const auto it = mission.find(key);
+  if (it == mission.end() || it->is_null()) return std::optional<double>();
+  if (!it->is_number() || !(it->get<double>() > 0 && it->get<double>() <= 1000)) {
+    return invalid_argument(file + "mission." + key + " " + json_brief(*it) + " is not a speed in (0, 1000] m/s");
+  }
+  return std::optional<double>(it->get<double>());
 }
 
 // What a mission item is to the flown path, by its MAV_CMD number.
@@ -193,9 +212,20 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   PathFile out;
   out.format = PathFormat::qgc_plan;
   out.has_heights = true;
-  bool have_home = false;
+  std::optional<Vec3> home;         // longitude, latitude, altitude, once an item needs it
   std::string end_after_waypoints;  // an end item read after a waypoint (where, command), or empty
-  double home_altitude_m = 0;
+  bool landing_after_waypoints = false;
+  for (const auto& [key, speed] :
+       {std::pair{"cruiseSpeed", &out.cruise_speed_m_per_s}, std::pair{"hoverSpeed", &out.hover_speed_m_per_s}}) {
+    Result<std::optional<double>> read = read_speed(mission, key, file);
+    if (!read.ok()) return read.status();
+    *speed = *read;
+  }
+  long long vehicle_type = 0;
+  if (mission.contains("vehicleType") && integer_of(mission["vehicleType"], vehicle_type) && vehicle_type >= 0 &&
+      vehicle_type < 1000) {
+    out.vehicle_type = static_cast<int>(vehicle_type);
+  }
   for (std::size_t i = 0; i < items.size(); ++i) {
     const nlohmann::json& item = items[i];
     std::string where = file + "mission.items[" + std::to_string(i) + "]";
@@ -235,7 +265,12 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     // in the file (home and back, a climb out): the path read would skip them
     if (role == ItemRole::end && !out.points.empty()) {
       end_after_waypoints = where + "command " + std::to_string(command);
+      constexpr long long kLandLocal = 23;
+      landing_after_waypoints = landing_after_waypoints || command == mavlink::kCmdNavLand ||
+                                command == mavlink::kCmdNavVtolLand || command == kLandLocal;
     }
+    constexpr long long kDoChangeSpeed = 178;
+    if (command == kDoChangeSpeed) out.speed_changes = true;
     if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
     if (!end_after_waypoints.empty()) {
       return invalid_argument(end_after_waypoints +
@@ -268,15 +303,16 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     }
     double altitude_m = v[2];
     if (frame == mavlink::kFrameGlobalRelativeAlt || frame == mavlink::kFrameGlobalRelativeAltInt) {
-      if (!have_home) {
-        VISVOL_RETURN_IF_ERROR(read_home_altitude(mission,
-                                                  where + "frame " + std::to_string(frame) + " (" +
-                                                      frame_name(static_cast<int>(frame)) +
-                                                      ", above home) needs the home altitude: ",
-                                                  home_altitude_m));
-        have_home = true;
+      if (!home) {
+        Vec3 read;
+        VISVOL_RETURN_IF_ERROR(read_home(mission,
+                                         where + "frame " + std::to_string(frame) + " (" +
+                                             frame_name(static_cast<int>(frame)) +
+                                             ", above home) needs the home altitude: ",
+                                         read));
+        home = read;
       }
-      altitude_m += home_altitude_m;
+      altitude_m += home->z();
     } else if (frame != mavlink::kFrameGlobal && frame != mavlink::kFrameGlobalInt) {
       return invalid_argument(where + "frame " + std::to_string(frame) + " (" +
                               frame_name(frame >= 0 && frame < 64 ? static_cast<int>(frame) : -1) +
@@ -298,11 +334,13 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     }
     out.points.push_back({lon, lat, altitude_m});
   }
-  // a landing after the last waypoint: the loiters over it are its approach
-  // (visvol's own plans circle there), flown after the path ends
-  if (!end_after_waypoints.empty()) {
+  // a landing after the last waypoint: a loiter over it at its altitude is
+  // the landing's approach (visvol's own plans circle there), flown after
+  // the path ends; one at another altitude is flown
+  if (landing_after_waypoints) {
     while (!out.loiters.empty() && out.loiters.back().over_waypoint &&
-           out.loiters.back().vertex + 1 == out.points.size()) {
+           out.loiters.back().vertex + 1 == out.points.size() &&
+           out.loiters.back().altitude_m == out.points.back().z()) {
       out.loiters.pop_back();
     }
   }
@@ -317,9 +355,14 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                             "it to");
   }
   // altitudes above mean sea level: the DEM's heights, kept
+  if (home) out.points.push_back(*home);
   Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
   if (!projected.ok()) return projected.status().with_context(path);
   out.points = std::move(*projected);
+  if (home) {
+    out.relative_home = out.points.back();
+    out.points.pop_back();
+  }
   return out;
 }
 

@@ -138,6 +138,12 @@ TEST(WorstDecimals, AnUnmetWorstNeverPrintsAsTheLimit) {
   EXPECT_EQ(worst_decimals(clearance), 1);
   clearance.worst = 29.9996;
   EXPECT_EQ(worst_decimals(clearance), 4);
+  clearance.limit = 30.04;  // the limit is printed with the same decimals
+  clearance.worst = 30.02;
+  EXPECT_EQ(worst_decimals(clearance), 2);
+  clearance.limit = 80;  // a turn radius unmet by its 1e-6 tolerance
+  clearance.worst = 79.99999;
+  EXPECT_EQ(worst_decimals(clearance), 5);
   LimitResult climb;  // an upper limit
   climb.limit = 10;
   climb.worst = 10.004;
@@ -226,6 +232,9 @@ TEST(PathCheck, ClearanceIsExactBetweenSamples) {
     lowest = std::min(lowest, p.z() - checker->ground_m(p.x(), p.y()));
   }
   EXPECT_NEAR(d.envelope[0].worst, lowest, 1e-6);
+  // a segment far beyond the grid: the grid's lines only, at once
+  const PathCheck far = checker->check({from, Vec3(1e12, -1e12, 60.0)});
+  EXPECT_GT(far.length_m, 1e12);
 }
 
 TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {

@@ -1,5 +1,6 @@
 #include "rt/rope/envelope_fit.hpp"
 
+#include "rt/rope/fillet.hpp"
 #include "rt/rope/terrain_probe.hpp"
 
 #include <algorithm>
@@ -163,6 +164,23 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   return m;
 }
 
+// How far the arc a fixed-wing flies by vertex b on (rt/rope/fillet.hpp)
+// leaves the band, at the checker's samples along it.
+SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& a, const Vec3& b,
+                     const Vec3& c, double step_m) {
+  SegmentMiss m;
+  const std::optional<Fillet> f = fillet(a, b, c, s.envelope.min_turn_radius_m);
+  if (!f) return m;
+  const int k = std::max(2, static_cast<int>(std::ceil(f->length_m() / step_m)));
+  for (int q = 1; q < k; ++q) {
+    const Vec3 p = f->at(static_cast<double>(q) / k);
+    const Band band = band_at(s, t, p.x(), p.y());
+    m.deficit = std::max(m.deficit, band.lo - p.z());
+    m.excess = std::max(m.excess, p.z() - band.hi);
+  }
+  return m;
+}
+
 }  // namespace
 
 EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
@@ -230,6 +248,21 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
       set_band(i + 1);
       changed = true;
       break;  // heights again with the new vertex
+    }
+    // the arcs inside the corners: the vertex moves by twice the miss (an
+    // arc's heights follow at least half of its vertex's move); where it
+    // cannot, the fit is not feasible
+    for (std::size_t i = 1; !changed && i + 1 < p.size(); ++i) {
+      const SegmentMiss m = arc_miss(spec, terrain, fitted[i - 1], fitted[i], fitted[i + 1], step);
+      if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
+      feasible = false;
+      if (m.deficit > 1e-6) {
+        const double raised = std::min(z[i] + 2 * m.deficit, hi[i]);
+        if (raised > lo[i] + 1e-9) lo[i] = raised, changed = true;
+      } else {
+        const double lowered = std::max(z[i] - 2 * m.excess, lo[i]);
+        if (lowered < hi[i] - 1e-9) hi[i] = lowered, changed = true;
+      }
     }
     if (!changed) {
       for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];

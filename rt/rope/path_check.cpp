@@ -4,9 +4,11 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "fields/exact_visibility.hpp"
+#include "rt/rope/fillet.hpp"
 #include "rt/rope/terrain_probe.hpp"
 
 namespace visvol::rt {
@@ -34,6 +36,12 @@ struct Tally {
     return failed ? std::min(f, std::nextafter(1.0, 0.0)) : f;
   }
 };
+
+// Samples `step_m` apart along a fillet, its ends (on the segments) left out.
+int fillet_samples(const Fillet& f, double step_m) {
+  const double wanted = std::ceil(f.length_m() / step_m);
+  return wanted >= 1 ? static_cast<int>(std::min(wanted, double(PathChecker::kMaxSegmentSamples))) : 1;
+}
 
 LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t,
                   bool lower = false) {
@@ -147,6 +155,10 @@ double PathChecker::sample_count(const std::vector<Vec3>& path) const {
     if (!path[s].allFinite() || !path[s + 1].allFinite()) return std::numeric_limits<double>::infinity();
     total += std::ceil((path[s + 1] - path[s]).norm() / spec_.sample_step_m);
   }
+  for (std::size_t i = 1; i + 1 < path.size(); ++i) {
+    const std::optional<Fillet> f = fillet(path[i - 1], path[i], path[i + 1], spec_.envelope.min_turn_radius_m);
+    if (f) total += std::ceil(f->length_m() / spec_.sample_step_m);
+  }
   return total;
 }
 
@@ -214,6 +226,16 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     steepest_descent = std::max(steepest_descent, -angle);
     climb.add(angle <= e.max_climb_deg + kAngleTolDeg, len);
     descent.add(-angle <= e.max_descent_deg + kAngleTolDeg, len);
+  }
+
+  // a fixed-wing flies by a vertex on an arc inside the corner: its
+  // samples judge everything the segments' do, at no share of the length
+  // (they can only fail a requirement)
+  for (int i = 1; i + 1 < count; ++i) {
+    const std::optional<Fillet> f = fillet(v[i - 1], v[i], v[i + 1], e.min_turn_radius_m);
+    if (!f) continue;
+    const int m = fillet_samples(*f, spec_.sample_step_m);
+    for (int k = 1; k < m; ++k) sample(f->at(static_cast<double>(k) / m), 0.0, nullptr);
   }
 
   out.per_vertex.resize(static_cast<std::size_t>(count));

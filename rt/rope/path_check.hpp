@@ -15,6 +15,11 @@
 // - Climb and descent: every segment's angle from the horizontal.
 // - Turn radius: the largest flyable fillet at every interior vertex
 //   (turn_radii_m below), weighted by half of each neighbouring segment.
+// - The arc a fixed-wing flies by each interior vertex on (inside the
+//   corner, tangent to both segments at the envelope's min_turn_radius_m, or
+//   the largest radius half of each segment leaves room for): sampled like
+//   the segments for every constraint and limit, at no share of the length
+//   (a failure there fails the requirement).
 // - Planning bounds: the samples inside the trusted region.
 // A requirement is met when every sample, segment or vertex satisfies it
 // (satisfied_fraction == 1).

@@ -237,6 +237,34 @@ TEST(PathCheck, ClearanceIsExactBetweenSamples) {
   EXPECT_GT(far.length_m, 1e12);
 }
 
+// A fixed-wing flies by a corner on an arc inside it, at its min-turn-radius
+// (or what the segments leave room for): a tall post there, away from both
+// segments, fails the clearance; a multirotor turns on the corner and does not.
+TEST(PathCheck, AFixedWingsArcInsideACornerIsChecked) {
+  fields::Heightfield t = blank(40, 40, 10.0, 0.0f);
+  t.at(18, 22) = 150.0f;  // 28 m from the corner along its bisector, 20 m from each leg
+  const Vec3 corner{t.x_of(20), t.y_of(20), 110.0};
+  const std::vector<Vec3> path = {corner + Vec3(-150, 0, 0), corner, corner + Vec3(0, -150, 0)};
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");  // 80 m turns: the arc is 75 m, half of each leg
+  s.envelope.max_climb_deg = s.envelope.max_descent_deg = 45;
+  const auto fixed_wing = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(fixed_wing.ok()) << fixed_wing.status().message();
+  const PathCheck flown_by = fixed_wing->check(path);
+  EXPECT_FALSE(flown_by.envelope[0].met);
+  EXPECT_LT(flown_by.envelope[0].worst, 30.0);
+  EXPECT_LT(fraction_shown(flown_by.envelope[0].satisfied_fraction), 1.0);
+  EXPECT_NEAR(flown_by.length_m, 300.0, 1e-9);                 // the arc takes no share of the length
+  EXPECT_GT(fixed_wing->sample_count(path), 300.0 / 2.5 + 3);  // the arc's samples counted too
+  s.envelope = *vehicle_preset("multirotor");
+  s.envelope.clearance_m = 30;
+  const auto multirotor = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(multirotor.ok());
+  const PathCheck on_the_corner = multirotor->check(path);
+  EXPECT_TRUE(on_the_corner.envelope[0].met) << on_the_corner.envelope[0].worst;
+  EXPECT_NEAR(on_the_corner.envelope[0].worst, 110.0, 1e-9);
+}
+
 TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
   PathCheckSpec s = spec();
   s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 99.0), 2.0}};  // 1 m under the plain

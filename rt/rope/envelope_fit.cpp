@@ -164,19 +164,21 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   return m;
 }
 
-// How far the arc a fixed-wing flies by vertex b on (rt/rope/fillet.hpp)
+// How far an arc a fixed-wing flies by a corner on (rt/rope/fillet.hpp)
 // leaves the band, at the checker's samples along it.
-SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& a, const Vec3& b,
-                     const Vec3& c, double step_m) {
+SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Fillet& f, double step_m) {
   SegmentMiss m;
-  const std::optional<Fillet> f = fillet(a, b, c, s.envelope.min_turn_radius_m);
-  if (!f) return m;
-  const int k = std::max(2, static_cast<int>(std::ceil(f->length_m() / step_m)));
-  for (int q = 1; q < k; ++q) {
-    const Vec3 p = f->at(static_cast<double>(q) / k);
+  const int k = std::max(2, static_cast<int>(std::ceil(f.length_m() / step_m)));
+  auto judge = [&](const Vec3& p) {
     const Band band = band_at(s, t, p.x(), p.y());
     m.deficit = std::max(m.deficit, band.lo - p.z());
     m.excess = std::max(m.excess, p.z() - band.hi);
+  };
+  for (int q = 1; q < k; ++q) judge(f.at(static_cast<double>(q) / k));
+  // between the samples where the terrain is extreme (the checker's probes)
+  for (int q = 0; q < k; ++q) {
+    for_each_terrain_probe(t, f.at(static_cast<double>(q) / k), f.at(static_cast<double>(q + 1) / k),
+                           [&](const Vec3& p, double) { judge(p); });
   }
   return m;
 }
@@ -252,8 +254,12 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
     // the arcs inside the corners: the vertex moves by twice the miss (an
     // arc's heights follow at least half of its vertex's move); where it
     // cannot, the fit is not feasible
+    const std::vector<std::optional<Fillet>> arcs =
+        changed ? std::vector<std::optional<Fillet>>()
+                : corner_fillets(fitted.data(), static_cast<int>(fitted.size()), spec.envelope.min_turn_radius_m);
     for (std::size_t i = 1; !changed && i + 1 < p.size(); ++i) {
-      const SegmentMiss m = arc_miss(spec, terrain, fitted[i - 1], fitted[i], fitted[i + 1], step);
+      if (!arcs[i]) continue;
+      const SegmentMiss m = arc_miss(spec, terrain, *arcs[i], step);
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;
       if (m.deficit > 1e-6) {

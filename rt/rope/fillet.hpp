@@ -6,17 +6,16 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <vector>
 
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/rope.hpp"
 
 namespace visvol::rt {
 
-// The arc a fixed-wing flies through vertex b, from segment a-b to b-c, at
-// `radius_m` (fly-by: tangent to both segments, inside the corner), or at
-// the largest radius half of each segment leaves room for; heights follow
-// the segments' halves. None for a straight continuation, a repeated spot
-// or no radius.
+// The arc a fixed-wing flies by a corner on: tangent to the segment in and
+// the segment out, inside the corner, at a radius; heights follow the two
+// segments.
 struct Fillet {
   Eigen::Vector2d centre;
   double radius_m = 0, start_rad = 0, turn_rad = 0, sense = 1;  // sense +1 counter-clockwise
@@ -30,25 +29,61 @@ struct Fillet {
   }
 };
 
-inline std::optional<Fillet> fillet(const Vec3& a, const Vec3& b, const Vec3& c, double radius_m) {
-  const Eigen::Vector2d u(b.x() - a.x(), b.y() - a.y()), w(c.x() - b.x(), c.y() - b.y());
+// The arc from segment a-b_in to b_out-c (b_in and b_out one spot: the same
+// vertex, or the ends of a run on it) at `radius_m`, its tangent points no
+// farther from the corner than the segments are long. None for a
+// straight continuation or no radius.
+inline std::optional<Fillet> fillet(const Vec3& a, const Vec3& b_in, const Vec3& b_out, const Vec3& c,
+                                    double radius_m) {
+  const Eigen::Vector2d u(b_in.x() - a.x(), b_in.y() - a.y()), w(c.x() - b_out.x(), c.y() - b_out.y());
   const double lu = u.norm(), lw = w.norm();
   if (!(radius_m > 0) || lu < kSameSpotM || lw < kSameSpotM) return std::nullopt;
   const double turn = std::acos(std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0));
   if (turn < 1e-6) return std::nullopt;
   const double t = std::tan(0.5 * std::min(turn, M_PI - 1e-6));
-  const double d = std::min(radius_m * t, 0.5 * std::min(lu, lw));  // from the vertex to each tangent point
+  const double d = std::min({radius_m * t, lu, lw});  // from the corner to each tangent point
   Fillet f;
   f.radius_m = d / t;
   f.turn_rad = turn;
   f.sense = u.x() * w.y() - u.y() * w.x() > 0 ? 1.0 : -1.0;
-  const Eigen::Vector2d start = Eigen::Vector2d(b.x(), b.y()) - u / lu * d;
+  const Eigen::Vector2d start = Eigen::Vector2d(b_in.x(), b_in.y()) - u / lu * d;
   const Eigen::Vector2d inward = f.sense * Eigen::Vector2d(-u.y(), u.x()) / lu;  // towards the turn's centre
   f.centre = start + inward * f.radius_m;
   f.start_rad = std::atan2(start.y() - f.centre.y(), start.x() - f.centre.x());
-  f.z_start_m = b.z() - (b.z() - a.z()) * d / lu;
-  f.z_end_m = b.z() + (c.z() - b.z()) * d / lw;
+  f.z_start_m = b_in.z() - (b_in.z() - a.z()) * d / lu;
+  f.z_end_m = b_out.z() + (c.z() - b_out.z()) * d / lw;
   return f;
+}
+
+// The arcs a fixed-wing of turns no tighter than `min_radius_m` flies by a
+// path's corners on, one per corner at the first vertex of its spot (a run
+// of vertices within kSameSpotM horizontally is one corner, as in
+// turn_radii_m): each at the smaller of min_radius_m and the radius the
+// corner's segments leave room for (turn_radii_m's, the radius a check
+// judges flyable). None where the path runs straight, and none at all
+// without a turn limit.
+inline std::vector<std::optional<Fillet>> corner_fillets(const Vec3* v, int count, double min_radius_m) {
+  const std::size_t n = count > 0 ? static_cast<std::size_t>(count) : 0;
+  std::vector<std::optional<Fillet>> out(n);
+  if (!(min_radius_m > 0) || n < 3) return out;
+  const std::vector<double> room = turn_radii_m(v, count);
+  auto same_spot = [&](std::size_t i, std::size_t j) {
+    return std::hypot(v[i].x() - v[j].x(), v[i].y() - v[j].y()) < kSameSpotM;
+  };
+  for (std::size_t first = 1; first + 1 < n;) {
+    std::size_t last = first;  // the run of vertices on this spot
+    while (last + 1 < n && same_spot(last + 1, first)) ++last;
+    if (last + 1 >= n) break;        // the path's end
+    std::size_t before = first - 1;  // the spot before: its last vertex
+    if (same_spot(before, first)) {  // the run started at the path's start
+      first = last + 1;
+      continue;
+    }
+    const double radius = std::min(min_radius_m, room[first]);
+    out[first] = fillet(v[before], v[first], v[last], v[last + 1], radius);
+    first = last + 1;
+  }
+  return out;
 }
 
 }  // namespace visvol::rt

@@ -155,8 +155,8 @@ double PathChecker::sample_count(const std::vector<Vec3>& path) const {
     if (!path[s].allFinite() || !path[s + 1].allFinite()) return std::numeric_limits<double>::infinity();
     total += std::ceil((path[s + 1] - path[s]).norm() / spec_.sample_step_m);
   }
-  for (std::size_t i = 1; i + 1 < path.size(); ++i) {
-    const std::optional<Fillet> f = fillet(path[i - 1], path[i], path[i + 1], spec_.envelope.min_turn_radius_m);
+  for (const std::optional<Fillet>& f :
+       corner_fillets(path.data(), static_cast<int>(path.size()), spec_.envelope.min_turn_radius_m)) {
     if (f) total += std::ceil(f->length_m() / spec_.sample_step_m);
   }
   return total;
@@ -196,6 +196,16 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     }
   };
 
+  // where the height above the terrain is extreme between samples (no share
+  // of the length: it can only fail clearance or max-agl)
+  auto terrain_probe = [&](const Vec3& p, double) {
+    const double h = p.z() - ground_m(p.x(), p.y());
+    lowest = std::min(lowest, h);
+    highest_agl = std::max(highest_agl, h);
+    clearance.probe(h >= e.clearance_m - kHeightTolM);
+    agl.probe(h <= e.max_agl_m + kHeightTolM);
+  };
+
   // samples along every segment, trapezoid weights by length
   for (int s = 0; s + 1 < count; ++s) {
     const Vec3 a = v[s], b = v[s + 1];
@@ -213,13 +223,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
                                               : nullptr;
       sample(p, w, at_vertex);
     }
-    for_each_terrain_probe(terrain_, a, b, [&](const Vec3& p, double) {
-      const double h = p.z() - ground_m(p.x(), p.y());
-      lowest = std::min(lowest, h);
-      highest_agl = std::max(highest_agl, h);
-      clearance.probe(h >= e.clearance_m - kHeightTolM);
-      agl.probe(h <= e.max_agl_m + kHeightTolM);
-    });
+    for_each_terrain_probe(terrain_, a, b, terrain_probe);
     const double horizontal = std::hypot(b.x() - a.x(), b.y() - a.y());
     const double angle = len > 1e-9 ? std::atan2(b.z() - a.z(), horizontal) * kDegPerRad : 0.0;
     steepest_climb = std::max(steepest_climb, angle);
@@ -231,11 +235,16 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // a fixed-wing flies by a vertex on an arc inside the corner: its
   // samples judge everything the segments' do, at no share of the length
   // (they can only fail a requirement)
-  for (int i = 1; i + 1 < count; ++i) {
-    const std::optional<Fillet> f = fillet(v[i - 1], v[i], v[i + 1], e.min_turn_radius_m);
+  // and the lowest and highest above the terrain along the arc's chords
+  // between those samples, exactly (within millimetres of the arc)
+  for (const std::optional<Fillet>& f : corner_fillets(v, count, e.min_turn_radius_m)) {
     if (!f) continue;
     const int m = fillet_samples(*f, spec_.sample_step_m);
     for (int k = 1; k < m; ++k) sample(f->at(static_cast<double>(k) / m), 0.0, nullptr);
+    for (int k = 0; k < m; ++k) {
+      for_each_terrain_probe(terrain_, f->at(static_cast<double>(k) / m), f->at(static_cast<double>(k + 1) / m),
+                             terrain_probe);
+    }
   }
 
   out.per_vertex.resize(static_cast<std::size_t>(count));

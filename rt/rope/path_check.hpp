@@ -15,11 +15,14 @@
 // - Climb and descent: every segment's angle from the horizontal.
 // - Turn radius: the largest flyable fillet at every interior vertex
 //   (turn_radii_m below), weighted by half of each neighbouring segment.
-// - The arc a fixed-wing flies by each interior vertex on (inside the
-//   corner, tangent to both segments at the envelope's min_turn_radius_m, or
-//   the largest radius half of each segment leaves room for): sampled like
-//   the segments for every constraint and limit, at no share of the length
-//   (a failure there fails the requirement).
+// - The arc a fixed-wing flies by each corner on (inside it, tangent to both
+//   segments, at the envelope's min_turn_radius_m or the smaller radius the
+//   segments leave room for, turn_radii_m's; a run of vertices on one spot
+//   is one corner: rt/rope/fillet.hpp): its samples judge the constraints,
+//   clearance, max-agl, max-altitude and the bounds (clearance and max-agl
+//   exactly along its chords), at no share of the length, so a failure only
+//   there reads "holds on 0.999 of the length", NOT MET. Climb and turn
+//   are judged on the segments and vertices only.
 // - Planning bounds: the samples inside the trusted region.
 // A requirement is met when every sample, segment or vertex satisfies it
 // (satisfied_fraction == 1).

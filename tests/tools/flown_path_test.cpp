@@ -174,11 +174,14 @@ TEST(FlownPath, OverAWaypointAndHovering) {
   f.loiters[1].radius_m = -100;
   Result<FlownPath> reverse = fly_path(f, fixed_wing());
   ASSERT_TRUE(reverse.ok());
-  bool geometry_inside = false;
-  for (std::size_t k = 3; k + 2 < reverse->points.size(); ++k) {
-    geometry_inside = geometry_inside || std::isnan(reverse->turn_radius_m[k]);
+  // the second begins where the first left its circle: both points there
+  int reversals = 0;
+  for (std::size_t k = 2; k + 1 < reverse->points.size(); ++k) {
+    if ((reverse->points[k] - reverse->points[k + 1]).norm() > 1e-9) continue;
+    ++reversals;
+    EXPECT_TRUE(std::isnan(reverse->turn_radius_m[k]) && std::isnan(reverse->turn_radius_m[k + 1])) << k;
   }
-  EXPECT_TRUE(geometry_inside);
+  EXPECT_EQ(reversals, 1);
   // all loiters together fly a bounded number of points
   f.loiters.assign(40, loiter(LoiterKind::turns, 100, 1000, 100));
   for (LoiterItem& many : f.loiters) {

@@ -517,12 +517,14 @@ TEST_F(PathIo, PlanLoitersAreReadWithTheirCircles) {
   const std::string rtl = waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch);
   const std::string circle_at_b = item(31, "0,80,0,0,37.789,-122.429,60");
   const std::string circle_below_b = item(31, "0,80,0,0,37.789,-122.429,20");
+  const std::string turns_at_b = item(18, "50,0,3000,0,37.789,-122.429,60");
   const struct {
     std::string items;
     std::size_t loiters;
   } ends[] = {{a + "," + b + "," + circle_at_b + "," + land, 0},
               {a + "," + b + "," + circle_below_b + "," + land, 1},
-              {a + "," + b + "," + circle_at_b + "," + rtl, 1}};
+              {a + "," + b + "," + circle_at_b + "," + rtl, 1},
+              {a + "," + b + "," + turns_at_b + "," + land, 1}};  // only LOITER_TO_ALT is an approach
   for (const auto& e : ends) {
     Result<PathFile> read = read_path_file(file_with("end.plan", plan_text(e.items)), wkt_);
     ASSERT_TRUE(read.ok()) << read.status().message();

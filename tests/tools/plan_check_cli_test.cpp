@@ -233,13 +233,16 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
             std::string::npos)
       << noted.out;
   const Outcome given = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing --speed 30");
-  EXPECT_EQ(given.out.find("cruiseSpeed"), std::string::npos) << given.out;
+  EXPECT_NE(given.out.find("note       speed 30.0 m/s (--speed); the .plan's cruiseSpeed is 12.5 m/s"),
+            std::string::npos)
+      << given.out;
   EXPECT_NE(given.out.find("at 30.0 m/s"), std::string::npos) << given.out;
   stated["mission"]["cruiseSpeed"] = -3;
   std::ofstream(plan) << stated.dump(2);
   const Outcome bad_speed = visvol("check " + *pack_ + " " + plan);
   EXPECT_EQ(bad_speed.status, 2);
-  EXPECT_NE(bad_speed.err.find("mission.cruiseSpeed -3 is not a speed"), std::string::npos) << bad_speed.err;
+  EXPECT_NE(bad_speed.err.find("mission.cruiseSpeed -3 is not a speed in [0.1, 1000] m/s"), std::string::npos)
+      << bad_speed.err;
   std::ofstream(plan) << mission_with(-120.0).dump(2);
   const Outcome wide = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing --json");
   ASSERT_TRUE(wide.status == 0 || wide.status == 1) << wide.err;

@@ -72,14 +72,21 @@ __attribute__((format(printf, 1, 2))) std::string printed(const char* format, ..
 // What a .plan states of its vehicle beside the options: its speed (the
 // exposure times' speed) unless --speed names one, and a note where the
 // mission's speed changes or its vehicle type is not the one checked.
-std::vector<std::string> plan_vehicle_notes(const PathFile& f, bool speed_given, rt::VehicleEnvelope& e) {
+std::vector<std::string> plan_vehicle_notes(const PathFile& f, const EnvelopeOptions& given, rt::VehicleEnvelope& e) {
   std::vector<std::string> notes;
   if (f.format != PathFormat::qgc_plan) return notes;
   const bool fixed_wing = e.type == rt::VehicleType::fixed_wing;
   const std::optional<double>& speed = fixed_wing ? f.cruise_speed_m_per_s : f.hover_speed_m_per_s;
-  if (speed && !speed_given) {
+  const char* key = fixed_wing ? "cruiseSpeed" : "hoverSpeed";
+  // a preset's speed is a default, the mission's is this flight's; --speed
+  // or a vehicle file's is the user's
+  const bool preset = given.vehicle == "fixed-wing" || given.vehicle == "multirotor";
+  if (speed && preset && !given.speed_m_per_s) {
     e.speed_m_per_s = *speed;
-    notes.push_back(printed("speed %.1f m/s: the .plan's %s", *speed, fixed_wing ? "cruiseSpeed" : "hoverSpeed"));
+    notes.push_back(printed("speed %.1f m/s: the .plan's %s", *speed, key));
+  } else if (speed && std::fabs(*speed - e.speed_m_per_s) > 1e-9) {
+    notes.push_back(printed("speed %.1f m/s (%s); the .plan's %s is %.1f m/s", e.speed_m_per_s,
+                            given.speed_m_per_s ? "--speed" : "the vehicle file", key, *speed));
   }
   if (f.speed_changes) {
     notes.push_back(
@@ -125,7 +132,7 @@ int run_check(const CheckOptions& o) {
   if (!envelope.ok()) return fail("check", envelope.status());
   Result<PathFile> file = read_path_file(o.path, p.pack->metadata().crs_wkt);
   if (!file.ok()) return fail("check", file.status());
-  std::vector<std::string> notes = plan_vehicle_notes(*file, o.envelope.speed_m_per_s.has_value(), *envelope);
+  std::vector<std::string> notes = plan_vehicle_notes(*file, o.envelope, *envelope);
   if (!file->has_heights) {
     return fail("check", invalid_argument(o.path + ": the path has no heights (x y z or a file with altitudes)"));
   }

@@ -115,9 +115,9 @@ struct PathFile {
   bool has_heights = false;  // every point has a z
   std::vector<double> fp;    // F_p per point from the file (plan CSV, GeoJSON), or empty
   PathFormat format = PathFormat::text;
-  // .plan: the loiters, in mission order. A loiter over the last waypoint,
-  // at its altitude, that a landing follows is the landing's approach and is
-  // not among them.
+  // .plan: the loiters, in mission order. A LOITER_TO_ALT over the last
+  // waypoint, at its altitude, that a landing follows is the landing's
+  // approach and is not among them.
   std::vector<LoiterItem> loiters;
   // .plan: what the mission states of its vehicle (absent where it does not)
   std::optional<double> cruise_speed_m_per_s, hover_speed_m_per_s;

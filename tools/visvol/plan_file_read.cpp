@@ -65,12 +65,12 @@ Status read_home(const nlohmann::json& mission, const std::string& where, Vec3& 
 }
 
 // A speed the mission states (cruiseSpeed, hoverSpeed): none when absent or
-// null, a finite speed in (0, 1000] m/s otherwise.
+// null, a speed in [0.1, 1000] m/s (a vehicle's range) otherwise.
 Result<std::optional<double>> read_speed(const nlohmann::json& mission, const char* key, const std::string& file) {
   const auto it = mission.find(key);
   if (it == mission.end() || it->is_null()) return std::optional<double>();
-  if (!it->is_number() || !(it->get<double>() > 0 && it->get<double>() <= 1000)) {
-    return invalid_argument(file + "mission." + key + " " + json_brief(*it) + " is not a speed in (0, 1000] m/s");
+  if (!it->is_number() || !(it->get<double>() >= 0.1 && it->get<double>() <= 1000)) {
+    return invalid_argument(file + "mission." + key + " " + json_brief(*it) + " is not a speed in [0.1, 1000] m/s");
   }
   return std::optional<double>(it->get<double>());
 }
@@ -334,12 +334,12 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     }
     out.points.push_back({lon, lat, altitude_m});
   }
-  // a landing after the last waypoint: a loiter over it at its altitude is
-  // the landing's approach (visvol's own plans circle there), flown after
-  // the path ends; one at another altitude is flown
+  // a landing after the last waypoint: a LOITER_TO_ALT over it at its
+  // altitude is the landing's approach (visvol's own plans circle there),
+  // flown after the path ends; any other loiter there is flown
   if (landing_after_waypoints) {
     while (!out.loiters.empty() && out.loiters.back().over_waypoint &&
-           out.loiters.back().vertex + 1 == out.points.size() &&
+           out.loiters.back().kind == LoiterKind::to_altitude && out.loiters.back().vertex + 1 == out.points.size() &&
            out.loiters.back().altitude_m == out.points.back().z()) {
       out.loiters.pop_back();
     }

@@ -242,11 +242,15 @@ TEST(PathCheck, ClearanceIsExactBetweenSamples) {
 // segments, fails the clearance; a multirotor turns on the corner and does not.
 TEST(PathCheck, AFixedWingsArcInsideACornerIsChecked) {
   fields::Heightfield t = blank(40, 40, 10.0, 0.0f);
-  t.at(18, 22) = 150.0f;  // 28 m from the corner along its bisector, 20 m from each leg
+  // a block 20 to 30 m from the corner along both legs, 20 m from each: the
+  // 80 m arc passes 33 m from the corner along its bisector, over it
+  for (int i : {17, 18}) {
+    for (int j : {22, 23}) t.at(i, j) = 150.0f;
+  }
   const Vec3 corner{t.x_of(20), t.y_of(20), 110.0};
   const std::vector<Vec3> path = {corner + Vec3(-150, 0, 0), corner, corner + Vec3(0, -150, 0)};
   PathCheckSpec s;
-  s.envelope = *vehicle_preset("fixed-wing");  // 80 m turns: the arc is 75 m, half of each leg
+  s.envelope = *vehicle_preset("fixed-wing");  // 80 m turns, room for them on the 150 m legs
   s.envelope.max_climb_deg = s.envelope.max_descent_deg = 45;
   const auto fixed_wing = PathChecker::create(t, nullptr, s);
   ASSERT_TRUE(fixed_wing.ok()) << fixed_wing.status().message();
@@ -256,6 +260,13 @@ TEST(PathCheck, AFixedWingsArcInsideACornerIsChecked) {
   EXPECT_LT(fraction_shown(flown_by.envelope[0].satisfied_fraction), 1.0);
   EXPECT_NEAR(flown_by.length_m, 300.0, 1e-9);                 // the arc takes no share of the length
   EXPECT_GT(fixed_wing->sample_count(path), 300.0 / 2.5 + 3);  // the arc's samples counted too
+  // the same corner through a repeated waypoint
+  const std::vector<Vec3> repeated = {path[0], corner, corner + Vec3(0, 0, 5), path[2]};
+  EXPECT_FALSE(fixed_wing->check(repeated).envelope[0].met);
+  // legs too short for 80 m: the arc at the radius they leave room for (a
+  // straight neighbour's leg whole), inside the block's reach no more
+  const std::vector<Vec3> short_legs = {corner + Vec3(-20, 0, 0), corner, corner + Vec3(0, -20, 0)};
+  EXPECT_TRUE(fixed_wing->check(short_legs).envelope[0].met);
   s.envelope = *vehicle_preset("multirotor");
   s.envelope.clearance_m = 30;
   const auto multirotor = PathChecker::create(t, nullptr, s);

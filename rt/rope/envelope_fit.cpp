@@ -164,6 +164,13 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   return m;
 }
 
+// An arc whose heights follow less of its corner's move than this is moved
+// as if they followed this much: the band then ends the fit (not feasible)
+// in a few passes rather than creeping.
+constexpr double kMinCornerShare = 0.1;
+
+bool same_spot(const Vec3& a, const Vec3& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()) < kSameSpotM; }
+
 // How far an arc a fixed-wing flies by a corner on (rt/rope/fillet.hpp)
 // leaves the band, at the checker's samples along it.
 SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Fillet& f, double step_m) {
@@ -251,9 +258,10 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
       changed = true;
       break;  // heights again with the new vertex
     }
-    // the arcs inside the corners: the vertex moves by twice the miss (an
-    // arc's heights follow at least half of its vertex's move); where it
-    // cannot, the fit is not feasible
+    // the arcs inside the corners: the corner (every vertex on its spot)
+    // moves by the miss over the share of that move the arc's heights
+    // follow; where it cannot (an arc that spans a segment follows the
+    // ends), the fit is not feasible
     const std::vector<std::optional<Fillet>> arcs =
         changed ? std::vector<std::optional<Fillet>>()
                 : corner_fillets(fitted.data(), static_cast<int>(fitted.size()), spec.envelope.min_turn_radius_m);
@@ -262,12 +270,15 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
       const SegmentMiss m = arc_miss(spec, terrain, *arcs[i], step);
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;
-      if (m.deficit > 1e-6) {
-        const double raised = std::min(z[i] + 2 * m.deficit, hi[i]);
-        if (raised > lo[i] + 1e-9) lo[i] = raised, changed = true;
-      } else {
-        const double lowered = std::max(z[i] - 2 * m.excess, lo[i]);
-        if (lowered < hi[i] - 1e-9) hi[i] = lowered, changed = true;
+      const double follow = std::max(arcs[i]->corner_share, kMinCornerShare);
+      for (std::size_t j = i; j + 1 < p.size() && (j == i || same_spot(p[j], p[i])); ++j) {
+        if (m.deficit > 1e-6) {
+          const double raised = std::min(z[j] + m.deficit / follow, hi[j]);
+          if (raised > lo[j] + 1e-9) lo[j] = raised, changed = true;
+        } else {
+          const double lowered = std::max(z[j] - m.excess / follow, lo[j]);
+          if (lowered < hi[j] - 1e-9) hi[j] = lowered, changed = true;
+        }
       }
     }
     if (!changed) {

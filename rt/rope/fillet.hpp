@@ -20,6 +20,10 @@ struct Fillet {
   Eigen::Vector2d centre;
   double radius_m = 0, start_rad = 0, turn_rad = 0, sense = 1;  // sense +1 counter-clockwise
   double z_start_m = 0, z_end_m = 0;
+  // The least share of a move of the corner's height that the arc's heights
+  // follow (1 - the tangent points' distance from the corner over the
+  // segment's length, the smaller of the two; 0 where an arc spans a segment).
+  double corner_share = 1;
   double length_m() const { return radius_m * turn_rad; }
   // The point a fraction f (0..1) along the arc.
   Vec3 at(double f) const {
@@ -52,6 +56,7 @@ inline std::optional<Fillet> fillet(const Vec3& a, const Vec3& b_in, const Vec3&
   f.start_rad = std::atan2(start.y() - f.centre.y(), start.x() - f.centre.x());
   f.z_start_m = b_in.z() - (b_in.z() - a.z()) * d / lu;
   f.z_end_m = b_out.z() + (c.z() - b_out.z()) * d / lw;
+  f.corner_share = 1.0 - d / std::min(lu, lw);
   return f;
 }
 

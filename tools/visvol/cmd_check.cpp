@@ -70,23 +70,21 @@ __attribute__((format(printf, 1, 2))) std::string printed(const char* format, ..
 }
 
 // What a .plan states of its vehicle beside the options: its speed (the
-// exposure times' speed) unless --speed names one, and a note where the
-// mission's speed changes or its vehicle type is not the one checked.
+// exposure times' speed, the vehicle's named beside it) unless --speed names
+// one, and a note where the mission's speed changes or its vehicle type is
+// not the one checked.
 std::vector<std::string> plan_vehicle_notes(const PathFile& f, const EnvelopeOptions& given, rt::VehicleEnvelope& e) {
   std::vector<std::string> notes;
   if (f.format != PathFormat::qgc_plan) return notes;
   const bool fixed_wing = e.type == rt::VehicleType::fixed_wing;
   const std::optional<double>& speed = fixed_wing ? f.cruise_speed_m_per_s : f.hover_speed_m_per_s;
   const char* key = fixed_wing ? "cruiseSpeed" : "hoverSpeed";
-  // a preset's speed is a default, the mission's is this flight's; --speed
-  // or a vehicle file's is the user's
-  const bool preset = given.vehicle == "fixed-wing" || given.vehicle == "multirotor";
-  if (speed && preset && !given.speed_m_per_s) {
+  if (speed && !given.speed_m_per_s) {
+    notes.push_back(printed("speed %.1f m/s: the .plan's %s (the vehicle's %.1f m/s; --speed sets another)", *speed,
+                            key, e.speed_m_per_s));
     e.speed_m_per_s = *speed;
-    notes.push_back(printed("speed %.1f m/s: the .plan's %s", *speed, key));
   } else if (speed && std::fabs(*speed - e.speed_m_per_s) > 1e-9) {
-    notes.push_back(printed("speed %.1f m/s (%s); the .plan's %s is %.1f m/s", e.speed_m_per_s,
-                            given.speed_m_per_s ? "--speed" : "the vehicle file", key, *speed));
+    notes.push_back(printed("speed %.1f m/s (--speed); the .plan's %s is %.1f m/s", e.speed_m_per_s, key, *speed));
   }
   if (f.speed_changes) {
     notes.push_back(

@@ -42,6 +42,37 @@ class FitOnRelief : public ::testing::Test {
   }
 };
 
+// A block inside a corner, under the 80 m arc a fixed-wing flies by it on
+// and away from both legs: the fit raises the corner until the arc clears
+// it (the arc follows 0.87 of the corner's move on 600 m legs), and the
+// checker agrees; on legs the arc spans, no corner height can, and the fit
+// says so in its passes.
+TEST(FitArcs, TheCornerRisesUntilItsArcClearsTheTerrain) {
+  fields::Heightfield t = blank(100, 100, 10.0, 0.0f);
+  for (int i : {67, 68}) {
+    for (int j : {22, 23}) t.at(i, j) = 150.0f;
+  }
+  const Vec3 corner{t.x_of(70), t.y_of(20), 110.0};
+  VehicleEnvelope e;  // fixed-wing: 15 deg, 80 m turns, clearance 30 m
+  EnvelopeFitSpec spec;
+  spec.envelope = e;
+  PathCheckSpec check_spec;
+  check_spec.envelope = e;
+  const auto checker = PathChecker::create(t, nullptr, check_spec);
+  ASSERT_TRUE(checker.ok());
+  const std::vector<Vec3> path = {corner + Vec3(-600, 0, 0), corner, corner + Vec3(0, -600, 0)};
+  ASSERT_FALSE(checker->check(path).envelope[0].met);  // the arc passes over the block
+  const EnvelopeFit fit = fit_to_envelope(path, spec, t);
+  ASSERT_TRUE(fit.feasible);
+  const PathCheck c = checker->check(fit.path);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_GE(c.envelope[0].worst, e.clearance_m);
+  // 100 m legs: the 80 m arc's heights follow the fixed ends, not the corner
+  const std::vector<Vec3> short_legs = {corner + Vec3(-100, 0, 0), corner, corner + Vec3(0, -100, 0)};
+  const EnvelopeFit pinned = fit_to_envelope(short_legs, spec, t);
+  EXPECT_FALSE(pinned.feasible && !checker->check(pinned.path).all_met);
+}
+
 TEST_F(FitOnRelief, AStraightLineThroughTheHillsBecomesFlyable) {
   const std::vector<Vec3> straight = {at(5, 5, 60), at(90, 88, 60)};
   ASSERT_FALSE(judge(straight, envelope()).all_met);  // it cuts through the relief

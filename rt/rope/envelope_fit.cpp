@@ -1,12 +1,11 @@
 #include "rt/rope/envelope_fit.hpp"
 
-#include "rt/rope/fillet.hpp"
-#include "rt/rope/terrain_probe.hpp"
-
 #include <algorithm>
 #include <cmath>
 
+#include "rt/rope/fillet.hpp"
 #include "rt/rope/path_check.hpp"
+#include "rt/rope/terrain_probe.hpp"
 
 namespace visvol::rt {
 
@@ -169,8 +168,6 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
 // in a few passes rather than creeping.
 constexpr double kMinCornerShare = 0.1;
 
-bool same_spot(const Vec3& a, const Vec3& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()) < kSameSpotM; }
-
 // How far an arc a fixed-wing flies by a corner on (rt/rope/fillet.hpp)
 // leaves the band, at the checker's samples along it.
 SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Fillet& f, double step_m) {
@@ -181,12 +178,7 @@ SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, con
     m.deficit = std::max(m.deficit, band.lo - p.z());
     m.excess = std::max(m.excess, p.z() - band.hi);
   };
-  for (int q = 1; q < k; ++q) judge(f.at(static_cast<double>(q) / k));
-  // between the samples where the terrain is extreme (the checker's probes)
-  for (int q = 0; q < k; ++q) {
-    for_each_terrain_probe(t, f.at(static_cast<double>(q) / k), f.at(static_cast<double>(q + 1) / k),
-                           [&](const Vec3& p, double) { judge(p); });
-  }
+  for_each_arc_point(f, k, t, judge, [&](const Vec3& p, double) { judge(p); });
   return m;
 }
 

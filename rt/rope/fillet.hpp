@@ -8,8 +8,10 @@
 #include <optional>
 #include <vector>
 
+#include "fields/heightfield.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/rope.hpp"
+#include "rt/rope/terrain_probe.hpp"
 
 namespace visvol::rt {
 
@@ -72,15 +74,12 @@ inline std::vector<std::optional<Fillet>> corner_fillets(const Vec3* v, int coun
   std::vector<std::optional<Fillet>> out(n);
   if (!(min_radius_m > 0) || n < 3) return out;
   const std::vector<double> room = turn_radii_m(v, count);
-  auto same_spot = [&](std::size_t i, std::size_t j) {
-    return std::hypot(v[i].x() - v[j].x(), v[i].y() - v[j].y()) < kSameSpotM;
-  };
   for (std::size_t first = 1; first + 1 < n;) {
     std::size_t last = first;  // the run of vertices on this spot
-    while (last + 1 < n && same_spot(last + 1, first)) ++last;
-    if (last + 1 >= n) break;        // the path's end
-    std::size_t before = first - 1;  // the spot before: its last vertex
-    if (same_spot(before, first)) {  // the run started at the path's start
+    while (last + 1 < n && same_spot(v[last + 1], v[first])) ++last;
+    if (last + 1 >= n) break;              // the path's end
+    const std::size_t before = first - 1;  // the spot before: its last vertex
+    if (same_spot(v[before], v[first])) {  // the run started at the path's start
       first = last + 1;
       continue;
     }
@@ -89,6 +88,19 @@ inline std::vector<std::optional<Fillet>> corner_fillets(const Vec3* v, int coun
     first = last + 1;
   }
   return out;
+}
+
+// Calls sample(p) at the k - 1 points that split a fillet into k equal arcs
+// (its ends lie on the segments, sampled there), and probe(p, u) where the
+// height above the bilinear terrain is extreme along each of the k chords
+// between them (for_each_terrain_probe): what the checker judges on an arc,
+// and the envelope fit holds its band at.
+template <class Sample, class Probe>
+inline void for_each_arc_point(const Fillet& f, int k, const fields::Heightfield& t, Sample sample, Probe probe) {
+  for (int q = 1; q < k; ++q) sample(f.at(static_cast<double>(q) / k));
+  for (int q = 0; q < k; ++q) {
+    for_each_terrain_probe(t, f.at(static_cast<double>(q) / k), f.at(static_cast<double>(q + 1) / k), probe);
+  }
 }
 
 }  // namespace visvol::rt

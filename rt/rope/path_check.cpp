@@ -232,20 +232,16 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     descent.add(-angle <= e.max_descent_deg + kAngleTolDeg, len);
   }
 
-  // a fixed-wing flies by a vertex on an arc inside the corner: its
-  // samples judge everything the segments' do, at no share of the length
-  // (they can only fail a requirement)
-  // and the lowest and highest above the terrain along the arc's chords
-  // between those samples, exactly (a chord is step^2 / 8R from the arc: a
-  // centimetre at the default step and 80 m)
+  // a fixed-wing flies by a corner on an arc inside it: its samples judge
+  // the constraints, clearance, heights and bounds at no share of the length
+  // (they can only fail a requirement), and clearance and max-agl are exact
+  // along the arc's chords between them (a chord is step^2 / 8R from the
+  // arc: a centimetre at the default step and 80 m)
   for (const std::optional<Fillet>& f : corner_fillets(v, count, e.min_turn_radius_m)) {
     if (!f) continue;
-    const int m = fillet_samples(*f, spec_.sample_step_m);
-    for (int k = 1; k < m; ++k) sample(f->at(static_cast<double>(k) / m), 0.0, nullptr);
-    for (int k = 0; k < m; ++k) {
-      for_each_terrain_probe(terrain_, f->at(static_cast<double>(k) / m), f->at(static_cast<double>(k + 1) / m),
-                             terrain_probe);
-    }
+    for_each_arc_point(
+        *f, fillet_samples(*f, spec_.sample_step_m), terrain_, [&](const Vec3& p) { sample(p, 0.0, nullptr); },
+        terrain_probe);
   }
 
   out.per_vertex.resize(static_cast<std::size_t>(count));

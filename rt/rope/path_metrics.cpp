@@ -81,9 +81,7 @@ std::vector<double> turn_radii_m(const Vec3* v, int count) {
   std::vector<std::size_t> spot_first(n), spot_of(n);
   std::size_t spots = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const bool same = spots > 0 && std::hypot(v[i].x() - v[spot_first[spots - 1]].x(),
-                                              v[i].y() - v[spot_first[spots - 1]].y()) < kSameSpotM;
-    if (!same) spot_first[spots++] = i;
+    if (spots == 0 || !same_spot(v[i], v[spot_first[spots - 1]])) spot_first[spots++] = i;
     spot_of[i] = spots - 1;
   }
   auto xy = [&](std::size_t s) { return Eigen::Vector2d(v[spot_first[s]].x(), v[spot_first[s]].y()); };

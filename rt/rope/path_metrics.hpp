@@ -7,6 +7,7 @@
 // mean of F_p along the path, so a longer path is not worth more by its length.
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -52,6 +53,7 @@ PathMetrics path_metrics(const Vec3* vertices, int count, const PathField& field
 // spot): each of them gets the turn between the segments either side of the
 // run, which a vertex 1e-8 m from its neighbour does not make a hairpin of.
 inline constexpr double kSameSpotM = 0.01;
+inline bool same_spot(const Vec3& a, const Vec3& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()) < kSameSpotM; }
 std::vector<double> turn_radii_m(const Vec3* vertices, int count);
 
 }  // namespace visvol::rt

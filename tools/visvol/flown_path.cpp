@@ -5,14 +5,16 @@
 #include <cstdio>
 #include <limits>
 
+#include "path_io_detail.hpp"
+
 namespace visvol::cli {
 
 namespace {
 
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kRadPerDeg = kTwoPi / 360.0;
-// Points closer than this horizontally are one spot (rt::kSameSpotM).
-constexpr double kSpotM = 0.01;
+// Points closer than this horizontally are one spot.
+constexpr double kSpotM = rt::kSameSpotM;
 // A turn radius the path's geometry decides (rt::turn_radii_m).
 constexpr double kGeometry = std::numeric_limits<double>::quiet_NaN();
 // The highest a loiter may be, m from the datum (as `check` takes vertices).
@@ -72,11 +74,7 @@ double loiter_turns(const LoiterItem& l, const rt::VehicleEnvelope& e, double ra
 }
 
 // A number for a message: 1 decimal, or 6 digits where that would be long.
-std::string describe_number(double v) {
-  char text[64];
-  std::snprintf(text, sizeof text, std::fabs(v) < 1e9 ? "%.1f" : "%.6g", v);
-  return text;
-}
+std::string describe_number(double v) { return detail::shown(v, 1); }
 
 std::string describe(const LoiterItem& l, double turns, double radius_m, double sense, std::size_t points) {
   char text[200];

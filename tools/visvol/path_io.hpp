@@ -70,6 +70,7 @@ inline constexpr int kCmdNavVtolTakeoff = 84;         // MAV_CMD_NAV_VTOL_TAKEOF
 inline constexpr int kCmdNavVtolLand = 85;            // MAV_CMD_NAV_VTOL_LAND
 inline constexpr int kCmdNavLand = 21;                // MAV_CMD_NAV_LAND
 inline constexpr int kCmdNavTakeoff = 22;             // MAV_CMD_NAV_TAKEOFF
+inline constexpr int kCmdNavLandLocal = 23;           // MAV_CMD_NAV_LAND_LOCAL
 inline constexpr int kCmdNavLoiterToAlt = 31;         // MAV_CMD_NAV_LOITER_TO_ALT
 inline constexpr int kCmdDoLandStart = 189;           // MAV_CMD_DO_LAND_START
 inline constexpr int kFrameGlobal = 0;                // MAV_FRAME_GLOBAL: altitude above mean sea level

@@ -112,7 +112,7 @@ bool moves_outside_nav_range(long long command) {
 
 ItemRole item_role(long long command) {
   using namespace mavlink;
-  constexpr long long kLandLocal = 23, kTakeoffLocal = 24, kNavRoi = 80, kNavDelay = 93;
+  constexpr long long kTakeoffLocal = 24, kNavRoi = 80, kNavDelay = 93;
   constexpr long long kNavFollow = 25, kContinueAndChangeAlt = 30, kDoFollow = 32, kDoFollowReposition = 33;
   constexpr long long kDoOrbit = 34, kNavPathPlanning = 81, kNavGuidedEnable = 92, kNavPayloadPlace = 94;
   switch (command) {
@@ -125,7 +125,7 @@ ItemRole item_role(long long command) {
     case kCmdNavReturnToLaunch:
     case kCmdNavLand:
     case kCmdNavTakeoff:
-    case kLandLocal:
+    case kCmdNavLandLocal:
     case kTakeoffLocal:
     case kCmdNavVtolTakeoff:
     case kCmdNavVtolLand: return ItemRole::end;
@@ -265,9 +265,8 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     // in the file (home and back, a climb out): the path read would skip them
     if (role == ItemRole::end && !out.points.empty()) {
       end_after_waypoints = where + "command " + std::to_string(command);
-      constexpr long long kLandLocal = 23;
       landing_after_waypoints = landing_after_waypoints || command == mavlink::kCmdNavLand ||
-                                command == mavlink::kCmdNavVtolLand || command == kLandLocal;
+                                command == mavlink::kCmdNavVtolLand || command == mavlink::kCmdNavLandLocal;
     }
     constexpr long long kDoChangeSpeed = 178;
     if (command == kDoChangeSpeed) out.speed_changes = true;

@@ -48,6 +48,7 @@ void append_ring_entries(int m, double spacing_m, double curvature_coeff, RangeS
     e.d_m = static_cast<float>(d);
     e.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
     e.span_m = sphere_span_m(shape, range_m, d);
+    e.t_own = static_cast<std::int32_t>(dy * stride + dx);
 
     // Work in (major, minor) axes: the major axis is the one where |offset| = m.
     const bool x_major = std::abs(dx) == m;
@@ -145,6 +146,7 @@ HullTable::HullTable(int radius, int exact_rings, double spacing_m, double curva
       e.d_m = static_cast<float>(d);
       e.drop_m = static_cast<float>(curvature_drop_m(curvature_coeff, d));
       e.span_m = sphere_span_m(shape, range_m, d);
+      e.t_own = static_cast<std::int32_t>(dy * stride + dx);
       inner_[static_cast<std::size_t>((dy + 1) * 3 + dx + 1)] = e;
     }
   }
@@ -237,6 +239,7 @@ struct Lanes {
 // registers must not cross a function boundary by value (it would change the
 // ABI, which clang refuses and GCC warns about).
 #define VISVOL_INLINE inline __attribute__((always_inline))
+#define VISVOL_INLINE_LAMBDA __attribute__((always_inline))
 
 template <class V, class T>
 VISVOL_INLINE void load(V& v, const T* p) {
@@ -259,8 +262,10 @@ VISVOL_INLINE void level_coordinate(typename Lanes<W>::F& q, const typename Lane
                                     float hi) {
   using F = typename Lanes<W>::F;
   q = (z_m - lv.z0_m) * lv.inv_dz;
-  q = q < -2.0f ? F{} - 2.0f : q;
-  q = q > hi ? F{} + hi : q;
+  // written as max and min (one instruction each): q is never NaN
+  const F lo_q = F{} - 2.0f, hi_q = F{} + hi;
+  q = q > lo_q ? q : lo_q;
+  q = q < hi_q ? q : hi_q;
 }
 
 // First level strictly above each hull height (visibility needs z > hull).
@@ -282,12 +287,43 @@ VISVOL_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typename L
   out -= __builtin_convertvector(out, typename Lanes<W>::F) < q;
 }
 
+// Levels are 0..nz <= 255 by construction (every bound above is clamped to
+// nz), so a byte holds each. The bytes are narrowed in a register and stored
+// whole: narrowing straight to memory (vpmovdb to memory on AVX-512) is slow.
 template <int W>
-VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, int nz, std::uint8_t* dst) {
+VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst) {
   typedef std::uint8_t Bytes __attribute__((vector_size(W)));
-  const typename Lanes<W>::I clamped = k < nz ? k : typename Lanes<W>::I{} + nz;
-  const Bytes b = __builtin_convertvector(clamped, Bytes);  // 0..nz <= 255
+  Bytes b = __builtin_convertvector(k, Bytes);
+#if defined(__x86_64__)
+  __asm__("" : "+x"(b));  // keeps the narrowing in a register
+#endif
   std::memcpy(dst, &b, sizeof b);
+}
+
+// Calls fn(n) for the entries n of ring m (ring_index order) whose offset
+// lies within [dx_lo, dx_hi] x [dy_lo, dy_hi]. The others are not needed:
+// where a sight line to a target inside the grid crosses ring m - 1, the
+// crossing lies inside the grid (the grid is convex) and so do the posts
+// either side of it on that grid line (the grid's edges are grid lines), so
+// a target's stencil cells are inside whenever it is. The ring buffer's
+// slots of the skipped entries keep older values, which only lanes whose
+// targets lie outside the grid read, and their levels are never used.
+template <class Fn>
+VISVOL_INLINE void for_each_inside_entry(int m, int dx_lo, int dx_hi, int dy_lo, int dy_hi, Fn&& fn) {
+  const int x0 = std::max(-m, dx_lo), x1 = std::min(m, dx_hi);
+  if (-m >= dy_lo && -m <= dy_hi) {  // the top row
+    for (int dx = x0; dx <= x1; ++dx) fn(dx + m);
+  }
+  const bool left = -m >= dx_lo && -m <= dx_hi, right = m >= dx_lo && m <= dx_hi;
+  const int y0 = std::max(-m + 1, dy_lo), y1 = std::min(m - 1, dy_hi);
+  for (int dy = y0; dy <= y1; ++dy) {  // the sides, left then right on each row
+    const int n = 2 * m + 1 + 2 * (dy + m - 1);
+    if (left) fn(n);
+    if (right) fn(n + 1);
+  }
+  if (m >= dy_lo && m <= dy_hi) {  // the bottom row
+    for (int dx = x0; dx <= x1; ++dx) fn((2 * m + 1) + 2 * (2 * m - 1) + (dx + m));
+  }
 }
 
 // Lanes [lane0, lane0 + R W) of the chunk: R registers of W lanes, so that
@@ -295,8 +331,11 @@ VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, int nz, std::uint
 // and offset of its write) are paid once for R W observers.
 template <int W, int R>
 VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
-                             const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, int lane0,
+                             const LevelMap& level_map, RangeShape shape, const ObserverChunk& chunk, int lane0,
                              float* ring_a, float* ring_b, std::uint8_t* out) {
+  // A copy: the byte stores to `out` could alias the caller's, which would
+  // reload (and convert) its fields at every entry.
+  const LevelMap levels = level_map;
   using VecF = typename Lanes<W>::F;
   using VecI = typename Lanes<W>::I;
   constexpr std::size_t N = static_cast<std::size_t>(R);  // array bounds
@@ -305,7 +344,6 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
   const int ci = px0 / kLanes;
   const int dx_first = layout.first_dx(px0);
   const int dx_last = layout.last_dx(px0);
-  const int stride = terrain.stride;
   const float* t0 = terrain.height_m.data() + terrain.index(px0, py) + lane0;
   const std::int32_t* g0 = terrain.ground_level.data() + terrain.index(px0, py) + lane0;
   VecF eye[N];
@@ -320,7 +358,7 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
   // observer's range.
   auto lowest_level = [&](VecI(&k)[N], const HullEntry& e) {
     for (int r = 0; r < R; ++r) {
-      load(k[r], g0 + e.dy * stride + e.dx + r * W);
+      load(k[r], g0 + e.t_own + r * W);
       max_into(k[r], floor_level[r]);
       if (sphere) {
         VecI bound;
@@ -329,16 +367,24 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
       }
     }
   };
+  // Targets of the chunk inside the grid: a lane's target is (px0 + lane + dx,
+  // py + dy), so some lane's is inside when dx and dy lie within these.
+  const int dy_first = -py, dy_last = layout.ny - 1 - py;
+  auto inside = [&](const HullEntry& e) {
+    return e.dy >= dy_first && e.dy <= dy_last && e.dx >= dx_first && e.dx <= dx_last;
+  };
+  // The levels of an entry inside: target (0, 0)'s place in `out`, then a
+  // row of slots per dy and a slot per dx.
+  std::uint8_t* const out_origin = out + layout.offset(py, py, ci, -dx_first) + lane0;
+  const std::ptrdiff_t row_bytes = static_cast<std::ptrdiff_t>(layout.slots) * kLanes;
   auto write = [&](const HullEntry& e, const VecI(&k)[N]) {
-    const int y = py + e.dy;
-    if (y < 0 || y >= layout.ny || e.dx < dx_first || e.dx > dx_last) return;
-    std::uint8_t* dst = out + layout.offset(py, y, ci, e.dx - dx_first) + lane0;
-    for (int r = 0; r < R; ++r) store_levels<W>(k[r], levels.nz, dst + r * W);
+    std::uint8_t* dst = out_origin + e.dy * row_bytes + e.dx * kLanes;
+    for (int r = 0; r < R; ++r) store_levels<W>(k[r], dst + r * W);
   };
   // The slope from the eye to the target's own terrain.
   auto own_slope = [&](VecF(&s)[N], const HullEntry& e) {
     for (int r = 0; r < R; ++r) {
-      load(s[r], t0 + e.dy * stride + e.dx + r * W);
+      load(s[r], t0 + e.t_own + r * W);
       s[r] = (s[r] - e.drop_m - eye[r]) / e.d_m;
     }
   };
@@ -347,6 +393,7 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
 
   // Rings 0 and 1: no crossing, visible from the ground up.
   for (const HullEntry& e : table.inner()) {
+    if (!inside(e)) continue;
     VecI k[N];
     lowest_level(k, e);
     write(e, k);
@@ -368,9 +415,8 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
   }
   for (int m = 2; m <= last_ring; ++m) {
     const HullEntry* ring = table.ring(m);
-    const int count = ring_size(m);
     const bool exact = m <= table.exact_rings();
-    for (int n = 0; n < count; ++n) {
+    auto entry = [&](int n) VISVOL_INLINE_LAMBDA {
       const HullEntry& e = ring[n];
       VecF h[N];
       VecF ta, tb;
@@ -416,7 +462,8 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
       lowest_level(lowest, e);
       for (int r = 0; r < R; ++r) max_into(k[r], lowest[r]);
       write(e, k);
-    }
+    };
+    for_each_inside_entry(m, dx_first, dx_last, dy_first, dy_last, entry);
     std::swap(prev, cur);
   }
 }
@@ -427,6 +474,12 @@ VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terra
                               const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
                               float* ring_b, std::uint8_t* out) {
   static_assert(kLanes % (W * R) == 0, "passes cover the chunk");
+  // The slots of entries outside the grid are not computed (see
+  // for_each_inside_entry): they start the chunk at a fixed value, so that
+  // every byte the kernel writes depends on this chunk alone.
+  const std::size_t ring_floats = static_cast<std::size_t>(ring_size(table.radius())) * kLanes;
+  std::fill(ring_a, ring_a + ring_floats, kNoHorizon);
+  std::fill(ring_b, ring_b + ring_floats, kNoHorizon);
   for (int lane0 = 0; lane0 < kLanes; lane0 += W * R) {
     hull_pass<W, R>(table, terrain, layout, levels, shape, chunk, lane0, ring_a, ring_b, out);
   }

@@ -48,9 +48,10 @@ struct HullEntry {
   float t2 = 0;                 // weight of td
   float inv_d2 = 0;             // 1 / distance to the other crossing, 1/m
   float drop2_m = 0;
-  float d_m = 0;     // distance to the target, m
-  float drop_m = 0;  // curvature drop at the target
-  float span_m = 0;  // sphere range: half height of the range here (<0: outside)
+  float d_m = 0;           // distance to the target, m
+  float drop_m = 0;        // curvature drop at the target
+  float span_m = 0;        // sphere range: half height of the range here (<0: outside)
+  std::int32_t t_own = 0;  // terrain offset of the target's own post (dy * stride + dx)
 };
 
 // One grid-line crossing of a sight line: terrain interpolated between two

@@ -140,7 +140,9 @@ TEST(HullKernel, GridOnlyHorizonsEqualTheFullSquaresOnTheGrid) {
 }
 
 TEST(HullKernel, VectorLevelsMatchTheScalarHorizon) {
-  // The vectorised kernel and the scalar horizon implement the same recursion.
+  // The vectorised kernel and the scalar horizon implement the same recursion,
+  // at the grid's corners and edges too (where the kernel leaves out the
+  // targets outside the grid, and the scalar horizon computes them all).
   const Heightfield hf = fractal(48, 9);
   const int r = 12;
   VolumeGeometry g;
@@ -155,35 +157,37 @@ TEST(HullKernel, VectorLevelsMatchTheScalarHorizon) {
   std::vector<std::uint8_t> out(layout.bytes_per_observer_row(), 0);
   std::vector<float> ra(static_cast<std::size_t>(ring_size(r)) * kLanes);
   std::vector<float> rb(ra.size());
-  const int py = 20;
-  ObserverChunk chunk;
-  chunk.px0 = 16;
-  chunk.py = py;
-  for (int l = 0; l < kLanes; ++l) chunk.eye_m[l] = hf.at(chunk.px0 + l, py) + 2.0f;
-  hull_levels_chunk(table, t, layout, levels, RangeShape::none, chunk, ra.data(), rb.data(), out.data());
-
   int compared = 0, equal = 0;
   std::vector<float> horizon;
-  for (int l = 0; l < kLanes; ++l) {
-    const int px = chunk.px0 + l;
-    observer_horizon(t, r, exact_rings, hf.spacing_m, 0.0, px, py, chunk.eye_m[l], horizon);
-    for (int dy = -r; dy <= r; ++dy) {
-      for (int dx = -r; dx <= r; ++dx) {
-        const int x = px + dx, y = py + dy;
-        if (x < 0 || y < 0 || x >= hf.nx || y >= hf.ny) continue;
-        const double h = horizon[static_cast<std::size_t>((dy + r) * (2 * r + 1) + dx + r)];
-        const double d = std::hypot(double(dx), double(dy)) * hf.spacing_m;
-        const double hull = h <= kNoHorizon ? -1e30 : chunk.eye_m[l] + d * h;
-        // clamped before the cast: no horizon is -1e30 m, far outside int
-        const double level = std::floor((hull - g.z0_m) / g.dz_m) + 1;
-        int expected = static_cast<int>(std::clamp(level, -1.0, static_cast<double>(g.nz)));
-        expected = std::max(expected, t.ground_level[t.index(x, y)]);
-        expected = std::clamp(expected, 0, g.nz);
-        const int got = out[layout.offset(py, y, chunk.px0 / kLanes, dx - layout.first_dx(chunk.px0)) +
-                            static_cast<std::size_t>(l)];
-        ++compared;
-        if (got == expected) ++equal;
-        ASSERT_LE(std::abs(got - expected), 1) << "observer " << px << " target " << x << "," << y;
+  const int chunks[][2] = {{16, 20}, {0, 0}, {32, 47}, {0, 40}, {32, 3}};
+  for (const auto& at : chunks) {
+    const int py = at[1];
+    ObserverChunk chunk;
+    chunk.px0 = at[0];
+    chunk.py = py;
+    for (int l = 0; l < kLanes; ++l) chunk.eye_m[l] = hf.at(chunk.px0 + l, py) + 2.0f;
+    hull_levels_chunk(table, t, layout, levels, RangeShape::none, chunk, ra.data(), rb.data(), out.data());
+    for (int l = 0; l < kLanes; ++l) {
+      const int px = chunk.px0 + l;
+      observer_horizon(t, r, exact_rings, hf.spacing_m, 0.0, px, py, chunk.eye_m[l], horizon);
+      for (int dy = -r; dy <= r; ++dy) {
+        for (int dx = -r; dx <= r; ++dx) {
+          const int x = px + dx, y = py + dy;
+          if (x < 0 || y < 0 || x >= hf.nx || y >= hf.ny) continue;
+          const double h = horizon[static_cast<std::size_t>((dy + r) * (2 * r + 1) + dx + r)];
+          const double d = std::hypot(double(dx), double(dy)) * hf.spacing_m;
+          const double hull = h <= kNoHorizon ? -1e30 : chunk.eye_m[l] + d * h;
+          // clamped before the cast: no horizon is -1e30 m, far outside int
+          const double level = std::floor((hull - g.z0_m) / g.dz_m) + 1;
+          int expected = static_cast<int>(std::clamp(level, -1.0, static_cast<double>(g.nz)));
+          expected = std::max(expected, t.ground_level[t.index(x, y)]);
+          expected = std::clamp(expected, 0, g.nz);
+          const int got = out[layout.offset(py, y, chunk.px0 / kLanes, dx - layout.first_dx(chunk.px0)) +
+                              static_cast<std::size_t>(l)];
+          ++compared;
+          if (got == expected) ++equal;
+          ASSERT_LE(std::abs(got - expected), 1) << "observer " << px << "," << py << " target " << x << "," << y;
+        }
       }
     }
   }

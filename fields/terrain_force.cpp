@@ -87,14 +87,41 @@ Nearest nearest_local(const Heightfield& hf, const Vec3& q, double search_m) {
   return best;
 }
 
+// A cell near a post, and the horizontal distance from the post to it:
+// cell (di, dj) spans posts i + di .. i + di + 1 and j + dj .. j + dj + 1.
+struct CellOffset {
+  int di = 0, dj = 0;
+  double gap2_m2 = 0;  // squared horizontal distance from the post to the cell's square
+};
+
+// Every cell within `reach` cells of a post, nearest first: the order in
+// which a search from a post meets the cells, the same for every post.
+std::vector<CellOffset> cells_by_distance(int reach, double spacing_m) {
+  std::vector<CellOffset> out;
+  for (int dj = -reach - 1; dj <= reach; ++dj) {
+    for (int di = -reach - 1; di <= reach; ++di) {
+      const int gx = std::max({0, di, -di - 1}), gy = std::max({0, dj, -dj - 1});  // whole cells between
+      out.push_back({di, dj, (double(gx) * gx + double(gy) * gy) * spacing_m * spacing_m});
+    }
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const CellOffset& a, const CellOffset& b) { return a.gap2_m2 < b.gap2_m2; });
+  return out;
+}
+
 // The height range of every terrain cell over a band of cell rows, held
 // contiguously: the band's nearest-point search rules out most cells in its
 // reach by their range alone (one load, not four scattered posts).
 class CellRanges {
  public:
-  // Cell rows [row_begin, row_end) of hf, clamped to the grid's cells.
-  CellRanges(const Heightfield& hf, int row_begin, int row_end)
-      : hf_(hf), ncx_(hf.nx - 1), j0_(std::max(0, row_begin)), j1_(std::min(hf.ny - 1, row_end)) {
+  // Cell rows [row_begin, row_end) of hf, clamped to the grid's cells; the
+  // searches reach `reach` cells from their post.
+  CellRanges(const Heightfield& hf, int row_begin, int row_end, int reach)
+      : hf_(hf),
+        ncx_(hf.nx - 1),
+        j0_(std::max(0, row_begin)),
+        j1_(std::min(hf.ny - 1, row_end)),
+        order_(cells_by_distance(reach, hf.spacing_m)) {
     range_.resize(static_cast<std::size_t>(ncx_) * static_cast<std::size_t>(std::max(0, j1_ - j0_)));
     for (int j = j0_; j < j1_; ++j) {
       for (int i = 0; i < ncx_; ++i) {
@@ -104,45 +131,27 @@ class CellRanges {
     }
   }
 
-  // The nearest point of the surface to q (local frame) among points nearer
-  // than `best` on entry (a known surface point, or none) and within
-  // `search_m` horizontally of q: nearest_local()'s rings, over the rows held
-  // (the caller's rows must cover the search).
-  Nearest nearest(const Vec3& q, double search_m, Nearest best) const {
+  // The nearest point of the surface to q, a point above or below post
+  // (i, j) (local frame), among points nearer than `best` on entry (a
+  // surface point known to be near). The cells are met nearest first, so the
+  // search ends at the first whose square is no nearer than the best point
+  // found; the caller's rows must hold every cell that near.
+  Nearest nearest_over_post(int i, int j, const Vec3& q, Nearest best) const {
     const double s = hf_.spacing_m;
-    const int i_lo = std::max(0, static_cast<int>(std::floor((q.x() - search_m) / s)));
-    const int i_hi = std::min(ncx_ - 1, static_cast<int>(std::floor((q.x() + search_m) / s)));
-    const int j_lo = std::max(j0_, static_cast<int>(std::floor((q.y() - search_m) / s)));
-    const int j_hi = std::min(j1_ - 1, static_cast<int>(std::floor((q.y() + search_m) / s)));
-    if (i_lo > i_hi || j_lo > j_hi) return best;
-    const int ci = std::clamp(static_cast<int>(std::floor(q.x() / s)), i_lo, i_hi);
-    const int cj = std::clamp(static_cast<int>(std::floor(q.y() / s)), j_lo, j_hi);
-    auto visit = [&](int i, int j) {
-      const double gap_x = std::max({0.0, i * s - q.x(), q.x() - (i + 1) * s});
-      const double gap_y = std::max({0.0, j * s - q.y(), q.y() - (j + 1) * s});
-      const Range& r = range_[index(i, j)];
+    for (const CellOffset& o : order_) {
+      if (o.gap2_m2 >= best.distance2) break;
+      const int ci = i + o.di, cj = j + o.dj;
+      if (ci < 0 || ci >= ncx_ || cj < j0_ || cj >= j1_) continue;
+      const Range& r = range_[index(ci, cj)];
       const double gap_z = std::max({0.0, q.z() - r.hi, r.lo - q.z()});
-      if (gap_x * gap_x + gap_y * gap_y + gap_z * gap_z >= best.distance2) return;
-      const double h00 = hf_.at(i, j), h10 = hf_.at(i + 1, j), h01 = hf_.at(i, j + 1), h11 = hf_.at(i + 1, j + 1);
-      const Vec3 a{i * s, j * s, h00}, b{(i + 1) * s, j * s, h10};
-      const Vec3 c{(i + 1) * s, (j + 1) * s, h11}, d{i * s, (j + 1) * s, h01};
+      if (o.gap2_m2 + gap_z * gap_z >= best.distance2) continue;
+      const double h00 = hf_.at(ci, cj), h10 = hf_.at(ci + 1, cj), h01 = hf_.at(ci, cj + 1),
+                   h11 = hf_.at(ci + 1, cj + 1);
+      const Vec3 a{ci * s, cj * s, h00}, b{(ci + 1) * s, cj * s, h10};
+      const Vec3 c{(ci + 1) * s, (cj + 1) * s, h11}, d{ci * s, (cj + 1) * s, h01};
       for (const Vec3& p : {closest_on_triangle(q, a, b, c), closest_on_triangle(q, a, c, d)}) {
         const double d2 = (p - q).squaredNorm();
         if (d2 < best.distance2) best = {p, d2};
-      }
-    };
-    const int rings = std::max({ci - i_lo, i_hi - ci, cj - j_lo, j_hi - cj});
-    for (int r = 0; r <= rings; ++r) {
-      // A ring's nearest cell is at least (r - 1) cells away horizontally.
-      const double ring_gap = std::max(0, r - 1) * s;
-      if (ring_gap * ring_gap >= best.distance2) break;
-      for (int j = cj - r; j <= cj + r; ++j) {
-        if (j < j_lo || j > j_hi) continue;
-        const bool edge_row = j == cj - r || j == cj + r;
-        for (int i = ci - r; i <= ci + r; i += edge_row ? 1 : 2 * r) {
-          if (i >= i_lo && i <= i_hi) visit(i, j);
-          if (r == 0) break;
-        }
       }
     }
     return best;
@@ -158,22 +167,25 @@ class CellRanges {
 
   const Heightfield& hf_;
   int ncx_, j0_, j1_;  // cells per row; the cell rows held, [j0_, j1_)
+  std::vector<CellOffset> order_;
   std::vector<Range> range_;
 };
 
 // One band sample. `previous` is the nearest point of the sample below it in
-// its column (or none): the nearest point is no farther than that one, so
-// the search starts with it as its best.
+// its column (or none): the nearest point is no farther than that one, nor
+// than the post below (or above) the sample, which is on the surface; the
+// search starts from the nearer of the two.
 TffSample band_sample(const CellRanges& cells, const Heightfield& hf, const TffParams& params, int i, int j, int b,
                       Nearest& previous) {
   const double ground = hf.at(i, j);
   const double z = ground - params.band_offset_m + b * params.step_m();
   const Vec3 q{i * hf.spacing_m, j * hf.spacing_m, z};
-  // The post below (or above) q is on the surface: the nearest point is no farther.
-  const double bound = std::fabs(z - ground);
-  Nearest seed;
-  if (std::isfinite(previous.distance2)) seed = {previous.point, (previous.point - q).squaredNorm()};
-  const Nearest n = cells.nearest(q, bound + 1e-9, seed);
+  Nearest seed{Vec3(q.x(), q.y(), ground), (z - ground) * (z - ground)};
+  if (std::isfinite(previous.distance2)) {
+    const double d2 = (previous.point - q).squaredNorm();
+    if (d2 < seed.distance2) seed = {previous.point, d2};
+  }
+  const Nearest n = cells.nearest_over_post(i, j, q, seed);
   previous = n;
   const bool inside = z < ground;
   Vec3 e = inside ? Vec3(n.point - q) : Vec3(q - n.point);  // outward, local axes
@@ -217,7 +229,7 @@ void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_be
   const std::size_t levels = static_cast<std::size_t>(params.band_levels);
   // every cell a search from these rows can reach: within the band's offset
   const int reach = static_cast<int>(std::ceil(params.band_offset_m / hf.spacing_m)) + 1;
-  const CellRanges cells(hf, j_begin - reach, j_end + reach);
+  const CellRanges cells(hf, j_begin - reach - 1, j_end + reach, reach);
   auto row = [&](int item, int) {
     const int j = j_begin + item;
     for (int i = 0; i < hf.nx; ++i) {

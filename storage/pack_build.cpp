@@ -121,37 +121,51 @@ std::int16_t to_centimetres(float metres) {
   return static_cast<std::int16_t>(std::clamp(cm, -32767.0, 32767.0));
 }
 
-// Terrain force field bricks of one level, brick rows [rows.first, rows.end).
+// One terrain force field brick: tile tx of the band's rows (y rows of
+// kBrickPosts posts each), in centimetres.
+void tff_brick(const fields::TffSample* band, const Heightfield& hf, int band_levels, int tx, int y_rows,
+               std::int16_t* brick, std::size_t brick_values) {
+  const std::size_t nx = static_cast<std::size_t>(hf.nx);
+  const std::size_t levels = static_cast<std::size_t>(band_levels);
+  std::fill(brick, brick + brick_values, std::int16_t{0});
+  for (int b = 0; b < band_levels; ++b) {
+    for (int y = 0; y < y_rows; ++y) {
+      for (int x = 0; x < kBrickPosts; ++x) {
+        const int i = tx * kBrickPosts + x;
+        if (i >= hf.nx) break;
+        const fields::TffSample& s = band[(static_cast<std::size_t>(y) * levels + static_cast<std::size_t>(b)) * nx +
+                                          static_cast<std::size_t>(i)];
+        std::int16_t* dst = &brick[static_cast<std::size_t>(((b * kBrickPosts + y) * kBrickPosts + x) * 4)];
+        dst[0] = to_centimetres(s.dx_m);
+        dst[1] = to_centimetres(s.dy_m);
+        dst[2] = to_centimetres(s.dz_m);
+        dst[3] = to_centimetres(s.signed_distance_m);
+      }
+    }
+  }
+}
+
+// Terrain force field bricks of one level, brick rows [rows.first, rows.end):
+// a brick row's samples by the pool, then its bricks by the pool, written in
+// order.
 Status write_tff(TileSink& w, std::size_t brick_bytes, int level, const Heightfield& hf, const fields::TffParams& p,
                  TileRows rows, fields::WorkerPool& pool) {
   const TileGrid g = tile_grid(Layer::tff, hf.nx, hf.ny);
   const std::size_t nx = static_cast<std::size_t>(hf.nx);
   const std::size_t levels = static_cast<std::size_t>(p.band_levels);
   std::vector<fields::TffSample> band(static_cast<std::size_t>(kBrickPosts) * levels * nx);
-  std::vector<std::int16_t> brick(brick_bytes / sizeof(std::int16_t));
+  const std::size_t brick_values = brick_bytes / sizeof(std::int16_t);
+  std::vector<std::int16_t> bricks(brick_values * static_cast<std::size_t>(g.tiles_x));
   for (int ty = rows.first; ty < rows.end; ++ty) {
     const int j0 = ty * kBrickPosts, j1 = std::min(hf.ny, j0 + kBrickPosts);
     fields::terrain_force_rows(hf, p, j0, j1, band.data(), &pool);
+    pool.run(g.tiles_x, [&](int tx, int) {
+      tff_brick(band.data(), hf, p.band_levels, tx, j1 - j0,
+                bricks.data() + static_cast<std::size_t>(tx) * brick_values, brick_values);
+    });
     for (int tx = 0; tx < g.tiles_x; ++tx) {
-      std::fill(brick.begin(), brick.end(), std::int16_t{0});
-      for (int b = 0; b < p.band_levels; ++b) {
-        for (int y = 0; y < j1 - j0; ++y) {
-          for (int x = 0; x < kBrickPosts; ++x) {
-            const int i = tx * kBrickPosts + x;
-            if (i >= hf.nx) break;
-            const fields::TffSample& s =
-                band[(static_cast<std::size_t>(y) * levels + static_cast<std::size_t>(b)) * nx +
-                     static_cast<std::size_t>(i)];
-            std::int16_t* dst = &brick[static_cast<std::size_t>(((b * kBrickPosts + y) * kBrickPosts + x) * 4)];
-            dst[0] = to_centimetres(s.dx_m);
-            dst[1] = to_centimetres(s.dy_m);
-            dst[2] = to_centimetres(s.dz_m);
-            dst[3] = to_centimetres(s.signed_distance_m);
-          }
-        }
-      }
-      VISVOL_RETURN_IF_ERROR(
-          w.write_tile(level, Layer::tff, tx, ty, brick.data(), brick.size() * sizeof(std::int16_t)));
+      VISVOL_RETURN_IF_ERROR(w.write_tile(level, Layer::tff, tx, ty,
+                                          bricks.data() + static_cast<std::size_t>(tx) * brick_values, brick_bytes));
     }
   }
   return Status::ok_status();

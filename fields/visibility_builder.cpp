@@ -21,6 +21,9 @@ std::size_t window_rows(int ny, int radius, int batch) {
   return static_cast<std::size_t>(std::min(ny, 2 * radius + batch));
 }
 
+// Finished rows are turned to the sink's order `batch` at a time, in parallel.
+std::size_t staging_for(int batch, std::size_t slab_bytes) { return static_cast<std::size_t>(batch) * slab_bytes; }
+
 // Everything the two phases share, sized once per build.
 struct Build {
   const Heightfield& hf;
@@ -349,7 +352,9 @@ Status run_build(Build& b, RowBand band, const Split& split, VolumeRowSink& sink
   std::vector<std::vector<float>> ring_b(static_cast<std::size_t>(pool.size()), std::vector<float>(ring_floats));
   b.cells_per_worker.assign(static_cast<std::size_t>(pool.size()), 0);
   int rows_out = target_lo;  // rows that left the window
-  std::vector<float> staging(static_cast<std::size_t>(b.geom.nz) * static_cast<std::size_t>(b.hf.nx));
+  std::vector<std::vector<float>> staging(
+      static_cast<std::size_t>(batch),
+      std::vector<float>(static_cast<std::size_t>(b.geom.nz) * static_cast<std::size_t>(b.hf.nx)));
   HeldRows held;
   for (int first = obs_lo; first < obs_hi; first += batch) {
     const int rows = std::min(batch, obs_hi - first);
@@ -372,25 +377,38 @@ Status run_build(Build& b, RowBand band, const Split& split, VolumeRowSink& sink
       if (y < finished_to && finished_here(y)) finish_sums(b, b.slab(y));
     });
     // rows done here leave in order, and their slabs are recycled
-    for (; rows_out < finished_to; ++rows_out) {
+    while (rows_out < finished_to) {
+      // a run of rows that go to the sink: turned to its order in parallel
+      int run = 0;
+      while (rows_out + run < finished_to && run < batch && finished_here(rows_out + run)) ++run;
+      if (run > 0) {
+        pool.run(run, [&](int item, int) {
+          std::int32_t* slab = b.slab(rows_out + item);
+          transpose_row(b, slab, staging[static_cast<std::size_t>(item)]);
+          std::fill(slab, slab + b.slab_ints, 0);
+        });
+        for (int item = 0; item < run; ++item) {
+          VISVOL_RETURN_IF_ERROR(sink.write_row(rows_out + item, staging[static_cast<std::size_t>(item)].data()));
+        }
+        rows_out += run;
+        continue;
+      }
       std::int32_t* slab = b.slab(rows_out);
       if (!in_band(rows_out)) {
         const int to = split.owner(rows_out);
         VISVOL_RETURN_IF_ERROR(split.exchange->send(to, rows_out, slab, b.slab_ints));
         stats.sent_bytes += b.slab_ints * sizeof(std::int32_t);
-      } else if (!finished_here(rows_out)) {
-        held.emplace_back(rows_out, std::vector<std::int32_t>(slab, slab + b.slab_ints));
       } else {
-        transpose_row(b, slab, staging);
-        VISVOL_RETURN_IF_ERROR(sink.write_row(rows_out, staging.data()));
+        held.emplace_back(rows_out, std::vector<std::int32_t>(slab, slab + b.slab_ints));
       }
       std::fill(slab, slab + b.slab_ints, 0);
+      ++rows_out;
     }
     stats.scatter_s += seconds_since(t0);
     if (progress) progress(static_cast<double>(first + rows - obs_lo) / (obs_hi - obs_lo));
   }
   if (!by_observers) return Status::ok_status();
-  return finish_held_rows(b, split, held, sink, staging, stats);
+  return finish_held_rows(b, split, held, sink, staging.front(), stats);
 }
 
 }  // namespace
@@ -428,20 +446,22 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
       static_cast<std::size_t>(params.nz + 1) * static_cast<std::size_t>(hf.nx) * sizeof(std::int32_t);
   auto total_for = [&](int batch) {
     return plan.table_bytes + plan.terrain_bytes + per_row * static_cast<std::size_t>(batch) +
-           window_rows(hf.ny, plan.radius_posts, batch) * slab;
+           window_rows(hf.ny, plan.radius_posts, batch) * slab + staging_for(batch, slab);
   };
   int batch = std::min(kMaxBatchRows, hf.ny);
   while (batch > 1 && total_for(batch) > limit) --batch;
   plan.batch_rows = batch;
   plan.level_bytes = per_row * static_cast<std::size_t>(batch);
   plan.window_bytes = window_rows(hf.ny, plan.radius_posts, batch) * slab;
+  plan.staging_bytes = staging_for(batch, slab);
   if (plan.total_bytes() > limit) {
     std::ostringstream msg;
     msg << "field build for " << hf.nx << " x " << hf.ny << " x " << params.nz << " voxels with hull radius "
         << plan.radius_posts << " posts needs " << plan.total_bytes() / kMiB << " MiB of working memory (hull levels "
-        << plan.level_bytes / kMiB << ", histogram window " << plan.window_bytes / kMiB << ", table "
-        << plan.table_bytes / kMiB << ", terrain " << plan.terrain_bytes / kMiB << "); the limit is "
-        << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
+        << plan.level_bytes / kMiB << ", histogram window " << plan.window_bytes / kMiB << ", finished rows "
+        << plan.staging_bytes / kMiB << ", table " << plan.table_bytes / kMiB << ", terrain "
+        << plan.terrain_bytes / kMiB << "); the limit is " << params.max_memory_mib
+        << " MiB: use a smaller range, fewer levels or a smaller grid";
     return resource_error(msg.str());
   }
   return plan;

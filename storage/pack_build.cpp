@@ -56,8 +56,19 @@ Status write_2d(TileSink& w, int level, Layer layer, const Heightfield& hf, cons
 // in memory until its last row.
 class BrickSink final : public fields::VolumeRowSink {
  public:
-  BrickSink(TileSink& w, std::size_t brick_bytes, int level, int nx, int ny, int nz, VisibilityEncoding enc)
-      : w_(w), level_(level), nx_(nx), ny_(ny), nz_(nz), enc_(enc), brick_(brick_bytes) {}
+  // The bricks of a band are encoded by `pool` (the field build's own pool is
+  // idle while its rows leave).
+  BrickSink(TileSink& w, std::size_t brick_bytes, int level, int nx, int ny, int nz, VisibilityEncoding enc,
+            fields::WorkerPool& pool)
+      : w_(w),
+        level_(level),
+        nx_(nx),
+        ny_(ny),
+        nz_(nz),
+        enc_(enc),
+        pool_(pool),
+        brick_bytes_(brick_bytes),
+        bricks_(brick_bytes * static_cast<std::size_t>(tile_grid(Layer::visibility, nx, ny).tiles_x)) {}
 
   Status write_row(int j, const float* values) override {
     const int ty = j / kBrickPosts, y = j % kBrickPosts;
@@ -84,36 +95,45 @@ class BrickSink final : public fields::VolumeRowSink {
 
   Status flush(int ty, int rows, const std::vector<float>& band) {
     const int tiles_x = tile_grid(Layer::visibility, nx_, ny_).tiles_x;
+    pool_.run(tiles_x,
+              [&](int tx, int) { encode(tx, rows, band, &bricks_[static_cast<std::size_t>(tx) * brick_bytes_]); });
     for (int tx = 0; tx < tiles_x; ++tx) {
-      std::fill(brick_.begin(), brick_.end(), std::uint8_t{0});
-      for (int k = 0; k < nz_; ++k) {
-        for (int y = 0; y < rows; ++y) {
-          for (int x = 0; x < kBrickPosts; ++x) {
-            const int i = tx * kBrickPosts + x;
-            if (i >= nx_) break;
-            const float f =
-                band[static_cast<std::size_t>(y) * row_floats() +
-                     static_cast<std::size_t>(k) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
-            const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + y) * kBrickPosts + x);
-            if (enc_ == VisibilityEncoding::uint16) {
-              const std::uint16_t q = quantise_visibility(f);
-              std::memcpy(&brick_[index * sizeof q], &q, sizeof q);
-            } else {
-              std::memcpy(&brick_[index * sizeof f], &f, sizeof f);
-            }
+      VISVOL_RETURN_IF_ERROR(w_.write_tile(level_, Layer::visibility, tx, ty,
+                                           &bricks_[static_cast<std::size_t>(tx) * brick_bytes_], brick_bytes_));
+    }
+    return Status::ok_status();
+  }
+
+  // Brick tx of a band of `rows` rows into `brick` (brick_bytes_).
+  void encode(int tx, int rows, const std::vector<float>& band, std::uint8_t* brick) const {
+    std::fill(brick, brick + brick_bytes_, std::uint8_t{0});
+    for (int k = 0; k < nz_; ++k) {
+      for (int y = 0; y < rows; ++y) {
+        for (int x = 0; x < kBrickPosts; ++x) {
+          const int i = tx * kBrickPosts + x;
+          if (i >= nx_) break;
+          const float f =
+              band[static_cast<std::size_t>(y) * row_floats() +
+                   static_cast<std::size_t>(k) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
+          const std::size_t index = static_cast<std::size_t>((k * kBrickPosts + y) * kBrickPosts + x);
+          if (enc_ == VisibilityEncoding::uint16) {
+            const std::uint16_t q = quantise_visibility(f);
+            std::memcpy(&brick[index * sizeof q], &q, sizeof q);
+          } else {
+            std::memcpy(&brick[index * sizeof f], &f, sizeof f);
           }
         }
       }
-      VISVOL_RETURN_IF_ERROR(w_.write_tile(level_, Layer::visibility, tx, ty, brick_.data(), brick_.size()));
     }
-    return Status::ok_status();
   }
 
   TileSink& w_;
   int level_, nx_, ny_, nz_;
   VisibilityEncoding enc_;
-  std::map<int, BrickRow> rows_;     // brick rows being filled, by index
-  std::vector<std::uint8_t> brick_;  // one encoded brick
+  fields::WorkerPool& pool_;
+  std::size_t brick_bytes_;
+  std::map<int, BrickRow> rows_;      // brick rows being filled, by index
+  std::vector<std::uint8_t> bricks_;  // one brick row's bricks, encoded
 };
 
 std::int16_t to_centimetres(float metres) {
@@ -353,7 +373,7 @@ Status build_pack_share(const PackPlan& plan, const PackBuildParams& params, Bui
     fields::BuildStats stats;
     if (bricks.first < bricks.end) {
       BrickSink bricks_out(sink, payload_bytes(plan.layout, level, Layer::visibility), level, t.nx, t.ny, in.params.nz,
-                           params.encoding);
+                           params.encoding, pool);
       const fields::ProgressFn field_progress = [&](double f) {
         if (progress) progress(done + share_of_total * 0.9 * f);
       };

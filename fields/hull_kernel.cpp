@@ -288,14 +288,16 @@ VISVOL_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typename L
 }
 
 // Levels are 0..nz <= 255 by construction (every bound above is clamped to
-// nz), so a byte holds each. The bytes are narrowed in a register and stored
-// whole: narrowing straight to memory (vpmovdb to memory on AVX-512) is slow.
+// nz, and so are the ground and floor levels: hull_levels_chunk's
+// preconditions), so a byte holds each. The 16 bytes of a 16-lane pass are
+// narrowed in a register and stored whole: narrowing straight to memory
+// (vpmovdb to memory on AVX-512) is slow.
 template <int W>
 VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst) {
   typedef std::uint8_t Bytes __attribute__((vector_size(W)));
   Bytes b = __builtin_convertvector(k, Bytes);
 #if defined(__x86_64__)
-  __asm__("" : "+x"(b));  // keeps the narrowing in a register
+  if constexpr (W == 16) __asm__("" : "+x"(b));  // keeps the narrowing in a register
 #endif
   std::memcpy(dst, &b, sizeof b);
 }
@@ -307,7 +309,8 @@ VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst
 // either side of it on that grid line (the grid's edges are grid lines), so
 // a target's stencil cells are inside whenever it is. The ring buffer's
 // slots of the skipped entries keep older values, which only lanes whose
-// targets lie outside the grid read, and their levels are never used.
+// observer or target lies outside the grid read, and their levels are never
+// used.
 template <class Fn>
 VISVOL_INLINE void for_each_inside_entry(int m, int dx_lo, int dx_hi, int dy_lo, int dy_hi, Fn&& fn) {
   const int x0 = std::max(-m, dx_lo), x1 = std::min(m, dx_hi);
@@ -476,7 +479,8 @@ VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terra
   static_assert(kLanes % (W * R) == 0, "passes cover the chunk");
   // The slots of entries outside the grid are not computed (see
   // for_each_inside_entry): they start the chunk at a fixed value, so that
-  // every byte the kernel writes depends on this chunk alone.
+  // every byte the kernel writes depends on this chunk alone (not on what the
+  // buffers held before: the widths compare equal byte for byte).
   const std::size_t ring_floats = static_cast<std::size_t>(ring_size(table.radius())) * kLanes;
   std::fill(ring_a, ring_a + ring_floats, kNoHorizon);
   std::fill(ring_b, ring_b + ring_floats, kNoHorizon);

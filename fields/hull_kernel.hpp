@@ -188,8 +188,14 @@ struct ObserverChunk {
 
 // Phase 1 of the field: for every target of the chunk's observers, the first
 // level from which each observer is visible (clamped to 0..nz), written to
-// `out` (one observer row's block of `layout`). Scratch: two ring buffers of
-// 8 * radius * kLanes floats. Cost: O(entries * kLanes); no allocation.
+// `out` (one observer row's block of `layout`). Only the bytes of an observer
+// and a target both inside the grid are meaningful; of the others some are
+// written with values of no use, some left as they were. Scratch: two ring
+// buffers of 8 * radius * kLanes floats. Cost: O(entries * kLanes); no
+// allocation. Preconditions, on which the levels' range 0..nz rests (the
+// scatter indexes with them): levels.nz <= kMaxHeightLevels, the terrain's
+// ground levels made by pad_terrain with the same nz, every floor_level in
+// 0..nz.
 void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
                        const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
                        float* ring_b, std::uint8_t* out);

@@ -1,6 +1,7 @@
 #include "fields/visibility_builder.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -127,7 +128,9 @@ void hull_phase(Build& b, int batch_first, int item, std::vector<float>& ring_a,
     const std::size_t pi = b.padded_index(oc.px0 + l, py);
     oc.eye_m[l] = b.eye_m[pi];
     oc.floor_level[l] = floor_level(b, b.hf.at(std::min(oc.px0 + l, b.hf.nx - 1), py));
+    assert(oc.floor_level[l] >= 0 && oc.floor_level[l] <= b.levels.nz);  // the kernel's preconditions
   }
+  assert(b.levels.nz <= kMaxHeightLevels);
   std::uint8_t* out =
       b.hull_levels.data() + static_cast<std::size_t>(py - batch_first) * b.layout.bytes_per_observer_row();
   hull_levels_chunk(b.table, b.terrain, b.layout, b.levels, b.params.range_shape, oc, ring_a.data(), ring_b.data(),

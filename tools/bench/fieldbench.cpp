@@ -429,6 +429,7 @@ int main(int argc, char** argv) {
     j["ny"] = hf->ny;
     j["nz"] = 128;
     j["repeat"] = repeat;
+    j["goal_s"] = kFieldGoalS;  // 512 x 512 x 128 at range 64
     for (const RangeFigures& f : figures) {
       j["builds"].push_back({{"range_posts", f.range},
                              {"ok", f.ok},
@@ -510,8 +511,8 @@ int main(int argc, char** argv) {
                     l + 1 < kStreamLevels ? "," : "");
       }
       std::printf(
-          "\n  terrain force field %.1f s, the rest (levels of detail, height and area tiles, writing; the import is "
-          "not counted) %.1f s\n",
+          "\n  terrain force field %.1f s, the rest (levels of detail, height and area tiles, the pack's end and "
+          "sync; the import is not counted) %.1f s\n",
           streamed.tff_s, streamed.other_s());
     } else {
       std::printf("\nstreamed pack build failed: %s\n", streamed.error.c_str());

@@ -97,13 +97,14 @@ void relax_turns(std::vector<Vec3>& p, double radius_m) {
 // limits per segment, ends fixed; false when no heights satisfy them all
 // (the heights then keep the slopes and come as near the band as they can).
 bool fit_heights(const std::vector<Vec3>& p, const std::vector<double>& lo, const std::vector<double>& hi,
-                 double climb_per_m, double descent_per_m, std::vector<double>& z) {
+                 double climb_per_m, double descent_per_m, const std::vector<double>& slope_share,
+                 std::vector<double>& z) {
   const std::size_t n = p.size();
   std::vector<double> rise(n - 1), drop(n - 1), C(n), D(n);
   for (std::size_t i = 0; i + 1 < n; ++i) {
     const double h = std::hypot(p[i + 1].x() - p[i].x(), p[i + 1].y() - p[i].y());
-    rise[i] = climb_per_m * h;
-    drop[i] = descent_per_m * h;
+    rise[i] = climb_per_m * h * slope_share[i];
+    drop[i] = descent_per_m * h * slope_share[i];
   }
   // backwards: heights from which the end stays reachable
   C[n - 1] = D[n - 1] = p[n - 1].z();
@@ -128,6 +129,27 @@ bool fit_heights(const std::vector<Vec3>& p, const std::vector<double>& lo, cons
   }
   z[n - 1] = p[n - 1].z();  // the ends are the user's: where they cannot be reached, the check says so
   return feasible;
+}
+
+// The share of the slope limits each segment may use so that the arcs a
+// fixed-wing flies by the corners hold them too: an arc of turn theta at a
+// corner climbs (s_in + s_out) / 2 / k, k = theta / (2 tan(theta / 2)) <= 1
+// (it is shorter than the legs it cuts), so both legs keep to k of the
+// limit. 1 everywhere without arcs.
+std::vector<double> slope_shares(const std::vector<Vec3>& p, double min_turn_radius_m) {
+  std::vector<double> share(p.size() > 1 ? p.size() - 1 : 0, 1.0);
+  const std::vector<std::optional<Fillet>> arcs =
+      corner_fillets(p.data(), static_cast<int>(p.size()), min_turn_radius_m);
+  for (std::size_t first = 0; first < arcs.size(); ++first) {
+    if (!arcs[first]) continue;
+    const double theta = arcs[first]->turn_rad;
+    const double k = theta / (2.0 * std::tan(0.5 * std::min(theta, M_PI - 1e-6)));
+    std::size_t last = first;  // the corner's run of vertices on one spot
+    while (last + 1 < p.size() && same_spot(p[last + 1], p[first])) ++last;
+    share[first - 1] = std::min(share[first - 1], k);
+    if (last < share.size()) share[last] = std::min(share[last], k);
+  }
+  return share;
 }
 
 struct SegmentMiss {
@@ -215,7 +237,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
   bool feasible = false;
   int round = 1;
   for (int pass = 0; pass < kHeightPasses * kTurnRounds; ++pass) {
-    feasible = fit_heights(p, lo, hi, climb, descent, z);
+    feasible = fit_heights(p, lo, hi, climb, descent, slope_shares(p, spec.envelope.min_turn_radius_m), z);
     std::vector<Vec3> fitted = p;
     for (std::size_t i = 0; i < p.size(); ++i) fitted[i].z() = z[i];
     bool changed = false;
@@ -290,7 +312,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
     }
   }
   // the passes ran out: the last heights, not proven
-  (void)fit_heights(p, lo, hi, climb, descent, z);
+  (void)fit_heights(p, lo, hi, climb, descent, slope_shares(p, spec.envelope.min_turn_radius_m), z);
   for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];
   out.path = std::move(p);
   return out;

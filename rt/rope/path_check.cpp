@@ -236,12 +236,20 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // the constraints, clearance, heights and bounds at no share of the length
   // (they can only fail a requirement), and clearance and max-agl are exact
   // along the arc's chords between them (a chord is step^2 / 8R from the
-  // arc: a centimetre at the default step and 80 m)
+  // arc: a centimetre at the default step and 80 m). The arc is shorter
+  // than the legs it cuts, so it climbs or descends more steeply than they
+  // do (a right-angle corner between two legs at the same slope: 4 / pi
+  // times their slope): judged too, at no share of the length.
   for (const std::optional<Fillet>& f : corner_fillets(v, count, e.min_turn_radius_m)) {
     if (!f) continue;
     for_each_arc_point(
         *f, fillet_samples(*f, spec_.sample_step_m), terrain_, [&](const Vec3& p) { sample(p, 0.0, nullptr); },
         terrain_probe);
+    const double angle = std::atan2(f->z_end_m - f->z_start_m, f->length_m()) * kDegPerRad;
+    steepest_climb = std::max(steepest_climb, angle);
+    steepest_descent = std::max(steepest_descent, -angle);
+    climb.probe(angle <= e.max_climb_deg + kAngleTolDeg);
+    descent.probe(-angle <= e.max_descent_deg + kAngleTolDeg);
   }
 
   out.per_vertex.resize(static_cast<std::size_t>(count));

@@ -276,6 +276,39 @@ TEST(PathCheck, AFixedWingsArcInsideACornerIsChecked) {
   EXPECT_NEAR(on_the_corner.envelope[0].worst, 110.0, 1e-9);
 }
 
+TEST(PathCheck, AFixedWingsArcClimbsMoreSteeplyThanItsLegs) {
+  const fields::Heightfield t = blank(60, 60, 10.0, 0.0f);
+  // two 200 m legs climbing at 12 deg with a right angle between them: the
+  // 80 m arc cuts 160 m of them and climbs their 34 m in 126 m, at 15.1 deg
+  const double rise = 200.0 * std::tan(12.0 * M_PI / 180.0);
+  const Vec3 corner{t.x_of(30), t.y_of(30), 300.0};
+  const std::vector<Vec3> path = {corner + Vec3(-200, 0, -rise), corner, corner + Vec3(0, -200, rise)};
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");  // 80 m turns
+  s.envelope.max_climb_deg = 14;
+  s.envelope.max_descent_deg = 14;
+  const auto fixed_wing = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(fixed_wing.ok()) << fixed_wing.status().message();
+  const PathCheck flown = fixed_wing->check(path);
+  const LimitResult& climb = flown.envelope[3];
+  ASSERT_EQ(climb.name, "max-climb");
+  EXPECT_FALSE(climb.met);
+  EXPECT_NEAR(climb.worst, std::atan(2 * rise * 0.4 / (80 * M_PI / 2)) * 180 / M_PI, 1e-6);
+  EXPECT_LT(fraction_shown(climb.satisfied_fraction), 1.0);
+  EXPECT_TRUE(flown.envelope[4].met);  // max-descent: nothing descends
+  // flown the other way, it descends as steeply
+  const std::vector<Vec3> back(path.rbegin(), path.rend());
+  EXPECT_FALSE(fixed_wing->check(back).envelope[4].met);
+  EXPECT_TRUE(fixed_wing->check(back).envelope[3].met);
+  // a multirotor turns on the corner: its legs at 12 deg are all it climbs
+  s.envelope = *vehicle_preset("multirotor");
+  s.envelope.max_climb_deg = 14;
+  const auto multirotor = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(multirotor.ok());
+  EXPECT_TRUE(multirotor->check(path).envelope[3].met);
+  EXPECT_NEAR(multirotor->check(path).envelope[3].worst, 12.0, 1e-9);
+}
+
 TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
   PathCheckSpec s = spec();
   s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 99.0), 2.0}};  // 1 m under the plain

@@ -142,8 +142,7 @@ std::vector<double> slope_shares(const std::vector<Vec3>& p, double min_turn_rad
       corner_fillets(p.data(), static_cast<int>(p.size()), min_turn_radius_m);
   for (std::size_t first = 0; first < arcs.size(); ++first) {
     if (!arcs[first]) continue;
-    const double theta = arcs[first]->turn_rad;
-    const double k = theta / (2.0 * std::tan(0.5 * std::min(theta, M_PI - 1e-6)));
+    const double k = arc_slope_share(arcs[first]->turn_rad);
     std::size_t last = first;  // the corner's run of vertices on one spot
     while (last + 1 < p.size() && same_spot(p[last + 1], p[first])) ++last;
     share[first - 1] = std::min(share[first - 1], k);

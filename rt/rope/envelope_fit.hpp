@@ -9,7 +9,10 @@
 // 3. Heights: each vertex keeps its height where it can, inside a band from
 //    the clearance (and above every visible-to hull) up to the ceiling (terrain
 //    + max AGL, max altitude, the field's top, and under every hidden-from
-//    hull), with every segment within the climb and descent limits. The band
+//    hull), with every segment within the climb and descent limits (a leg
+//    by a corner within the share of them its fixed-wing arc leaves:
+//    theta / (2 tan(theta / 2)), as the arc is shorter than the legs it
+//    cuts). The band
 //    is checked between vertices too (the terrain under a straight segment,
 //    at samples and exactly where its height is extreme, as the checker
 //    finds it: rt/rope/terrain_probe.hpp); a segment that cannot hold it is

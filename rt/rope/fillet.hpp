@@ -35,6 +35,15 @@ struct Fillet {
   }
 };
 
+// The share of its legs' slope an arc turning `turn_rad` climbs at
+// (theta / (2 tan(theta / 2)), 1 for no turn): it is shorter than the legs
+// it cuts, so legs within this share of a slope limit keep their arc within
+// the limit (rt::fit_to_envelope's legs by a corner, a loiter's chords).
+inline double arc_slope_share(double turn_rad) {
+  if (!(turn_rad > 1e-9)) return 1.0;
+  return turn_rad / (2.0 * std::tan(0.5 * std::min(turn_rad, M_PI - 1e-6)));
+}
+
 // The arc from segment a-b_in to b_out-c (b_in and b_out one spot: the same
 // vertex, or the ends of a run on it) at `radius_m`, its tangent points no
 // farther from the corner than the segments are long. None for a

@@ -238,8 +238,8 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // along the arc's chords between them (a chord is step^2 / 8R from the
   // arc: a centimetre at the default step and 80 m). The arc is shorter
   // than the legs it cuts, so it climbs or descends more steeply than they
-  // do (a right-angle corner between two legs at the same slope: 4 / pi
-  // times their slope): judged too, at no share of the length.
+  // do on average (a right-angle corner between two legs at the same slope:
+  // 4 / pi times their slope): judged too, at no share of the length.
   for (const std::optional<Fillet>& f : corner_fillets(v, count, e.min_turn_radius_m)) {
     if (!f) continue;
     for_each_arc_point(

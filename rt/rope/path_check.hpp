@@ -107,7 +107,8 @@ struct VertexCheck {
   double fp = 0;              // F_p of the field at the vertex (informative)
   double ground_m = 0;        // finest terrain below it
   double clearance_m = 0;     // height above it
-  double climb_deg = 0;       // of the segment to the next vertex (negative: descent)
+  double climb_deg = 0;       // of the segment to the next vertex (negative: descent; a fixed-wing's
+                              // arc by a corner may climb more steeply, and max-climb's worst counts it)
   double turn_radius_m = 0;   // the largest flyable turn radius here (turn_radii_m; infinite: straight or an end)
   std::vector<bool> seen_by;  // per constraint: the observer sees this vertex (R3)
 };

@@ -221,6 +221,17 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   EXPECT_NE(tight.out.find("loiter     mission.items[1] (doJumpId 2): 2.0 turns of 25 m clockwise"), std::string::npos)
       << tight.out;
   EXPECT_NE(tight.out.find("min-turn-radius 80.0 m: worst 25.0 m"), std::string::npos) << tight.out;
+  // a loiter that climbs 200 m to its altitude, at the steepest the vehicle
+  // climbs: its circle's points climb as the circle does (no arc of their own)
+  nlohmann::json climbing = mission_with(120.0);
+  climbing["mission"]["items"][1]["command"] = 31;  // MAV_CMD_NAV_LOITER_TO_ALT: radius in param 2
+  climbing["mission"]["items"][1]["params"] = {0, 120, 0, 0, 37.7880, -122.4310, 600};
+  climbing["mission"]["items"][2]["params"][6] = 600;
+  std::ofstream(plan) << climbing.dump(2);
+  const Outcome up = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing");
+  EXPECT_NE(up.out.find("clockwise at 600.0 m"), std::string::npos) << up.out;
+  EXPECT_NE(up.out.find("max-climb 15.0 deg: worst 15.0 deg, holds on 1.000 of the length met"), std::string::npos)
+      << up.out;
   // what the .plan states of its vehicle: its cruise speed for the times
   // (unless --speed names one), and its type where it is not the one checked
   nlohmann::json stated = mission_with(-120.0);

@@ -16,6 +16,8 @@ namespace visvol::cli {
 nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope);
 
 // Per vertex: x_m, y_m, z_m, fp, ground_m, clearance_m, climb_deg, turn_radius_m, seen_by.
+// (climb_deg is the straight segment's to the next vertex; a fixed-wing's arc
+// by a corner may climb more steeply, and max-climb's worst includes it.)
 nlohmann::json vertices_json(const rt::PathCheck& check, const std::vector<rt::Vec3>& path);
 
 // Lines "constraint  hidden-from (x, y, z): met on 1.000 of the length" and

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "path_io_detail.hpp"
+#include "rt/rope/fillet.hpp"
 
 namespace visvol::cli {
 
@@ -120,9 +121,13 @@ class Flight {
     const double chord_turn_m =
         kTwoPi * radius_m * std::sin(0.5 * kLoiterStepDeg * kRadPerDeg) / (0.5 * kLoiterStepDeg * kRadPerDeg);
     // the turns the item asks for, or more: the loiter's altitude is reached
-    // on the circle (an autopilot climbs or descends there until it is)
+    // on the circle (an autopilot climbs or descends there until it is). Its
+    // chords climb at the share of the steepest slope the checker's arcs by
+    // their corners leave (rt::arc_slope_share): a helix climbs at the slope
+    // itself, the chords with an arc at each corner would climb more steeply.
     const double slope = steepest_slope(e_, dz_m), sign = dz_m > 0 ? 1.0 : -1.0;
-    const double to_altitude = std::max(0.0, std::fabs(dz_m) - leg_m * slope) / slope / chord_turn_m;
+    const double circle_slope = slope * rt::arc_slope_share(kLoiterStepDeg * kRadPerDeg);
+    const double to_altitude = std::max(0.0, std::fabs(dz_m) - leg_m * slope) / circle_slope / chord_turn_m;
     const double turns = std::max(loiter_turns(l, e_, radius_m), to_altitude);
     if (!(turns <= kMaxLoiterTurns)) {
       return invalid_argument(l.item + ": " + describe_number(turns) + " turns of " + describe_number(radius_m) +
@@ -139,8 +144,8 @@ class Flight {
     const double sweep = turns * kTwoPi + exit_arc;
     const int steps = std::max(1, static_cast<int>(std::ceil(sweep / (kLoiterStepDeg * kRadPerDeg))));
     double z = from.z(), left_m = std::fabs(dz_m);
-    auto climb_over = [&](double horizontal_m) {
-      const double step = std::min(left_m, horizontal_m * slope);
+    auto climb_over = [&](double horizontal_m, double along_slope) {
+      const double step = std::min(left_m, horizontal_m * along_slope);
       left_m -= step;
       z += sign * step;
     };
@@ -153,7 +158,7 @@ class Flight {
     Vec2 last = xy(from);
     for (int k = 0; k <= last_step; ++k) {
       const Vec2 p = c.at(entry + c.sense * sweep * k / steps);
-      climb_over((p - last).norm());
+      climb_over((p - last).norm(), k == 0 ? slope : circle_slope);  // the leg in, then the chords
       last = p;
       const bool join = (k == 0 && !entry_inside) || (k == last_step && !exit_inside);
       add({p.x(), p.y(), z}, join ? kGeometry : radius_m);

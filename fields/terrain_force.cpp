@@ -42,6 +42,19 @@ struct Nearest {
   double distance2 = std::numeric_limits<double>::infinity();
 };
 
+// The closest points to q of cell (i, j)'s two triangles (split along its
+// north-west to south-east diagonal), kept in `best` where nearer.
+void visit_cell(const Heightfield& hf, int i, int j, const Vec3& q, Nearest& best) {
+  const double s = hf.spacing_m;
+  const double h00 = hf.at(i, j), h10 = hf.at(i + 1, j), h01 = hf.at(i, j + 1), h11 = hf.at(i + 1, j + 1);
+  const Vec3 a{i * s, j * s, h00}, b{(i + 1) * s, j * s, h10};
+  const Vec3 c{(i + 1) * s, (j + 1) * s, h11}, d{i * s, (j + 1) * s, h01};
+  for (const Vec3& p : {closest_on_triangle(q, a, b, c), closest_on_triangle(q, a, c, d)}) {
+    const double d2 = (p - q).squaredNorm();
+    if (d2 < best.distance2) best = {p, d2};
+  }
+}
+
 // Searches the cells whose squares come within `search_m` of q (local frame),
 // nearest cells first, skipping any cell that cannot hold a closer point: its
 // distance is at least the horizontal distance to its square and the vertical
@@ -62,12 +75,7 @@ Nearest nearest_local(const Heightfield& hf, const Vec3& q, double search_m) {
     const double hmax = std::max({h00, h10, h01, h11}), hmin = std::min({h00, h10, h01, h11});
     const double gap_z = std::max({0.0, q.z() - hmax, hmin - q.z()});
     if (gap_x * gap_x + gap_y * gap_y + gap_z * gap_z >= best.distance2) return;
-    const Vec3 a{i * s, j * s, h00}, b{(i + 1) * s, j * s, h10};
-    const Vec3 c{(i + 1) * s, (j + 1) * s, h11}, d{i * s, (j + 1) * s, h01};
-    for (const Vec3& p : {closest_on_triangle(q, a, b, c), closest_on_triangle(q, a, c, d)}) {
-      const double d2 = (p - q).squaredNorm();
-      if (d2 < best.distance2) best = {p, d2};
-    }
+    visit_cell(hf, i, j, q, best);
   };
   // Rings of cells around the one under q.
   const int rings = std::max({ci - i_lo, i_hi - ci, cj - j_lo, j_hi - cj});
@@ -137,7 +145,6 @@ class CellRanges {
   // search ends at the first whose square is no nearer than the best point
   // found; the caller's rows must hold every cell that near.
   Nearest nearest_over_post(int i, int j, const Vec3& q, Nearest best) const {
-    const double s = hf_.spacing_m;
     for (const CellOffset& o : order_) {
       if (o.gap2_m2 >= best.distance2) break;
       const int ci = i + o.di, cj = j + o.dj;
@@ -145,14 +152,7 @@ class CellRanges {
       const Range& r = range_[index(ci, cj)];
       const double gap_z = std::max({0.0, q.z() - r.hi, r.lo - q.z()});
       if (o.gap2_m2 + gap_z * gap_z >= best.distance2) continue;
-      const double h00 = hf_.at(ci, cj), h10 = hf_.at(ci + 1, cj), h01 = hf_.at(ci, cj + 1),
-                   h11 = hf_.at(ci + 1, cj + 1);
-      const Vec3 a{ci * s, cj * s, h00}, b{(ci + 1) * s, cj * s, h10};
-      const Vec3 c{(ci + 1) * s, (cj + 1) * s, h11}, d{ci * s, (cj + 1) * s, h01};
-      for (const Vec3& p : {closest_on_triangle(q, a, b, c), closest_on_triangle(q, a, c, d)}) {
-        const double d2 = (p - q).squaredNorm();
-        if (d2 < best.distance2) best = {p, d2};
-      }
+      visit_cell(hf_, ci, cj, q, best);
     }
     return best;
   }

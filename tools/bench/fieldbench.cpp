@@ -293,6 +293,14 @@ struct StreamFigures {
   }
 };
 
+// What the stream build's child sends its parent through a pipe: plain data.
+struct StreamResult {
+  int ok, n;
+  double wall_s, pack_mib;
+  double fp_s[kStreamLevels], hull_s[kStreamLevels], scatter_s[kStreamLevels], tff_s;
+  char error[256];
+};
+
 // A pack build of a grid far larger than the field's working window: the
 // Taunus DEM resampled to 22.5 m is 2048 x 2048 posts; 128 levels, range 64,
 // three levels of detail. Run in a child so the peak RSS is the build's own.
@@ -304,12 +312,7 @@ StreamFigures bench_stream(const std::string& dem, int threads) {
   const pid_t pid = fork();
   if (pid == 0) {
     close(fds[0]);
-    struct Result {
-      int ok, n;
-      double wall_s, pack_mib;
-      double fp_s[kStreamLevels], hull_s[kStreamLevels], scatter_s[kStreamLevels], tff_s;
-      char error[256];
-    } r{};
+    StreamResult r{};
     ImportOptions io;
     io.spacing_m = 22.5;
     io.nodata = NodataPolicy::fill;
@@ -341,12 +344,7 @@ StreamFigures bench_stream(const std::string& dem, int threads) {
     _exit(0);
   }
   close(fds[1]);
-  struct {
-    int ok, n;
-    double wall_s, pack_mib;
-    double fp_s[kStreamLevels], hull_s[kStreamLevels], scatter_s[kStreamLevels], tff_s;
-    char error[256];
-  } r{};
+  StreamResult r{};
   const ssize_t got = read(fds[0], &r, sizeof r);
   close(fds[0]);
   int status = 0;

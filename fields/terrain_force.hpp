@@ -22,6 +22,9 @@ namespace visvol::fields {
 
 class WorkerPool;
 
+// Band samples a column may have.
+inline constexpr int kMaxBandLevels = 64;
+
 struct TffParams {
   double band_offset_m = 100.0;  // band from terrain - offset to terrain + offset
   int band_levels = 24;          // samples per column (even: no sample sits on a post)
@@ -48,8 +51,16 @@ NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Ve
 
 // The band samples of rows [j_begin, j_end): out[((j - j_begin) * band_levels + b) * nx + i].
 // Each search is bounded by the sample's vertical distance to its own post,
-// which the nearest point can never exceed, so the result is exact.
+// which the nearest point can never exceed, so the result is exact. A
+// column's samples are searched together, in the lanes of a vector.
 void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end, TffSample* out,
                         WorkerPool* pool);
+
+// The lanes a column's search runs in on this CPU (4 with AVX2 or AVX-512, 2
+// otherwise), and the same rows at the baseline's width whatever the CPU,
+// one thread: tests hold the two to the same distances.
+int terrain_force_width();
+void terrain_force_rows_baseline(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
+                                 TffSample* out);
 
 }  // namespace visvol::fields

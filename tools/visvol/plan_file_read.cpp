@@ -81,40 +81,132 @@ enum class ItemRole : std::uint8_t {
   end,        // takeoff, landing, return to launch: the mission's ends, not checked
   no_motion,  // moves nothing (conditions, delays, camera, gimbal, speed, ROI...)
   moves,      // moves the aircraft along what visvol cannot read from the file
-  unknown,    // no MAV_CMD visvol knows: it may move the aircraft
+  unknown,    // none visvol knows to leave the path unchanged: it may move the aircraft
 };
 
-// The commands past the NAV range that move the aircraft (ArduPilot counts
-// some as NAV commands): a jump repeats legs, a mode or home change moves
-// it or what its altitudes mean.
-bool moves_outside_nav_range(long long command) {
-  constexpr long long kDoSetMode = 176, kDoJump = 177, kDoSetHome = 179, kDoChangeAltitude = 186;
-  constexpr long long kDoRallyLand = 190, kDoGoAround = 191, kDoReposition = 192, kNavSetYawSpeed = 213;
-  constexpr long long kDoJumpTag = 601, kNavScriptTime = 42702, kNavAttitudeTime = 42703;
-  constexpr long long kConditionChangeAlt = 113;
-  constexpr long long kFirstUserWaypoint = 31000, kLastUserSpatial = 31009;  // user commands with positions
+// Commands that leave the flown path as it is: conditions and delays that
+// hold the aircraft on it, speed, camera, gimbal, servo, relay and ROI
+// commands. A list of those visvol knows (MAVLink's common set): any other
+// command may move the aircraft (a jump, a mode or home change, a
+// termination, an orbit...), and a path read past it would not be the path
+// flown.
+bool leaves_path_unchanged(long long command) {
+  constexpr long long kNavRoi = 80, kNavDelay = 93;
+  constexpr long long kConditionDelay = 112, kConditionDistance = 114, kConditionYaw = 115;
+  constexpr long long kDoChangeSpeed = 178, kDoSetRelay = 181, kDoRepeatRelay = 182, kDoSetServo = 183;
+  constexpr long long kDoRepeatServo = 184, kDoSetActuator = 187;
+  constexpr long long kDoSetRoiLocation = 195, kDoSetRoiWpnextOffset = 196, kDoSetRoiNone = 197;
+  constexpr long long kDoSetRoiSysid = 198, kDoControlVideo = 200, kDoSetRoi = 201, kDoDigicamConfigure = 202;
+  constexpr long long kDoDigicamControl = 203, kDoMountConfigure = 204, kDoMountControl = 205;
+  constexpr long long kDoSetCamTriggDist = 206, kDoFenceEnable = 207, kDoGripper = 211;
+  constexpr long long kDoSetCamTriggInterval = 214, kDoMountControlQuat = 220, kObliqueSurvey = 260;
+  constexpr long long kSetCameraMode = 530, kSetCameraZoom = 531, kSetCameraFocus = 532;
+  constexpr long long kGimbalManagerPitchyaw = 1000, kGimbalManagerConfigure = 1001;
+  constexpr long long kImageStartCapture = 2000, kImageStopCapture = 2001, kDoTriggerControl = 2003;
+  constexpr long long kCameraTrackPoint = 2004, kCameraTrackRectangle = 2005, kCameraStopTracking = 2010;
+  constexpr long long kVideoStartCapture = 2500, kVideoStopCapture = 2501, kVideoStartStreaming = 2502;
+  constexpr long long kVideoStopStreaming = 2503;
   switch (command) {
+    case kNavRoi:
+    case kNavDelay:
+    case kConditionDelay:
+    case kConditionDistance:
+    case kConditionYaw:
+    case kDoChangeSpeed:
+    case kDoSetRelay:
+    case kDoRepeatRelay:
+    case kDoSetServo:
+    case kDoRepeatServo:
+    case kDoSetActuator:
+    case mavlink::kCmdDoLandStart:  // a marker for a landing sequence
+    case kDoSetRoiLocation:
+    case kDoSetRoiWpnextOffset:
+    case kDoSetRoiNone:
+    case kDoSetRoiSysid:
+    case kDoControlVideo:
+    case kDoSetRoi:
+    case kDoDigicamConfigure:
+    case kDoDigicamControl:
+    case kDoMountConfigure:
+    case kDoMountControl:
+    case kDoSetCamTriggDist:
+    case kDoFenceEnable:
+    case kDoGripper:
+    case kDoSetCamTriggInterval:
+    case kDoMountControlQuat:
+    case kObliqueSurvey:
+    case kSetCameraMode:
+    case kSetCameraZoom:
+    case kSetCameraFocus:
+    case kGimbalManagerPitchyaw:
+    case kGimbalManagerConfigure:
+    case kImageStartCapture:
+    case kImageStopCapture:
+    case kDoTriggerControl:
+    case kCameraTrackPoint:
+    case kCameraTrackRectangle:
+    case kCameraStopTracking:
+    case kVideoStartCapture:
+    case kVideoStopCapture:
+    case kVideoStartStreaming:
+    case kVideoStopStreaming: return true;
+    default: return false;
+  }
+}
+
+// Commands known to move the aircraft along what the file does not hold
+// (named so in the refusal; others are refused as unknown).
+bool moves_off_the_file(long long command) {
+  constexpr long long kNavFollow = 25, kContinueAndChangeAlt = 30, kDoFollow = 32, kDoFollowReposition = 33;
+  constexpr long long kDoOrbit = 34, kNavPathPlanning = 81, kNavGuidedEnable = 92, kNavPayloadPlace = 94;
+  constexpr long long kConditionChangeAlt = 113, kDoSetMode = 176, kDoJump = 177, kDoSetHome = 179;
+  constexpr long long kDoFlightTermination = 185, kDoChangeAltitude = 186, kDoReturnPathStart = 188;
+  constexpr long long kDoRallyLand = 190, kDoGoAround = 191, kDoReposition = 192, kDoPauseContinue = 193;
+  constexpr long long kDoSetReverse = 194, kDoParachute = 208, kDoInvertedFlight = 210, kDoAutotuneEnable = 212;
+  constexpr long long kNavSetYawSpeed = 213, kDoGuidedLimits = 222, kDoEngineControl = 223;
+  constexpr long long kDoSetMissionCurrent = 224, kComponentArmDisarm = 400, kDoJumpTag = 601;
+  constexpr long long kDoVtolTransition = 3000, kNavScriptTime = 42702, kNavAttitudeTime = 42703;
+  constexpr long long kFirstUserWaypoint = 31000, kLastUserSpatial = 31009;
+  switch (command) {
+    case kNavFollow:
+    case kContinueAndChangeAlt:
+    case kDoFollow:
+    case kDoFollowReposition:
+    case kDoOrbit:
+    case kNavPathPlanning:
+    case kNavGuidedEnable:
+    case kNavPayloadPlace:
     case kConditionChangeAlt:
     case kDoSetMode:
     case kDoJump:
     case kDoSetHome:
+    case kDoFlightTermination:
     case kDoChangeAltitude:
+    case kDoReturnPathStart:
     case kDoRallyLand:
     case kDoGoAround:
     case kDoReposition:
+    case kDoPauseContinue:
+    case kDoSetReverse:
+    case kDoParachute:
+    case kDoInvertedFlight:
+    case kDoAutotuneEnable:
     case kNavSetYawSpeed:
+    case kDoGuidedLimits:
+    case kDoEngineControl:
+    case kDoSetMissionCurrent:
+    case kComponentArmDisarm:
     case kDoJumpTag:
+    case kDoVtolTransition:
     case kNavScriptTime:
     case kNavAttitudeTime: return true;
-    default: return command >= kFirstUserWaypoint && command <= kLastUserSpatial;
+    default: return command >= kFirstUserWaypoint && command <= kLastUserSpatial;  // user commands with positions
   }
 }
 
 ItemRole item_role(long long command) {
   using namespace mavlink;
-  constexpr long long kTakeoffLocal = 24, kNavRoi = 80, kNavDelay = 93;
-  constexpr long long kNavFollow = 25, kContinueAndChangeAlt = 30, kDoFollow = 32, kDoFollowReposition = 33;
-  constexpr long long kDoOrbit = 34, kNavPathPlanning = 81, kNavGuidedEnable = 92, kNavPayloadPlace = 94;
+  constexpr long long kTakeoffLocal = 24;
   switch (command) {
     case kCmdNavWaypoint:
     case kCmdNavLoiterUnlim:
@@ -129,24 +221,10 @@ ItemRole item_role(long long command) {
     case kTakeoffLocal:
     case kCmdNavVtolTakeoff:
     case kCmdNavVtolLand: return ItemRole::end;
-    case kNavRoi:
-    case kNavDelay: return ItemRole::no_motion;
-    case kNavFollow:
-    case kContinueAndChangeAlt:
-    case kDoFollow:
-    case kDoFollowReposition:
-    case kDoOrbit:
-    case kNavPathPlanning:
-    case kNavGuidedEnable:
-    case kNavPayloadPlace: return ItemRole::moves;
     default: break;
   }
-  // Conditions (112..159), DO_ items (176..), camera, gimbal and the like
-  // point or trigger things, but for those that move the aircraft; in the
-  // NAV range (..111) and past 16 bits, a number visvol does not know.
-  constexpr long long kFirstCondition = 112, kLargestCommand = 65535;
-  if (command < kFirstCondition || command > kLargestCommand) return ItemRole::unknown;
-  return moves_outside_nav_range(command) ? ItemRole::moves : ItemRole::no_motion;
+  if (leaves_path_unchanged(command)) return ItemRole::no_motion;
+  return moves_off_the_file(command) ? ItemRole::moves : ItemRole::unknown;
 }
 
 // A loiter's parameter (params[index]): a finite number in [lo, hi]; null
@@ -256,8 +334,9 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       return invalid_argument(where + "command " + std::to_string(command) +
                               (role == ItemRole::moves
                                    ? " moves the aircraft along a path visvol cannot read from the file (a jump, "
-                                     "orbit, follow, mode, home or altitude change...)"
-                                   : " is not a MAVLink command visvol knows, and it may move the aircraft") +
+                                     "orbit, follow, termination, mode, home or altitude change...)"
+                                   : " is not a command visvol knows to leave the flown path unchanged (speed, "
+                                     "camera, gimbal, servo, relay, ROI, delays), and it may move the aircraft") +
                               "; the path is read from waypoints (16), spline waypoints (82) and loiters (17, 18, "
                               "19, 31): write the mission with those, or check the path as flown");
     }

@@ -371,6 +371,7 @@ Status check_terrain(const std::string& path, int level) {
   auto p = storage::Pack::open(path, storage::PackAccess::inspect);
   if (!p.ok()) return p.status();
   VISVOL_RETURN_IF_ERROR((*p)->verify());
+  VISVOL_RETURN_IF_ERROR(storage::check_planning_bounds(**p));
   if (level >= (*p)->level_count()) {
     return invalid_argument(path + ": " + std::to_string((*p)->level_count()) + " levels of detail, --level " +
                             std::to_string(level) + " is not among them");
@@ -466,6 +467,7 @@ Status Console::Impl::open_pack() {
     return invalid_argument("--level: " + std::to_string(o.level) + " is not in " + o.pack + " (0.." +
                             std::to_string(pack->level_count() - 1) + ")");
   }
+  VISVOL_RETURN_IF_ERROR(storage::check_planning_bounds(*pack));
   bounds = storage::planning_bounds(*pack);
   VISVOL_RETURN_IF_ERROR(check_ends_inside(o, bounds));
   return {};

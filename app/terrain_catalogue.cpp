@@ -140,6 +140,7 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
     return refuse(e, std::to_string((*pack)->level_count()) + " levels of detail: the console runs on level " +
                          std::to_string(level));
   }
+  if (Status s = storage::check_planning_bounds(**pack); !s.ok()) return refuse(e, s.message());
   if (Status s = verify_tiles_read(**pack, stop); !s.ok()) return refuse(e, s.message());
   // changed while it was read: verified again when the change is seen
   if (stat(path.c_str(), &st) != 0 || !same_file(e, st)) return refuse(e, path + " changed while it was verified");

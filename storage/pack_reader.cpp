@@ -115,6 +115,13 @@ Result<PlanningBounds> derived_planning_bounds(const nlohmann::json& metadata, c
 
 fields::Bounds2D planning_bounds(const Pack& pack) { return pack.metadata().planning.box; }
 
+Status check_planning_bounds(const Pack& pack) {
+  if (!planning_bounds(pack).empty()) return Status::ok_status();
+  return invalid_argument(pack.path() +
+                          ": no planning bounds: the pack is no wider than twice its range, so F_p is short of "
+                          "observers everywhere (build it from a larger DEM, see visvol build --area)");
+}
+
 Pack::~Pack() {
   if (base_) ::munmap(const_cast<std::uint8_t*>(base_), static_cast<std::size_t>(size_));
 }

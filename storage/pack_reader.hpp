@@ -134,6 +134,10 @@ class Pack {
 // inside them. Recorded or derived; see PackMetadata::planning for which, and
 // for the margin. Check empty() on packs built before they were recorded.
 fields::Bounds2D planning_bounds(const Pack& pack);
+// Errc::invalid_argument naming the pack where its planning bounds are empty
+// (a pack built before they were recorded, no wider than twice its range):
+// nothing in it can be planned, checked or flown.
+Status check_planning_bounds(const Pack& pack);
 
 // One level of detail of a pack as the field sampler reads it: heights, F_p
 // and the terrain force field band, through per-tile pointers resolved once.

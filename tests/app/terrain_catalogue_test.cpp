@@ -18,6 +18,7 @@
 #include "console_packs.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
+#include "tests/storage/bare_pack.hpp"
 
 namespace visvol::app {
 namespace {
@@ -122,6 +123,21 @@ TEST(TerrainCatalogue, ALevelThePackLacksIsRefused) {
   ASSERT_TRUE(e);
   EXPECT_EQ(e->state, CatalogueState::refused);
   EXPECT_NE(e->reason.find("level"), std::string::npos) << e->reason;
+}
+
+TEST(TerrainCatalogue, APackWithNoPlanningBoundsIsRefused) {
+  // built before bounds were recorded, and no wider than twice its range:
+  // `visvol plan` and `check` refuse it, and so does the console
+  const std::string dir = make_folder("bounds");
+  storage::testing::write_bare_pack(dir + "/narrow.vvp", storage::testing::level_40x30(15),
+                                    R"({"build": {"range_shape": "cube"}})");
+  auto c = TerrainCatalogue::start(dir, 0);
+  ASSERT_TRUE(c.ok());
+  ASSERT_TRUE((*c)->wait_idle(60.0));
+  const std::optional<CatalogueEntry> e = find(**c, "narrow");
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->state, CatalogueState::refused);
+  EXPECT_NE(e->reason.find("no planning bounds"), std::string::npos) << e->reason;
 }
 
 // A folder of thousands of files (a mistaken copy, or an attack on the

@@ -12,27 +12,18 @@
 #include "storage/pack_reader.hpp"
 #include "storage/pack_writer.hpp"
 #include "storage/planning_bounds.hpp"
+#include "tests/storage/bare_pack.hpp"
 
 namespace visvol::storage {
 namespace {
 
 using fields::RangeShape;
+using testing::grid_40x30;
+using testing::level_40x30;
+using testing::write_bare_pack;
 
 std::string temp_path(const std::string& stem) {
   return ::testing::TempDir() + "/bounds_" + stem + "_" + std::to_string(::getpid()) + ".vvp";
-}
-
-// 40 x 30 posts of 30 m, post (0, 0) at (1000, 5000): posts span x 1000..2170, y 4130..5000.
-fields::VolumeGeometry grid_40x30() {
-  fields::VolumeGeometry g;
-  g.nx = 40;
-  g.ny = 30;
-  g.nz = 4;
-  g.spacing_m = 30;
-  g.origin_x = 1000;
-  g.origin_y = 5000;
-  g.dz_m = 10;
-  return g;
 }
 
 void expect_box(const fields::Bounds2D& b, double xmin, double ymin, double xmax, double ymax) {
@@ -164,42 +155,6 @@ TEST_F(BuiltPack, RefusesEmptyBoundsAndBadMarginsBeforeWriting) {
   }
 }
 
-// A pack as the writer lays it out for `level0`, with zero tiles and the
-// metadata given: what an older build, or a forged one, leaves.
-std::string write_pack(const std::string& stem, const LevelEntry& level0, const std::string& metadata) {
-  const std::string path = temp_path(stem);
-  PackLayout layout;
-  layout.levels = {level0};
-  layout.band_levels = 4;
-  Result<std::unique_ptr<PackWriter>> w = PackWriter::create(path, layout);
-  EXPECT_TRUE(w.ok()) << w.status().message();
-  if (!w.ok()) return path;
-  for (int l = 0; l < kLayerCount; ++l) {
-    const Layer layer = static_cast<Layer>(l);
-    const TileGrid g = tile_grid(layer, level0.nx, level0.ny);
-    const std::vector<char> zeros((*w)->payload_bytes(0, layer), 0);
-    for (int ty = 0; ty < g.tiles_y; ++ty)
-      for (int tx = 0; tx < g.tiles_x; ++tx)
-        EXPECT_TRUE((*w)->write_tile(0, layer, tx, ty, zeros.data(), zeros.size()).ok());
-  }
-  EXPECT_TRUE((*w)->finish(metadata).ok());
-  return path;
-}
-
-LevelEntry level_40x30(int range_posts) {
-  const fields::VolumeGeometry g = grid_40x30();
-  LevelEntry e{};
-  e.nx = g.nx;
-  e.ny = g.ny;
-  e.nz = g.nz;
-  e.range_posts = range_posts;
-  e.spacing_m = g.spacing_m;
-  e.origin_x = g.origin_x;
-  e.origin_y = g.origin_y;
-  e.dz_m = g.dz_m;
-  return e;
-}
-
 PlanningBounds read_planning(const std::string& path) {
   const std::shared_ptr<const Pack> pack = open_ok(path);
   std::remove(path.c_str());
@@ -208,38 +163,48 @@ PlanningBounds read_planning(const std::string& path) {
 
 TEST(OlderPack, BoundsAreDerivedFromLevelZeroAndTheRangeShape) {
   for (const char* shape : {"cube", "sphere"}) {
-    const PlanningBounds b = read_planning(
-        write_pack("old_range", level_40x30(8), nlohmann::json{{"build", {{"range_shape", shape}}}}.dump()));
+    const PlanningBounds b = read_planning(write_bare_pack(temp_path("old_range"), level_40x30(8),
+                                                           nlohmann::json{{"build", {{"range_shape", shape}}}}.dump()));
     EXPECT_FALSE(b.recorded);
     EXPECT_DOUBLE_EQ(b.margin_m, 240.0) << shape;
     expect_box(b.box, 1240, 4370, 1930, 4760);
   }
   const PlanningBounds none =
-      read_planning(write_pack("old_none", level_40x30(0), R"({"build": {"range_shape": "none"}})"));
+      read_planning(write_bare_pack(temp_path("old_none"), level_40x30(0), R"({"build": {"range_shape": "none"}})"));
   EXPECT_FALSE(none.recorded);
   EXPECT_DOUBLE_EQ(none.margin_m, 108.75);
 }
 
 TEST(OlderPack, WithoutBuildParametersTheLevelsRangeDecides) {
-  EXPECT_DOUBLE_EQ(read_planning(write_pack("old_bare", level_40x30(8), "{}")).margin_m, 240.0);
-  EXPECT_DOUBLE_EQ(read_planning(write_pack("old_bare0", level_40x30(0), "{}")).margin_m, 108.75);
+  EXPECT_DOUBLE_EQ(read_planning(write_bare_pack(temp_path("old_bare"), level_40x30(8), "{}")).margin_m, 240.0);
+  EXPECT_DOUBLE_EQ(read_planning(write_bare_pack(temp_path("old_bare0"), level_40x30(0), "{}")).margin_m, 108.75);
 }
 
 TEST(OlderPack, TooSmallForItsRangeOpensWithEmptyBounds) {
   // 15 posts of range leave nothing of 29 x 30 m: readable, but nowhere to plan
-  const std::string path = write_pack("old_small", level_40x30(15), R"({"build": {"range_shape": "cube"}})");
+  const std::string path =
+      write_bare_pack(temp_path("old_small"), level_40x30(15), R"({"build": {"range_shape": "cube"}})");
   const std::shared_ptr<const Pack> pack = open_ok(path);
   std::remove(path.c_str());
   ASSERT_TRUE(pack);
   EXPECT_TRUE(planning_bounds(*pack).empty());
   EXPECT_FALSE(pack->metadata().planning.recorded);
+  // what every planner, checker and console asks before it trusts a path there
+  const Status none = check_planning_bounds(*pack);
+  EXPECT_EQ(none.code(), Errc::invalid_argument);
+  EXPECT_NE(none.message().find(path + ": no planning bounds"), std::string::npos) << none.message();
+  const std::string wide = write_bare_pack(temp_path("old_wide"), level_40x30(8), "{}");
+  const std::shared_ptr<const Pack> plannable = open_ok(wide);
+  std::remove(wide.c_str());
+  ASSERT_TRUE(plannable);
+  EXPECT_TRUE(check_planning_bounds(*plannable).ok());
 }
 
 TEST(RecordedPack, BoundsAreReadAsRecorded) {
   const std::string meta =
       R"({"build": {"range_shape": "cube"}, "planning_bounds":
           {"xmin_m": 1300, "ymin_m": 4400.5, "xmax_m": 1900, "ymax_m": 4700, "margin_m": 255}})";
-  const PlanningBounds b = read_planning(write_pack("recorded", level_40x30(8), meta));
+  const PlanningBounds b = read_planning(write_bare_pack(temp_path("recorded"), level_40x30(8), meta));
   EXPECT_TRUE(b.recorded);
   EXPECT_DOUBLE_EQ(b.margin_m, 255);
   expect_box(b.box, 1300, 4400.5, 1900, 4700);
@@ -247,7 +212,7 @@ TEST(RecordedPack, BoundsAreReadAsRecorded) {
 
 // Malformed values fail Pack::open as corrupt, naming what is wrong.
 void expect_refused(const std::string& metadata, const std::string& named) {
-  const std::string path = write_pack("malformed", level_40x30(8), metadata);
+  const std::string path = write_bare_pack(temp_path("malformed"), level_40x30(8), metadata);
   const Result<std::shared_ptr<const Pack>> pack = Pack::open(path);
   std::remove(path.c_str());
   ASSERT_FALSE(pack.ok()) << metadata;
@@ -280,7 +245,8 @@ TEST(OlderPack, MalformedRangeShapeFailsOpenByName) {
   expect_refused(R"({"build": {"range_shape": "cone"}})", "build.range_shape");
   expect_refused(R"({"build": {"range_shape": 1}})", "build.range_shape");
   // a ranged shape with no range in level 0
-  const std::string path = write_pack("norange", level_40x30(0), R"({"build": {"range_shape": "cube"}})");
+  const std::string path =
+      write_bare_pack(temp_path("norange"), level_40x30(0), R"({"build": {"range_shape": "cube"}})");
   const Result<std::shared_ptr<const Pack>> pack = Pack::open(path);
   std::remove(path.c_str());
   ASSERT_FALSE(pack.ok());

@@ -38,11 +38,7 @@ Result<PlanningPack> open_planning_pack(const std::string& path) {
   if (!curvature.ok()) return curvature.status();
   p.curvature_coeff = *curvature;
   p.bounds = storage::planning_bounds(*p.pack);
-  if (p.bounds.empty()) {
-    return invalid_argument(path +
-                            ": no planning bounds: the pack is no wider than twice its range, so F_p is "
-                            "short of observers everywhere (build it from a larger DEM, see --area)");
-  }
+  VISVOL_RETURN_IF_ERROR(storage::check_planning_bounds(*p.pack));
   return p;
 }
 

@@ -417,8 +417,9 @@ TffSample band_sample(const Heightfield& hf, int i, int j, double z, const Neare
 
 Status validate(const TffParams& p) {
   std::ostringstream msg;
-  if (!std::isfinite(p.band_offset_m) || p.band_offset_m <= 0 || p.band_offset_m > 300.0) {
-    msg << "terrain force band offset: " << p.band_offset_m << " m is outside (0, 300] m";
+  if (!(p.band_offset_m >= kMinBandOffsetM && p.band_offset_m <= kMaxBandOffsetM)) {  // NaN too
+    msg << "terrain force band offset: " << p.band_offset_m << " m is outside " << kMinBandOffsetM << ".."
+        << kMaxBandOffsetM << " m";
     return invalid_argument(msg.str());
   }
   if (p.band_levels < 2 || p.band_levels > kMaxBandLevels) {

@@ -22,8 +22,12 @@ namespace visvol::fields {
 
 class WorkerPool;
 
-// Band samples a column may have.
+// Band samples a column may have, and how far the band may reach, m: from a
+// metre (a band that shrinks to nothing would leave the rope no push off the
+// ground) to 300 m (the pack's centimetres in 16 bits).
 inline constexpr int kMaxBandLevels = 64;
+inline constexpr double kMinBandOffsetM = 1.0;
+inline constexpr double kMaxBandOffsetM = 300.0;
 
 struct TffParams {
   double band_offset_m = 100.0;  // band from terrain - offset to terrain + offset

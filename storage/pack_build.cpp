@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "fields/terrain_force.hpp"
 #include "fields/worker_pool.hpp"
 #include "io/json_text.hpp"
 #include "storage/pack_writer.hpp"
@@ -18,6 +19,10 @@
 #endif
 
 namespace visvol::storage {
+
+// The band the build validates (fields) is the band the format holds.
+static_assert(kMaxBandLevels == fields::kMaxBandLevels && kMaxBandOffsetM == fields::kMaxBandOffsetM &&
+              kMinBandOffsetM == fields::kMinBandOffsetM);
 
 namespace {
 

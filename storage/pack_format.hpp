@@ -161,5 +161,6 @@ inline float dequantise_visibility(std::uint16_t q) { return static_cast<float>(
 // Terrain force field samples are centimetres in int16: at most +-327 m.
 inline constexpr double kTffUnitM = 0.01;
 inline constexpr double kMaxBandOffsetM = 300.0;
+inline constexpr double kMinBandOffsetM = 1.0;  // the build's least (fields/terrain_force.hpp)
 
 }  // namespace visvol::storage

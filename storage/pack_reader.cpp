@@ -188,7 +188,7 @@ Status Pack::validate_header() {
   if (h.visibility_encoding > 1)
     return bad("visibility_encoding " + std::to_string(h.visibility_encoding) + " is unknown");
   if (h.band_levels < 2 || h.band_levels > static_cast<std::uint32_t>(kMaxBandLevels) ||
-      !(h.band_offset_m > 0 && h.band_offset_m <= kMaxBandOffsetM)) {
+      !(h.band_offset_m >= kMinBandOffsetM && h.band_offset_m <= kMaxBandOffsetM)) {
     return bad("terrain force band (" + std::to_string(h.band_levels) + " levels, offset " +
                std::to_string(h.band_offset_m) + " m) is out of range");
   }

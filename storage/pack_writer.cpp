@@ -30,9 +30,9 @@ Status validate(const PackLayout& layout) {
     return invalid_argument(msg.str());
   }
   if (layout.band_levels < 2 || layout.band_levels > kMaxBandLevels ||
-      !(layout.band_offset_m > 0 && layout.band_offset_m <= kMaxBandOffsetM)) {
+      !(layout.band_offset_m >= kMinBandOffsetM && layout.band_offset_m <= kMaxBandOffsetM)) {
     msg << "pack: terrain force band of " << layout.band_levels << " levels over +-" << layout.band_offset_m
-        << " m is outside 2.." << kMaxBandLevels << " levels, (0, " << kMaxBandOffsetM << "] m";
+        << " m is outside 2.." << kMaxBandLevels << " levels, " << kMinBandOffsetM << ".." << kMaxBandOffsetM << " m";
     return invalid_argument(msg.str());
   }
   for (std::size_t l = 0; l < layout.levels.size(); ++l) {

@@ -129,6 +129,9 @@ TEST(TerrainForce, EveryWidthFindsTheSameDistances) {
 
 TEST(TerrainForce, RejectsBadParameters) {
   EXPECT_FALSE(validate(TffParams{0.0, 32}).ok());
+  EXPECT_FALSE(validate(TffParams{0.5, 32}).ok());  // under a metre: no band to push the rope off the ground
+  EXPECT_FALSE(validate(TffParams{std::nan(""), 32}).ok());
+  EXPECT_TRUE(validate(TffParams{1.0, 32}).ok());
   EXPECT_FALSE(validate(TffParams{500.0, 32}).ok());
   EXPECT_FALSE(validate(TffParams{100.0, 1}).ok());
   EXPECT_TRUE(validate(TffParams{100.0, 32}).ok());

@@ -371,6 +371,19 @@ TEST(CliBuildRefuses, BadMarginsAndEmptyBounds) {
   expect_refused(" " + kCrop + " --range-shape none --planning-margin 585", {"1170 x 1170 m", "--planning-margin"});
 }
 
+TEST(CliBuildRefuses, ATerrainForceBandOfNothing) {
+  // a band of 1e-300 m was built (every sample 0: no push off the ground)
+  for (const char* offset : {"1e-300", "0.5", "0", "-1", "nan", "inf", "301"})
+    expect_refused(" --range 8 " + kCrop + " --tff-offset " + offset, {"--tff-offset", "1..300 m"});
+  for (const char* levels : {"1", "0", "-1", "65"})
+    expect_refused(" --range 8 " + kCrop + " --tff-levels " + levels, {"--tff-levels", "2..64"});
+  // and before anything is built, with no pack to write
+  const Outcome r =
+      visvol("build " + kDem + " --fill-nodata --levels 16 --lod 1 --range 8 " + kCrop + " --tff-offset 1e-300");
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("--tff-offset"), std::string::npos) << r.err;
+}
+
 TEST(CliViewshed, WritesAGeoTiff) {
   const std::string out = ::testing::TempDir() + "/cli_vs_" + std::to_string(getpid()) + ".tif";
   const Outcome r = visvol("viewshed " + kDem + " " + kCrop + " --observer 550500 4182000 -o " + out);

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "fields/gdal/dem_io.hpp"
+#include "fields/terrain_force.hpp"
 #include "io/json_text.hpp"
 #include "storage/planning_bounds.hpp"
 
@@ -95,8 +96,23 @@ double area_margin_m(const BuildOptions& o, fields::RangeShape shape, const fiel
   return smaller_side_m / (storage::kUnrangedMarginDivisor - 2.0);
 }
 
+// The terrain force field's band as the options give it, checked before
+// anything is imported or built (with or without a pack to write).
+Status check_tff_options(const BuildOptions& o) {
+  if (!(o.tff_offset_m >= fields::kMinBandOffsetM && o.tff_offset_m <= fields::kMaxBandOffsetM)) {
+    return invalid_argument("--tff-offset: " + number_text(o.tff_offset_m) + " m is not in " +
+                            number_text(fields::kMinBandOffsetM) + ".." + number_text(fields::kMaxBandOffsetM) + " m");
+  }
+  if (o.tff_levels < 2 || o.tff_levels > fields::kMaxBandLevels) {
+    return invalid_argument("--tff-levels: " + std::to_string(o.tff_levels) + " is not in 2.." +
+                            std::to_string(fields::kMaxBandLevels));
+  }
+  return Status::ok_status();
+}
+
 Result<BuildInput> build_input(const BuildOptions& o) {
   VISVOL_RETURN_IF_ERROR(check_planning_margin(o.planning_margin_m));
+  VISVOL_RETURN_IF_ERROR(check_tff_options(o));
   BuildInput in{o.import, o.planning_margin_m};
   if (o.area.empty()) return in;
   if (!o.import.crop.empty()) {

@@ -20,6 +20,13 @@ constexpr int kTurnRounds = 4;
 // Where a segment is split, as a fraction of it: never at its ends, where the
 // split would leave the turns beside it no room.
 constexpr double kSplitMin = 0.25, kSplitMax = 0.75;
+// Segments shorter than this (horizontally, m) are not split: the pieces
+// would be under a metre, where a millimetre of rounding in a written file
+// moves a slope by more than the fit's angle margin, and a band that a
+// segment this short cannot hold is not held by splitting it (a skeptic
+// found plans whose first segment was split to millimetres, 220 waypoints
+// within 2.5 cm of the start).
+constexpr double kMinSplitM = 4.0;
 
 struct Band {
   double lo = 0, hi = 0;
@@ -262,6 +269,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
       }
       changed = changed || moved;
       if ((held && moved) || p.size() >= max_points) continue;
+      if (std::hypot(p[i + 1].x() - p[i].x(), p[i + 1].y() - p[i].y()) < kMinSplitM) continue;
       // the segment cannot hold the band: a vertex at its worst sample
       const Vec3 mid = p[i] + std::clamp(m.worst_t, kSplitMin, kSplitMax) * (p[i + 1] - p[i]);
       p.insert(p.begin() + static_cast<std::ptrdiff_t>(i) + 1, mid);

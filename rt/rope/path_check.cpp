@@ -17,6 +17,10 @@ namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
 constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre
+// Positions against the planning bounds too: a path on their edge, written
+// to a file and read back (millimetres, or WGS84 degrees through PROJ),
+// moves by a fraction of a millimetre, out as often as in.
+constexpr double kBoundsTolM = 0.01;
 constexpr double kAngleTolDeg = 1e-6;
 
 // Running tally of one requirement over weighted samples, and points of no
@@ -177,6 +181,12 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   double steepest_climb = 0, steepest_descent = 0, tightest = std::numeric_limits<double>::infinity();
 
   std::vector<std::vector<bool>> vertex_seen(static_cast<std::size_t>(count), std::vector<bool>(nc));
+  auto inside_bounds = [&](const Vec3& p) {
+    if (!spec_.planning_bounds) return true;
+    const fields::Bounds2D& b = *spec_.planning_bounds;
+    return p.x() >= b.xmin_m - kBoundsTolM && p.x() <= b.xmax_m + kBoundsTolM && p.y() >= b.ymin_m - kBoundsTolM &&
+           p.y() <= b.ymax_m + kBoundsTolM;
+  };
   // `seen` (or null): where the sight lines of a vertex's sample go
   auto sample = [&](const Vec3& p, double w, std::vector<bool>* seen_out) {
     const double ground = ground_m(p.x(), p.y());
@@ -187,7 +197,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     clearance.add(h >= e.clearance_m - kHeightTolM, w);
     agl.add(h <= e.max_agl_m + kHeightTolM, w);
     altitude.add(p.z() <= e.max_altitude_m + kHeightTolM, w);
-    bounds.add(!spec_.planning_bounds || spec_.planning_bounds->contains(p.x(), p.y()), w);
+    bounds.add(inside_bounds(p), w);
     for (std::size_t c = 0; c < nc; ++c) {
       const bool seen = sees(spec_.constraints[c], p);
       if (seen_out) (*seen_out)[c] = seen;

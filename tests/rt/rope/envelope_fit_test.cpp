@@ -180,5 +180,23 @@ TEST_F(FitOnRelief, StaysInsideThePlanningBounds) {
   for (const Vec3& v : fit.path) EXPECT_TRUE(b.contains(v.x(), v.y())) << v.transpose();
 }
 
+TEST_F(FitOnRelief, ABandItCannotHoldIsNeverSplitBelowAMetre) {
+  // an end 1 m above the ground under a 40 m clearance: no height of the
+  // first segment holds the band, however it is split (before, the fit split
+  // it at a quarter again and again, down to millimetres: slopes a written
+  // file's rounding turns past the limits, hundreds of waypoints on one spot)
+  const std::vector<Vec3> low_start = {at(20, 20, 1), at(60, 50, 60)};
+  for (double turn_m : {0.0, 80.0}) {
+    VehicleEnvelope e = envelope();
+    e.min_turn_radius_m = turn_m;
+    const EnvelopeFit fit = fit_to_envelope(low_start, spec_of(e), terrain);
+    EXPECT_FALSE(fit.feasible);
+    for (std::size_t i = 0; i + 1 < fit.path.size(); ++i) {
+      const Vec3 d = fit.path[i + 1] - fit.path[i];
+      EXPECT_GE(std::hypot(d.x(), d.y()), 1.0) << "segment " << i << " of " << fit.path.size() - 1;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace visvol::rt

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -238,6 +239,7 @@ struct Console::Impl {
   const PathFitter& path_fitter() const { return flyable ? flyable->fitter() : *fitter; }
   void fit_final_path();
   nlohmann::json check_path(std::string& line) const;
+  Status check_outputs() const;
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   Status make_output_dirs(const std::string& out) const;
   static std::string path_csv(const msg::PathSample& fp);
@@ -421,7 +423,18 @@ Status Console::Impl::open_terrains() {
   return {};
 }
 
+// The outputs' folder and names, checked before the session: they are
+// written at its end, and a bad --out found then lost the whole record.
+Status Console::Impl::check_outputs() const {
+  if (Status s = make_output_dirs(o.out); !s.ok()) return invalid_argument("--out: " + s.message());
+  for (const char* name : {"path.csv", "health.csv", "summary.json", "thumbnail.png"}) {
+    if (Status s = check_output_path(o.out + "/" + name); !s.ok()) return invalid_argument("--out: " + s.message());
+  }
+  return {};
+}
+
 Status Console::Impl::start() {
+  VISVOL_RETURN_IF_ERROR(check_outputs());
   VISVOL_RETURN_IF_ERROR(open_pack());
   const fields::VolumeGeometry g = pack->geometry(o.level);
   rt::RealtimeConfig rtc;
@@ -963,6 +976,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
 }
 
 Status Console::Impl::make_output_dirs(const std::string& out) const {
+  std::error_code ignored;                              // what went wrong is seen below
+  std::filesystem::create_directories(o.out, ignored);  // with its parents (the default is out/console)
   for (const std::string& dir : {o.out, out}) {
     ::mkdir(dir.c_str(), 0755);
     struct stat st {};

@@ -145,6 +145,33 @@ TEST_F(Console, FifoInputsAndAMissingScriptExitTwoAtOnce) {
   std::remove(fifo.c_str());
 }
 
+TEST_F(Console, ABadOutputFolderIsRefusedBeforeTheSession) {
+  // found only at the end, it lost the session's whole record
+  const std::string dir = out_dir("bad_out");
+  ASSERT_EQ(::mkdir(dir.c_str(), 0755), 0);
+  const std::string file = dir + "/file";
+  std::ofstream(file) << "x\n";
+  const std::string holder = dir + "/holder";
+  ASSERT_EQ(::mkdir(holder.c_str(), 0755), 0);
+  ASSERT_EQ(::symlink(file.c_str(), (holder + "/summary.json").c_str()), 0);
+  const std::string base = "--pack " + *pack_ + " --no-dds --seconds 30 --thumbnail-view none --priority 0 -o ";
+  const std::pair<std::string, std::string> cases[] = {
+      {file, "--out: " + file + ": cannot create the output directory"},
+      {file + "/out", "--out: " + file + "/out: cannot create the output directory"},
+      {holder, "--out: " + holder + "/summary.json"}};
+  for (const auto& [out, expected] : cases) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Outcome r = console_limited(base + out);
+    EXPECT_EQ(r.status, 2) << out << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << out << "\n" << r.err;
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 25.0) << out;
+  }
+  std::ifstream in(file);
+  std::string line;
+  EXPECT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, "x");  // nothing replaced
+}
+
 // Under systemd (JOURNAL_STREAM is standard error's device and inode) every
 // line on standard error carries its sd-daemon priority, so journald files it
 // by level. (--quiet: Console.ItsPathIsFittedIntoTheVehiclesEnvelope.)

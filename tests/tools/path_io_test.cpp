@@ -323,6 +323,43 @@ TEST_F(PathIo, WithoutACrsOnlyTheCsvIsWrittenInThePacksCoordinates) {
   EXPECT_NE(csv.find("\nindex,x_m,y_m,z_m,fp,clearance_m\n"), std::string::npos) << csv;
 }
 
+TEST_F(PathIo, NoFileOfAnEarlierPlanIsLeftBesideAPartSet) {
+  // an earlier plan's whole set, then one that can write only its CSV: the
+  // earlier KML, .plan and GeoJSON (another route) are removed, and said so
+  const std::string base = dir_ + "/again";
+  std::vector<std::string> written;
+  ASSERT_TRUE(write_path_outputs(base, report(preset("multirotor")), written).ok());
+  ASSERT_EQ(written.size(), 4u);
+  PathReport bare = report(preset("multirotor"));
+  bare.crs_wkt.clear();
+  written.clear();
+  const Status s = write_path_outputs(base, bare, written);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("(the earlier " + base + ".kml, " + base + ".plan, " + base +
+                             ".geojson removed: another plan's)"),
+            std::string::npos)
+      << s.message();
+  for (const char* gone : {".kml", ".plan", ".geojson"}) EXPECT_NE(access((base + gone).c_str(), F_OK), 0) << gone;
+  EXPECT_EQ(access((base + ".csv").c_str(), F_OK), 0);
+}
+
+TEST_F(PathIo, APackCrsInDegreesPlacesNothing) {
+  // a grid in metres under a geographic CRS (a forged or mislabelled pack):
+  // latitude 4182200 was written into a .plan
+  PathReport r = report(preset("multirotor"));
+  OGRSpatialReference geographic;
+  geographic.importFromEPSG(4326);
+  char* wkt = nullptr;
+  geographic.exportToWkt(&wkt);
+  r.crs_wkt = wkt;
+  CPLFree(wkt);
+  std::vector<std::string> written;
+  const Status s = write_path_outputs(dir_ + "/degrees", r, written);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("is not a projected CRS in metres"), std::string::npos) << s.message();
+  EXPECT_EQ(written, std::vector<std::string>{dir_ + "/degrees.csv"});
+}
+
 // ---- .plan ----
 
 const nlohmann::json& item(const nlohmann::json& plan, std::size_t i) { return plan["mission"]["items"][i]; }

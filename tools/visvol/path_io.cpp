@@ -2,6 +2,8 @@
 
 #include <ogr_spatialref.h>
 #include <proj.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -479,6 +481,11 @@ Result<std::unique_ptr<OGRCoordinateTransformation>> wgs84_transform(const std::
   if (crs_wkt.empty()) return Status(Errc::unsupported, "the pack has no CRS, so there is no WGS84 position");
   OGRSpatialReference pack, wgs84;
   if (pack.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return corrupt("the pack's CRS WKT does not parse");
+  // a pack's grid is in metres: a CRS in degrees (or feet) would place it wrong
+  if (!pack.IsProjected() || std::fabs(pack.GetLinearUnits() - 1.0) > 1e-9) {
+    return corrupt("the pack's CRS (" + std::string(pack.GetName() ? pack.GetName() : "unnamed") +
+                   ") is not a projected CRS in metres, as its grid is");
+  }
   wgs84.SetWellKnownGeogCS("WGS84");
   pack.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
@@ -499,6 +506,10 @@ Result<std::vector<Vec3>> transform_xy(const std::vector<Vec3>& points, const st
     if (!(*ct)->Transform(1, &x, &y) || !std::isfinite(x) || !std::isfinite(y)) {
       return invalid_argument("path vertex " + std::to_string(i) + " cannot be converted " +
                               (to_wgs84 ? "to WGS84" : "from WGS84 to the pack's CRS"));
+    }
+    if (to_wgs84 && !(std::fabs(x) <= 180 && std::fabs(y) <= 90)) {
+      return invalid_argument("path vertex " + std::to_string(i) + " converts to longitude " + shown(x, 6) +
+                              ", latitude " + shown(y, 6) + ": not a WGS84 position");
     }
     out.push_back({x, y, points[i].z()});
   }
@@ -855,7 +866,11 @@ Status check_path_outputs(const std::string& base) {
   return Status::ok_status();
 }
 
-Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
+namespace {
+
+// Writes what it can of the set: the CSV whatever the CRS, the rest where
+// the positions convert to WGS84 (and the geoid grid is there).
+Status write_path_output_set(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
   VISVOL_RETURN_IF_ERROR(validate_report(r));
   const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt);
   const Result<GeoidShift> ellipsoidal =
@@ -874,6 +889,31 @@ Status write_path_outputs(const std::string& base, const PathReport& r, std::vec
   if (!plan_ground.ok()) return plan_ground.with_context(".plan not written");
   if (!ellipsoidal.ok()) return ellipsoidal.status().with_context("GeoJSON not written");
   return Status::ok_status();
+}
+
+// Where this plan wrote part of the set, the files of an earlier one under
+// `base` that it did not write are removed (regular files only), so that no
+// file of the set is another plan's; named after `error`. (Where it wrote
+// none, the earlier set stands whole.)
+Status without_stale_outputs(const std::string& base, const std::vector<std::string>& written, const Status& error) {
+  if (written.empty()) return error;
+  std::string removed;
+  for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
+    const std::string file = base + extension;
+    struct stat st {};
+    if (std::find(written.begin(), written.end(), file) != written.end()) continue;
+    if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || ::unlink(file.c_str()) != 0) continue;
+    removed += (removed.empty() ? "" : ", ") + file;
+  }
+  if (removed.empty()) return error;
+  return Status(error.code(), error.message() + " (the earlier " + removed + " removed: another plan's)");
+}
+
+}  // namespace
+
+Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
+  const Status s = write_path_output_set(base, r, written);
+  return s.ok() ? s : without_stale_outputs(base, written, s);
 }
 
 }  // namespace visvol::cli

@@ -252,6 +252,38 @@ TEST_F(PathIo, EarlierVisvolGeoJsonWithOrthometricHeightsIsReadAsItIs) {
   EXPECT_NEAR(path->points[1].z(), 120.0, 1e-9);
 }
 
+// Nothing beside the path's LineString that could be another route, and no
+// CRS but WGS84's, is left out unseen (a skeptic's files read "all met").
+TEST_F(PathIo, GeoJsonWithAnotherRouteOrCrsIsRefused) {
+  const std::string line = R"({"type":"Feature","properties":{"vertical_datum":"EGM96"},"geometry":)"
+                           R"({"type":"LineString","coordinates":[[-122.43,37.79,100.0],[-122.42,37.78,120.0]]}})";
+  auto collection = [&](const std::string& members, const std::string& extra = "") {
+    return R"({"type":"FeatureCollection",)" + extra + R"("features":[)" + line + members + "]}";
+  };
+  const std::pair<std::string, std::string> refused[] = {
+      {collection(R"(,{"type":"Feature","geometry":{"type":"MultiLineString","coordinates":)"
+                  R"([[[-122.43,37.79,-20],[-122.42,37.78,-20]]]}})"),
+       "a MultiLineString beside the path's LineString"},
+      {collection(R"(,{"type":"feature","geometry":{"type":"LineString","coordinates":[[0,0],[1,1]]}})"),
+       "features[1] (type \"feature\") is not a Feature with a geometry"},
+      {collection("", R"("crs":{"type":"name","properties":{"name":"urn:ogc:def:crs:EPSG::4267"}},)"), "\"crs\""},
+  };
+  for (const auto& [text, named] : refused) {
+    Result<PathFile> path = read_path_file(file_with("other.geojson", text), wkt_);
+    ASSERT_FALSE(path.ok()) << text;
+    EXPECT_NE(path.status().message().find(named), std::string::npos) << path.status().message();
+  }
+  // points beside it (waypoint markers, observers) and a CRS84 "crs" are read
+  const std::string fine[] = {
+      collection(R"(,{"type":"Feature","properties":null,"geometry":{"type":"Point","coordinates":[-122.4,37.7]}})"),
+      collection("", R"("crs":{"type":"name","properties":{"name":"urn:ogc:def:crs:OGC:1.3:CRS84"}},)")};
+  for (const std::string& text : fine) {
+    Result<PathFile> path = read_path_file(file_with("fine.geojson", text), wkt_);
+    ASSERT_TRUE(path.ok()) << path.status().message();
+    EXPECT_EQ(path->points.size(), 2u);
+  }
+}
+
 // A GeoJSON that names its vertical datum is read by it: mean sea level
 // (EGM96) as it is, the ellipsoid converted, anything else refused by name.
 TEST_F(PathIo, GeoJsonVerticalDatumIsHonouredOrRefused) {

@@ -278,9 +278,11 @@ const std::string* type_of(const nlohmann::json& j) {
 
 // The LineStrings of a GeoJSON geometry, Feature or FeatureCollection, each
 // with its Feature's properties (`none` for a bare geometry); the other
-// geometry types met go to `others`. RFC 7946 nests no deeper than that.
+// geometry types met go to `others`, and a FeatureCollection's members that
+// are not Features (or have no geometry) to `strays`. RFC 7946 nests no
+// deeper than that.
 void collect_line_strings(const nlohmann::json& root, const nlohmann::json& none, LineStrings& out,
-                          std::vector<std::string>& others) {
+                          std::vector<std::string>& others, std::vector<std::string>& strays) {
   const auto geometry = [&](const nlohmann::json& g, const nlohmann::json& properties) {
     const std::string* type = type_of(g);
     if (type != nullptr && *type == "LineString") {
@@ -289,21 +291,46 @@ void collect_line_strings(const nlohmann::json& root, const nlohmann::json& none
       others.push_back(type != nullptr ? *type : std::string("a geometry with no type"));
     }
   };
-  const auto feature = [&](const nlohmann::json& f) {
+  const auto feature = [&](const nlohmann::json& f, const std::string& where) {
     const std::string* type = type_of(f);
-    if (type == nullptr || *type != "Feature" || !f.contains("geometry")) return;
+    if (type == nullptr || *type != "Feature" || !f.contains("geometry")) {
+      strays.push_back(where + (type != nullptr ? " (type " + json_brief(f["type"]) + ")" : " (no type)"));
+      return;
+    }
+    if (f["geometry"].is_null()) return;  // RFC 7946: a Feature without a location
     geometry(f["geometry"], f.contains("properties") ? f["properties"] : none);
   };
   const std::string* type = type_of(root);
   if (type == nullptr) return;
   if (*type == "FeatureCollection") {
     if (!root.contains("features") || !root["features"].is_array()) return;
-    for (const nlohmann::json& f : root["features"]) feature(f);
+    for (std::size_t i = 0; i < root["features"].size(); ++i)
+      feature(root["features"][i], "features[" + std::to_string(i) + "]");
   } else if (*type == "Feature") {
-    feature(root);
+    feature(root, "the Feature");
   } else {
     geometry(root, none);
   }
+}
+
+// RFC 7946 dropped the "crs" member: positions are WGS84 longitude and
+// latitude. An older file's "crs" naming another CRS (NAD27, a UTM zone) is
+// refused: read as WGS84 its positions would be tens of metres off or more.
+Status check_legacy_crs(const nlohmann::json& object, const std::string& path) {
+  if (!object.is_object() || !object.contains("crs")) return Status::ok_status();
+  const nlohmann::json& crs = object["crs"];
+  std::string name;
+  if (crs.is_object() && crs.contains("properties") && crs["properties"].is_object() &&
+      crs["properties"].contains("name") && crs["properties"]["name"].is_string()) {
+    name = crs["properties"]["name"].get<std::string>();
+  }
+  for (const char* wgs84 : {"urn:ogc:def:crs:OGC:1.3:CRS84", "urn:ogc:def:crs:OGC::CRS84", "urn:ogc:def:crs:EPSG::4326",
+                            "EPSG:4326", "CRS84"}) {
+    if (name == wgs84) return Status::ok_status();
+  }
+  return invalid_argument(path + ": \"crs\" " + json_brief(crs) +
+                          " is not WGS84 longitude and latitude (CRS84), the only CRS a GeoJSON path is read in "
+                          "(RFC 7946)");
 }
 
 // properties.vertex_fp of a plan's GeoJSON: one F_p in [0, 1] per vertex.
@@ -385,12 +412,24 @@ Result<bool> heights_are_orthometric(const nlohmann::json& properties, const std
 Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
   const nlohmann::json no_properties;
   LineStrings lines;
-  std::vector<std::string> others;
-  collect_line_strings(j, no_properties, lines, others);
+  std::vector<std::string> others, strays;
+  collect_line_strings(j, no_properties, lines, others, strays);
   if (lines.size() != 1) {
     return invalid_argument(path + ": " + std::to_string(lines.size()) + " LineStrings; a path file has exactly one" +
                             (others.empty() ? "" : " (found " + others.front() + ")"));
   }
+  // nothing beside the path that could be another route, left out unseen
+  if (!strays.empty()) {
+    return invalid_argument(path + ": " + strays.front() +
+                            " is not a Feature with a geometry; a path file is one LineString (and may hold points)");
+  }
+  for (const std::string& other : others) {
+    if (other != "Point" && other != "MultiPoint") {
+      return invalid_argument(path + ": a " + other +
+                              " beside the path's LineString; a path file is one LineString (and may hold points)");
+    }
+  }
+  VISVOL_RETURN_IF_ERROR(check_legacy_crs(j, path));
   PathFile out;
   out.format = PathFormat::geojson;
   const nlohmann::json& line = *lines.front().first;

@@ -14,6 +14,7 @@
 
 #include "app/console.hpp"
 #include "app/log.hpp"
+#include "base/arguments.hpp"
 #include "base/version.hpp"
 
 namespace {
@@ -64,6 +65,11 @@ int run_sessions(const visvol::app::ConsoleOptions& options) {
 
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-console")) return 0;
+  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
+    std::fprintf(stderr, "visvol-console: argument %d%s%s is empty: give it a value (try --help)\n", empty,
+                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    return 2;
+  }
   using namespace visvol;
   CLI::App cli{
       "visvol-console: interactive path optimisation in a visibility field (Srikanth et al.), with the rope and "

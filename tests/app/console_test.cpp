@@ -115,7 +115,7 @@ TEST_F(Console, HelpAndBadOptions) {
         "--pack " + *pack_ + " --from 1 2 3 --no-dds", "--pack " + *pack_ + " --level 7 --no-dds",
         "--pack " + *pack_ + " --thumbnail-size 10x10 --no-dds", "--pack " + *pack_ + " --thumbnail-view side",
         "--pack " + *pack_ + " --thumbnail-size 99999999999x100 --no-dds",
-        "--pack " + *pack_ + " --thumbnail-size 640x480x2 --no-dds"}) {
+        "--pack " + *pack_ + " --thumbnail-size 640x480x2 --no-dds", "--pack " + *pack_ + " --max-agl '' --no-dds"}) {
     const Outcome r = console(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.err;
     EXPECT_NE(r.err.find("visvol-console: "), std::string::npos) << args;

@@ -62,6 +62,10 @@ TEST(CliUsage, BadArgumentsExitTwoWithOneLine) {
             std::string::npos)
       << unknown.err;
   EXPECT_NE(visvol("").err.find("A subcommand is required"), std::string::npos) << "nothing given: CLI11's words";
+  // an empty value was read as the option's default (a plan at 30 m clearance)
+  const Outcome empty = visvol("plan x.vvp --objective hide --clearance '' -o out");
+  EXPECT_EQ(empty.status, 2);
+  EXPECT_NE(empty.err.find("argument 6 after --clearance is empty"), std::string::npos) << empty.err;
 }
 
 TEST(CliUsage, BadInputNamesTheFile) {

@@ -41,6 +41,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/arguments.hpp"
 #include "base/version.hpp"
 #include "build_cli.hpp"
 #include "cli.hpp"
@@ -342,6 +343,11 @@ int run(const Comm& world, BuildOptions o, bool by_observers) {
 int main(int argc, char** argv) {
   using namespace visvol::cli;
   if (visvol::print_version_if_asked(argc, argv, "visvol-build-mpi")) return 0;
+  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
+    std::fprintf(stderr, "visvol-build-mpi: argument %d%s%s is empty: give it a value (try --help)\n", empty,
+                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    return 2;
+  }
   // mpirun ends a failed job with SIGTERM: rank 0's temporary goes with it
   visvol::install_output_cleanup_on_signals();
   // the worker threads never call MPI: the main thread makes every call

@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/arguments.hpp"
 #include "base/version.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
@@ -424,6 +425,11 @@ void add_command_kinds(CLI::App& command, CommandOptions& o) {
 
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-echo")) return 0;
+  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
+    std::fprintf(stderr, "visvol-echo: argument %d%s%s is empty: give it a value (try --help)\n", empty,
+                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    return 2;
+  }
   Common common;
   WatchOptions watch;
   CommandOptions command;

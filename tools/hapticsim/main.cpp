@@ -14,6 +14,7 @@
 #include <fstream>
 #include <string>
 
+#include "base/arguments.hpp"
 #include "base/version.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/hapticsim/script.hpp"
@@ -131,6 +132,11 @@ std::string summary_json(const Options& o, const SimDevice& d, const visvol::can
 
 int run(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-hapticsim")) return 0;
+  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
+    std::fprintf(stderr, "visvol-hapticsim: argument %d%s%s is empty: give it a value (try --help)\n", empty,
+                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    return 2;
+  }
   CLI::App app{
       "visvol-hapticsim: a simulated 3-DOF haptic device (Phantom Premium 1.5 stand-in) on a CAN\n"
       "interface: handle dynamics, 0.01 mm encoder, 8.5 N saturation, 10 ms command watchdog,\n"

@@ -18,6 +18,7 @@
 #include <new>
 #include <string>
 
+#include "base/arguments.hpp"
 #include "base/version.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
@@ -44,6 +45,11 @@ int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
 
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol")) return 0;
+  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
+    std::fprintf(stderr, "visvol: argument %d%s%s is empty: give it a value (try --help)\n", empty,
+                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    return visvol::cli::kExitUsage;
+  }
   using namespace visvol::cli;
   // Ctrl-C or a kill during a build leaves no PACK.tmp.<host>.<pid> behind
   visvol::install_output_cleanup_on_signals();

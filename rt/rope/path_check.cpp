@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <limits>
 #include <optional>
@@ -22,6 +23,13 @@ constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre
 // moves by a fraction of a millimetre, out as often as in.
 constexpr double kBoundsTolM = 0.01;
 constexpr double kAngleTolDeg = 1e-6;
+
+// A length for a message: metres to the centimetre.
+std::string metres(double v_m) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.2f", v_m);
+  return text;
+}
 
 // Running tally of one requirement over weighted samples, and points of no
 // weight (the terrain probes) that can only fail it.
@@ -128,8 +136,20 @@ Result<PathChecker> PathChecker::create(fields::Heightfield terrain, const PathF
     }
     const double ground = fields::bilinear_height(t, i, j);
     if (p.point_m.z() < ground - kHeightTolM) {
-      return invalid_argument(name + ": the point is " + std::to_string(ground - p.point_m.z()) +
-                              " m below the finest terrain (" + std::to_string(ground) + " m there)");
+      return invalid_argument(name + ": the point is " + metres(ground - p.point_m.z()) +
+                              " m below the finest terrain (" + metres(ground) + " m there)");
+    }
+  }
+  // one eye named both ways: no path is hidden from it and in its sight
+  for (const ConstraintPoint& h : spec.constraints) {
+    if (h.kind != ConstraintKind::hidden_from) continue;
+    for (const ConstraintPoint& v : spec.constraints) {
+      if (v.kind == ConstraintKind::visible_to && (h.eye_m() - v.eye_m()).norm() < kHeightTolM) {
+        const Vec3 e = h.eye_m();
+        return invalid_argument("--hidden-from and --visible-to name the same eye (" + metres(e.x()) + ", " +
+                                metres(e.y()) + ", " + metres(e.z()) +
+                                " m): no path is both hidden from it and in its sight");
+      }
     }
   }
   c.spec_ = std::move(spec);

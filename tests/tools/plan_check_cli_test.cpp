@@ -121,6 +121,10 @@ TEST_F(PlanCheck, EnvelopeLimitsHoldOnEverySegment) {
   const Outcome tight = visvol("check " + *pack_ + " " + b + ".csv --max-agl 40");
   EXPECT_EQ(tight.status, 1);
   EXPECT_NE(tight.out.find("max-agl"), std::string::npos) << tight.out;
+  // without observers the report says no sight line was checked
+  EXPECT_NE(tight.out.find("constraint none given (--hidden-from, --visible-to): no observer's sight lines checked"),
+            std::string::npos)
+      << tight.out;
   remove_outputs(b);
 }
 

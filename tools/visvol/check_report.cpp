@@ -49,6 +49,10 @@ nlohmann::json vertices_json(const rt::PathCheck& c, const std::vector<rt::Vec3>
 }
 
 void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
+  if (c.constraints.empty()) {
+    // "all met" below would otherwise read as hidden from everyone that matters
+    std::printf("constraint none given (--hidden-from, --visible-to): no observer's sight lines checked\n");
+  }
   for (const rt::ConstraintResult& r : c.constraints) {
     const rt::Vec3& p = r.constraint.point_m;
     std::printf("constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the length, in sight %.0f m (%.0f s) %s\n",
@@ -68,7 +72,8 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
   std::printf("bounds     %.3f of the length inside the planning bounds %s\n",
               rt::fraction_shown(c.inside_bounds_fraction), c.inside_planning_bounds ? "met" : "NOT MET");
   if (c.all_met) {
-    std::printf("requirements all met (sight lines and limits checked on the finest terrain)\n");
+    std::printf("requirements all met (%s checked on the finest terrain)\n",
+                c.constraints.empty() ? "limits" : "sight lines and limits");
     return;
   }
   std::printf("requirements NOT MET:\n");

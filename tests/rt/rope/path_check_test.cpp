@@ -315,7 +315,9 @@ TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
   auto c = PathChecker::create(terrain, nullptr, s);
   ASSERT_FALSE(c.ok());
   EXPECT_NE(c.status().message().find("--hidden-from"), std::string::npos);
-  EXPECT_NE(c.status().message().find("below"), std::string::npos);
+  EXPECT_NE(c.status().message().find("the point is 1.00 m below the finest terrain (100.00 m there)"),
+            std::string::npos)
+      << c.status().message();
   // on the ground exactly: accepted
   s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 100.0), 2.0}};
   EXPECT_TRUE(PathChecker::create(terrain, nullptr, s).ok());
@@ -325,6 +327,21 @@ TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
   EXPECT_NE(c.status().message().find("--visible-to"), std::string::npos);
   s.constraints = {{ConstraintKind::visible_to, post(10, 10, std::nan("")), 2.0}};
   EXPECT_FALSE(PathChecker::create(terrain, nullptr, s).ok());
+}
+
+TEST_F(WallTerrain, OneEyeBothHiddenFromAndVisibleToIsRefused) {
+  // no path can meet both: refused as input, not planned and reported unmet
+  PathCheckSpec s = spec();
+  s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 100.0), 2.0},
+                   {ConstraintKind::visible_to, post(10, 10, 100.0), 2.0}};
+  const auto c = PathChecker::create(terrain, nullptr, s);
+  ASSERT_FALSE(c.ok());
+  EXPECT_EQ(c.status().code(), Errc::invalid_argument);
+  EXPECT_NE(c.status().message().find("--hidden-from and --visible-to name the same eye"), std::string::npos)
+      << c.status().message();
+  // the same spot seen from another height is a different eye
+  s.constraints[1].eye_height_m = 30.0;
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s).ok());
 }
 
 TEST_F(WallTerrain, PlanningBoundsAreAFractionOfLength) {

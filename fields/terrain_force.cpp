@@ -361,8 +361,8 @@ VISVOL_TFF_INLINE void column_search(const CellRanges& cells, int i, int j, cons
 // The search at the CPU's best width, picked once (GCC builds on x86-64:
 // x86-64 levels v4 and v3; others take the baseline). Four lanes on v4 as on
 // v3: on a 2-core AMD EPYC VM (Zen 4) the 8-lane AVX-512 search took 1.7
-// times as long as the 4-lane one with AVX-512's masks, which beat AVX2's
-// by 10% (tools/bench/README.md, "Field build").
+// times as long as the 4-lane one with AVX-512's masks, which took a fifth
+// less than AVX2's (tools/bench/README.md, "Field build").
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define VISVOL_TFF_DISPATCH 1
 #endif

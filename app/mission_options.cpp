@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -66,7 +67,14 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
     if (k == "name") {
       const auto* s = node.as_string();
       if (!s) return invalid_argument(path + ": name must be a string");
-      v->name = s->get();
+      // printed in reports and on terminals: no control characters (an escape
+      // sequence in a vehicle file would drive the operator's terminal)
+      const std::string& name = s->get();
+      if (name.size() > 128 || std::any_of(name.begin(), name.end(),
+                                           [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; })) {
+        return invalid_argument(path + ": name must be at most 128 characters, none of them a control character");
+      }
+      v->name = name;
       continue;
     }
     if (k == "autopilot") {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <iomanip>
 #include <new>
 #include <sstream>
 
@@ -459,12 +460,14 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
   plan.staging_bytes = staging_for(batch, slab);
   if (plan.total_bytes() > limit) {
     std::ostringstream msg;
-    msg << "field build for " << hf.nx << " x " << hf.ny << " x " << params.nz << " voxels with hull radius "
-        << plan.radius_posts << " posts needs " << plan.total_bytes() / kMiB << " MiB of working memory (hull levels "
-        << plan.level_bytes / kMiB << ", histogram window " << plan.window_bytes / kMiB << ", finished rows "
-        << plan.staging_bytes / kMiB << ", table " << plan.table_bytes / kMiB << ", terrain "
-        << plan.terrain_bytes / kMiB << "); the limit is " << params.max_memory_mib
-        << " MiB: use a smaller range, fewer levels or a smaller grid";
+    // in MiB to a hundredth (a small build needs less than one)
+    auto mib = [](std::size_t bytes) { return static_cast<double>(bytes) / static_cast<double>(kMiB); };
+    msg << std::fixed << std::setprecision(2) << "field build for " << hf.nx << " x " << hf.ny << " x " << params.nz
+        << " voxels with hull radius " << plan.radius_posts << " posts needs " << mib(plan.total_bytes())
+        << " MiB of working memory (hull levels " << mib(plan.level_bytes) << ", histogram window "
+        << mib(plan.window_bytes) << ", finished rows " << mib(plan.staging_bytes) << ", table "
+        << mib(plan.table_bytes) << ", terrain " << mib(plan.terrain_bytes) << "); the limit is " << std::defaultfloat
+        << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
     return resource_error(msg.str());
   }
   return plan;

@@ -191,6 +191,18 @@ Status validate_constraints(const msg::Command::Constraints& cs, const CommandLi
                                      " visible-to points, at most " + std::to_string(msg::kMaxObserversPerKind) +
                                      " of a kind");
   }
+  // one point both hidden from and visible to: no path meets both
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const msg::Constraint& h = cs.items[i];
+    if (h.kind != msg::ConstraintKind::hidden_from) continue;
+    for (std::uint32_t j = 0; j < n; ++j) {
+      const msg::Constraint& v = cs.items[j];
+      if (v.kind == msg::ConstraintKind::visible_to && std::fabs(v.position.x_m - h.position.x_m) < 0.01 &&
+          std::fabs(v.position.y_m - h.position.y_m) < 0.01 && std::fabs(v.position.z_m - h.position.z_m) < 0.01) {
+        return reject(item(j), "the point of " + item(i) + " too: no path is both hidden from it and in its sight");
+      }
+    }
+  }
   if (hidden + visible > limits.max_observers) {
     return reject("constraints", std::to_string(hidden + visible) +
                                      " hidden-from and visible-to points, the console takes at most " +

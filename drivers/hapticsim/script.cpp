@@ -61,9 +61,12 @@ class LineParser {
 };
 
 Status LineParser::number(const std::string& text, const char* what, double& out) const {
+  // decimal only, as a path file's: strtod also reads hexadecimal (0x1p3) and
+  // "infinity", which a script should not mean
+  const bool decimal = text.find_first_not_of("0123456789+-.eE") == std::string::npos;
   char* end = nullptr;
   out = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0' || !std::isfinite(out)) {
+  if (!decimal || end == text.c_str() || *end != '\0' || !std::isfinite(out)) {
     return error(std::string(what) + " '" + text + "' is not a finite number");
   }
   return Status::ok_status();

@@ -283,6 +283,9 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   std::ofstream(vehicle) << "type = \"fixed-wing\"\nmax-climb = 10\nwingspan = 3\n";
   const std::string autopilot = ::testing::TempDir() + "/vehicle_inav_" + std::to_string(getpid()) + ".toml";
   std::ofstream(autopilot) << "type = \"multirotor\"\nautopilot = \"inav\"\n";
+  // a name printed in reports: an escape sequence in it would drive the terminal
+  const std::string escape = ::testing::TempDir() + "/vehicle_esc_" + std::to_string(getpid()) + ".toml";
+  std::ofstream(escape) << "type = \"multirotor\"\nname = \"quad\\u001b[2J\"\n";
   struct Case {
     std::string args, names;
   } cases[] = {
@@ -300,6 +303,7 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
       {kEnds + " --stiffness inf", "--stiffness"},
       {kEnds + " --autopilot inav", "--autopilot: 'inav' is neither px4 nor ardupilot"},
       {kEnds + " --vehicle " + autopilot, "autopilot must be \"px4\" or \"ardupilot\""},
+      {kEnds + " --vehicle " + escape, "name must be at most 128 characters, none of them a control character"},
   };
   for (const Case& c : cases) {
     const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);
@@ -308,6 +312,7 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   }
   EXPECT_NE(access((b + ".csv").c_str(), F_OK), 0);
   std::remove(vehicle.c_str());
+  std::remove(escape.c_str());
   std::remove(autopilot.c_str());
 }
 

@@ -263,6 +263,8 @@ TEST_F(RenderCli, BadInputIsRefusedWithTheReason) {
       {p + "--visible-to 551300 4182100 200" + out, "--visible-to (551300.0, 4182100.0) is 140 m outside the pack"},
       {p + "--height-above-ground -1" + out, "--height-above-ground must be"},
       {p + "--height-above-ground nan" + out, "--height-above-ground must be"},
+      {p + "--height-above-ground 1e20" + out, "--height-above-ground must be"},
+      {p + "--hidden-from 550600 4182100 1e20" + out, "--hidden-from: Z 1e+20 m is above the 100000 m"},
       {p + "--exaggeration nan" + out, "--exaggeration must be"},
       {p + "--compression 12" + out, "--compression 12 is outside 0..9"},
       {p + "--height-above-ground -5" + out, "--height-above-ground must be"},

@@ -18,6 +18,7 @@
 #include "io/atomic_file.hpp"
 #include "pack_planner.hpp"  // the planner and sampler for packs: compiled in visvol_pack_planner
 #include "path_io.hpp"
+#include "rt/rope/path_check.hpp"
 #include "storage/pack_reader.hpp"
 
 namespace visvol::cli {
@@ -140,6 +141,7 @@ Result<std::vector<render::Marker>> markers_of(const RenderOptions& o, const fie
         return invalid_argument(option + " takes three finite numbers X Y Z");
       }
       if (e.outside_m(v[0], v[1]) > 0) return invalid_argument(option + " " + e.describe(v[0], v[1]));
+      VISVOL_RETURN_IF_ERROR(rt::check_observer_altitude(option, v[2]));  // as plan and check
       const double ground_m = finest.height(v[0], v[1]);
       if (v[2] < ground_m) {
         char text[160];
@@ -173,8 +175,9 @@ Status configure(const RenderOptions& o, render::RendererConfig& config, render:
   if (!std::isfinite(o.exaggeration) || o.exaggeration < 0 || o.exaggeration > 1000) {
     return invalid_argument("--exaggeration must be 0 (automatic) up to 1000");
   }
-  if (o.height_given && !(std::isfinite(o.height_above_ground_m) && o.height_above_ground_m >= 0)) {
-    return invalid_argument("--height-above-ground must be a finite number of metres, 0 or more");
+  if (o.height_given && !(std::isfinite(o.height_above_ground_m) && o.height_above_ground_m >= 0 &&
+                          o.height_above_ground_m <= rt::kMaxObserverAltitudeM)) {
+    return invalid_argument("--height-above-ground must be a number of metres from 0 to 100000");
   }
   if (!std::isfinite(o.fp_max) || o.fp_max < 0 || o.fp_max > 1) {
     return invalid_argument("--fp-max must be 0 (the field's largest F_p) up to 1");

@@ -261,6 +261,12 @@ TEST(ValidateCommand, ValuesAreCheckedAgainstTheLimits) {
   c.constraints[0] = {1, {10.0, 20.0, 30.0}, 0.0};
   c.constraints[1] = {3, {kNan, kNan, kNan}, 20.0};  // clearance ignores position
   EXPECT_EQ(verdict(c), "");
+  // one point hidden from and visible to: no path meets both
+  c.constraints[1] = {2, {10.0, 20.0, 30.0}, 0.0};
+  EXPECT_EQ(verdict(c),
+            "constraints[1]: the point of constraints[0] too: no path is both hidden from it and in its sight");
+  c.constraints[1] = {2, {10.0, 20.0, 31.0}, 0.0};
+  EXPECT_EQ(verdict(c), "");
 
   Msg t(kind(msg::CommandKind::switch_terrain));
   t.pack = "taunus";
@@ -351,7 +357,7 @@ TEST(ValidateCommand, ObserversFitWhatTheConsoleTakes) {
   const auto per_kind = static_cast<std::uint32_t>(msg::kMaxObserversPerKind);
   for (std::uint32_t i = 0; i < per_kind; ++i) {
     c.constraints[i] = {1, {10.0 + i, 20.0, 30.0}, 0.0};
-    c.constraints[per_kind + i] = {2, {20.0, 10.0 + i, 30.0}, 0.0};
+    c.constraints[per_kind + i] = {2, {20.0, 10.0 + i, 40.0}, 0.0};
   }
   c.m.constraints._length = 2 * per_kind;
   EXPECT_EQ(verdict(c, l), "") << "256 of each kind";

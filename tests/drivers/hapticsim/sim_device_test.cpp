@@ -342,6 +342,7 @@ TEST(Script, ErrorsNameTheLineAndTheProblem) {
   }
   EXPECT_EQ(error("0 mode\n"), "s.txt:1: 'mode' takes 1 argument(s), got 0");
   EXPECT_EQ(error("x grab\n"), "s.txt:1: time 'x' is not a finite number");
+  EXPECT_EQ(error("0x1p3 grab\n"), "s.txt:1: time '0x1p3' is not a finite number");  // hexadecimal: not decimal
   EXPECT_EQ(error("  # only a comment\n\n0 grab # and another\n"), "(parsed)");
   auto missing = load_script("/nonexistent/script.txt", kHalf);
   ASSERT_FALSE(missing.ok());

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -428,14 +429,15 @@ Status Console::Impl::open_terrains() {
 Status Console::Impl::check_outputs() const {
   if (Status s = make_output_dirs(o.out); !s.ok()) return invalid_argument("--out: " + s.message());
   for (const char* name : {"path.csv", "health.csv", "summary.json", "thumbnail.png"}) {
+    if (o.thumbnail_view == "none" && std::strcmp(name, "thumbnail.png") == 0) continue;  // not written
     if (Status s = check_output_path(o.out + "/" + name); !s.ok()) return invalid_argument("--out: " + s.message());
   }
   return {};
 }
 
 Status Console::Impl::start() {
-  VISVOL_RETURN_IF_ERROR(check_outputs());
   VISVOL_RETURN_IF_ERROR(open_pack());
+  VISVOL_RETURN_IF_ERROR(check_outputs());  // (after the pack: a bad pack leaves no folder behind)
   const fields::VolumeGeometry g = pack->geometry(o.level);
   rt::RealtimeConfig rtc;
   rtc.priority = o.priority;

@@ -256,6 +256,9 @@ Status validate_ceilings(const cli::EnvelopeOptions& e) {
 
 // The observers: X Y Z each, finite, at most 256 of a kind and no more than
 // --max-observers allows (where/whether inside the pack: at start-up).
+// Points closer than this are one (a centimetre, as the path check's).
+constexpr double kSamePointM = 0.01;
+
 Status validate_observers(const ConsoleOptions& o) {
   for (const auto& [name, points] : {std::pair{"--hidden-from", &o.hidden_from}, {"--visible-to", &o.visible_to}}) {
     if (points->size() > static_cast<std::size_t>(kMaxObserversPerKind)) {
@@ -277,6 +280,16 @@ Status validate_observers(const ConsoleOptions& o) {
   if (o.max_observers >= 0 && given > static_cast<std::size_t>(o.max_observers)) {
     return invalid_argument("--max-observers: " + std::to_string(o.max_observers) + " is fewer than the " +
                             std::to_string(given) + " --hidden-from and --visible-to points given");
+  }
+  // one point both ways: no path is hidden from it and in its sight
+  for (const std::vector<double>& h : o.hidden_from) {
+    for (const std::vector<double>& v : o.visible_to) {
+      if (std::hypot(h[0] - v[0], h[1] - v[1], h[2] - v[2]) < kSamePointM) {
+        return invalid_argument(
+            "--hidden-from and --visible-to name the same point: no path is both hidden from it "
+            "and in its sight");
+      }
+    }
   }
   return {};
 }

@@ -65,9 +65,9 @@ int run_sessions(const visvol::app::ConsoleOptions& options) {
 
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-console")) return 0;
-  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
-    std::fprintf(stderr, "visvol-console: argument %d%s%s is empty: give it a value (try --help)\n", empty,
-                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+  static const char* const kMayBeEmpty[] = {"--namespace", nullptr};
+  if (const int empty = visvol::first_empty_argument(argc, argv, kMayBeEmpty); empty > 0) {
+    std::fprintf(stderr, "visvol-console: %s (try --help)\n", visvol::empty_argument_problem(argv, empty).c_str());
     return 2;
   }
   using namespace visvol;

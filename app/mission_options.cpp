@@ -68,11 +68,18 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
       const auto* s = node.as_string();
       if (!s) return invalid_argument(path + ": name must be a string");
       // printed in reports and on terminals: no control characters (an escape
-      // sequence in a vehicle file would drive the operator's terminal)
+      // sequence in a vehicle file would drive the operator's terminal), C1's
+      // in UTF-8 (0xC2 0x80..0x9F) included
       const std::string& name = s->get();
-      if (name.size() > 128 || std::any_of(name.begin(), name.end(),
-                                           [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; })) {
-        return invalid_argument(path + ": name must be at most 128 characters, none of them a control character");
+      bool control = false;
+      for (std::size_t i = 0; i < name.size(); ++i) {
+        const auto c = static_cast<unsigned char>(name[i]);
+        const bool c1 = c == 0xC2 && i + 1 < name.size() && static_cast<unsigned char>(name[i + 1]) >= 0x80 &&
+                        static_cast<unsigned char>(name[i + 1]) <= 0x9F;
+        control = control || c < 0x20 || c == 0x7F || c1;
+      }
+      if (name.size() > 128 || control) {
+        return invalid_argument(path + ": name must be at most 128 bytes, none of them a control character");
       }
       v->name = name;
       continue;

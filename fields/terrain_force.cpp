@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -167,7 +168,7 @@ class CellRanges {
 // The band samples of one column share their post: the cells a search meets,
 // in the same order, and the triangles' corners. Only their heights differ.
 // So a column is searched once, its samples W at a time in the lanes of a
-// vector (8 doubles on AVX-512, 4 on AVX2, 2 on the baseline's SSE2), each
+// vector (4 doubles with AVX2 or AVX-512, 2 on the baseline's SSE2), each
 // lane keeping its own nearest point; a cell is visited when any lane's bound
 // admits it, and the search ends at the first cell no nearer than every
 // lane's best. A lane that did not need a visit only keeps the nearer point,
@@ -362,7 +363,9 @@ VISVOL_TFF_INLINE void column_search(const CellRanges& cells, int i, int j, cons
 // x86-64 levels v4 and v3; others take the baseline). Four lanes on v4 as on
 // v3: on a 2-core AMD EPYC VM (Zen 4) the 8-lane AVX-512 search took 1.7
 // times as long as the 4-lane one with AVX-512's masks, which took a fifth
-// less than AVX2's (tools/bench/README.md, "Field build").
+// less than AVX2's (tools/bench/README.md, "Field build"). The baseline's 2
+// lanes (SSE2; and every clang or non-x86 build) are no gain: 0.84 s there
+// against 0.78 s for the search one sample at a time that this replaced.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define VISVOL_TFF_DISPATCH 1
 #endif
@@ -443,6 +446,9 @@ namespace {
 
 void band_rows(ColumnFn search, const Heightfield& hf, const TffParams& params, int j_begin, int j_end, TffSample* out,
                WorkerPool* pool) {
+  // the column's samples live on the stack: validate(params) is every caller's precondition
+  assert(params.band_levels >= 2 && params.band_levels <= kMaxBandLevels);
+  if (params.band_levels < 2 || params.band_levels > kMaxBandLevels) return;
   const std::size_t nx = static_cast<std::size_t>(hf.nx);
   const std::size_t levels = static_cast<std::size_t>(params.band_levels);
   // every cell a search from these rows can reach: within the band's offset
@@ -479,14 +485,6 @@ void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_be
 void terrain_force_rows_baseline(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
                                  TffSample* out) {
   band_rows(column_search_baseline, hf, params, j_begin, j_end, out, nullptr);
-}
-
-int terrain_force_width() {
-#ifdef VISVOL_TFF_DISPATCH
-  return column_search_for_cpu() == column_search_baseline ? 2 : 4;
-#else
-  return 2;
-#endif
 }
 
 }  // namespace visvol::fields

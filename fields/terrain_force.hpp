@@ -53,17 +53,16 @@ struct NearestTerrainPoint {
 // covers the grid.
 NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m, double search_m);
 
-// The band samples of rows [j_begin, j_end): out[((j - j_begin) * band_levels + b) * nx + i].
+// The band samples of rows [j_begin, j_end): out[((j - j_begin) * band_levels + b) * nx + i],
+// for parameters validate() accepts (others write nothing).
 // Each search is bounded by the sample's vertical distance to its own post,
 // which the nearest point can never exceed, so the result is exact. A
 // column's samples are searched together, in the lanes of a vector.
 void terrain_force_rows(const Heightfield& hf, const TffParams& params, int j_begin, int j_end, TffSample* out,
                         WorkerPool* pool);
 
-// The lanes a column's search runs in on this CPU (4 with AVX2 or AVX-512, 2
-// otherwise), and the same rows at the baseline's width whatever the CPU,
-// one thread: tests hold the two to the same distances.
-int terrain_force_width();
+// The same rows at the baseline's width (2 lanes) whatever the CPU (4 lanes
+// with AVX2 or AVX-512), one thread: tests hold the two to the same distances.
 void terrain_force_rows_baseline(const Heightfield& hf, const TffParams& params, int j_begin, int j_end,
                                  TffSample* out);
 

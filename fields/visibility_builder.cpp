@@ -467,7 +467,7 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
         << " MiB of working memory (hull levels " << mib(plan.level_bytes) << ", histogram window "
         << mib(plan.window_bytes) << ", finished rows " << mib(plan.staging_bytes) << ", table "
         << mib(plan.table_bytes) << ", terrain " << mib(plan.terrain_bytes) << "); the limit is " << std::defaultfloat
-        << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
+        << std::setprecision(6) << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
     return resource_error(msg.str());
   }
   return plan;

@@ -18,10 +18,6 @@ namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
 constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre
-// Positions against the planning bounds too: a path on their edge, written
-// to a file and read back (millimetres, or WGS84 degrees through PROJ),
-// moves by a fraction of a millimetre, out as often as in.
-constexpr double kBoundsTolM = 0.01;
 constexpr double kAngleTolDeg = 1e-6;
 
 // A length for a message: metres to the centimetre.

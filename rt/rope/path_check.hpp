@@ -50,6 +50,11 @@ const char* to_string(ConstraintKind kind);  // "hidden-from", "visible-to"
 // The highest an observer may stand or fly, metres above the datum: higher is
 // a mistyped number (a point 1e300 m up was accepted, and seen by no path).
 inline constexpr double kMaxObserverAltitudeM = 1.0e5;
+// Positions against the planning bounds compare to a centimetre, as heights
+// do: a path on their edge, written to a file and read back (millimetres, or
+// WGS84 degrees through PROJ), moves by a fraction of a millimetre, out as
+// often as in.
+inline constexpr double kBoundsTolM = 0.01;
 // "NAME: Z 1e+300 m is above the 100000 m an observer may be" where `z_m` is
 // over kMaxObserverAltitudeM (the options, the console, the hull maker).
 Status check_observer_altitude(const std::string& name, double z_m);

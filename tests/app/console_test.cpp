@@ -244,6 +244,7 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--eye-height -1", "--eye-height"},
       {"--max-observers 513", "--max-observers: must be in 0..512"},
       {"--max-observers 1 --hidden-from" + p + " --visible-to" + p, "--max-observers: 1 is fewer than the 2"},
+      {"--hidden-from" + p + " --visible-to" + p, "--hidden-from and --visible-to name the same point"},
       {"--hidden-from 1 2 3", "hidden-from point 1: (1.000000, 2.000000) is outside the pack"},
       {"--visible-to " + xyz(post(10, 10, -40)), "visible-to point 1"},
       {"--max-agl 100 --from " + xyz(post(10, 48, 150)), "start: "},

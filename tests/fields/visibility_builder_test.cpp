@@ -564,6 +564,21 @@ TEST(VisibilityFieldInput, RefusesAbsurdSizesWithTheNeededMemory) {
   ASSERT_FALSE(v.ok());
   EXPECT_EQ(v.status().code(), Errc::resource);
   EXPECT_NE(v.status().message().find("MiB"), std::string::npos);
+  // the streamed build's plan names its need and the limit as given
+  p.max_memory_mib = 100;
+  const Result<BuildPlan> plan = plan_visibility_build(hf, p);
+  ASSERT_FALSE(plan.ok());
+  EXPECT_NE(plan.status().message().find(" MiB of working memory (hull levels "), std::string::npos)
+      << plan.status().message();
+  EXPECT_NE(plan.status().message().find("the limit is 100 MiB: "), std::string::npos) << plan.status().message();
+  // a limit under a MiB, and a need as small: to the hundredth, not "0"
+  const Heightfield small = flat(40, 10.0);
+  FieldParams q = small_params(RangeShape::cube, 8);
+  q.max_memory_mib = 0.001;
+  const Result<BuildPlan> tiny = plan_visibility_build(small, q);
+  ASSERT_FALSE(tiny.ok());
+  EXPECT_EQ(tiny.status().message().find("needs 0 MiB"), std::string::npos) << tiny.status().message();
+  EXPECT_NE(tiny.status().message().find("the limit is 0.001 MiB"), std::string::npos) << tiny.status().message();
 }
 
 TEST(VisibilityFieldInput, PlanRefusesRangeNoneOnLargeGrids) {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -267,6 +268,9 @@ TEST_F(PathIo, GeoJsonWithAnotherRouteOrCrsIsRefused) {
       {collection(R"(,{"type":"feature","geometry":{"type":"LineString","coordinates":[[0,0],[1,1]]}})"),
        "features[1] (type \"feature\") is not a Feature with a geometry"},
       {collection("", R"("crs":{"type":"name","properties":{"name":"urn:ogc:def:crs:EPSG::4267"}},)"), "\"crs\""},
+      {R"({"type":"Feature","crs":{"type":"name","properties":{"name":"EPSG:26710"}},"geometry":)"
+       R"({"type":"LineString","coordinates":[[-122.43,37.79,100.0],[-122.42,37.78,120.0]]}})",
+       "\"crs\""},
   };
   for (const auto& [text, named] : refused) {
     Result<PathFile> path = read_path_file(file_with("other.geojson", text), wkt_);
@@ -373,6 +377,33 @@ TEST_F(PathIo, NoFileOfAnEarlierPlanIsLeftBesideAPartSet) {
       << s.message();
   for (const char* gone : {".kml", ".plan", ".geojson"}) EXPECT_NE(access((base + gone).c_str(), F_OK), 0) << gone;
   EXPECT_EQ(access((base + ".csv").c_str(), F_OK), 0);
+}
+
+TEST_F(PathIo, OnlyTheFilesOfTheSetNotWrittenGoAndNeverALink) {
+  // the home's ground above the first vertex: every file but the .plan is
+  // written, and the earlier .plan alone is removed
+  const std::string base = dir_ + "/ground";
+  std::vector<std::string> written;
+  ASSERT_TRUE(write_path_outputs(base, report(preset("multirotor")), written).ok());
+  PathReport low = report(preset("multirotor"));
+  low.home_ground_m = 300;
+  written.clear();
+  Status s = write_path_outputs(base, low, written);
+  EXPECT_NE(s.message().find("(the earlier " + base + ".plan removed: another plan's)"), std::string::npos)
+      << s.message();
+  EXPECT_NE(access((base + ".plan").c_str(), F_OK), 0);
+  for (const char* kept : {".csv", ".kml", ".geojson"}) EXPECT_EQ(access((base + kept).c_str(), F_OK), 0) << kept;
+  // a link where a file of the set would be is never removed (nor what it names)
+  const std::string victim = dir_ + "/victim.txt";
+  std::ofstream(victim) << "keep\n";
+  ASSERT_EQ(::symlink(victim.c_str(), (base + ".plan").c_str()), 0);
+  written.clear();
+  s = write_path_outputs(base, low, written);
+  EXPECT_EQ(s.message().find("removed"), std::string::npos) << s.message();
+  struct stat st {};
+  EXPECT_EQ(::lstat((base + ".plan").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+  EXPECT_EQ(slurp(victim), "keep\n");
 }
 
 TEST_F(PathIo, APackCrsInDegreesPlacesNothing) {
@@ -516,7 +547,7 @@ TEST_F(PathIo, PlanWaypointsAboveHomeAreLiftedByHomesAltitude) {
 
 // The aircraft flies to spline waypoints and loiters too: they are vertices
 // (a loiter at its centre), so a check sees them; speed, camera, ROI and
-// delay items move nothing and are left out, as are takeoff, landing and
+// condition items move nothing and are left out, as are takeoff, landing and
 // return to launch (the mission's ends).
 TEST_F(PathIo, PlanSplineWaypointsAndLoitersAreVerticesOtherItemsAreLeftOut) {
   const std::string f = file_with(
@@ -527,7 +558,7 @@ TEST_F(PathIo, PlanSplineWaypointsAndLoitersAreVerticesOtherItemsAreLeftOut) {
                 waypoint(0, "0", "0", "0", 2000) + "," +        // IMAGE_START_CAPTURE
                 waypoint(0, "0", "0", "0", 206) + "," +         // DO_SET_CAM_TRIGG_DIST
                 waypoint(0, "37.7", "-122.4", "0", 80) + "," +  // NAV_ROI
-                waypoint(0, "0", "0", "0", 93) + "," +          // NAV_DELAY
+                waypoint(0, "0", "0", "0", 112) + "," +         // CONDITION_DELAY
                 waypoint(0, "37.788", "-122.428", "60", 19) + "," + waypoint(0, "37.787", "-122.427", "61", 17) + "," +
                 waypoint(0, "37.786", "-122.426", "62", 18) + "," +
                 waypoint(0, "37.785", "-122.425", "63", mavlink::kCmdNavLoiterToAlt) + "," +
@@ -760,6 +791,9 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
        "return.plan: mission.items[1] (doJumpId 1): command 188 moves the aircraft"},
       {"terminate.plan", plan_text(wp + "," + waypoint(0, "0", "0", "0", 185) + "," + wp),
        "terminate.plan: mission.items[1] (doJumpId 1): command 185 moves the aircraft"},
+      // a fixed-wing circles while it waits, on a circle the file does not give
+      {"delay.plan", plan_text(wp + "," + waypoint(0, "0", "0", "0", 93) + "," + wp),
+       "delay.plan: mission.items[1] (doJumpId 1): command 93 moves the aircraft"},
       {"survey.plan", plan_text(wp + R"(,{"type":"ComplexItem","complexItemType":"survey"},)" + wp),
        "survey.plan: mission.items[1]: a ComplexItem (survey): its flown path is not in the file"},
       {"home.plan", plan_text(wp + "," + waypoint(3, "37.78", "-122.42", "60"), "[37.79, -122.43]"),

@@ -303,7 +303,7 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
       {kEnds + " --stiffness inf", "--stiffness"},
       {kEnds + " --autopilot inav", "--autopilot: 'inav' is neither px4 nor ardupilot"},
       {kEnds + " --vehicle " + autopilot, "autopilot must be \"px4\" or \"ardupilot\""},
-      {kEnds + " --vehicle " + escape, "name must be at most 128 characters, none of them a control character"},
+      {kEnds + " --vehicle " + escape, "name must be at most 128 bytes, none of them a control character"},
   };
   for (const Case& c : cases) {
     const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);
@@ -361,6 +361,36 @@ TEST_F(PlanCheck, CheckRefusesAPathBeyondThePack) {
   const Outcome r = visvol("check " + *pack_ + " " + path + " --hidden-from 550500 4182200 330");
   EXPECT_NE(r.err.find("vertex 1 (550300.0, -5817550.0) lies outside the pack"), std::string::npos) << r.err;
   std::remove(path.c_str());
+}
+
+// A start read from a file: its rounding may take a point on the bounds' edge
+// a fraction of a millimetre out (back in it goes); further out is refused;
+// and a start that is one of the plan's own outputs is refused before it is
+// overwritten.
+TEST_F(PlanCheck, AnInitPathOnTheBoundsEdgeAndOneOfItsOwnOutputs) {
+  const double x_max = (*bounds_)["xmax_m"].get<double>();
+  const std::string path = ::testing::TempDir() + "/edge_" + std::to_string(getpid()) + ".txt";
+  const std::string b = base("edge");
+  auto plan_from = [&](double out_m) {
+    std::ofstream(path) << std::fixed << "550300 4182450 320\n" << x_max + out_m << " 4182150 320\n";
+    return visvol("plan " + *pack_ + kEnds + " --init " + path + " --objective hide --max-seconds 1 -o " + b);
+  };
+  const Outcome in = plan_from(0.004);
+  EXPECT_NE(in.status, 2) << in.err;
+  const Outcome out = plan_from(0.05);
+  EXPECT_EQ(out.status, 2);
+  EXPECT_NE(out.err.find("is outside the pack's planning bounds"), std::string::npos) << out.err;
+  // --init b.csv -o b: refused, and b.csv left as it was
+  std::ofstream(b + ".csv") << "550300 4182450 320\n550600 4182150 320\n";
+  const Outcome own = visvol("plan " + *pack_ + kEnds + " --init " + b + ".csv --objective hide -o " + b);
+  EXPECT_EQ(own.status, 2);
+  EXPECT_NE(own.err.find("--init " + b + ".csv is " + b + ".csv, one of -o's outputs"), std::string::npos) << own.err;
+  std::ifstream kept(b + ".csv");
+  std::string first;
+  EXPECT_TRUE(std::getline(kept, first));
+  EXPECT_EQ(first, "550300 4182450 320");
+  std::remove(path.c_str());
+  remove_outputs(b);
 }
 
 // The .plan is written for the flight stack the vehicle flies: PX4 unless the

@@ -66,6 +66,10 @@ TEST(CliUsage, BadArgumentsExitTwoWithOneLine) {
   const Outcome empty = visvol("plan x.vvp --objective hide --clearance '' -o out");
   EXPECT_EQ(empty.status, 2);
   EXPECT_NE(empty.err.find("argument 6 after --clearance is empty"), std::string::npos) << empty.err;
+  // and `--clearance=`, which CLI11 gives the next argument
+  const Outcome equals = visvol("plan x.vvp --objective hide --clearance= 45 -o out");
+  EXPECT_EQ(equals.status, 2);
+  EXPECT_NE(equals.err.find("argument 5, '--clearance=', has an empty value"), std::string::npos) << equals.err;
 }
 
 TEST(CliUsage, BadInputNamesTheFile) {

@@ -344,8 +344,7 @@ int main(int argc, char** argv) {
   using namespace visvol::cli;
   if (visvol::print_version_if_asked(argc, argv, "visvol-build-mpi")) return 0;
   if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
-    std::fprintf(stderr, "visvol-build-mpi: argument %d%s%s is empty: give it a value (try --help)\n", empty,
-                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    std::fprintf(stderr, "visvol-build-mpi: %s (try --help)\n", visvol::empty_argument_problem(argv, empty).c_str());
     return 2;
   }
   // mpirun ends a failed job with SIGTERM: rank 0's temporary goes with it

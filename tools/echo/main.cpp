@@ -425,9 +425,9 @@ void add_command_kinds(CLI::App& command, CommandOptions& o) {
 
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-echo")) return 0;
-  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
-    std::fprintf(stderr, "visvol-echo: argument %d%s%s is empty: give it a value (try --help)\n", empty,
-                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+  static const char* const kMayBeEmpty[] = {"--namespace", nullptr};
+  if (const int empty = visvol::first_empty_argument(argc, argv, kMayBeEmpty); empty > 0) {
+    std::fprintf(stderr, "visvol-echo: %s (try --help)\n", visvol::empty_argument_problem(argv, empty).c_str());
     return 2;
   }
   Common common;

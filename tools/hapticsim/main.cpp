@@ -133,8 +133,7 @@ std::string summary_json(const Options& o, const SimDevice& d, const visvol::can
 int run(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol-hapticsim")) return 0;
   if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
-    std::fprintf(stderr, "visvol-hapticsim: argument %d%s%s is empty: give it a value (try --help)\n", empty,
-                 empty > 1 ? " after " : "", empty > 1 ? argv[empty - 1] : "");
+    std::fprintf(stderr, "visvol-hapticsim: %s (try --help)\n", visvol::empty_argument_problem(argv, empty).c_str());
     return 2;
   }
   CLI::App app{

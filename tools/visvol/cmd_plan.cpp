@@ -1,5 +1,7 @@
 // visvol plan PACK --from X Y Z --to X Y Z --objective hide|show -o OUT:
 // the offline planner (paper, section 4) on a field pack.
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -149,6 +151,14 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   } else {
     Result<PathFile> file = read_path_file(o.init, p.pack->metadata().crs_wkt);
     if (!file.ok()) return invalid_argument("--init " + file.status().message());
+    // a path read back from a file moves by its rounding: where that took it
+    // out of the bounds (by under a centimetre), it goes back in
+    for (rt::Vec3& v : file->points) {
+      const fields::Bounds2D& b = p.bounds;
+      if (b.contains(v.x(), v.y())) continue;
+      const double x = std::clamp(v.x(), b.xmin_m, b.xmax_m), y = std::clamp(v.y(), b.ymin_m, b.ymax_m);
+      if (std::hypot(x - v.x(), y - v.y()) <= rt::kBoundsTolM) v.x() = x, v.y() = y;
+    }
     VISVOL_RETURN_IF_ERROR(check_init_points(o.init, *file, p, finest));
     r.init = rt::InitialPath::polyline;
     if (file->has_heights) {
@@ -164,8 +174,27 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   return r;
 }
 
+// An --init file that is one of the plan's own outputs would be overwritten
+// (or, where the plan writes only part of its set, removed).
+Status check_init_is_no_output(const PlanOptions& o) {
+  if (o.init == "straight" || o.init == "global") return Status::ok_status();
+  struct stat in {};
+  if (::stat(o.init.c_str(), &in) != 0) return Status::ok_status();  // the reader names what is wrong
+  for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
+    struct stat out {};
+    const std::string file = o.out + extension;
+    if (::stat(file.c_str(), &out) == 0 && out.st_dev == in.st_dev && out.st_ino == in.st_ino) {
+      return invalid_argument("--init " + o.init + " is " + file +
+                              ", one of -o's outputs: the plan would overwrite "
+                              "its own start (choose another -o)");
+    }
+  }
+  return Status::ok_status();
+}
+
 int run_plan(const PlanOptions& o) {
   if (Status s = check_path_outputs(o.out); !s.ok()) return fail("plan", s.with_context("-o"));
+  if (Status s = check_init_is_no_output(o); !s.ok()) return fail("plan", s);
   Result<PlanningPack> opened = open_planning_pack(o.pack);
   if (!opened.ok()) return fail("plan", opened.status());
   const PlanningPack& planning = *opened;

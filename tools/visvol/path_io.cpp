@@ -294,7 +294,8 @@ void collect_line_strings(const nlohmann::json& root, const nlohmann::json& none
   const auto feature = [&](const nlohmann::json& f, const std::string& where) {
     const std::string* type = type_of(f);
     if (type == nullptr || *type != "Feature" || !f.contains("geometry")) {
-      strays.push_back(where + (type != nullptr ? " (type " + json_brief(f["type"]) + ")" : " (no type)"));
+      strays.push_back(where +
+                       (f.is_object() && f.contains("type") ? " (type " + json_brief(f["type"]) + ")" : " (no type)"));
       return;
     }
     if (f["geometry"].is_null()) return;  // RFC 7946: a Feature without a location
@@ -429,7 +430,17 @@ Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path,
                               " beside the path's LineString; a path file is one LineString (and may hold points)");
     }
   }
+  // the root, and (GeoJSON 2008 allowed it there too) each Feature and geometry
   VISVOL_RETURN_IF_ERROR(check_legacy_crs(j, path));
+  const auto check_feature = [&](const nlohmann::json& f) {
+    VISVOL_RETURN_IF_ERROR(check_legacy_crs(f, path));
+    return f.is_object() && f.contains("geometry") ? check_legacy_crs(f["geometry"], path) : Status::ok_status();
+  };
+  if (j.is_object() && j.contains("features") && j["features"].is_array()) {
+    for (const nlohmann::json& f : j["features"]) VISVOL_RETURN_IF_ERROR(check_feature(f));
+  } else {
+    VISVOL_RETURN_IF_ERROR(check_feature(j));
+  }
   PathFile out;
   out.format = PathFormat::geojson;
   const nlohmann::json& line = *lines.front().first;

@@ -75,25 +75,27 @@ Result<std::optional<double>> read_speed(const nlohmann::json& mission, const ch
   return std::optional<double>(it->get<double>());
 }
 
+constexpr long long kCmdDoChangeSpeed = 178;  // MAV_CMD_DO_CHANGE_SPEED: moves nothing, noted
+
 // What a mission item is to the flown path, by its MAV_CMD number.
 enum class ItemRole : std::uint8_t {
   vertex,     // flown at its position: a vertex of the path
   end,        // takeoff, landing, return to launch: the mission's ends, not checked
-  no_motion,  // moves nothing (conditions, delays, camera, gimbal, speed, ROI...)
+  no_motion,  // moves nothing (conditions, camera, gimbal, speed, ROI...)
   moves,      // moves the aircraft along what visvol cannot read from the file
   unknown,    // none visvol knows to leave the path unchanged: it may move the aircraft
 };
 
-// Commands that leave the flown path as it is: conditions and delays that
+// Commands that leave the flown path as it is: conditions that
 // hold the aircraft on it, speed, camera, gimbal, servo, relay and ROI
 // commands. A list of those visvol knows (MAVLink's common set): any other
 // command may move the aircraft (a jump, a mode or home change, a
 // termination, an orbit...), and a path read past it would not be the path
 // flown.
 bool leaves_path_unchanged(long long command) {
-  constexpr long long kNavRoi = 80, kNavDelay = 93;
+  constexpr long long kNavRoi = 80;
   constexpr long long kConditionDelay = 112, kConditionDistance = 114, kConditionYaw = 115;
-  constexpr long long kDoChangeSpeed = 178, kDoSetRelay = 181, kDoRepeatRelay = 182, kDoSetServo = 183;
+  constexpr long long kDoSetRelay = 181, kDoRepeatRelay = 182, kDoSetServo = 183;
   constexpr long long kDoRepeatServo = 184, kDoSetActuator = 187;
   constexpr long long kDoSetRoiLocation = 195, kDoSetRoiWpnextOffset = 196, kDoSetRoiNone = 197;
   constexpr long long kDoSetRoiSysid = 198, kDoControlVideo = 200, kDoSetRoi = 201, kDoDigicamConfigure = 202;
@@ -108,11 +110,10 @@ bool leaves_path_unchanged(long long command) {
   constexpr long long kVideoStopStreaming = 2503;
   switch (command) {
     case kNavRoi:
-    case kNavDelay:
     case kConditionDelay:
     case kConditionDistance:
     case kConditionYaw:
-    case kDoChangeSpeed:
+    case kCmdDoChangeSpeed:
     case kDoSetRelay:
     case kDoRepeatRelay:
     case kDoSetServo:
@@ -159,6 +160,7 @@ bool leaves_path_unchanged(long long command) {
 bool moves_off_the_file(long long command) {
   constexpr long long kNavFollow = 25, kContinueAndChangeAlt = 30, kDoFollow = 32, kDoFollowReposition = 33;
   constexpr long long kDoOrbit = 34, kNavPathPlanning = 81, kNavGuidedEnable = 92, kNavPayloadPlace = 94;
+  constexpr long long kNavDelay = 93;  // a fixed-wing circles while it waits, on a circle the file does not give
   constexpr long long kConditionChangeAlt = 113, kDoSetMode = 176, kDoJump = 177, kDoSetHome = 179;
   constexpr long long kDoFlightTermination = 185, kDoChangeAltitude = 186, kDoReturnPathStart = 188;
   constexpr long long kDoRallyLand = 190, kDoGoAround = 191, kDoReposition = 192, kDoPauseContinue = 193;
@@ -176,6 +178,7 @@ bool moves_off_the_file(long long command) {
     case kNavPathPlanning:
     case kNavGuidedEnable:
     case kNavPayloadPlace:
+    case kNavDelay:
     case kConditionChangeAlt:
     case kDoSetMode:
     case kDoJump:
@@ -336,7 +339,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                                    ? " moves the aircraft along a path visvol cannot read from the file (a jump, "
                                      "orbit, follow, termination, mode, home or altitude change...)"
                                    : " is not a command visvol knows to leave the flown path unchanged (speed, "
-                                     "camera, gimbal, servo, relay, ROI, delays), and it may move the aircraft") +
+                                     "camera, gimbal, servo, relay, ROI, conditions), and it may move the aircraft") +
                               "; the path is read from waypoints (16), spline waypoints (82) and loiters (17, 18, "
                               "19, 31): write the mission with those, or check the path as flown");
     }
@@ -347,8 +350,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       landing_after_waypoints = landing_after_waypoints || command == mavlink::kCmdNavLand ||
                                 command == mavlink::kCmdNavVtolLand || command == mavlink::kCmdNavLandLocal;
     }
-    constexpr long long kDoChangeSpeed = 178;
-    if (command == kDoChangeSpeed) out.speed_changes = true;
+    if (command == kCmdDoChangeSpeed) out.speed_changes = true;
     if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
     if (!end_after_waypoints.empty()) {
       return invalid_argument(end_after_waypoints +

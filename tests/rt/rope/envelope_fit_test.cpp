@@ -191,6 +191,7 @@ TEST_F(FitOnRelief, ABandItCannotHoldIsNeverSplitBelowAMetre) {
     e.min_turn_radius_m = turn_m;
     const EnvelopeFit fit = fit_to_envelope(low_start, spec_of(e), terrain);
     EXPECT_FALSE(fit.feasible);
+    EXPECT_LE(fit.path.size(), 40u) << "the splits stop where they no longer help (72 points before)";
     for (std::size_t i = 0; i + 1 < fit.path.size(); ++i) {
       const Vec3 d = fit.path[i + 1] - fit.path[i];
       EXPECT_GE(std::hypot(d.x(), d.y()), 1.0) << "segment " << i << " of " << fit.path.size() - 1;

@@ -221,7 +221,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
     return out;
   }
   if (spec.planning_bounds) clamp_to_bounds(p, *spec.planning_bounds);
-  relax_turns(p, spec.envelope.min_turn_radius_m);
+  relax_turns(p, spec.envelope.min_turn_radius_m * (1 + spec.turn_margin));
   const double step = spec.step_m > 0 ? spec.step_m : 0.25 * terrain.spacing_m;
   auto slope = [&](double limit_deg) {
     const double aim_deg = limit_deg - std::min(spec.angle_margin_deg, 0.5 * limit_deg);
@@ -308,7 +308,7 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
       if (!turns && round < kTurnRounds) {
         // the splits tightened some turns: open them again, then the heights
         ++round;
-        relax_turns(p, spec.envelope.min_turn_radius_m);
+        relax_turns(p, spec.envelope.min_turn_radius_m * (1 + spec.turn_margin));
         if (spec.planning_bounds) clamp_to_bounds(p, *spec.planning_bounds);
         for (std::size_t i = 0; i < p.size(); ++i) set_band(i);
         continue;

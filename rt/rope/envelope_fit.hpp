@@ -49,6 +49,10 @@ struct EnvelopeFitSpec {
   // kept inside the climb and descent limits: a path written with millimetre
   // coordinates (CSV, GeoJSON) still checks as met when read back
   double angle_margin_deg = 0.1;
+  // turns opened to this share over the least turn radius: the same, for
+  // turns between vertices a few metres apart (a millimetre moved a tightest
+  // turn from 80.3 to 79.6 m against 80)
+  double turn_margin = 0.01;
   double hull_margin_m = 5.0;           // kept under hidden-from and over visible-to hulls
   double step_m = 0;                    // between-vertex samples; 0: a quarter post spacing
   std::size_t max_points = 0;           // vertices the fit may end with (it splits segments); 0: 4 n + 64

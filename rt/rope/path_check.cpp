@@ -115,7 +115,7 @@ Result<PathChecker> PathChecker::create(fields::Heightfield terrain, const PathF
   if (!(spec.sample_step_m >= 0 && std::isfinite(spec.sample_step_m))) {
     return invalid_argument("path check: the sample step must be a finite length");
   }
-  if (spec.sample_step_m == 0) spec.sample_step_m = 0.25 * terrain.spacing_m;
+  if (spec.sample_step_m == 0) spec.sample_step_m = kSightStepPosts * terrain.spacing_m;
   PathChecker c;
   c.terrain_ = std::move(terrain);
   c.field_ = field;
@@ -262,7 +262,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // the constraints, clearance, heights and bounds at no share of the length
   // (they can only fail a requirement), and clearance and max-agl are exact
   // along the arc's chords between them (a chord is step^2 / 8R from the
-  // arc: a centimetre at the default step and 80 m). The arc is shorter
+  // arc: under a centimetre at the default step on a 30 m grid and 80 m). The arc is shorter
   // than the legs it cuts, so it climbs or descends more steeply than they
   // do on average (a right-angle corner between two legs at the same slope:
   // 4 / pi times their slope): judged too, at no share of the length.

@@ -784,7 +784,8 @@ std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo, 
       << "fp,clearance_m\n";
   for (std::size_t i = 0; i < r.vertices.size(); ++i) {
     const Vec3& v = r.vertices[i];
-    csv << i << ',' << fixed(v.x(), 3) << ',' << fixed(v.y(), 3) << ',' << fixed(v.z(), 3) << ',';
+    // a tenth of a millimetre: read back, a turn between vertices metres apart keeps its radius
+    csv << i << ',' << fixed(v.x(), 4) << ',' << fixed(v.y(), 4) << ',' << fixed(v.z(), 4) << ',';
     if (geo.ok()) csv << fixed((*geo)[i].x(), 8) << ',' << fixed((*geo)[i].y(), 8) << ',';
     if (ellipsoidal.ok()) csv << fixed(ellipsoidal->points[i].z(), 3) << ',';
     csv << fixed(r.per_vertex[i].fp, 6) << ',' << fixed(r.per_vertex[i].clearance_m, 2) << '\n';

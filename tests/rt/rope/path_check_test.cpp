@@ -309,6 +309,36 @@ TEST(PathCheck, AFixedWingsArcClimbsMoreSteeplyThanItsLegs) {
   EXPECT_NEAR(multirotor->check(path).envelope[3].worst, 12.0, 1e-9);
 }
 
+// A notch one post wide in the wall: an observer far east sees, through it,
+// a stretch of a path just west of the wall about 0.15 of a post long.
+// Samples a quarter post apart (the step before) step over it and read the
+// path hidden; the default step (a sixteenth) finds it (a skeptic's plan on
+// Taunus was reported hidden while 13 m of it was in sight).
+TEST_F(WallTerrain, AStretchInSightBetweenQuarterPostSamplesIsFound) {
+  terrain.at(30, 32) = 100.0f;  // the notch
+  PathCheckSpec s = spec();
+  s.envelope.clearance_m = 1;
+  s.constraints = {{ConstraintKind::hidden_from, post(60, 32, 100), 2.0}};
+  // 40 posts along x = 28 at 104.35 m: quarter-post samples fall 0.125 post either side of the notch's line
+  const std::vector<Vec3> path = {post(28, 12.125, 104.35), post(28, 52.125, 104.35)};
+  // the reference: R3 every millimetre over the two posts around the notch
+  const Vec3 eye = s.constraints[0].eye_m();
+  double seen_m = 0;
+  for (double y = 31.0; y < 33.0; y += 1e-4) {
+    seen_m += fields::r3_visible(terrain, terrain.i_of(eye.x()), terrain.j_of(eye.y()), eye.z(), 28.0, y, 104.35, 0.0) *
+              1e-4 * terrain.spacing_m;
+  }
+  ASSERT_GT(seen_m, 0.07 * terrain.spacing_m);  // a stretch in sight, shorter than a quarter post
+  ASSERT_LT(seen_m, 0.25 * terrain.spacing_m);
+  const auto by_default = PathChecker::create(terrain, nullptr, s);
+  ASSERT_TRUE(by_default.ok());
+  const PathCheck c = by_default->check(path);
+  EXPECT_FALSE(c.constraints[0].met);
+  EXPECT_NEAR(c.constraints[0].seen_m, seen_m, 0.0625 * terrain.spacing_m);
+  s.sample_step_m = 0.25 * terrain.spacing_m;  // the quarter post: it misses the stretch
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s)->check(path).constraints[0].met);
+}
+
 TEST_F(WallTerrain, ObserversBelowTheTerrainOrOutsideAreRefusedByName) {
   PathCheckSpec s = spec();
   s.constraints = {{ConstraintKind::hidden_from, post(10, 10, 99.0), 2.0}};  // 1 m under the plain

@@ -43,8 +43,13 @@ PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields
 }
 
 std::string describe(const fields::Bounds2D& box) {
+  // to the centimetre, rounded inward: a point read off the text is inside
+  // (452918.0723 printed as 452918.07 was refused as --to)
+  auto up = [](double v) { return std::ceil(v * 100.0 - 1e-6) / 100.0; };
+  auto down = [](double v) { return std::floor(v * 100.0 + 1e-6) / 100.0; };
   char text[128];
-  std::snprintf(text, sizeof text, "x %.2f..%.2f, y %.2f..%.2f", box.xmin_m, box.xmax_m, box.ymin_m, box.ymax_m);
+  std::snprintf(text, sizeof text, "x %.2f..%.2f, y %.2f..%.2f", up(box.xmin_m), down(box.xmax_m), up(box.ymin_m),
+                down(box.ymax_m));
   return text;
 }
 

@@ -64,6 +64,9 @@ TEST(PlanningBoundsRule, DescribedForPeopleInMetres) {
             "x 1240.00..1930.00, y 4370.00..4760.00 (margin 240 m)");
   EXPECT_EQ(describe(planning_bounds_rule(grid_40x30(), RangeShape::none, 0)),
             "x 1108.75..2061.25, y 4238.75..4891.25 (margin 108.75 m)");
+  // to the centimetre, rounded inward: a point read off the text is inside
+  EXPECT_EQ(describe(fields::Bounds2D{452918.0723, 5610000.004, 465068.0799, 5628000.0}),
+            "x 452918.08..465068.07, y 5610000.01..5628000.00");
 }
 
 PackBuildParams small_params() {

@@ -408,6 +408,11 @@ TEST_F(PlanCheck, AnInitPathOnTheBoundsEdgeAndOneOfItsOwnOutputs) {
   const Outcome out = plan_from(0.05);
   EXPECT_EQ(out.status, 2);
   EXPECT_NE(out.err.find("is outside the pack's planning bounds"), std::string::npos) << out.err;
+  // --to read off `info`'s bounds (452918.0723 was printed 452918.07, and refused): the same centimetre
+  std::ostringstream to;
+  to << std::fixed << " --from 550300 4182450 320 --to " << x_max + 0.004 << " 4182150 320";
+  const Outcome edge_to = visvol("plan " + *pack_ + to.str() + " --objective hide --max-seconds 1 -o " + b);
+  EXPECT_NE(edge_to.status, 2) << edge_to.err;
   // --init b.csv -o b: refused, and b.csv left as it was
   std::ofstream(b + ".csv") << "550300 4182450 320\n550600 4182150 320\n";
   const Outcome own = visvol("plan " + *pack_ + kEnds + " --init " + b + ".csv --objective hide -o " + b);

@@ -60,6 +60,15 @@ msg::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack
   return t;
 }
 
+// A point read back from a file, or off a printed bound, is out by its
+// rounding: where that took it out of the bounds by under a centimetre (the
+// check's tolerance), it goes back in.
+void into_bounds(rt::Vec3& v, const fields::Bounds2D& b) {
+  if (b.contains(v.x(), v.y())) return;
+  const double x = std::clamp(v.x(), b.xmin_m, b.xmax_m), y = std::clamp(v.y(), b.ymin_m, b.ymax_m);
+  if (std::hypot(x - v.x(), y - v.y()) <= rt::kBoundsTolM) v.x() = x, v.y() = y;
+}
+
 std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
   if (v.size() != 3) return std::nullopt;
   return rt::Vec3(v[0], v[1], v[2]);
@@ -124,6 +133,8 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   rt::PlanRequest r;
   r.from = *point_of(o.from);
   r.to = *point_of(o.to);
+  into_bounds(r.from, p.bounds);
+  into_bounds(r.to, p.bounds);
   r.objective = o.objective == "show" ? rt::Objective::show : rt::Objective::hide;
   Result<rt::RopeModel> model = rt::parse_rope_model(o.model.c_str());
   if (!model.ok()) return model.status();
@@ -151,14 +162,7 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   } else {
     Result<PathFile> file = read_path_file(o.init, p.pack->metadata().crs_wkt);
     if (!file.ok()) return invalid_argument("--init " + file.status().message());
-    // a path read back from a file moves by its rounding: where that took it
-    // out of the bounds (by under a centimetre), it goes back in
-    for (rt::Vec3& v : file->points) {
-      const fields::Bounds2D& b = p.bounds;
-      if (b.contains(v.x(), v.y())) continue;
-      const double x = std::clamp(v.x(), b.xmin_m, b.xmax_m), y = std::clamp(v.y(), b.ymin_m, b.ymax_m);
-      if (std::hypot(x - v.x(), y - v.y()) <= rt::kBoundsTolM) v.x() = x, v.y() = y;
-    }
+    for (rt::Vec3& v : file->points) into_bounds(v, p.bounds);
     VISVOL_RETURN_IF_ERROR(check_init_points(o.init, *file, p, finest));
     r.init = rt::InitialPath::polyline;
     if (file->has_heights) {

@@ -160,6 +160,18 @@ TEST(FlownPath, OverAWaypointAndHovering) {
   ASSERT_EQ(mr->points.size(), 4u);
   EXPECT_EQ(mr->points[2], Vec3(0, 0, 120));  // climbs on the spot
   EXPECT_NE(mr->loiters[0].find("hovers at 120.0 m"), std::string::npos) << mr->loiters[0];
+  for (double held : mr->hold_s) EXPECT_EQ(held, 0.0);  // an unlimited loiter: no time counted
+  // LOITER_TIME: it hovers its seconds there, which the length at the
+  // speed does not count (a skeptic's 600 s hover was missing from the
+  // mission's duration and exposure)
+  PathFile timed = f;
+  timed.loiters[0].kind = LoiterKind::time;
+  timed.loiters[0].amount = 600;
+  Result<FlownPath> waits = fly_path(timed, *rt::vehicle_preset("multirotor"));
+  ASSERT_TRUE(waits.ok());
+  ASSERT_EQ(waits->hold_s.size(), waits->points.size());
+  EXPECT_EQ(waits->hold_s[2], 600.0);
+  EXPECT_NE(waits->loiters[0].find("hovers at 120.0 m for 600.0 s"), std::string::npos) << waits->loiters[0];
   // a circle too small to draw turns on the spot at its radius; so does a
   // fixed-wing of no turn limit asked for the autopilot's radius
   f.loiters[0].radius_m = 0.005;

@@ -264,6 +264,17 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   EXPECT_NE(up.out.find("clockwise at 600.0 m"), std::string::npos) << up.out;
   EXPECT_NE(up.out.find("max-climb 15.0 deg: worst 15.0 deg, holds on 1.000 of the length met"), std::string::npos)
       << up.out;
+  // a multirotor hovers out a LOITER_TIME: its seconds count in the duration
+  // and, where an observer sees the point, in the exposure (they did not)
+  nlohmann::json timed = mission_with(0.0);
+  timed["mission"]["items"][1]["command"] = 19;  // MAV_CMD_NAV_LOITER_TIME: seconds in param 1
+  timed["mission"]["items"][1]["params"][0] = 600;
+  std::ofstream(plan) << timed.dump(2);
+  const Outcome hover = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor --speed 10 --json");
+  ASSERT_NE(hover.status, 2) << hover.err;
+  const nlohmann::json h = nlohmann::json::parse(hover.out);
+  EXPECT_DOUBLE_EQ(h["held_s"].get<double>(), 600.0);
+  EXPECT_NEAR(h["duration_s"].get<double>(), h["length_m"].get<double>() / 10 + 600, 1e-6);
   // what the .plan states of its vehicle: its cruise speed for the times
   // (unless --speed names one), and its type where it is not the one checked
   nlohmann::json stated = mission_with(-120.0);

@@ -8,12 +8,21 @@
 
 namespace visvol::cli {
 
-nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
+namespace {
+
+double held_in_sight_s(const Holds& holds, std::size_t k) {
+  return k < holds.in_sight_s.size() ? holds.in_sight_s[k] : 0.0;
+}
+
+}  // namespace
+
+nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Holds& holds) {
   nlohmann::json j;
   j["constraints"] = nlohmann::json::array();
-  for (const rt::ConstraintResult& r : c.constraints) {
+  for (std::size_t k = 0; k < c.constraints.size(); ++k) {
+    const rt::ConstraintResult& r = c.constraints[k];
     nlohmann::json o = rt::constraint_json(r);
-    o["exposure_s"] = r.seen_m / e.speed_m_per_s;
+    o["exposure_s"] = r.seen_m / e.speed_m_per_s + held_in_sight_s(holds, k);
     j["constraints"].push_back(std::move(o));
   }
   j["envelope"] = nlohmann::json::array();
@@ -24,7 +33,8 @@ nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e) 
   j["all_met"] = c.all_met;
   j["unmet"] = c.unmet();
   j["length_m"] = c.length_m;
-  j["duration_s"] = c.duration_s;
+  j["duration_s"] = c.duration_s + holds.total_s;
+  j["held_s"] = holds.total_s;
   j["fc"] = c.fc;
   return j;
 }
@@ -48,16 +58,20 @@ nlohmann::json vertices_json(const rt::PathCheck& c, const std::vector<rt::Vec3>
   return out;
 }
 
-void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e) {
+void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Holds& holds) {
   if (c.constraints.empty()) {
     // "all met" below would otherwise read as hidden from everyone that matters
     std::printf("constraint none given (--hidden-from, --visible-to): no observer's sight lines checked\n");
   }
-  for (const rt::ConstraintResult& r : c.constraints) {
+  for (std::size_t k = 0; k < c.constraints.size(); ++k) {
+    const rt::ConstraintResult& r = c.constraints[k];
     const rt::Vec3& p = r.constraint.point_m;
-    std::printf("constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the length, in sight %.0f m (%.0f s) %s\n",
+    const double held_s = held_in_sight_s(holds, k);
+    char held[64] = "";
+    if (held_s > 0) std::snprintf(held, sizeof held, ", %.0f s of them held", held_s);
+    std::printf("constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the length, in sight %.0f m (%.0f s%s) %s\n",
                 rt::to_string(r.constraint.kind), p.x(), p.y(), p.z(), rt::fraction_shown(r.satisfied_fraction),
-                r.seen_m, r.seen_m / e.speed_m_per_s, r.met ? "met" : "NOT MET");
+                r.seen_m, r.seen_m / e.speed_m_per_s + held_s, held, r.met ? "met" : "NOT MET");
   }
   for (const rt::LimitResult& l : c.envelope) {
     if (!std::isfinite(l.limit)) {

@@ -4,16 +4,27 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "rt/rope/path_check.hpp"
 
 namespace visvol::cli {
 
+// Time a mission holds the aircraft still (a multirotor's LOITER_TIME: it
+// hovers), which the path's length at the vehicle's speed does not count: in
+// all, and in sight of each constraint point (by its sight line at the
+// vertex held).
+struct Holds {
+  double total_s = 0;
+  std::vector<double> in_sight_s;  // per constraint
+};
+
 // {"constraints": [{kind, point, eye_m, satisfied_fraction, seen_m, exposure_s, met}],
 //  "envelope": [{name, unit, limit, worst, satisfied_fraction, met}],
 //  "inside_planning_bounds", "inside_bounds_fraction", "all_met", "unmet": [...],
-//  "length_m", "duration_s", "fc"}; infinite limits are null.
-nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope);
+//  "length_m", "duration_s", "held_s", "fc"}; infinite limits are null. Durations
+// and exposures count `holds` (none for a plan).
+nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {});
 
 // Per vertex: x_m, y_m, z_m, fp, ground_m, clearance_m, climb_deg, turn_radius_m, seen_by.
 // (climb_deg is the straight segment's to the next vertex; a fixed-wing's arc
@@ -23,6 +34,6 @@ nlohmann::json vertices_json(const rt::PathCheck& check, const std::vector<rt::V
 // Lines "constraint  hidden-from (x, y, z): met on 1.000 of the length" and
 // "envelope   max-climb 15.0 deg: worst 12.3 deg, met", then "requirements  all met"
 // or "requirements  NOT MET: ...".
-void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope);
+void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {});
 
 }  // namespace visvol::cli

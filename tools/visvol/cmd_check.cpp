@@ -201,9 +201,17 @@ int run_check(const CheckOptions& o) {
     return fail("check", invalid_argument(o.path + text));
   }
   const rt::PathCheck c = checker->check(path.data(), static_cast<int>(path.size()), flown->turn_radius_m.data());
+  Holds holds;
+  holds.in_sight_s.assign(c.constraints.size(), 0.0);
+  for (std::size_t i = 0; i < path.size() && i < c.per_vertex.size(); ++i) {
+    const double held_s = flown->hold_s[i];
+    holds.total_s += held_s;
+    for (std::size_t k = 0; k < c.per_vertex[i].seen_by.size() && k < holds.in_sight_s.size(); ++k)
+      if (c.per_vertex[i].seen_by[k]) holds.in_sight_s[k] += held_s;
+  }
 
   if (o.json) {
-    nlohmann::json j = check_json(c, *envelope);
+    nlohmann::json j = check_json(c, *envelope, holds);
     j["pack"] = o.pack;
     j["path"] = o.path;
     j["per_vertex"] = vertices_json(c, path);
@@ -219,14 +227,16 @@ int run_check(const CheckOptions& o) {
     j["fc_end"] = c.fc;
     std::printf("%s\n", json_text(j, 2).c_str());
   } else {
-    std::printf("path       %s: %zu vertices (%zu points flown), %.0f m, %.0f s at %.1f m/s (vehicle %s)\n",
-                o.path.c_str(), file->points.size(), path.size(), c.length_m, c.duration_s, envelope->speed_m_per_s,
-                envelope->name.c_str());
+    char held[64] = "";
+    if (holds.total_s > 0) std::snprintf(held, sizeof held, " and %.0f s held", holds.total_s);
+    std::printf("path       %s: %zu vertices (%zu points flown), %.0f m, %.0f s at %.1f m/s%s (vehicle %s)\n",
+                o.path.c_str(), file->points.size(), path.size(), c.length_m, c.duration_s + holds.total_s,
+                envelope->speed_m_per_s, held, envelope->name.c_str());
     for (const std::string& n : notes) std::printf("note       %s\n", n.c_str());
     for (const std::string& l : flown->loiters) std::printf("loiter     %s\n", l.c_str());
     std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
     print_vertices(c, path, flown->vertex_of);
-    print_check(c, *envelope);
+    print_check(c, *envelope, holds);
   }
   return c.all_met ? kExitOk : kExitFailure;
 }

@@ -92,6 +92,7 @@ class Flight {
     out_.points.push_back(p);
     out_.turn_radius_m.push_back(turn_radius_m);
     out_.vertex_of.push_back(vertex);
+    out_.hold_s.push_back(0.0);
   }
 
   // The heading the aircraft arrives with (east when it has not moved).
@@ -175,7 +176,12 @@ class Flight {
   Status hover(const LoiterItem& l, const Vec3& centre) {
     const Vec3 over(centre.x(), centre.y(), l.altitude_m);
     if (out_.points.empty() || (out_.points.back() - over).norm() >= kSpotM) add(over);
-    out_.loiters.push_back(l.item + ": hovers at " + describe_number(l.altitude_m) + " m");
+    // LOITER_TIME waits its seconds there (the others, like a fixed-wing's
+    // first turn, no time: an unlimited loiter would hold for ever)
+    const double wait_s = l.kind == LoiterKind::time ? l.amount : 0.0;
+    out_.hold_s.back() += wait_s;
+    out_.loiters.push_back(l.item + ": hovers at " + describe_number(l.altitude_m) + " m" +
+                           (wait_s > 0 ? " for " + describe_number(wait_s) + " s" : std::string()));
     return Status::ok_status();
   }
 

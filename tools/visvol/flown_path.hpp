@@ -42,6 +42,9 @@ struct FlownPath {
   std::vector<double> turn_radius_m;
   // Per point: the file's vertex it is, or -1 on a loiter's circle.
   std::vector<int> vertex_of;
+  // Per point: the seconds the aircraft stays there (a multirotor's
+  // LOITER_TIME hover), 0 where it flies on.
+  std::vector<double> hold_s;
   // One line per loiter: "mission.items[4]: 3.0 turns of 80 m clockwise at 120.0 m (108 points)".
   std::vector<std::string> loiters;
 };

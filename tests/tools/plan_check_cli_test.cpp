@@ -82,6 +82,12 @@ TEST_F(PlanCheck, AFixedWingsFilesReadBackItsWorstValues) {
     ASSERT_NE(c.status, 2) << ext << ": " << c.err;
     const nlohmann::json j = nlohmann::json::parse(c.out);
     EXPECT_EQ(j["all_met"], s["all_met"]) << ext;
+    if (std::string(ext) == ".plan") {  // its landing's approach circle is the crew's to judge: said so
+      ASSERT_FALSE(j["notes"].empty());
+      EXPECT_NE(j["notes"].back().get<std::string>().find("the landing's approach: not flown or checked here"),
+                std::string::npos)
+          << j["notes"].dump();
+    }
     for (std::size_t k = 0; k < s["envelope"].size(); ++k) {
       const nlohmann::json& planned = s["envelope"][k];
       const nlohmann::json& read = j["envelope"][k];

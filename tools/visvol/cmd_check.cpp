@@ -187,6 +187,14 @@ int run_check(const CheckOptions& o) {
   Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
   if (!checker.ok()) return fail("check", checker.status());
   if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
+  for (const LoiterItem& a : file->approach) {
+    // the path ends at the last waypoint: what is flown after it is the crew's to judge
+    const std::string radius =
+        a.radius_m != 0 ? printed("%.0f m", std::fabs(a.radius_m)) : std::string("the autopilot's radius");
+    notes.push_back(a.item + ", a loiter to altitude of " + radius +
+                    " over the last waypoint, and the landing after it are the landing's approach: not flown or "
+                    "checked here");
+  }
   // samples every quarter post along the path, a sight line from each to
   // every observer: a path zigzagging across the pack millions of times, or
   // hundreds of observers of a long one, would take hours

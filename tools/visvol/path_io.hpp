@@ -120,6 +120,8 @@ struct PathFile {
   // waypoint, at its altitude, that a landing follows is the landing's
   // approach and is not among them.
   std::vector<LoiterItem> loiters;
+  // .plan: those approach loiters, which a check does not fly (it says so)
+  std::vector<LoiterItem> approach;
   // .plan: what the mission states of its vehicle (absent where it does not)
   std::optional<double> cruise_speed_m_per_s, hover_speed_m_per_s;
   int vehicle_type = -1;       // MAV_TYPE (1 fixed wing, 2 quadrotor...)

@@ -421,6 +421,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     while (!out.loiters.empty() && out.loiters.back().over_waypoint &&
            out.loiters.back().kind == LoiterKind::to_altitude && out.loiters.back().vertex + 1 == out.points.size() &&
            out.loiters.back().altitude_m == out.points.back().z()) {
+      out.approach.insert(out.approach.begin(), out.loiters.back());
       out.loiters.pop_back();
     }
   }

@@ -17,6 +17,7 @@
 #include "app/supervisor.hpp"
 #include "app/terrain_catalogue.hpp"
 #include "app/thumbnail_thread.hpp"
+#include "base/tolerances.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/dds/catalogue_publisher.hpp"
 #include "drivers/dds/command_intake.hpp"
@@ -385,7 +386,10 @@ Status check_terrain(const std::string& path, int level) {
 // --from and --to inside the pack's planning bounds, as `visvol plan` asks.
 Status check_ends_inside(const ConsoleOptions& o, const fields::Bounds2D& b) {
   for (const auto& [name, p] : {std::pair{"--from", &o.from}, std::pair{"--to", &o.to}}) {
-    if (p->size() == 3 && !b.contains((*p)[0], (*p)[1])) {
+    // to a centimetre, as plan and check judge it
+    const fields::Bounds2D near{b.xmin_m - kBoundsTolM, b.ymin_m - kBoundsTolM, b.xmax_m + kBoundsTolM,
+                                b.ymax_m + kBoundsTolM};
+    if (p->size() == 3 && !near.contains((*p)[0], (*p)[1])) {
       char at[96];
       std::snprintf(at, sizeof at, "(%.1f, %.1f)", (*p)[0], (*p)[1]);
       return invalid_argument(std::string(name) + " " + at + " is outside " + o.pack + "'s planning bounds (" +

@@ -254,11 +254,11 @@ Status validate_ceilings(const cli::EnvelopeOptions& e) {
   return {};
 }
 
-// The observers: X Y Z each, finite, at most 256 of a kind and no more than
-// --max-observers allows (where/whether inside the pack: at start-up).
 // Points closer than this are one (a centimetre, as the path check's).
 constexpr double kSamePointM = 0.01;
 
+// The observers: X Y Z each, finite, at most 256 of a kind and no more than
+// --max-observers allows (where/whether inside the pack: at start-up).
 Status validate_observers(const ConsoleOptions& o) {
   for (const auto& [name, points] : {std::pair{"--hidden-from", &o.hidden_from}, {"--visible-to", &o.visible_to}}) {
     if (points->size() > static_cast<std::size_t>(kMaxObserversPerKind)) {

@@ -1,5 +1,5 @@
-// Checks on a program's command line before it is parsed (start-up only: they
-// allocate).
+// Checks on a program's command line before it is parsed (start-up only:
+// empty_argument_problem allocates).
 #pragma once
 
 #include <cstring>
@@ -11,8 +11,8 @@ namespace visvol {
 // after the '='), or 0 when there is none. CLI11 reads an empty value as the
 // option's default (`--clearance ''` planned at the default 30 m without a
 // word) and `--option=` as taking the next argument. `may_be_empty` names
-// the options whose value may be empty (null-terminated list; the console's
-// and visvol-echo's --namespace, empty by default).
+// the options whose value may be empty (null-terminated list; every
+// program's --namespace, empty by default).
 inline int first_empty_argument(int argc, char** argv, const char* const* may_be_empty = nullptr) {
   auto allowed = [&](const char* option, std::size_t length) {
     for (const char* const* o = may_be_empty; o != nullptr && *o != nullptr; ++o) {

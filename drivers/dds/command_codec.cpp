@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "base/tolerances.hpp"
 #include "drivers/dds/message_codec.hpp"
 
 namespace visvol::dds {
@@ -72,8 +73,8 @@ Status check_range(const std::string& field, double v, double lo, double hi, con
 // One coordinate of a point against [lo, hi] (finite, checked before):
 // "FIELD.AXIS: V m is outside the pack's RANGE [LO, HI] m" and `why`.
 Status check_axis(const std::string& field, const char* axis, double v, double lo, double hi, const std::string& range,
-                  const char* why) {
-  if (!(v < lo || v > hi)) return Status();
+                  const char* why, double tol_m = 0) {
+  if (!(v < lo - tol_m || v > hi + tol_m)) return Status();
   return reject(field + "." + axis,
                 number(v) + " m is outside the pack's " + range + " [" + number(lo) + ", " + number(hi) + "] m" + why);
 }
@@ -96,9 +97,11 @@ Status check_endpoint(const std::string& field, const msg::WorldPoint& p, const 
   VISVOL_RETURN_IF_ERROR(check_inside(field, p, limits));
   if (!has_planning_bounds(limits)) return Status();
   const char* why = " (where F_p counts every observer)";
+  // to a centimetre, as the console's options, plan and check judge it
   VISVOL_RETURN_IF_ERROR(
-      check_axis(field, "x", p.x_m, limits.plan_min.x_m, limits.plan_max.x_m, "planning bounds, x", why));
-  return check_axis(field, "y", p.y_m, limits.plan_min.y_m, limits.plan_max.y_m, "planning bounds, y", why);
+      check_axis(field, "x", p.x_m, limits.plan_min.x_m, limits.plan_max.x_m, "planning bounds, x", why, kBoundsTolM));
+  return check_axis(field, "y", p.y_m, limits.plan_min.y_m, limits.plan_max.y_m, "planning bounds, y", why,
+                    kBoundsTolM);
 }
 
 msg::WorldPoint to_world(const geometry_msgs_msg_dds__Point_& p) { return msg::WorldPoint{p.x, p.y, p.z}; }

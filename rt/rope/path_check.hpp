@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "base/tolerances.hpp"
 #include "fields/heightfield.hpp"
 #include "fields/volume.hpp"
 #include "rt/rope/path_metrics.hpp"
@@ -50,15 +51,11 @@ const char* to_string(ConstraintKind kind);  // "hidden-from", "visible-to"
 // The highest an observer may stand or fly, metres above the datum: higher is
 // a mistyped number (a point 1e300 m up was accepted, and seen by no path).
 inline constexpr double kMaxObserverAltitudeM = 1.0e5;
-// Positions against the planning bounds compare to a centimetre, as heights
-// do: a path on their edge, written to a file and read back (millimetres, or
-// WGS84 degrees through PROJ), moves by a fraction of a millimetre, out as
-// often as in.
-inline constexpr double kBoundsTolM = 0.01;
+// Positions against the planning bounds: visvol::kBoundsTolM (base/tolerances.hpp).
 // The default sample step, in posts: the sight lines to the constraint
 // points are exact at each sample, and a stretch seen (or hidden) between
 // two samples is missed. A quarter post missed 13 m in sight between samples
-// 20 m apart on a 90 m grid (a skeptic's plan, reported met); a sixteenth
+// about 20 m apart on a 90 m grid (a skeptic's plan, reported met); a sixteenth
 // (5.6 m there, 1.9 m at 30 m) costs four times the sight lines.
 inline constexpr double kSightStepPosts = 1.0 / 16;
 // "NAME: Z 1e+300 m is above the 100000 m an observer may be" where `z_m` is

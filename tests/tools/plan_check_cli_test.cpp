@@ -275,12 +275,17 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   nlohmann::json timed = mission_with(0.0);
   timed["mission"]["items"][1]["command"] = 19;  // MAV_CMD_NAV_LOITER_TIME: seconds in param 1
   timed["mission"]["items"][1]["params"][0] = 600;
+  timed["mission"]["items"][0]["params"][0] = 30;  // and a waypoint's hold (param 1)
   std::ofstream(plan) << timed.dump(2);
   const Outcome hover = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor --speed 10 --json");
   ASSERT_NE(hover.status, 2) << hover.err;
   const nlohmann::json h = nlohmann::json::parse(hover.out);
-  EXPECT_DOUBLE_EQ(h["held_s"].get<double>(), 600.0);
-  EXPECT_NEAR(h["duration_s"].get<double>(), h["length_m"].get<double>() / 10 + 600, 1e-6);
+  EXPECT_DOUBLE_EQ(h["held_s"].get<double>(), 630.0);
+  EXPECT_NEAR(h["duration_s"].get<double>(), h["length_m"].get<double>() / 10 + 630, 1e-6);
+  // a fixed-wing flies on past a waypoint's hold
+  const Outcome flies_on = visvol("check " + *pack_ + " " + plan + " --vehicle fixed-wing --json");
+  ASSERT_NE(flies_on.status, 2) << flies_on.err;
+  EXPECT_EQ(nlohmann::json::parse(flies_on.out)["held_s"].get<double>(), 0.0);
   // what the .plan states of its vehicle: its cruise speed for the times
   // (unless --speed names one), and its type where it is not the one checked
   nlohmann::json stated = mission_with(-120.0);
@@ -379,11 +384,14 @@ TEST_F(PlanCheck, CheckRefusesAPathItCouldNotCheckInSeconds) {
   const Outcome r = visvol("check " + *pack_ + " " + path + " --json");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("samples"), std::string::npos) << r.err;
-  // a tenth of that path, checkable alone, is refused with 20 observers
+  // a hundredth of that path (1.7 M samples of 1.9 m), checkable alone, is
+  // refused with 20 observers
   {
     std::ofstream f(path);
-    for (int k = 0; k < 40000; ++k) f << (k % 2 ? "550300 4182450 400\n" : "550850 4181850 400\n");
+    for (int k = 0; k < 4000; ++k) f << (k % 2 ? "550300 4182450 400\n" : "550850 4181850 400\n");
   }
+  const Outcome alone = visvol("check " + *pack_ + " " + path);
+  EXPECT_NE(alone.status, 2) << alone.err;
   std::string observers;
   for (int k = 0; k < 20; ++k) observers += " --hidden-from 550500 4182200 330";
   const Outcome many = visvol("check " + *pack_ + " " + path + observers);

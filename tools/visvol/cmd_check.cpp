@@ -195,7 +195,7 @@ int run_check(const CheckOptions& o) {
                     " over the last waypoint, and the landing after it are the landing's approach: not flown or "
                     "checked here");
   }
-  // samples every quarter post along the path, a sight line from each to
+  // samples every sixteenth of a post along the path, a sight line from each to
   // every observer: a path zigzagging across the pack millions of times, or
   // hundreds of observers of a long one, would take hours
   const double samples = checker->sample_count(path);
@@ -264,8 +264,9 @@ Runner add_check_command(CLI::App& app) {
   add_constraint_options(*c, o->constraints);
   c->add_flag("--json", o->json, "Print the assessment as one JSON object (per_vertex included)");
   c->footer(
-      "Sight lines are Franklin & Ray's R3 on the finest terrain from each observer's eye to samples a quarter "
-      "post apart. Exit status: 0 when every requirement holds, 1 when one does not, 2 for bad arguments or input.");
+      "Sight lines are Franklin & Ray's R3 on the finest terrain from each observer's eye to samples a sixteenth "
+      "of a post apart. Exit status: 0 when every requirement holds, 1 when one does not, 2 for bad arguments or "
+      "input.");
   return [o] { return run_check(*o); };
 }
 

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "app/mission_options.hpp"
+#include "base/tolerances.hpp"
 #include "check_report.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
@@ -64,9 +65,8 @@ msg::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack
 // rounding: where that took it out of the bounds by under a centimetre (the
 // check's tolerance), it goes back in.
 void into_bounds(rt::Vec3& v, const fields::Bounds2D& b) {
-  if (b.contains(v.x(), v.y())) return;
   const double x = std::clamp(v.x(), b.xmin_m, b.xmax_m), y = std::clamp(v.y(), b.ymin_m, b.ymax_m);
-  if (std::hypot(x - v.x(), y - v.y()) <= rt::kBoundsTolM) v.x() = x, v.y() = y;
+  if (std::fabs(x - v.x()) <= kBoundsTolM && std::fabs(y - v.y()) <= kBoundsTolM) v.x() = x, v.y() = y;
 }
 
 std::optional<rt::Vec3> point_of(const std::vector<double>& v) {
@@ -92,8 +92,7 @@ Status check_init_points(const std::string& file_name, const PathFile& file, con
     if (file.has_heights) msg << ", " << v.z();
     msg << ") ";
     if (!b.contains(v.x(), v.y())) {
-      msg << "is outside the pack's planning bounds (x " << b.xmin_m << ".." << b.xmax_m << ", y " << b.ymin_m << ".."
-          << b.ymax_m << ")";
+      msg << "is outside the pack's planning bounds (" << storage::describe(b) << ")";
       return invalid_argument(msg.str());
     }
     if (!file.has_heights) continue;

@@ -176,8 +176,8 @@ class Flight {
   Status hover(const LoiterItem& l, const Vec3& centre) {
     const Vec3 over(centre.x(), centre.y(), l.altitude_m);
     if (out_.points.empty() || (out_.points.back() - over).norm() >= kSpotM) add(over);
-    // LOITER_TIME waits its seconds there (the others, like a fixed-wing's
-    // first turn, no time: an unlimited loiter would hold for ever)
+    // LOITER_TIME waits its seconds there; the others no time (an unlimited
+    // loiter would hold for ever: the check counts none, as for a fixed-wing's)
     const double wait_s = l.kind == LoiterKind::time ? l.amount : 0.0;
     out_.hold_s.back() += wait_s;
     out_.loiters.push_back(l.item + ": hovers at " + describe_number(l.altitude_m) + " m" +
@@ -202,7 +202,11 @@ class Flight {
       while (next_loiter < file_.loiters.size() && file_.loiters[next_loiter].vertex == k) ++next_loiter;
       // a loiter's own vertex is its centre, which the aircraft circles
       const bool centre_only = first < next_loiter && !file_.loiters[first].over_waypoint;
-      if (!centre_only) add(v[k], kGeometry, static_cast<int>(k));
+      if (!centre_only) {
+        add(v[k], kGeometry, static_cast<int>(k));
+        // a waypoint's hold: a multirotor waits there (a fixed-wing flies on)
+        if (e_.type == rt::VehicleType::multirotor && k < file_.hold_s.size()) out_.hold_s.back() += file_.hold_s[k];
+      }
       for (std::size_t i = first; i < next_loiter; ++i) {
         const Vec3* next = k + 1 < v.size() ? &v[k + 1] : nullptr;
         VISVOL_RETURN_IF_ERROR(loiter(file_.loiters[i], v[k], next));

@@ -45,7 +45,8 @@ int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
 
 int main(int argc, char** argv) {
   if (visvol::print_version_if_asked(argc, argv, "visvol")) return 0;
-  if (const int empty = visvol::first_empty_argument(argc, argv); empty > 0) {
+  static const char* const kMayBeEmpty[] = {"--namespace", nullptr};  // plan --publish: empty by default
+  if (const int empty = visvol::first_empty_argument(argc, argv, kMayBeEmpty); empty > 0) {
     std::fprintf(stderr, "visvol: %s (try --help)\n", visvol::empty_argument_problem(argv, empty).c_str());
     return visvol::cli::kExitUsage;
   }

@@ -122,6 +122,9 @@ struct PathFile {
   std::vector<LoiterItem> loiters;
   // .plan: those approach loiters, which a check does not fly (it says so)
   std::vector<LoiterItem> approach;
+  // .plan: per point, the seconds a waypoint's param 1 holds a multirotor
+  // there (0 for a loiter's point); empty for the other formats
+  std::vector<double> hold_s;
   // .plan: what the mission states of its vehicle (absent where it does not)
   std::optional<double> cruise_speed_m_per_s, hover_speed_m_per_s;
   int vehicle_type = -1;       // MAV_TYPE (1 fixed wing, 2 quadrotor...)

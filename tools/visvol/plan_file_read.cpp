@@ -407,12 +407,19 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       l->altitude_m = altitude_m;
       // over the waypoint before it: a circle around that waypoint, no vertex of its own
       l->over_waypoint = !out.points.empty() && out.points.back().x() == lon && out.points.back().y() == lat;
-      if (!l->over_waypoint) out.points.push_back({lon, lat, altitude_m});
+      if (!l->over_waypoint) {
+        out.points.push_back({lon, lat, altitude_m});
+        out.hold_s.push_back(0.0);
+      }
       l->vertex = out.points.size() - 1;
       out.loiters.push_back(*l);
       continue;
     }
+    // param 1: the seconds a multirotor holds there (a fixed-wing ignores it)
+    Result<double> hold = loiter_param(params, 0, "hold, s", 0, 1e6, 0.0, where);
+    if (!hold.ok()) return hold.status();
     out.points.push_back({lon, lat, altitude_m});
+    out.hold_s.push_back(*hold);
   }
   // a landing after the last waypoint: a LOITER_TO_ALT over it at its
   // altitude is the landing's approach (visvol's own plans circle there),

@@ -321,7 +321,7 @@ TEST_F(WallTerrain, AStretchInSightBetweenQuarterPostSamplesIsFound) {
   s.constraints = {{ConstraintKind::hidden_from, post(60, 32, 100), 2.0}};
   // 40 posts along x = 28 at 104.35 m: quarter-post samples fall 0.125 post either side of the notch's line
   const std::vector<Vec3> path = {post(28, 12.125, 104.35), post(28, 52.125, 104.35)};
-  // the reference: R3 every millimetre over the two posts around the notch
+  // the reference: R3 every ten-thousandth of a post (1 mm) over the two posts around the notch
   const Vec3 eye = s.constraints[0].eye_m();
   double seen_m = 0;
   for (double y = 31.0; y < 33.0; y += 1e-4) {

@@ -188,6 +188,18 @@ bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
   if (hidden > msg::kMaxObserversPerKind || visible > msg::kMaxObserversPerKind || hidden + visible > l.max_observers) {
     return false;
   }
+  // one point (within a centimetre) both hidden from and visible to
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const auto& h = msg.constraints._buffer[i];
+    if (h.kind != 1) continue;
+    for (std::uint32_t j = 0; j < n; ++j) {
+      const auto& v = msg.constraints._buffer[j];
+      if (v.kind == 2 && std::hypot(v.position_m.x - h.position_m.x, v.position_m.y - h.position_m.y,
+                                    v.position_m.z - h.position_m.z) < 0.01) {
+        return false;
+      }
+    }
+  }
   return !(envelope[3] == 1 && envelope[4] == 1 && !(max_agl_m > clearance_m));
 }
 

@@ -65,8 +65,12 @@ msg::TerrainInfo terrain_info(const storage::Pack& pack, const std::string& pack
 // rounding: where that took it out of the bounds by under a centimetre (the
 // check's tolerance), it goes back in.
 void into_bounds(rt::Vec3& v, const fields::Bounds2D& b) {
-  const double x = std::clamp(v.x(), b.xmin_m, b.xmax_m), y = std::clamp(v.y(), b.ymin_m, b.ymax_m);
-  if (std::fabs(x - v.x()) <= kBoundsTolM && std::fabs(y - v.y()) <= kBoundsTolM) v.x() = x, v.y() = y;
+  // the same comparison as the check's, the console's and the DDS codec's
+  const bool within = v.x() >= b.xmin_m - kBoundsTolM && v.x() <= b.xmax_m + kBoundsTolM &&
+                      v.y() >= b.ymin_m - kBoundsTolM && v.y() <= b.ymax_m + kBoundsTolM;
+  if (!within) return;
+  v.x() = std::clamp(v.x(), b.xmin_m, b.xmax_m);
+  v.y() = std::clamp(v.y(), b.ymin_m, b.ymax_m);
 }
 
 std::optional<rt::Vec3> point_of(const std::vector<double>& v) {

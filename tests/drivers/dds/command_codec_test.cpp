@@ -288,6 +288,12 @@ TEST(ValidateCommand, EndpointsStayInsideThePlanningBoundsObserversNeedNot) {
   c.endpoints.end = {500.0, 1000.0, 100.0};
   EXPECT_EQ(validate_command(c, l).message(),
             "start_m.x: 50 m is outside the pack's planning bounds, x [100, 900] m (where F_p counts every observer)");
+  c.endpoints.start.x_m = 99.995;  // within the centimetre the bounds are judged to (base/tolerances.hpp)
+  EXPECT_TRUE(validate_command(c, l).ok()) << validate_command(c, l).message();
+  c.endpoints.start.x_m = 99.98;
+  EXPECT_EQ(
+      validate_command(c, l).message(),
+      "start_m.x: 99.98 m is outside the pack's planning bounds, x [100, 900] m (where F_p counts every observer)");
   c.endpoints.start.x_m = 100.0;  // inclusive
   c.endpoints.end.y_m = 1900.0;
   EXPECT_NE(validate_command(c, l).message().find("end_m.y: 1900 m is outside the pack's planning bounds"),

@@ -31,6 +31,7 @@
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
+#include "tests/support/scratch.hpp"
 
 namespace {
 
@@ -79,9 +80,8 @@ class Console : public ::testing::Test {
     delete pack_;
     delete script_;
   }
-  static std::string out_dir(const std::string& name) {
-    return ::testing::TempDir() + "/console_" + name + "_" + std::to_string(getpid());
-  }
+  // removed with what the console wrote there when the binary exits
+  static std::string out_dir(const std::string& name) { return visvol::test::scratch_path("console_" + name); }
   // Post (i, j) of the pack's finest level, `up_m` above the terrain: "X Y Z".
   static std::vector<double> post(int i, int j, double up_m) {
     auto pack = visvol::storage::Pack::open(*pack_);
@@ -1058,7 +1058,7 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
 TEST_F(Console, SwitchesToAVerifiedPackOfItsCatalogue) {
   using namespace visvol::dds;
   using namespace visvol::msg;
-  const std::string dir = ::testing::TempDir() + "/console_catalogue_" + std::to_string(getpid());
+  const std::string dir = visvol::test::scratch_path("console_catalogue");
   ASSERT_EQ(std::system(("rm -rf '" + dir + "' && mkdir '" + dir + "'").c_str()), 0);
   ASSERT_TRUE(
       visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9), small_pack_params(), "", dir + "/valley.vvp")

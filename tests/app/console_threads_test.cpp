@@ -21,6 +21,7 @@
 #include "drivers/dds/participant.hpp"
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
+#include "tests/support/scratch.hpp"
 
 namespace {
 
@@ -46,7 +47,7 @@ TEST(ConsoleThreads, ASessionWithCommandsRunsItsThreadsWithoutARace) {
   auto acks = Reader::create(**participant, Topic::command_ack);
   ASSERT_TRUE(commands.ok() && acks.ok());
 
-  const std::string out = ::testing::TempDir() + "/console_threads_" + tag;
+  const std::string out = visvol::test::scratch_path("console_threads");
   const std::string err = out + ".err";
   int status = -1;
   // a budget that ThreadSanitizer's shadow memory fits in (the process alone

@@ -19,6 +19,7 @@
 #include "storage/pack_build.hpp"
 #include "storage/pack_reader.hpp"
 #include "tests/storage/bare_pack.hpp"
+#include "tests/support/scratch.hpp"
 
 namespace visvol::app {
 namespace {
@@ -26,7 +27,7 @@ namespace {
 using testing::small_pack_params;
 
 std::string make_folder(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "/catalogue_" + name + "_" + std::to_string(getpid());
+  const std::string dir = visvol::test::scratch_path("catalogue_" + name);
   std::string rm = "rm -rf '" + dir + "'";
   EXPECT_EQ(std::system(rm.c_str()), 0);
   EXPECT_EQ(mkdir(dir.c_str(), 0755), 0);

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "base/tolerances.hpp"
 #include "io/input_file.hpp"
 
 namespace visvol::app {
@@ -255,7 +256,6 @@ Status validate_ceilings(const cli::EnvelopeOptions& e) {
 }
 
 // Points closer than this are one (a centimetre, as the path check's).
-constexpr double kSamePointM = 0.01;
 
 // The observers: X Y Z each, finite, at most 256 of a kind and no more than
 // --max-observers allows (where/whether inside the pack: at start-up).
@@ -284,7 +284,7 @@ Status validate_observers(const ConsoleOptions& o) {
   // one point both ways: no path is hidden from it and in its sight
   for (const std::vector<double>& h : o.hidden_from) {
     for (const std::vector<double>& v : o.visible_to) {
-      if (std::hypot(h[0] - v[0], h[1] - v[1], h[2] - v[2]) < kSamePointM) {
+      if (same_point(h[0], h[1], h[2], v[0], v[1], v[2])) {
         return invalid_argument(
             "--hidden-from and --visible-to name the same point: no path is both hidden from it "
             "and in its sight");

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <limits>
 
+#include "fields/simd.hpp"
+
 namespace visvol::fields {
 
 namespace {
@@ -229,37 +231,27 @@ namespace {
 // such vectors on the stack: on AVX2 the kernel ran at 79 M hull cells per
 // second and core, against 657 on AVX-512.) The lanes are independent
 // observers, so a pass reads and writes its own W of every kLanes-wide slot.
-template <int W>
-struct Lanes {
-  typedef float F __attribute__((vector_size(W * sizeof(float))));
-  typedef std::int32_t I __attribute__((vector_size(W * sizeof(std::int32_t))));
-};
-
-// Helpers pass vectors by reference: a vector wider than the baseline
-// registers must not cross a function boundary by value (it would change the
-// ABI, which clang refuses and GCC warns about).
-#define VISVOL_INLINE inline __attribute__((always_inline))
-#define VISVOL_INLINE_LAMBDA __attribute__((always_inline))
+using simd::Lanes;
 
 template <class V, class T>
-VISVOL_INLINE void load(V& v, const T* p) {
+VISVOL_SIMD_INLINE void load(V& v, const T* p) {
   std::memcpy(&v, p, sizeof v);
 }
 template <class V>
-VISVOL_INLINE void max_into(V& a, const V& b) {
+VISVOL_SIMD_INLINE void max_into(V& a, const V& b) {
   a = a > b ? a : b;
 }
 
 // floor(q) for q >= -4 (truncation of a positive number is its floor).
 template <int W>
-VISVOL_INLINE void floor_into(typename Lanes<W>::I& out, const typename Lanes<W>::F& q) {
+VISVOL_SIMD_INLINE void floor_into(typename Lanes<W>::I& out, const typename Lanes<W>::F& q) {
   out = __builtin_convertvector(q + 4.0f, typename Lanes<W>::I) - 4;
 }
 
 // (z - z0) / dz clamped to [-2, hi].
 template <int W>
-VISVOL_INLINE void level_coordinate(typename Lanes<W>::F& q, const typename Lanes<W>::F& z_m, const LevelMap& lv,
-                                    float hi) {
+VISVOL_SIMD_INLINE void level_coordinate(typename Lanes<W>::F& q, const typename Lanes<W>::F& z_m, const LevelMap& lv,
+                                         float hi) {
   using F = typename Lanes<W>::F;
   q = (z_m - lv.z0_m) * lv.inv_dz;
   // written as max and min (one instruction each): q is never NaN
@@ -270,7 +262,7 @@ VISVOL_INLINE void level_coordinate(typename Lanes<W>::F& q, const typename Lane
 
 // First level strictly above each hull height (visibility needs z > hull).
 template <int W>
-VISVOL_INLINE void level_above(typename Lanes<W>::I& out, const typename Lanes<W>::F& hull_m, const LevelMap& lv) {
+VISVOL_SIMD_INLINE void level_above(typename Lanes<W>::I& out, const typename Lanes<W>::F& hull_m, const LevelMap& lv) {
   typename Lanes<W>::F q;
   level_coordinate<W>(q, hull_m, lv, static_cast<float>(lv.nz - 1));
   floor_into<W>(out, q);
@@ -280,7 +272,8 @@ VISVOL_INLINE void level_above(typename Lanes<W>::I& out, const typename Lanes<W
 // First level at or above a height (for the sphere's lower bound):
 // ceil(q) = floor(q) + (floor(q) < q); comparisons give -1 for true.
 template <int W>
-VISVOL_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typename Lanes<W>::F& z_m, const LevelMap& lv) {
+VISVOL_SIMD_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typename Lanes<W>::F& z_m,
+                                          const LevelMap& lv) {
   typename Lanes<W>::F q;
   level_coordinate<W>(q, z_m, lv, static_cast<float>(lv.nz));
   floor_into<W>(out, q);
@@ -293,7 +286,7 @@ VISVOL_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typename L
 // narrowed in a register and stored whole: narrowing straight to memory
 // (vpmovdb to memory on AVX-512) is slow.
 template <int W>
-VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst) {
+VISVOL_SIMD_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst) {
   typedef std::uint8_t Bytes __attribute__((vector_size(W)));
   Bytes b = __builtin_convertvector(k, Bytes);
 #if defined(__x86_64__)
@@ -312,7 +305,7 @@ VISVOL_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst
 // observer or target lies outside the grid read, and their levels are never
 // used.
 template <class Fn>
-VISVOL_INLINE void for_each_inside_entry(int m, int dx_lo, int dx_hi, int dy_lo, int dy_hi, Fn&& fn) {
+VISVOL_SIMD_INLINE void for_each_inside_entry(int m, int dx_lo, int dx_hi, int dy_lo, int dy_hi, Fn&& fn) {
   const int x0 = std::max(-m, dx_lo), x1 = std::min(m, dx_hi);
   if (-m >= dy_lo && -m <= dy_hi) {  // the top row
     for (int dx = x0; dx <= x1; ++dx) fn(dx + m);
@@ -333,9 +326,9 @@ VISVOL_INLINE void for_each_inside_entry(int m, int dx_lo, int dx_hi, int dy_lo,
 // the table walk and the scalar work of each entry (its fields, the bounds
 // and offset of its write) are paid once for R W observers.
 template <int W, int R>
-VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
-                             const LevelMap& level_map, RangeShape shape, const ObserverChunk& chunk, int lane0,
-                             float* ring_a, float* ring_b, std::uint8_t* out) {
+VISVOL_SIMD_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                                  const LevelMap& level_map, RangeShape shape, const ObserverChunk& chunk, int lane0,
+                                  float* ring_a, float* ring_b, std::uint8_t* out) {
   // A copy: the byte stores to `out` could alias the caller's, which would
   // reload (and convert) its fields at every entry.
   const LevelMap levels = level_map;
@@ -419,7 +412,7 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
   for (int m = 2; m <= last_ring; ++m) {
     const HullEntry* ring = table.ring(m);
     const bool exact = m <= table.exact_rings();
-    auto entry = [&](int n) VISVOL_INLINE_LAMBDA {
+    auto entry = [&](int n) VISVOL_SIMD_INLINE_LAMBDA {
       const HullEntry& e = ring[n];
       VecF h[N];
       VecF ta, tb;
@@ -473,9 +466,9 @@ VISVOL_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& terrai
 
 // The chunk in passes of R registers of W lanes.
 template <int W, int R = 1>
-VISVOL_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
-                              const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
-                              float* ring_b, std::uint8_t* out) {
+VISVOL_SIMD_INLINE void hull_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
+                                   const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
+                                   float* ring_b, std::uint8_t* out) {
   static_assert(kLanes % (W * R) == 0, "passes cover the chunk");
   // The slots of entries outside the grid are not computed (see
   // for_each_inside_entry): they start the chunk at a fixed value, so that
@@ -502,13 +495,9 @@ constexpr int kBaselineWidth = 16;
 [[maybe_unused]] constexpr int kAvx2Width = 8;
 constexpr int kBaselineWidth = 4;
 #endif
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define VISVOL_HULL_DISPATCH 1
-#endif
-
 namespace {
 
-#ifdef VISVOL_HULL_DISPATCH
+#ifdef VISVOL_SIMD_DISPATCH
 using ChunkFn = void (*)(const HullTable&, const PaddedTerrain&, const LevelRowLayout&, const LevelMap&, RangeShape,
                          const ObserverChunk&, float*, float*, std::uint8_t*);
 
@@ -533,13 +522,8 @@ void hull_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, c
   hull_chunk<kBaselineWidth>(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
 }
 
-#ifdef VISVOL_HULL_DISPATCH
-ChunkFn pick_hull_chunk() {
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("x86-64-v4")) return hull_chunk_v4;
-  if (__builtin_cpu_supports("x86-64-v3")) return hull_chunk_v3;
-  return hull_chunk_baseline;
-}
+#ifdef VISVOL_SIMD_DISPATCH
+ChunkFn pick_hull_chunk() { return simd::pick_for_cpu<ChunkFn>(hull_chunk_v4, hull_chunk_v3, hull_chunk_baseline); }
 #endif
 
 }  // namespace
@@ -547,7 +531,7 @@ ChunkFn pick_hull_chunk() {
 void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
                        const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
                        float* ring_b, std::uint8_t* out) {
-#ifdef VISVOL_HULL_DISPATCH
+#ifdef VISVOL_SIMD_DISPATCH
   static const ChunkFn chunk_fn = pick_hull_chunk();
   chunk_fn(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
 #else
@@ -556,7 +540,7 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
 }
 
 int hull_kernel_width() {
-#ifdef VISVOL_HULL_DISPATCH
+#ifdef VISVOL_SIMD_DISPATCH
   const ChunkFn f = pick_hull_chunk();
   return f == hull_chunk_v4 ? 16 : f == hull_chunk_v3 ? kAvx2Width : kBaselineWidth;
 #else

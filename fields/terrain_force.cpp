@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "fields/simd.hpp"
 #include "fields/worker_pool.hpp"
 
 namespace visvol::fields {
@@ -176,13 +177,7 @@ class CellRanges {
 // post does.
 
 template <int W>
-struct DLanes {
-  typedef double D __attribute__((vector_size(W * sizeof(double))));
-  typedef std::int64_t M __attribute__((vector_size(W * sizeof(std::int64_t))));
-};
-
-#define VISVOL_TFF_INLINE inline __attribute__((always_inline))
-#define VISVOL_TFF_INLINE_LAMBDA __attribute__((always_inline))
+using DLanes = simd::Lanes<W>;
 
 // A point per lane: x, y, z.
 template <int W>
@@ -193,7 +188,7 @@ struct PointLanes {
 // Is any lane of a comparison's result set? (Narrowed to a byte a lane and
 // tested as one integer: a lane by lane test extracts every lane.)
 template <int W>
-VISVOL_TFF_INLINE bool any_lane(const typename DLanes<W>::M& m) {
+VISVOL_SIMD_INLINE bool any_lane(const typename DLanes<W>::M& m) {
   typedef std::int8_t Bytes __attribute__((vector_size(W)));
   const Bytes b = __builtin_convertvector(m, Bytes);
   std::uint64_t bits = 0;
@@ -206,15 +201,15 @@ VISVOL_TFF_INLINE bool any_lane(const typename DLanes<W>::M& m) {
 // division can be by zero: d1 - d3 = |ab|^2, d2 - d6 = |ac|^2,
 // (d4 - d3) + (d5 - d6) = |bc|^2 and va + vb + vc = |ab x ac|^2.
 template <int W>
-VISVOL_TFF_INLINE void closest_on_triangle_lanes(double qx, double qy, const typename DLanes<W>::D& qz, const Vec3& a,
-                                                 const Vec3& b, const Vec3& c, PointLanes<W>& out) {
+VISVOL_SIMD_INLINE void closest_on_triangle_lanes(double qx, double qy, const typename DLanes<W>::D& qz, const Vec3& a,
+                                                  const Vec3& b, const Vec3& c, PointLanes<W>& out) {
   using D = typename DLanes<W>::D;
   using M = typename DLanes<W>::M;
   const Vec3 ab = b - a, ac = c - a;
   // dot(u, q - p) for a corner p: the horizontal part is the same in every lane
   // (vectors pass by reference: by value, one wider than the baseline's
   // registers would change the calling convention)
-  auto dot = [&](D& out_d, const Vec3& u, const Vec3& p) VISVOL_TFF_INLINE_LAMBDA {
+  auto dot = [&](D& out_d, const Vec3& u, const Vec3& p) VISVOL_SIMD_INLINE_LAMBDA {
     out_d = (u.x() * (qx - p.x()) + u.y() * (qy - p.y())) + u.z() * (qz - p.z());
   };
   D d1, d2, d3, d4, d5, d6;
@@ -228,12 +223,12 @@ VISVOL_TFF_INLINE void closest_on_triangle_lanes(double qx, double qy, const typ
   const D vb = d5 * d2 - d1 * d6;
   const D va = d3 * d6 - d5 * d4;
   // point p + u t where the lane's region holds
-  auto along = [&](const M& region, const Vec3& p, const Vec3& u, const D& t) VISVOL_TFF_INLINE_LAMBDA {
+  auto along = [&](const M& region, const Vec3& p, const Vec3& u, const D& t) VISVOL_SIMD_INLINE_LAMBDA {
     out.x = region ? p.x() + u.x() * t : out.x;
     out.y = region ? p.y() + u.y() * t : out.y;
     out.z = region ? p.z() + u.z() * t : out.z;
   };
-  auto corner = [&](const M& region, const Vec3& p) VISVOL_TFF_INLINE_LAMBDA {
+  auto corner = [&](const M& region, const Vec3& p) VISVOL_SIMD_INLINE_LAMBDA {
     out.x = region ? D{} + p.x() : out.x;
     out.y = region ? D{} + p.y() : out.y;
     out.z = region ? D{} + p.z() : out.z;
@@ -263,8 +258,8 @@ struct ColumnLanes {
 
 // visit_cell for every lane: cell (ci, cj)'s two triangles.
 template <int W>
-VISVOL_TFF_INLINE void visit_cell_lanes(const Heightfield& hf, int ci, int cj, double qx, double qy, double gap2_m2,
-                                        ColumnLanes<W>& lanes) {
+VISVOL_SIMD_INLINE void visit_cell_lanes(const Heightfield& hf, int ci, int cj, double qx, double qy, double gap2_m2,
+                                         ColumnLanes<W>& lanes) {
   using D = typename DLanes<W>::D;
   const double s = hf.spacing_m;
   const double h00 = hf.at(ci, cj), h10 = hf.at(ci + 1, cj), h01 = hf.at(ci, cj + 1), h11 = hf.at(ci + 1, cj + 1);
@@ -295,8 +290,8 @@ VISVOL_TFF_INLINE void visit_cell_lanes(const Heightfield& hf, int ci, int cj, d
 // (count <= kMaxBandLevels), W lanes at a time. Each lane starts from the post,
 // on the surface straight above or below it.
 template <int W>
-VISVOL_TFF_INLINE void column_search(const CellRanges& cells, int i, int j, const double* z_m, int count,
-                                     Nearest* out) {
+VISVOL_SIMD_INLINE void column_search(const CellRanges& cells, int i, int j, const double* z_m, int count,
+                                      Nearest* out) {
   using D = typename DLanes<W>::D;
   constexpr std::size_t kMaxVectors = (kMaxBandLevels + W - 1) / W;
   const Heightfield& hf = cells.terrain();
@@ -312,7 +307,7 @@ VISVOL_TFF_INLINE void column_search(const CellRanges& cells, int i, int j, cons
     lanes[v].best.z = D{} + ground;
   }
   // The largest best distance of a vector's lanes: where its search may end.
-  auto farthest2 = [&](int v) VISVOL_TFF_INLINE_LAMBDA {
+  auto farthest2 = [&](int v) VISVOL_SIMD_INLINE_LAMBDA {
     double out_m2 = 0;
     for (int l = 0; l < W; ++l) out_m2 = std::max(out_m2, double(lanes[v].best2[l]));
     return out_m2;
@@ -366,9 +361,6 @@ VISVOL_TFF_INLINE void column_search(const CellRanges& cells, int i, int j, cons
 // less than AVX2's (tools/bench/README.md, "Field build"). The baseline's 2
 // lanes (SSE2; and every clang or non-x86 build) are no gain: 0.84 s there
 // against 0.78 s for the search one sample at a time that this replaced.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define VISVOL_TFF_DISPATCH 1
-#endif
 
 using ColumnFn = void (*)(const CellRanges&, int, int, const double*, int, Nearest*);
 
@@ -376,7 +368,7 @@ void column_search_baseline(const CellRanges& cells, int i, int j, const double*
   column_search<2>(cells, i, j, z_m, count, out);
 }
 
-#ifdef VISVOL_TFF_DISPATCH
+#ifdef VISVOL_SIMD_DISPATCH
 __attribute__((target("arch=x86-64-v4"))) void column_search_v4(const CellRanges& cells, int i, int j,
                                                                 const double* z_m, int count, Nearest* out) {
   column_search<4>(cells, i, j, z_m, count, out);
@@ -386,15 +378,12 @@ __attribute__((target("arch=x86-64-v3"))) void column_search_v3(const CellRanges
   column_search<4>(cells, i, j, z_m, count, out);
 }
 ColumnFn pick_column_search() {
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("x86-64-v4")) return column_search_v4;
-  if (__builtin_cpu_supports("x86-64-v3")) return column_search_v3;
-  return column_search_baseline;
+  return simd::pick_for_cpu<ColumnFn>(column_search_v4, column_search_v3, column_search_baseline);
 }
 #endif
 
 ColumnFn column_search_for_cpu() {
-#ifdef VISVOL_TFF_DISPATCH
+#ifdef VISVOL_SIMD_DISPATCH
   static const ColumnFn fn = pick_column_search();
   return fn;
 #else

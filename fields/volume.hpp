@@ -6,7 +6,10 @@
 //   index = (k * ny + j) * nx + i.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 namespace visvol::fields {
@@ -40,6 +43,18 @@ struct Bounds2D {
   }
   bool empty() const { return !(xmax_m > xmin_m && ymax_m > ymin_m); }
 };
+
+// "x XMIN..XMAX, y YMIN..YMAX" in metres to the centimetre, rounded inward:
+// a point typed back from the text is inside (452918.0723 printed as
+// 452918.07 was refused as --to). Every message that names bounds says it so.
+inline std::string describe_inward(const Bounds2D& box) {
+  auto up = [](double v) { return std::ceil(v * 100.0 - 1e-6) / 100.0; };
+  auto down = [](double v) { return std::floor(v * 100.0 + 1e-6) / 100.0; };
+  char text[128];
+  std::snprintf(text, sizeof text, "x %.2f..%.2f, y %.2f..%.2f", up(box.xmin_m), down(box.xmax_m), up(box.ymin_m),
+                down(box.ymax_m));
+  return text;
+}
 
 // A dense volume of float values (F_p in [0, 1] for the visibility field).
 struct DenseVolume {

@@ -42,16 +42,7 @@ PlanningBounds planning_bounds_rule(const fields::VolumeGeometry& finest, fields
   return p;
 }
 
-std::string describe(const fields::Bounds2D& box) {
-  // to the centimetre, rounded inward: a point read off the text is inside
-  // (452918.0723 printed as 452918.07 was refused as --to)
-  auto up = [](double v) { return std::ceil(v * 100.0 - 1e-6) / 100.0; };
-  auto down = [](double v) { return std::floor(v * 100.0 + 1e-6) / 100.0; };
-  char text[128];
-  std::snprintf(text, sizeof text, "x %.2f..%.2f, y %.2f..%.2f", up(box.xmin_m), down(box.xmax_m), up(box.ymin_m),
-                down(box.ymax_m));
-  return text;
-}
+std::string describe(const fields::Bounds2D& box) { return fields::describe_inward(box); }
 
 std::string describe(const PlanningBounds& bounds) {
   const double m = bounds.margin_m;

@@ -200,10 +200,8 @@ Status validate_constraints(const msg::Command::Constraints& cs, const CommandLi
     if (h.kind != msg::ConstraintKind::hidden_from) continue;
     for (std::uint32_t j = 0; j < n; ++j) {
       const msg::Constraint& v = cs.items[j];
-      // within a centimetre, as the path check and the console's options judge it
       if (v.kind == msg::ConstraintKind::visible_to &&
-          std::hypot(v.position.x_m - h.position.x_m, v.position.y_m - h.position.y_m,
-                     v.position.z_m - h.position.z_m) < 0.01) {
+          same_point(h.position.x_m, h.position.y_m, h.position.z_m, v.position.x_m, v.position.y_m, v.position.z_m)) {
         return reject(item(j), "the point of " + item(i) + " too: no path is both hidden from it and in its sight");
       }
     }

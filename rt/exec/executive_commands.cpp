@@ -1,6 +1,7 @@
 // The executive's command applier: operator commands taken from the queue, checked, applied and acknowledged.
 // Loop thread (real-time rules: no allocation, no lock, no logging, no blocking), except check_observers() and
 // check_ceiling(), which init() runs on the configuration, and terrain_switch(), which any thread may ask.
+#include "base/tolerances.hpp"
 #include "rt/exec/executive.hpp"
 
 #include <algorithm>
@@ -22,7 +23,6 @@ static_assert(kMaxPlanObservers == kMaxObserversPerKind, "the console takes as m
 static_assert(msg::kMaxObserversPerKind == static_cast<std::size_t>(kMaxObserversPerKind),
               "a command's observers of a kind are what a hull request holds");
 
-constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre (as rt::PathChecker)
 // A command whose springs or gains the loop's fixed step could not integrate
 // (the rope would diverge within ticks): refused, nothing changed.
 constexpr const char* kUnstable =

@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 
+#include "base/tolerances.hpp"
 #include "fields/exact_visibility.hpp"
 #include "rt/rope/fillet.hpp"
 #include "rt/rope/terrain_probe.hpp"
@@ -17,7 +18,6 @@ namespace visvol::rt {
 namespace {
 
 constexpr double kDegPerRad = 57.29577951308232;
-constexpr double kHeightTolM = 0.01;  // heights compare to a centimetre
 constexpr double kAngleTolDeg = 1e-6;
 
 // A length for a message: metres to the centimetre.
@@ -140,8 +140,8 @@ Result<PathChecker> PathChecker::create(fields::Heightfield terrain, const PathF
   for (const ConstraintPoint& h : spec.constraints) {
     if (h.kind != ConstraintKind::hidden_from) continue;
     for (const ConstraintPoint& v : spec.constraints) {
-      if (v.kind == ConstraintKind::visible_to && (h.eye_m() - v.eye_m()).norm() < kHeightTolM) {
-        const Vec3 e = h.eye_m();
+      const Vec3 e = h.eye_m(), f = v.eye_m();
+      if (v.kind == ConstraintKind::visible_to && same_point(e.x(), e.y(), e.z(), f.x(), f.y(), f.z())) {
         return invalid_argument("--hidden-from and --visible-to name the same eye (" + metres(e.x()) + ", " +
                                 metres(e.y()) + ", " + metres(e.z()) +
                                 " m): no path is both hidden from it and in its sight");

@@ -91,13 +91,9 @@ Status validate(const PlanRequest& r) {
   if (r.planning_bounds) {
     for (const Vec3* p : {&r.from, &r.to}) {
       if (!r.planning_bounds->contains(p->x(), p->y())) {
-        const fields::Bounds2D& b = *r.planning_bounds;
-        // the bounds to the centimetre, rounded inward: typed back, inside
-        auto in = [](double v, bool up) { return (up ? std::ceil(v * 100 - 1e-6) : std::floor(v * 100 + 1e-6)) / 100; };
         msg.precision(2);
         msg << std::fixed << "plan: " << (p == &r.from ? "--from" : "--to") << " (" << p->x() << ", " << p->y()
-            << ") is outside the pack's planning bounds (x " << in(b.xmin_m, true) << ".." << in(b.xmax_m, false)
-            << ", y " << in(b.ymin_m, true) << ".." << in(b.ymax_m, false)
+            << ") is outside the pack's planning bounds (" << fields::describe_inward(*r.planning_bounds)
             << "), where F_p undercounts observers beyond the DEM";
         return invalid_argument(msg.str());
       }

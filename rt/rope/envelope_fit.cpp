@@ -210,10 +210,7 @@ SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, con
   return m;
 }
 
-}  // namespace
-
-EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
-                            const fields::Heightfield& terrain) {
+EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec, const fields::Heightfield& terrain) {
   EnvelopeFit out;
   std::vector<Vec3> p = without_repeats(path, 0.05 * terrain.spacing_m);
   if (p.size() < 2) {
@@ -247,6 +244,10 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
     std::vector<Vec3> fitted = p;
     for (std::size_t i = 0; i < p.size(); ++i) fitted[i].z() = z[i];
     bool changed = false;
+    // Every segment that cannot hold the band gets a vertex at its worst
+    // sample, all in one pass (one a pass ran out of passes on paths that
+    // needed hundreds, and left them over the band between their vertices).
+    std::vector<std::pair<std::size_t, Vec3>> splits;
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
       const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step);
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
@@ -268,16 +269,19 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
         }
       }
       changed = changed || moved;
-      if ((held && moved) || p.size() >= max_points) continue;
+      if ((held && moved) || p.size() + splits.size() >= max_points) continue;
       if (std::hypot(p[i + 1].x() - p[i].x(), p[i + 1].y() - p[i].y()) < kMinSplitM) continue;
       // the segment cannot hold the band: a vertex at its worst sample
-      const Vec3 mid = p[i] + std::clamp(m.worst_t, kSplitMin, kSplitMax) * (p[i + 1] - p[i]);
-      p.insert(p.begin() + static_cast<std::ptrdiff_t>(i) + 1, mid);
-      lo.insert(lo.begin() + static_cast<std::ptrdiff_t>(i) + 1, 0.0);
-      hi.insert(hi.begin() + static_cast<std::ptrdiff_t>(i) + 1, 0.0);
-      set_band(i + 1);
+      splits.emplace_back(i, p[i] + std::clamp(m.worst_t, kSplitMin, kSplitMax) * (p[i + 1] - p[i]));
+    }
+    // from the last, so that the indices before stay; then heights again
+    for (auto split = splits.rbegin(); split != splits.rend(); ++split) {
+      const auto at = static_cast<std::ptrdiff_t>(split->first) + 1;
+      p.insert(p.begin() + at, split->second);
+      lo.insert(lo.begin() + at, 0.0);
+      hi.insert(hi.begin() + at, 0.0);
+      set_band(split->first + 1);
       changed = true;
-      break;  // heights again with the new vertex
     }
     // the arcs inside the corners: the corner (every vertex on its spot)
     // moves by the miss over the share of that move the arc's heights
@@ -323,6 +327,30 @@ EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec
   for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];
   out.path = std::move(p);
   return out;
+}
+
+}  // namespace
+
+EnvelopeFit fit_to_envelope(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
+                            const fields::Heightfield& terrain) {
+  EnvelopeFit fit = fit_once(path, spec, terrain);
+  if (fit.feasible || (spec.below.empty() && spec.above.empty())) return fit;
+  // The hulls are the observers' wishes, the envelope the vehicle's limits:
+  // where both cannot hold, the envelope does. (A visible-to hull over the
+  // ceiling pinned every vertex to it, and the last leg dropped 21 m in 5 m
+  // to an end 58 m above the ground under a 45 degree descent limit.)
+  // The hulls then only aim the heights: each vertex starts inside them, and
+  // the fit keeps it as near there as the envelope lets it.
+  std::vector<Vec3> aimed = path;
+  for (std::size_t i = 1; i + 1 < aimed.size(); ++i) {
+    const Band b = band_at(spec, terrain, aimed[i].x(), aimed[i].y());
+    aimed[i].z() = std::clamp(aimed[i].z(), b.lo, b.hi);
+  }
+  EnvelopeFitSpec bare = spec;
+  bare.below.clear();
+  bare.above.clear();
+  EnvelopeFit flyable = fit_once(aimed, bare, terrain);
+  return flyable.feasible ? flyable : fit;
 }
 
 }  // namespace visvol::rt

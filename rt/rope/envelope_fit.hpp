@@ -16,7 +16,8 @@
 //    is checked between vertices too (the terrain under a straight segment,
 //    at samples and exactly where its height is extreme, as the checker
 //    finds it: rt/rope/terrain_probe.hpp); a segment that cannot hold it is
-//    split. The ends stay where they are.
+//    split (every such segment of a pass at once). The ends stay where they
+//    are.
 //    Heights are chosen by two passes along the path: backwards, the band of
 //    heights from which the end is still reachable; forwards, the height
 //    nearest the path's own inside that band and one segment's climb or
@@ -28,6 +29,10 @@
 // The fit is exact for the envelope where the band allows it (`feasible`);
 // constraint hulls come from the field's hull kernel, so hidden-from and
 // visible-to are made likely, not proven: rt::PathChecker's sight lines judge.
+// The hulls yield to the envelope: where a fit inside them is not feasible,
+// the heights start inside them and are fitted to the envelope alone, as
+// near there as it allows (an observer unmet is reported; a path the vehicle
+// cannot fly is not planned for one).
 // Offline: allocates.
 #pragma once
 

@@ -187,7 +187,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   const VehicleEnvelope& e = spec_.envelope;
   const std::size_t nc = spec_.constraints.size();
   if (count < 2 || v == nullptr) {
-    out.violation = 1;
+    out.violation = out.flight_violation = 1;
     return out;
   }
   std::vector<Tally> constraint_tally(nc);
@@ -320,14 +320,16 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   out.inside_planning_bounds = !bounds.failed;
 
   out.all_met = out.inside_planning_bounds;
-  auto count_violation = [&](bool met, double fraction) {
+  auto count_violation = [&](bool met, double fraction, bool flight) {
     if (met) return;
     out.all_met = false;
-    out.violation += std::max(1e-9, 1.0 - fraction);
+    const double unmet = std::max(1e-9, 1.0 - fraction);
+    out.violation += unmet;
+    if (flight) out.flight_violation += unmet;
   };
-  for (const ConstraintResult& r : out.constraints) count_violation(r.met, r.satisfied_fraction);
-  for (const LimitResult& l : out.envelope) count_violation(l.met, l.satisfied_fraction);
-  count_violation(out.inside_planning_bounds, out.inside_bounds_fraction);
+  for (const ConstraintResult& r : out.constraints) count_violation(r.met, r.satisfied_fraction, false);
+  for (const LimitResult& l : out.envelope) count_violation(l.met, l.satisfied_fraction, true);
+  count_violation(out.inside_planning_bounds, out.inside_bounds_fraction, true);
   return out;
 }
 

@@ -134,6 +134,10 @@ struct PathCheck {
   // Sum over requirements of the unmet fraction (0 when all are met): a
   // ranking of infeasible paths, least violation first.
   double violation = 0;
+  // The part of `violation` that the vehicle's envelope and the planning
+  // bounds make (clearance, ceilings, climb, descent, turns): what makes a
+  // path unsafe or unflyable, as the constraint points do not.
+  double flight_violation = 0;
 
   // "hidden-from (x, y, z): 0.82 of the length" lines for what is unmet.
   std::vector<std::string> unmet() const;

@@ -157,7 +157,9 @@ namespace detail {
 // finest terrain and inside the envelope's band of heights there.
 Status check_ends(const PlanRequest& request, const PathChecker& checker, double top_m);
 
-// Is path a (its check) better than path b?
+// Is path a (its check) better than path b? All met first; then the least
+// violation of the envelope and the bounds, then of the constraint points;
+// then F_c.
 bool better(const PathCheck& a, const PathCheck& b, Objective objective);
 
 // Every observer of a kind on one level as a single hull: a path must stay

@@ -8,6 +8,7 @@
 
 #include "../../fields/terrains.hpp"
 #include "rt/rope/path_check.hpp"
+#include "rt/rope/point_hull.hpp"
 
 namespace visvol::rt {
 namespace {
@@ -197,6 +198,50 @@ TEST_F(FitOnRelief, ABandItCannotHoldIsNeverSplitBelowAMetre) {
       EXPECT_GE(std::hypot(d.x(), d.y()), 1.0) << "segment " << i << " of " << fit.path.size() - 1;
     }
   }
+}
+
+// A band 14 m wide over 150 m of relief, on legs 300 m long: the fit needs
+// hundreds of vertices between them. It split one segment a pass and ran
+// out of passes, leaving a multirotor's plans over their max-agl between
+// vertices (81.2 m against 80 m); every segment that needs one now gets its
+// vertex in the same pass.
+TEST_F(FitOnRelief, HundredsOfSplitsFitInItsPasses) {
+  VehicleEnvelope e = *vehicle_preset("multirotor");
+  e.clearance_m = 30;
+  e.max_agl_m = 45;
+  std::vector<Vec3> path;
+  for (int k = 0; k <= 24; ++k) path.push_back(at(6 + 3.5 * k, k % 2 ? 30 : 60, 38));
+  EnvelopeFitSpec spec = spec_of(e);
+  spec.max_points = 2000;  // room for what the band needs: the passes are what is tested
+  const EnvelopeFit fit = fit_to_envelope(path, spec, terrain);
+  EXPECT_GT(fit.path.size(), 250u) << "the band needs hundreds of vertices";
+  EXPECT_TRUE(fit.feasible);
+  const PathCheck c = judge(fit.path, e);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+}
+
+// An observer's hull is a wish, the envelope a limit: a visible-to hull far
+// over the ceiling pinned every vertex to the ceiling, so the last leg fell
+// 21 m in 5 m to an end lower down (77 degrees under a 45 degree limit).
+// Where both cannot hold, the fit holds the envelope.
+TEST_F(FitOnRelief, TheEnvelopeHoldsWhereAnObserversHullCannot) {
+  VehicleEnvelope e = *vehicle_preset("multirotor");
+  e.clearance_m = 30;
+  e.max_agl_m = 80;
+  PointHull sky;  // seen only from far above the ceiling, everywhere
+  sky.nx = sky.ny = 2;
+  sky.origin_x = terrain.x_of(0);
+  sky.origin_y = terrain.y_of(0);
+  sky.spacing_m = 95 * terrain.spacing_m;
+  sky.height_m.assign(4, 1.0e4f);
+  EnvelopeFitSpec spec = spec_of(e);
+  spec.above = {&sky};
+  const std::vector<Vec3> path = {at(10, 10, 40), at(30, 40, 60), at(50, 50, 60), at(70, 60, 40)};
+  const EnvelopeFit fit = fit_to_envelope(path, spec, terrain);
+  EXPECT_TRUE(fit.feasible);
+  const PathCheck c = judge(fit.path, e);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_EQ(fit.path.back(), path.back());
 }
 
 }  // namespace

@@ -42,8 +42,14 @@ TEST_F(WallTerrain, ObserverBehindTheWallDoesNotSeeALowPathAndSeesAHighOne) {
   EXPECT_NEAR(high.constraints[0].satisfied_fraction, 0.0, 1e-12);
   EXPECT_FALSE(high.all_met);
   EXPECT_GT(high.violation, 0.9);
+  EXPECT_EQ(high.flight_violation, 0.0) << "an observer's sight is no flight limit";
   ASSERT_EQ(high.unmet().size(), 1u);
   EXPECT_NE(high.unmet()[0].find("hidden-from"), std::string::npos);
+  // 5 m up, under the 10 m clearance along all its length: a flight limit
+  const PathCheck skim = checker->check({post(5, 10, 105), post(5, 50, 105)});
+  EXPECT_TRUE(skim.constraints[0].met);
+  EXPECT_NEAR(skim.flight_violation, 1.0, 1e-9);
+  EXPECT_NEAR(skim.violation, skim.flight_violation, 1e-12);
 }
 
 TEST_F(WallTerrain, FractionsAreShareOfLengthAndAgreeWithR3) {

@@ -437,6 +437,9 @@ TEST_F(RealTerrain, NoCorridorIsReportedUnmetNotHidden) {
   // the planner's fraction is the sight lines' fraction
   EXPECT_NEAR(res->final_check.constraints[0].satisfied_fraction,
               1 - seen_share_r3(*terrain_, r.constraints[0].eye_m(), res->final_path), 0.01);
+  // what cannot be met is not bought with the envelope
+  EXPECT_EQ(res->final_check.flight_violation, 0.0);
+  for (const LimitResult& l : res->final_check.envelope) EXPECT_TRUE(l.met) << l.name;
 }
 
 TEST_F(RealTerrain, ShowStaysUnderItsCeilingAndInsideTheEnvelope) {
@@ -550,6 +553,34 @@ PlanRequest valid_request() {
   r.from = Vec3(100, 100, 50);
   r.to = Vec3(4000, 100, 50);  // room for 4096 segments of 0.5 m at least
   return r;
+}
+
+// Of paths that meet not everything, the planner keeps the one the vehicle
+// can fly: no share of an observer's requirement buys a metre under the
+// clearance (a sum of unmet shares traded 4 m of a 30 m clearance, on a
+// seventh of a Taunus path, for 15 observers' shares).
+TEST(PlanRanking, TheEnvelopeComesBeforeTheObserversAndBothBeforeFc) {
+  PathCheck exposed, skimming, feasible;
+  exposed.violation = 3.0;  // three observers unmet on the whole path, the envelope held
+  exposed.fc = 0.9;
+  skimming.violation = skimming.flight_violation = 0.14;  // under the clearance on a seventh of it
+  skimming.fc = 0.1;
+  feasible.all_met = true;
+  feasible.fc = 0.95;
+  for (Objective o : {Objective::hide, Objective::show}) {
+    EXPECT_TRUE(detail::better(exposed, skimming, o));
+    EXPECT_FALSE(detail::better(skimming, exposed, o));
+    EXPECT_TRUE(detail::better(feasible, exposed, o));
+    EXPECT_FALSE(detail::better(exposed, feasible, o));
+  }
+  // the same flight violation: the observers' shares decide, then F_c
+  PathCheck less = exposed;
+  less.violation = 2.0;
+  EXPECT_TRUE(detail::better(less, exposed, Objective::hide));
+  PathCheck lower = exposed;
+  lower.fc = 0.5;
+  EXPECT_TRUE(detail::better(lower, exposed, Objective::hide));
+  EXPECT_FALSE(detail::better(lower, exposed, Objective::show));
 }
 
 TEST(PlanValidate, SegmentsAndTheirWorkAreBounded) {

@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <sstream>
 
+#include "base/terminal_text.hpp"
 #include "base/tolerances.hpp"
 #include "io/input_file.hpp"
 
@@ -62,6 +64,66 @@ std::string section_names() {
   return out;
 }
 
+// A console configuration is a page of keys: more than this is not one.
+constexpr std::size_t kMaxConfigBytes = 1 << 20;
+// Arrays in a value nest no deeper than this (the deepest the options take
+// is one: hidden-from = [[x, y, z], ...] is two).
+constexpr int kMaxConfigNesting = 8;
+
+// What CLI11's reader does not refuse itself, refused before it reads: a file
+// over kMaxConfigBytes, arrays nested deeper than kMaxConfigNesting (100,000
+// levels overflowed its recursion: a segmentation fault), and a section
+// defined twice (TOML forbids it; the second [session] was silently
+// ignored). Returns the text.
+std::string prechecked_config(std::istream& input) {
+  std::string text;
+  char chunk[4096];
+  while (input.read(chunk, sizeof chunk) || input.gcount() > 0) {
+    text.append(chunk, static_cast<std::size_t>(input.gcount()));
+    if (text.size() > kMaxConfigBytes) {
+      throw CLI::ConfigError("the file is over " + std::to_string(kMaxConfigBytes >> 10) +
+                             " KiB: not a console configuration");
+    }
+  }
+  std::vector<std::string> sections;
+  int depth = 0, line_no = 1;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find('\n', begin), text.size());
+    const std::string line = text.substr(begin, end - begin);
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (depth == 0 && first != std::string::npos && line[first] == '[') {
+      // a section's header: [name], or [[name]] (refused by name later)
+      const std::size_t close = line.find(']', first);
+      std::string name = close == std::string::npos ? line.substr(first) : line.substr(first, close - first + 1);
+      if (std::find(sections.begin(), sections.end(), name) != sections.end()) {
+        throw CLI::ConfigError("line " + std::to_string(line_no) + ": section " + terminal_safe(name, 80) +
+                               " is defined twice (a section is one table)");
+      }
+      sections.push_back(std::move(name));
+    } else {
+      char quote = 0;
+      for (const char c : line) {
+        if (quote != 0) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '#') {
+          break;
+        } else if (c == '[' && ++depth > kMaxConfigNesting) {
+          throw CLI::ConfigError("line " + std::to_string(line_no) + ": arrays nested deeper than " +
+                                 std::to_string(kMaxConfigNesting));
+        } else if (c == ']') {
+          depth = std::max(0, depth - 1);
+        }
+      }
+    }
+    begin = end + 1;
+    ++line_no;
+  }
+  return text;
+}
+
 // TOML (or INI) as CLI11 reads it, with the sections above: a key in its own
 // section (or at the top level, as before sections) is the option it names;
 // a key in another section, an unknown section or a nested one is refused,
@@ -69,7 +131,8 @@ std::string section_names() {
 class SectionedConfig final : public CLI::ConfigTOML {
  public:
   std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
-    std::vector<CLI::ConfigItem> read = CLI::ConfigTOML::from_config(input);
+    std::istringstream checked(prechecked_config(input));
+    std::vector<CLI::ConfigItem> read = CLI::ConfigTOML::from_config(checked);
     std::vector<CLI::ConfigItem> out;
     for (CLI::ConfigItem& item : read) {
       if (item.parents.empty()) {

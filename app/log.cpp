@@ -8,7 +8,13 @@
 #include <cstdlib>
 #include <vector>
 
+#include "base/terminal_text.hpp"
+
 namespace visvol::app {
+
+namespace {
+constexpr std::size_t kMaxLogBytes = 16384;  // one message
+}  // namespace
 
 bool stderr_is_journal() {
   const char* stream = std::getenv("JOURNAL_STREAM");
@@ -46,7 +52,9 @@ void log_printf(LogLevel level, const char* format, ...) {
   std::vector<char> buffer(static_cast<std::size_t>(n > 0 ? n : 0) + 1);
   std::vsnprintf(buffer.data(), buffer.size(), format, args);
   va_end(args);
-  const std::string line = log_text(level, buffer.data(), journal);
+  // what came from outside (a key, a value, a script's token) cannot drive
+  // the terminal or flood the journal
+  const std::string line = log_text(level, terminal_safe(buffer.data(), kMaxLogBytes), journal);
   std::fwrite(line.data(), 1, line.size(), stderr);
   std::fflush(stderr);
 }

@@ -210,7 +210,13 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       {"[dds]\nfrobnicate = 1\n", "unknown key 'frobnicate' in [dds]"},
       {"[rope]\nsegments = 1\n", "--segments: 1 must be in 2.."},
       {"segments = \"many\"\n", "--segments = many"},
-      {"segments = 1\n", "--segments: 1 must be in 2.."}};
+      {"segments = 1\n", "--segments: 1 must be in 2.."},
+      // 100,000 nested arrays overflowed CLI11's reader (a segmentation
+      // fault); a second [session] was silently ignored
+      {"[rope]\nfrom = " + std::string(100000, '[') + std::string(100000, ']') + "\n", "arrays nested deeper than 8"},
+      {"[session]\nseconds = 0.3\n[session]\nseconds = 100\n", "section [session] is defined twice"},
+      // a key's bytes reach the operator's terminal escaped
+      {"bogus\x1b]0;x\x07key = 1\n", "unknown key 'bogus\\x1B]0;x\\x07key'"}};
   int k = 0;
   for (const auto& [text, expected] : cases) {
     const std::string file = dir + "/console_" + std::to_string(k++) + ".toml";

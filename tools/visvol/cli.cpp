@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <fstream>
 
+#include "base/terminal_text.hpp"
 #include "io/atomic_file.hpp"
 
 namespace visvol::cli {
@@ -17,7 +18,7 @@ int exit_code(const Status& status) {
 }
 
 int fail(const std::string& command, const Status& status) {
-  std::fprintf(stderr, "visvol %s: %s\n", command.c_str(), status.message().c_str());
+  std::fprintf(stderr, "visvol %s: %s\n", command.c_str(), terminal_safe(status.message()).c_str());
   return exit_code(status);
 }
 

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "base/terminal_text.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "fields/gdal/dem_io.hpp"
@@ -106,20 +107,22 @@ nlohmann::json pack_info_json(const Pack& pack) {
 void print_pack_info(const Pack& pack) {
   const nlohmann::json j = pack_info_json(pack);
   const storage::LevelEntry& l0 = pack.level(0);
-  std::printf("pack       %s (format %u, %s)\n", pack.path().c_str(), pack.header().version,
-              j["tool"].get<std::string>().c_str());
+  // the pack's own strings are input: shown so that none drives the terminal
+  std::printf("pack       %s (format %u, %s)\n", terminal_safe(pack.path()).c_str(), pack.header().version,
+              terminal_safe(j["tool"].get<std::string>(), 200).c_str());
   std::printf("size       %.1f MiB, %llu tiles, F_p %s\n", double(pack.file_bytes()) / 1048576.0,
               static_cast<unsigned long long>(pack.tile_count()), j["visibility_encoding"].get<std::string>().c_str());
-  std::printf("crs        %s\n",
-              pack.metadata().crs_name.empty() ? "(local metres)" : pack.metadata().crs_name.c_str());
+  std::printf("crs        %s\n", pack.metadata().crs_name.empty()
+                                     ? "(local metres)"
+                                     : terminal_safe(pack.metadata().crs_name, 200).c_str());
   std::printf("grid       %d x %d posts x %d levels, %.2f m; post (0, 0) at (%.2f, %.2f)\n", l0.nx, l0.ny, l0.nz,
               l0.spacing_m, l0.origin_x, l0.origin_y);
   std::printf("heights    levels from %.2f m every %.3f m (top %.2f m)\n", l0.z0_m, l0.dz_m,
               l0.z0_m + (l0.nz - 1) * l0.dz_m);
   std::printf("tff band   +-%.1f m, %u samples a column\n", pack.header().band_offset_m, pack.header().band_levels);
   print_planning(pack.metadata().planning);
-  std::printf("build      %s\n", json_text(j["build"]).c_str());
-  std::printf("source     %s\n", json_text(j["source"]).c_str());
+  std::printf("build      %s\n", terminal_safe(json_text(j["build"])).c_str());
+  std::printf("source     %s\n", terminal_safe(json_text(j["source"])).c_str());
   std::printf("levels of detail:\n");
   for (int l = 0; l < pack.level_count(); ++l) {
     const storage::LevelEntry& e = pack.level(l);
@@ -227,7 +230,7 @@ int run_sample(const SampleOptions& o) {
     std::string rest;
     if (!(in >> x >> y >> z) || (in >> rest) || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
       std::fprintf(stderr, "visvol sample: line %ld: expected three finite numbers 'x y z', got '%s'\n", line_no,
-                   line.c_str());
+                   terminal_safe(line, 80).c_str());
       std::printf("nan\n");
       ++bad;
       continue;

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "base/arguments.hpp"
+#include "base/terminal_text.hpp"
 #include "base/version.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
@@ -87,13 +88,14 @@ int main(int argc, char** argv) {
     if (argc > 1 && argv[1][0] != '-' && runners.count(argv[1]) == 0) {
       std::string known;
       for (const auto& r : runners) known += (known.empty() ? "" : ", ") + r.first;
-      std::fprintf(stderr, "visvol: unknown command '%s' (commands: %s; try --help)\n", argv[1], known.c_str());
+      std::fprintf(stderr, "visvol: unknown command '%s' (commands: %s; try --help)\n",
+                   visvol::terminal_safe(argv[1], 80).c_str(), known.c_str());
       return kExitUsage;
     }
-    std::fprintf(stderr, "visvol: %s (try --help)\n", e.what());
+    std::fprintf(stderr, "visvol: %s (try --help)\n", visvol::terminal_safe(e.what()).c_str());
     return kExitUsage;
   } catch (const std::exception& e) {  // an option's own conversion or check
-    std::fprintf(stderr, "visvol: %s (try --help)\n", e.what());
+    std::fprintf(stderr, "visvol: %s (try --help)\n", visvol::terminal_safe(e.what()).c_str());
     return kExitUsage;
   }
   for (CLI::App* sub : app.get_subcommands()) return run_guarded(sub->get_name(), runners.at(sub->get_name()));

@@ -1,0 +1,32 @@
+#include "base/terminal_text.hpp"
+
+#include <gtest/gtest.h>
+
+namespace visvol {
+namespace {
+
+TEST(TerminalText, ControlCharactersAreShownNotSent) {
+  // an OSC title sequence and a colour, as a crafted pack's CRS name held them
+  EXPECT_EQ(terminal_safe("a\x1b]0;PWN\x07z\x1b[31m"), "a\\x1B]0;PWN\\x07z\\x1B[31m");
+  EXPECT_EQ(terminal_safe(std::string("nul\0here", 8)), "nul\\x00here");
+  EXPECT_EQ(terminal_safe("del\x7f"), "del\\x7F");
+  // U+009B, CSI in C1, as UTF-8: a terminal acts on it
+  EXPECT_EQ(terminal_safe("c1\xc2\x9b"
+                          "31m"),
+            "c1\\xC2\\x9B31m");
+}
+
+TEST(TerminalText, LinesAndOtherUtf8Stay) {
+  EXPECT_EQ(terminal_safe("two\nlines"), "two\nlines");
+  EXPECT_EQ(terminal_safe("Zürich \xc4\x89 \xc2\xa0"), "Zürich \xc4\x89 \xc2\xa0");  // 0x89 as a continuation byte
+}
+
+TEST(TerminalText, ALongTokenIsCutAndItsLengthSaid) {
+  const std::string big(8 << 20, 'x');
+  const std::string shown = terminal_safe(big, 100);
+  EXPECT_EQ(shown, std::string(100, 'x') + "... (8388608 bytes)");
+  EXPECT_EQ(terminal_safe("short", 100), "short");
+}
+
+}  // namespace
+}  // namespace visvol

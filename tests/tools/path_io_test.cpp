@@ -545,34 +545,34 @@ TEST_F(PathIo, PlanWaypointsAboveHomeAreLiftedByHomesAltitude) {
   EXPECT_NEAR((*lon_lat)[0].y(), 37.79, 1e-8);
 }
 
-// The aircraft flies to spline waypoints and loiters too: they are vertices
-// (a loiter at its centre), so a check sees them; speed, camera, ROI and
-// condition items move nothing and are left out, as are takeoff, landing and
-// return to launch (the mission's ends).
-TEST_F(PathIo, PlanSplineWaypointsAndLoitersAreVerticesOtherItemsAreLeftOut) {
+// The aircraft flies to loiters too: they are vertices (a loiter at its
+// centre), so a check sees them; speed, camera, ROI and condition items move
+// nothing and are left out, as are takeoff, landing and return to launch
+// (the mission's ends, on the spot of the first and last waypoints).
+TEST_F(PathIo, PlanLoitersAreVerticesOtherItemsAreLeftOut) {
   const std::string f = file_with(
       "mixed.plan",
       plan_text(waypoint(0, "37.790", "-122.430", "50", mavlink::kCmdNavTakeoff) + "," +
-                waypoint(0, "37.790", "-122.430", "50") + "," + waypoint(0, "37.789", "-122.429", "5", 82) + "," +
+                waypoint(0, "37.790", "-122.430", "50") + "," + waypoint(0, "37.789", "-122.429", "5") + "," +
                 waypoint(0, "0", "0", "0", 178) + "," +         // DO_CHANGE_SPEED
                 waypoint(0, "0", "0", "0", 2000) + "," +        // IMAGE_START_CAPTURE
                 waypoint(0, "0", "0", "0", 206) + "," +         // DO_SET_CAM_TRIGG_DIST
                 waypoint(0, "37.7", "-122.4", "0", 80) + "," +  // NAV_ROI
                 waypoint(0, "0", "0", "0", 112) + "," +         // CONDITION_DELAY
-                waypoint(0, "37.788", "-122.428", "60", 19) + "," + waypoint(0, "37.787", "-122.427", "61", 17) + "," +
-                waypoint(0, "37.786", "-122.426", "62", 18) + "," +
+                waypoint(0, "37.788", "-122.428", "60", 19) + "," + waypoint(0, "37.786", "-122.426", "62", 18) + "," +
                 waypoint(0, "37.785", "-122.425", "63", mavlink::kCmdNavLoiterToAlt) + "," +
-                waypoint(0, "37.785", "-122.425", "0", mavlink::kCmdNavLand) + "," +
-                waypoint(0, "37.785", "-122.425", "0", mavlink::kCmdNavVtolLand) + "," +
+                waypoint(0, "37.784", "-122.424", "64", 17) + "," +  // the last: it circles there for ever
+                waypoint(0, "37.784", "-122.424", "0", mavlink::kCmdNavLand) + "," +
+                waypoint(0, "37.784", "-122.424", "0", mavlink::kCmdNavVtolLand) + "," +
                 waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch)));
   Result<PathFile> path = read_path_file(f, wkt_);
   ASSERT_TRUE(path.ok()) << path.status().message();
   ASSERT_EQ(path->points.size(), 6u);
-  EXPECT_NEAR(path->points[1].z(), 5.0, 1e-9);  // the spline waypoint, low: a check must see it
-  EXPECT_NEAR(path->points[5].z(), 63.0, 1e-9);
+  EXPECT_NEAR(path->points[1].z(), 5.0, 1e-9);  // low: a check must see it
+  EXPECT_NEAR(path->points[5].z(), 64.0, 1e-9);
   // the loiters, each at its own vertex (a check flies their circles)
   ASSERT_EQ(path->loiters.size(), 4u);
-  const LoiterKind kinds[] = {LoiterKind::time, LoiterKind::unlimited, LoiterKind::turns, LoiterKind::to_altitude};
+  const LoiterKind kinds[] = {LoiterKind::time, LoiterKind::turns, LoiterKind::to_altitude, LoiterKind::unlimited};
   for (std::size_t k = 0; k < 4; ++k) {
     EXPECT_EQ(path->loiters[k].kind, kinds[k]);
     EXPECT_EQ(path->loiters[k].vertex, k + 2);
@@ -695,6 +695,14 @@ TEST_F(PathIo, TextAndCsvNumbersAreDecimalOnly) {
   Result<PathFile> later = read_path_file(file_with("late.txt", "1 2 3\nE_32633 N Z\n4 5 6\n"), wkt_);
   ASSERT_FALSE(later.ok());
   EXPECT_EQ(later.status().message().find("'#'"), std::string::npos) << later.status().message();
+  // a column named twice: the reader took the last (a path at 500 m read for
+  // one at 100 m); which one is the path is not its to guess
+  Result<PathFile> twice = read_path_file(
+      file_with("twice.csv", "i,x_m,y_m,z_m,z_m\n0,550300,4181900,100,500\n1,550500,4182100,100,500\n"), wkt_);
+  ASSERT_FALSE(twice.ok());
+  EXPECT_NE(twice.status().message().find("twice.csv: line 1: the header names z_m twice (columns 4 and 5)"),
+            std::string::npos)
+      << twice.status().message();
 }
 
 // A takeoff, landing or return between waypoints flies legs the file does
@@ -757,8 +765,30 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
       {"params.plan", plan_text(wp + R"(,{"type":"SimpleItem","command":16,"frame":0,"params":[1,2,3]})"),
        "params.plan: mission.items[1]: params is missing or not an array of 7"},
       {"one.plan", plan_text(wp),
-       "one.plan: 1 waypoints (waypoint, spline waypoint or loiter items) in mission.items (of 1); a path needs at "
-       "least 2"},
+       "one.plan: 1 waypoints (waypoint or loiter items) in mission.items (of 1); a path needs at least 2"},
+      // what is flown and not in the file: a spline's curve (judged as straight
+      // legs, it read as met 157 m off them), a climb-out or a landing away
+      // from the path, waypoints after the mission has ended or while it circles
+      {"spline.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 82) + "," + wp),
+       "spline.plan: mission.items[1] (doJumpId 1): command 82 (a spline waypoint): the autopilot flies a curve"},
+      {"takeoff.plan",
+       plan_text(waypoint(0, "37.76", "-122.43", "60", mavlink::kCmdNavTakeoff) + "," + wp + "," +
+                 waypoint(0, "37.78", "-122.42", "60")),
+       "takeoff.plan: mission.items[0] (doJumpId 1): a takeoff 3340 m from the first waypoint: the leg between them "
+       "is flown and is not in the path read"},
+      {"landing.plan",
+       plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60") + "," +
+                 waypoint(0, "37.78", "-122.40", "0", mavlink::kCmdNavLand)),
+       "landing.plan: mission.items[2] (doJumpId 1): a landing 1760 m from the last waypoint"},
+      {"land_first.plan",
+       plan_text(waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch) + "," + wp + "," +
+                 waypoint(0, "37.78", "-122.42", "60")),
+       "land_first.plan: mission.items[0] (doJumpId 1): command 20 (a landing or return to launch) comes before the "
+       "first waypoint: the mission ends there"},
+      {"unlimited.plan",
+       plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", mavlink::kCmdNavLoiterUnlim) + "," +
+                 waypoint(0, "37.77", "-122.41", "60")),
+       "unlimited.plan: mission.items[1] (doJumpId 1): command 17 (an unlimited loiter) comes before this waypoint"},
       // items that move the aircraft without a position visvol can check,
       // and numbers that are no command: refused, never left out unseen
       {"orbit.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 34) + "," + wp),

@@ -205,12 +205,13 @@ TEST_F(PlanCheck, CheckAssessesAQGroundControlMission) {
       j["notes"][1].get<std::string>().find("altitudes above home: the planned home's 150.0 m, the terrain there"),
       std::string::npos)
       << j["notes"];
-  // a spline waypoint 1 m above sea level, under the ground: a vertex the
-  // check sees (it was left out, and the mission read as met)
+  // a waypoint 1 m above sea level, under the ground: a vertex the check
+  // sees (a spline waypoint there was left out, and the mission read as met;
+  // spline waypoints are now refused: their curve is not in the file)
   nlohmann::json low = mission;
   low["mission"]["items"].insert(low["mission"]["items"].begin() + 1,
                                  nlohmann::json{{"type", "SimpleItem"},
-                                                {"command", 82},
+                                                {"command", 16},
                                                 {"frame", 0},
                                                 {"autoContinue", true},
                                                 {"doJumpId", 9},
@@ -270,6 +271,12 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   EXPECT_NE(up.out.find("clockwise at 600.0 m"), std::string::npos) << up.out;
   EXPECT_NE(up.out.find("max-climb 15.0 deg: worst 15.0 deg, holds on 1.000 of the length met"), std::string::npos)
       << up.out;
+  // a multirotor flies a loiter's turns of a radius as the circle (as
+  // ArduCopter does; it was read as a hover at the centre)
+  std::ofstream(plan) << mission_with(120.0).dump(2);
+  const Outcome rotor_turns = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor");
+  EXPECT_NE(rotor_turns.out.find("loiter     mission.items[1] (doJumpId 2): 2.0 turns of 120 m"), std::string::npos)
+      << rotor_turns.out << rotor_turns.err;
   // a multirotor hovers out a LOITER_TIME: its seconds count in the duration
   // and, where an observer sees the point, in the exposure (they did not)
   nlohmann::json timed = mission_with(0.0);

@@ -235,10 +235,16 @@ Result<PathFile> parse_plan_csv(const std::string& text, const std::string& path
     if (columns == 0) {
       for (std::size_t c = 0; c < cells.size(); ++c) {
         const int ci = static_cast<int>(c);
-        if (cells[c] == "x_m") col_x = ci;
-        if (cells[c] == "y_m") col_y = ci;
-        if (cells[c] == "z_m") col_z = ci;
-        if (cells[c] == "fp") col_fp = ci;
+        for (auto [name, col] :
+             {std::pair{"x_m", &col_x}, std::pair{"y_m", &col_y}, std::pair{"z_m", &col_z}, std::pair{"fp", &col_fp}}) {
+          if (cells[c] != name) continue;
+          // two columns of one name: which is the path is not for the reader to guess
+          if (*col >= 0) {
+            return invalid_argument(where + "the header names " + name + " twice (columns " + std::to_string(*col + 1) +
+                                    " and " + std::to_string(ci + 1) + ")");
+          }
+          *col = ci;
+        }
       }
       if (col_y < 0 || col_z < 0) {
         return invalid_argument(where + "the header names x_m but not " + (col_y < 0 ? "y_m" : "z_m"));

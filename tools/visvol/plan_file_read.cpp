@@ -207,16 +207,16 @@ bool moves_off_the_file(long long command) {
   }
 }
 
+constexpr long long kTakeoffLocal = 24;  // MAV_CMD_NAV_TAKEOFF_LOCAL
+
 ItemRole item_role(long long command) {
   using namespace mavlink;
-  constexpr long long kTakeoffLocal = 24;
   switch (command) {
     case kCmdNavWaypoint:
     case kCmdNavLoiterUnlim:
     case kCmdNavLoiterTurns:
     case kCmdNavLoiterTime:
-    case kCmdNavLoiterToAlt:
-    case kCmdNavSplineWaypoint: return ItemRole::vertex;
+    case kCmdNavLoiterToAlt: return ItemRole::vertex;
     case kCmdNavReturnToLaunch:
     case kCmdNavLand:
     case kCmdNavTakeoff:
@@ -269,6 +269,57 @@ Result<LoiterItem> read_loiter(long long command, const nlohmann::json& params, 
   return l;
 }
 
+// The takeoff and landing items that give a position (not 0, 0 or null:
+// "where the aircraft is"), and where in the file.
+struct MissionEnds {
+  std::optional<Vec3> takeoff, landing;  // longitude, latitude (degrees), 0
+  std::string takeoff_where, landing_where;
+};
+
+Status remember_end(const nlohmann::json& item, long long command, const std::string& where, MissionEnds& ends) {
+  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) return Status::ok_status();
+  const nlohmann::json& lat = item["params"][4];
+  const nlohmann::json& lon = item["params"][5];
+  if (!lat.is_number() || !lon.is_number()) return Status::ok_status();  // none given: where the aircraft is
+  const double la = lat.get<double>(), lo = lon.get<double>();
+  if (!std::isfinite(la) || !std::isfinite(lo) || (la == 0 && lo == 0)) return Status::ok_status();
+  if (std::fabs(la) > 90 || std::fabs(lo) > 180) {
+    return invalid_argument(where + "latitude " + shown(la, 6) + ", longitude " + shown(lo, 6) +
+                            " is not a WGS84 position in degrees");
+  }
+  const bool takeoff =
+      command == mavlink::kCmdNavTakeoff || command == mavlink::kCmdNavVtolTakeoff || command == kTakeoffLocal;
+  (takeoff ? ends.takeoff : ends.landing) = Vec3(lo, la, 0);
+  (takeoff ? ends.takeoff_where : ends.landing_where) = where;
+  return Status::ok_status();
+}
+
+// A takeoff or landing away from the path's first or last waypoint flies a
+// leg the path read does not hold (a 3.4 km climb-out at 25 m over the
+// ground read as met): refused, as an end between waypoints is. On the spot
+// (visvol's own plans: the same position), the climb and the descent are
+// the mission's ends, not its path.
+Status check_ends_at_the_path(const MissionEnds& ends, const std::vector<Vec3>& lon_lat) {
+  constexpr double kEndAwayM = 5.0, kMetresPerDegree = 111320.0, kRadPerDeg = 0.017453292519943295;
+  auto apart_m = [&](const Vec3& a, const Vec3& b) {
+    const double east = (a.x() - b.x()) * kMetresPerDegree * std::cos(0.5 * (a.y() + b.y()) * kRadPerDeg);
+    return std::hypot(east, (a.y() - b.y()) * kMetresPerDegree);
+  };
+  for (const auto& [end, where, vertex, name] :
+       {std::tuple{&ends.takeoff, &ends.takeoff_where, &lon_lat.front(), "first"},
+        std::tuple{&ends.landing, &ends.landing_where, &lon_lat.back(), "last"}}) {
+    if (!*end) continue;
+    const double d = apart_m(**end, *vertex);
+    if (d > kEndAwayM) {
+      return invalid_argument(*where + "a " + (end == &ends.takeoff ? "takeoff" : "landing") + " " + shown(d, 0) +
+                              " m from the " + name +
+                              " waypoint: the leg between them is flown and is not in the path read; put it "
+                              "over that waypoint, or add a waypoint where it is");
+    }
+  }
+  return Status::ok_status();
+}
+
 }  // namespace
 
 // The waypoints of a QGroundControl .plan (waypoints, spline waypoints and
@@ -295,6 +346,8 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   out.has_heights = true;
   std::optional<Vec3> home;         // longitude, latitude, altitude, once an item needs it
   std::string end_after_waypoints;  // an end item read after a waypoint (where, command), or empty
+  std::string unlimited_loiter;     // where an unlimited loiter was read, or empty
+  MissionEnds ends;                 // the takeoff and landing positions given
   bool landing_after_waypoints = false;
   for (const auto& [key, speed] :
        {std::pair{"cruiseSpeed", &out.cruise_speed_m_per_s}, std::pair{"hoverSpeed", &out.hover_speed_m_per_s}}) {
@@ -332,6 +385,14 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       const std::string given = item.contains("command") ? json_brief(item["command"]) : "missing";
       return invalid_argument(where + "command " + given + " is not an integer");
     }
+    if (command == mavlink::kCmdNavSplineWaypoint) {
+      // judged as straight legs, it read as met where the curve flown passed
+      // 157 m off them and 22 m under the clearance
+      return invalid_argument(where +
+                              "command 82 (a spline waypoint): the autopilot flies a curve through it that "
+                              "the file does not give, away from the straight legs a check would judge; "
+                              "write the mission with waypoints (16), or check the path as flown");
+    }
     const ItemRole role = item_role(command);
     if (role == ItemRole::moves || role == ItemRole::unknown) {
       return invalid_argument(where + "command " + std::to_string(command) +
@@ -340,8 +401,8 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                                      "orbit, follow, termination, mode, home or altitude change...)"
                                    : " is not a command visvol knows to leave the flown path unchanged (speed, "
                                      "camera, gimbal, servo, relay, ROI, conditions), and it may move the aircraft") +
-                              "; the path is read from waypoints (16), spline waypoints (82) and loiters (17, 18, "
-                              "19, 31): write the mission with those, or check the path as flown");
+                              "; the path is read from waypoints (16) and loiters (17, 18, 19, 31): write the mission "
+                              "with those, or check the path as flown");
     }
     // a takeoff, landing or return between waypoints flies legs that are not
     // in the file (home and back, a climb out): the path read would skip them
@@ -350,8 +411,22 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       landing_after_waypoints = landing_after_waypoints || command == mavlink::kCmdNavLand ||
                                 command == mavlink::kCmdNavVtolLand || command == mavlink::kCmdNavLandLocal;
     }
+    if (role == ItemRole::end && out.points.empty() && command != mavlink::kCmdNavTakeoff &&
+        command != mavlink::kCmdNavVtolTakeoff && command != kTakeoffLocal) {
+      // a landing or a return first: the mission ends there
+      return invalid_argument(where + "command " + std::to_string(command) +
+                              " (a landing or return to launch) comes before the first waypoint: the mission ends "
+                              "there, and the waypoints after it are never flown");
+    }
+    if (role == ItemRole::end) VISVOL_RETURN_IF_ERROR(remember_end(item, command, where, ends));
     if (command == kCmdDoChangeSpeed) out.speed_changes = true;
     if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
+    if (!unlimited_loiter.empty()) {
+      return invalid_argument(unlimited_loiter +
+                              "command 17 (an unlimited loiter) comes before this waypoint: the aircraft circles "
+                              "there until told otherwise, and never flies on; put it last, or give it turns or "
+                              "time (18, 19)");
+    }
     if (!end_after_waypoints.empty()) {
       return invalid_argument(end_after_waypoints +
                               " (a takeoff, landing or return to launch) comes between waypoints: the legs it flies "
@@ -412,6 +487,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
         out.hold_s.push_back(0.0);
       }
       l->vertex = out.points.size() - 1;
+      if (l->kind == LoiterKind::unlimited) unlimited_loiter = where;
       out.loiters.push_back(*l);
       continue;
     }
@@ -432,9 +508,10 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       out.loiters.pop_back();
     }
   }
+  if (out.points.size() >= 2) VISVOL_RETURN_IF_ERROR(check_ends_at_the_path(ends, out.points));
   if (out.points.size() < 2) {
     return invalid_argument(file + std::to_string(out.points.size()) +
-                            " waypoints (waypoint, spline waypoint or loiter items) in mission.items (of " +
+                            " waypoints (waypoint or loiter items) in mission.items (of " +
                             std::to_string(items.size()) + "); a path needs at least 2");
   }
   if (crs_wkt.empty()) {

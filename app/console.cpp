@@ -623,7 +623,7 @@ rt::ExecutiveConfig Console::Impl::executive_config() const {
   const fields::FieldSampler<storage::ResidentLevel> ground(field->level(o.level));
   auto end_at = [&](double x, double y) {
     const double z0 = ground.height(x, y);
-    const double top = std::min(z0 + ec.gains.max_agl_m, ec.gains.max_altitude_m);
+    const double top = std::min({z0 + ec.gains.max_agl_m, ec.gains.max_altitude_m, ground.level().geometry().top_m()});
     // no room under the ceiling: left above it, for the executive to refuse naming it
     const bool lower = z0 + 150 > top && top > z0 + vehicle.clearance_m;
     return rt::Vec3(x, y, lower ? 0.5 * (z0 + vehicle.clearance_m + top) : z0 + 150);

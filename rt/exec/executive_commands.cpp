@@ -277,9 +277,11 @@ Status Executive::check_observers(const HullRequest& r) const {
 }
 
 // An endpoint under the ceiling of `g` (on the finest terrain).
+// (and under the field's top, above which F_p is not known, as the planner's)
 bool Executive::under_ceiling(const Vec3& p, const ForceGains& g) const {
   const double agl = p.z() - finest_.height(p.x(), p.y());
-  return agl <= g.max_agl_m + kHeightTolM && p.z() <= g.max_altitude_m + kHeightTolM;
+  return agl <= g.max_agl_m + kHeightTolM && p.z() <= g.max_altitude_m + kHeightTolM &&
+         p.z() <= field_.level(0).geometry().top_m() + kHeightTolM;
 }
 
 Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGains& g) const {
@@ -287,7 +289,8 @@ Status Executive::check_ceiling(const char* name, const Vec3& p, const ForceGain
   const double agl = p.z() - finest_.height(p.x(), p.y());
   return invalid_argument(std::string(name) + ": " + std::to_string(agl) + " m above the terrain and " +
                           std::to_string(p.z()) + " m high, above the ceiling (max-agl " + std::to_string(g.max_agl_m) +
-                          " m, max-altitude " + std::to_string(g.max_altitude_m) + " m)");
+                          " m, max-altitude " + std::to_string(g.max_altitude_m) + " m, the field's top " +
+                          std::to_string(field_.level(0).geometry().top_m()) + " m)");
 }
 
 // Why an observer of a command cannot be had (null: it can). Real-time safe.

@@ -75,6 +75,7 @@ class FieldForces final : public RopeEnvironment, public PathField {
     y0_ = g.origin_y - (g.ny - 1) * g.spacing_m;
     y1_ = g.origin_y;
     ramp_m_ = g.spacing_m;
+    top_m_ = g.top_m();
   }
 
   void set_gains(const ForceGains& g) { gains_ = g; }
@@ -134,8 +135,9 @@ class FieldForces final : public RopeEnvironment, public PathField {
     if (gains_.clearance_m > 0 && depth > 0) {
       a.z() += gains_.k_clearance * accel_ref_ * kSaturation * std::min(2.0 * depth / margin, 8.0);
     }
-    // Ceiling: the mirror of the clearance push.
-    const double ceiling = std::min(ground + gains_.max_agl_m, gains_.max_altitude_m);
+    // Ceiling: the mirror of the clearance push. The field's top is one too:
+    // above it F_p is not known (a console rope flew over a low pack's top).
+    const double ceiling = std::min({ground + gains_.max_agl_m, gains_.max_altitude_m, top_m_});
     const double above = h - (ceiling - ground) + margin;
     if (std::isfinite(ceiling) && above > 0) {
       a.z() -= gains_.k_clearance * accel_ref_ * kSaturation * std::min(2.0 * above / margin, 8.0);
@@ -216,6 +218,7 @@ class FieldForces final : public RopeEnvironment, public PathField {
   double gradient_ref_ = 1.0;
   double x0_ = 0, x1_ = 0, y0_ = 0, y1_ = 0;  // the field's horizontal extent, world metres
   double ramp_m_ = 1.0;
+  double top_m_ = 0;  // the field's top level, m
   static void set_hulls(std::array<const PointHull*, kMaxHulls>& to, int& count, const PointHull* const* from, int n) {
     count = 0;
     for (int c = 0; c < n && count < kMaxHulls; ++c)

@@ -405,3 +405,34 @@ TEST(CliViewshed, WritesAGeoTiff) {
 }
 
 }  // namespace
+
+namespace {
+
+// A pack build gives its summary as JSON too (--json and --json-file were
+// ignored with -o), and a bad --json-file is refused before the build, by
+// name (it was found only once the build had run).
+TEST(CliBuild, APackBuildsSummaryIsJsonWhenAsked) {
+  const std::string tag = std::to_string(getpid());
+  const std::string out = ::testing::TempDir() + "/cli_json_" + tag + ".vvp";
+  const std::string summary = ::testing::TempDir() + "/cli_json_" + tag + ".json";
+  const Outcome r = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + out + " --json --json-file " + summary);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json printed = nlohmann::json::parse(r.out);
+  EXPECT_EQ(printed["pack"]["path"], out);
+  EXPECT_GT(printed["pack"]["bytes"].get<double>(), 0);
+  EXPECT_EQ(printed["levels_of_detail"].size(), 2u);
+  EXPECT_TRUE(printed["planning_bounds"].contains("margin_m"));
+  EXPECT_EQ(nlohmann::json::parse(slurp(summary)), printed);
+  std::remove(out.c_str());
+  std::remove(summary.c_str());
+
+  const std::string never = ::testing::TempDir() + "/cli_json_never_" + tag + ".vvp";
+  const Outcome bad =
+      visvol("build " + kDem + " " + kSmallPackOptions + " -o " + never + " --json-file /nonexistent/dir/summary.json");
+  EXPECT_EQ(bad.status, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--json-file"), std::string::npos) << bad.err;
+  EXPECT_EQ(bad.err.find("building"), std::string::npos) << "refused before the build: " << bad.err;
+  EXPECT_NE(access(never.c_str(), F_OK), 0);
+}
+
+}  // namespace

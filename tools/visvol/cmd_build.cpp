@@ -161,6 +161,50 @@ std::string summary_json(const BuildOptions& o, const Heightfield& hf, const Fie
   return json_text(j, 2) + "\n";
 }
 
+// The summary of a pack build as JSON: what print_pack_summary says, and the pack.
+std::string pack_summary_json(const BuildOptions& o, const PreparedBuild& b, const storage::PackBuildReport& report) {
+  using nlohmann::json;
+  const Heightfield& hf = b.terrain;
+  const FieldParams& p = b.params;
+  const fields::HeightRange hr = fields::height_range(hf);
+  json j;
+  j["dem"] = o.dem;
+  j["nx"] = hf.nx;
+  j["ny"] = hf.ny;
+  j["cell_size_m"] = hf.spacing_m;
+  j["origin_x"] = hf.origin_x;
+  j["origin_y"] = hf.origin_y;
+  j["crs"] = fields::crs_name(hf.crs_wkt);
+  j["height_min_m"] = hr.min_m;
+  j["height_max_m"] = hr.max_m;
+  j["nz"] = p.nz;
+  j["eye_height_m"] = p.eye_height_m;
+  j["range_shape"] = fields::to_string(p.range_shape);
+  j["range_posts"] = p.range_posts;
+  j["curvature_coeff"] = p.curvature_coeff;
+  j["exact_rings"] = p.exact_rings;
+  for (std::size_t l = 0; l < report.levels.size(); ++l) {
+    const double spacing = hf.spacing_m * static_cast<double>(1 << l);
+    j["levels_of_detail"].push_back({{"nx", hf.nx >> l},
+                                     {"ny", hf.ny >> l},
+                                     {"spacing_m", spacing},
+                                     {"range_m", p.range_posts * spacing},
+                                     {"wall_s", report.levels[l].wall_s},
+                                     {"hull_cells", report.levels[l].hull_cells},
+                                     {"cells_per_s_per_core", report.levels[l].cells_per_s_per_core()}});
+  }
+  j["terrain_force_field"] = {{"wall_s", report.tff_s}, {"band_offset_m", o.tff_offset_m}, {"levels", o.tff_levels}};
+  const fields::Bounds2D& box = report.planning.box;
+  j["planning_bounds"] = {{"xmin_m", box.xmin_m},
+                          {"ymin_m", box.ymin_m},
+                          {"xmax_m", box.xmax_m},
+                          {"ymax_m", box.ymax_m},
+                          {"margin_m", report.planning.margin_m}};
+  j["pack"] = {{"path", o.out}, {"bytes", report.file_bytes}};
+  j["wall_s"] = report.wall_s;
+  return json_text(j, 2) + "\n";
+}
+
 int run_pack_build(const BuildOptions& o, const PreparedBuild& b) {
   storage::PackBuildReport report;
   Progress progress("building " + o.out);
@@ -169,12 +213,25 @@ int run_pack_build(const BuildOptions& o, const PreparedBuild& b) {
       &report);
   if (!st.ok()) return fail("build", st);
   progress.finish();
-  print_pack_summary(o, b, report);
+  // --json and --json-file as for a build in memory (they were ignored with -o)
+  if (o.json) {
+    std::printf("%s", pack_summary_json(o, b, report).c_str());
+  } else {
+    print_pack_summary(o, b, report);
+  }
+  if (!o.json_file.empty()) {
+    const Status written = write_text_file(o.json_file, pack_summary_json(o, b, report));
+    if (!written.ok()) return fail("build", written.with_context("--json-file"));
+  }
   return kExitOk;
 }
 
 int run_build(const BuildOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
+  // a bad summary file costs nothing: refused before the build, by name
+  if (!o.json_file.empty()) {
+    if (Status s = check_output_path(o.json_file); !s.ok()) return fail("build", s.with_context("--json-file"));
+  }
   Result<PreparedBuild> prepared = prepare_build(o);
   if (!prepared.ok()) return fail("build", prepared.status());
   if (!o.out.empty()) return run_pack_build(o, *prepared);
@@ -198,7 +255,7 @@ int run_build(const BuildOptions& o) {
   }
   if (!o.json_file.empty()) {
     const Status st = write_text_file(o.json_file, summary_json(o, hf, params, *levels, stats, wall_s));
-    if (!st.ok()) return fail("build", st);
+    if (!st.ok()) return fail("build", st.with_context("--json-file"));
   }
   return kExitOk;
 }

@@ -185,9 +185,8 @@ void remove_directory_in_handler(const char* directory) {
   ::rmdir(directory);
 }
 
-// Async-signal-safe: the removals above, signal and raise only.
-extern "C" void remove_temporaries_and_reraise(int sig) {
-  const int saved_errno = errno;
+// Async-signal-safe: removes every temporary being written.
+void remove_temporaries_in_handler() {
   for (Slot& s : g_slots) {
     if (!s.claimed.load()) continue;
     const unsigned before = s.sequence.load();
@@ -203,6 +202,12 @@ extern "C" void remove_temporaries_and_reraise(int sig) {
       remove_file_in_handler(file);
     }
   }
+}
+
+// Async-signal-safe: the removals above, signal and raise only.
+extern "C" void remove_temporaries_and_reraise(int sig) {
+  const int saved_errno = errno;
+  remove_temporaries_in_handler();
   std::signal(sig, SIG_DFL);
   std::raise(sig);  // delivered with the default action once this returns
   errno = saved_errno;
@@ -468,6 +473,28 @@ void install_output_cleanup_on_signals() {
     sigemptyset(&sa.sa_mask);
     ::sigaction(sig, &sa, nullptr);
   }
+}
+
+namespace {
+const char* g_fault_message = nullptr;
+
+// Async-signal-safe: the removals, write and _exit only.
+extern "C" void remove_temporaries_and_exit(int) {
+  remove_temporaries_in_handler();
+  if (g_fault_message != nullptr) {
+    const ssize_t n = ::write(STDERR_FILENO, g_fault_message, std::strlen(g_fault_message));
+    (void)n;
+  }
+  ::_exit(1);
+}
+}  // namespace
+
+void install_mapped_read_fault_handler(const char* message) {
+  g_fault_message = message;
+  struct sigaction sa {};
+  sa.sa_handler = remove_temporaries_and_exit;
+  sigemptyset(&sa.sa_mask);
+  ::sigaction(SIGBUS, &sa, nullptr);
 }
 
 std::string temporary_prefix(const std::string& path) { return path + ".tmp." + this_host() + "."; }

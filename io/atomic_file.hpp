@@ -96,6 +96,13 @@ Status write_file_atomically(const std::string& path, const std::string& bytes);
 // before any other handler is installed.
 void install_output_cleanup_on_signals();
 
+// For offline tools that read files through memory maps: a read of a mapped
+// page that is no longer in the file (cut short or rewritten in place while
+// read) faults with SIGBUS. Its handler removes the temporaries being
+// written, prints `message` (a string that lives for the process) and exits
+// 1: a line that says what happened, not a crash without a word.
+void install_mapped_read_fault_handler(const char* message);
+
 // The name every temporary of `path` made on this host starts with, the pid
 // following: `PATH.tmp.<host>.`, <host> this host's name with anything but
 // letters, digits and '-' as '_' (at most 64 characters).

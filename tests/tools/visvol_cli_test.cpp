@@ -436,3 +436,37 @@ TEST(CliBuild, APackBuildsSummaryIsJsonWhenAsked) {
 }
 
 }  // namespace
+
+namespace {
+
+// A pack cut short while a command reads it (an operator's cp over it): the
+// next read of a mapped page faults. One line and exit 1 ("Bus error",
+// status 135, before).
+TEST_F(Cli, APackCutShortWhileReadIsSaidNotACrash) {
+  const std::string tag = std::to_string(getpid());
+  const std::string live = ::testing::TempDir() + "/cli_live_" + tag + ".vvp";
+  const std::string err = ::testing::TempDir() + "/cli_live_" + tag + ".err";
+  ASSERT_EQ(std::system(("cp " + *pack_ + " " + live).c_str()), 0);
+  const Outcome info = visvol("info " + live + " --json");
+  ASSERT_EQ(info.status, 0) << info.err;
+  const nlohmann::json j = nlohmann::json::parse(info.out);
+  const nlohmann::json& b = j["planning_bounds"];
+  const double x = 0.5 * (b["xmin_m"].get<double>() + b["xmax_m"].get<double>());
+  const double y = 0.5 * (b["ymin_m"].get<double>() + b["ymax_m"].get<double>());
+  FILE* sample = ::popen((std::string(VISVOL_BIN) + " sample " + live + " >/dev/null 2>" + err).c_str(), "w");
+  ASSERT_NE(sample, nullptr);
+  std::fprintf(sample, "%.2f %.2f 300\n", x, y);
+  std::fflush(sample);
+  ::usleep(500 * 1000);  // the first point read, the pack mapped
+  ASSERT_EQ(::truncate(live.c_str(), 0), 0);
+  std::fprintf(sample, "%.2f %.2f 200\n", x + 100, y - 100);
+  const int status = ::pclose(sample);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_NE(slurp(err).find("a pack was cut short or rewritten while this command read it"), std::string::npos)
+      << slurp(err);
+  std::remove(live.c_str());
+  std::remove(err.c_str());
+}
+
+}  // namespace

@@ -54,6 +54,11 @@ int main(int argc, char** argv) {
   using namespace visvol::cli;
   // Ctrl-C or a kill during a build leaves no PACK.tmp.<host>.<pid> behind
   visvol::install_output_cleanup_on_signals();
+  // packs are read through memory maps: one cut short under a command faults
+  // its next read (a "Bus error" before)
+  visvol::install_mapped_read_fault_handler(
+      "visvol: a pack was cut short or rewritten while this command read it (copied over in place?); build or "
+      "copy a new pack beside it and rename it over the old one\n");
   CLI::App app{
       "visvol: visibility volumes above terrain (the field F_p of Srikanth et al., "
       "\"Visibility Volumes for Interactive Path Optimization\")"};

@@ -130,6 +130,26 @@ Status check_height_tile(const LevelEntry& level, const TileEntry& tile, const s
   });
 }
 
+Status check_area_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,
+                       const std::string& path) {
+  // sqrt(1 + Tx^2 + Ty^2): 1 or more (the slack, a rounding), and no more
+  // than the steepest slope the level's heights allow (their whole span, one
+  // level either side, between neighbouring posts, on both axes)
+  const double steepest = (level.nz + 1) * level.dz_m / level.spacing_m;
+  const double highest = std::sqrt(1.0 + 2.0 * steepest * steepest) * (1 + 1e-6);
+  return for_each_post(level, tile, [&](int x, int y) {
+    float a;
+    std::memcpy(&a, data + (static_cast<std::size_t>(y) * kTile2dPosts + static_cast<std::size_t>(x)) * sizeof a,
+                sizeof a);
+    if (std::isfinite(a) && a >= 0.9999f && a <= highest) return Status::ok_status();
+    const int i = tile.tx * kTile2dPosts + x, j = tile.ty * kTile2dPosts + y;
+    return corrupt(path + ": area tile (" + std::to_string(tile.tx) + ", " + std::to_string(tile.ty) + ") of level " +
+                   std::to_string(tile.level) + ": post (" + std::to_string(i) + ", " + std::to_string(j) +
+                   ") has area factor " + number(a) + ", not a factor in 1.." + number(highest) +
+                   " (the steepest slope the level's heights allow)");
+  });
+}
+
 Status check_visibility_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,
                              const std::string& path) {
   const int x_end = std::min(kBrickPosts, level.nx - tile.tx * kBrickPosts);

@@ -40,6 +40,11 @@ Status check_level_geometry(const LevelEntry* levels, int count, const std::stri
 Status check_height_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,
                          const std::string& path);
 
+// The area factors of one level's area tile (padding excluded): finite and
+// at least 1 (sqrt(1 + slope^2)).
+Status check_area_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,
+                       const std::string& path);
+
 // A float32 visibility tile: every F_p finite and in [0, 1] (uint16 tiles
 // cannot hold anything else).
 Status check_visibility_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,

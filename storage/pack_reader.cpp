@@ -387,6 +387,8 @@ Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) co
   // heights were checked at open(); a copy read later is checked again (a
   // checksum is no proof against a file rewritten on purpose)
   if (t.layer == static_cast<std::uint16_t>(Layer::height)) return check_height_tile(levels_[t.level], t, bytes, path_);
+  // area factors: only exported, and so checked where they are read
+  if (t.layer == static_cast<std::uint16_t>(Layer::area)) return check_area_tile(levels_[t.level], t, bytes, path_);
   return Status::ok_status();
 }
 

@@ -37,6 +37,12 @@ class CraftedPack {
     const std::size_t index = static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts);
     std::memcpy(bytes_.data() + t.offset + index * sizeof h_m, &h_m, sizeof h_m);
   }
+  // Area factor of post (i, j) of level l, in its tile.
+  void set_area(int l, int i, int j, float a) {
+    const TileEntry& t = tile(l, Layer::area, i / kTile2dPosts, j / kTile2dPosts);
+    const std::size_t index = static_cast<std::size_t>((j % kTile2dPosts) * kTile2dPosts + i % kTile2dPosts);
+    std::memcpy(bytes_.data() + t.offset + index * sizeof a, &a, sizeof a);
+  }
   // One float of a float32 visibility tile: voxel (i, j, k) of level l.
   void set_visibility(int l, int i, int j, int k, float f) {
     const TileEntry& t = tile(l, Layer::visibility, i / kBrickPosts, j / kBrickPosts);

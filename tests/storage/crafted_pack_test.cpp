@@ -220,6 +220,26 @@ TEST_F(Crafted, NonFiniteFloatVisibilityFailsVerifyNamingTheVoxel) {
   std::remove(path.c_str());
 }
 
+// Area factors are read only to be exported: verify and the export's reads
+// refuse one that sqrt(1 + slope^2) cannot be (NaN, infinite, negative or
+// steeper than the level's heights allow), naming the post (they passed
+// verify and were exported as they were).
+TEST_F(Crafted, AreaFactorsOutOfRangeFailVerifyNamingThePost) {
+  const std::string path = temp_path("crafted_area");
+  for (const float a : {NAN, INFINITY, -1.0f, 0.5f, 3.4e38f}) {
+    CraftedPack p(valid(VisibilityEncoding::uint16));
+    p.set_area(0, 5, 7, a);
+    p.write(path);
+    const Result<std::shared_ptr<const Pack>> pack = Pack::open(path);
+    ASSERT_TRUE(pack.ok()) << pack.status().message();
+    const Status st = (*pack)->verify();
+    ASSERT_FALSE(st.ok()) << a;
+    EXPECT_NE(st.message().find(path + ": area tile (0, 0) of level 0: post (5, 7) has area factor"), std::string::npos)
+        << st.message();
+  }
+  std::remove(path.c_str());
+}
+
 // The writer refuses up front what the reader would refuse: no build ends
 // in a pack that cannot be opened.
 TEST(CraftedLayout, TheWriterRefusesWhatTheReaderWould) {

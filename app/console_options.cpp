@@ -70,11 +70,23 @@ constexpr std::size_t kMaxConfigBytes = 1 << 20;
 // is one: hidden-from = [[x, y, z], ...] is two).
 constexpr int kMaxConfigNesting = 8;
 
+// A section header's name as TOML compares it: [ session ], ["session"]
+// and [session] are one.
+std::string section_name(const std::string& header) {
+  std::string name;
+  for (const char c : header) {
+    if (c != ' ' && c != '\t' && c != '"' && c != '\'') name += c;
+  }
+  return name;
+}
+
 // What CLI11's reader does not refuse itself, refused before it reads: a file
 // over kMaxConfigBytes, arrays nested deeper than kMaxConfigNesting (100,000
 // levels overflowed its recursion: a segmentation fault), and a section
 // defined twice (TOML forbids it; the second [session] was silently
-// ignored). Returns the text.
+// ignored). Brackets count inside a value that starts as an array only (not
+// in strings, their escapes, comments or an unquoted value such as
+// out = /data/run[1/). Returns the text.
 std::string prechecked_config(std::istream& input) {
   std::string text;
   char chunk[4096];
@@ -87,39 +99,63 @@ std::string prechecked_config(std::istream& input) {
   }
   std::vector<std::string> sections;
   int depth = 0, line_no = 1;
-  std::size_t begin = 0;
-  while (begin <= text.size()) {
-    const std::size_t end = std::min(text.find('\n', begin), text.size());
-    const std::string line = text.substr(begin, end - begin);
-    const std::size_t first = line.find_first_not_of(" \t\r");
-    if (depth == 0 && first != std::string::npos && line[first] == '[') {
+  char quote = 0;           // the string being read: '"' or '\'', or none
+  bool comment = false;     // to the end of the line
+  bool line_start = true;   // nothing but blanks on the line so far
+  bool value_next = false;  // after '=': the value's first character decides
+  for (std::size_t n = 0; n < text.size(); ++n) {
+    const char c = text[n];
+    if (c == '\n') {
+      ++line_no;
+      comment = false;
+      line_start = true;
+      value_next = false;
+      if (quote == '\'') quote = 0;  // (single-line strings end with their line)
+      if (quote == '"') quote = 0;
+      continue;
+    }
+    if (comment) continue;
+    if (quote != 0) {
+      if (quote == '"' && c == '\\') {
+        ++n;  // an escape: the next character is the string's
+      } else if (c == quote) {
+        quote = 0;
+      }
+      continue;
+    }
+    if (c == ' ' || c == '\t' || c == '\r') continue;
+    const bool first_on_line = line_start;
+    line_start = false;
+    if (c == '#') {
+      comment = true;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+      value_next = false;
+    } else if (c == '[' && depth == 0 && first_on_line) {
       // a section's header: [name], or [[name]] (refused by name later)
-      const std::size_t close = line.find(']', first);
-      std::string name = close == std::string::npos ? line.substr(first) : line.substr(first, close - first + 1);
+      const std::size_t close = text.find(']', n);
+      const std::size_t eol = std::min(text.find('\n', n), text.size());
+      const std::string header = text.substr(n, (close < eol ? close + 1 : eol) - n);
+      const std::string name = section_name(header);
       if (std::find(sections.begin(), sections.end(), name) != sections.end()) {
         throw CLI::ConfigError("line " + std::to_string(line_no) + ": section " + terminal_safe(name, 80) +
                                " is defined twice (a section is one table)");
       }
-      sections.push_back(std::move(name));
-    } else {
-      char quote = 0;
-      for (const char c : line) {
-        if (quote != 0) {
-          if (c == quote) quote = 0;
-        } else if (c == '"' || c == '\'') {
-          quote = c;
-        } else if (c == '#') {
-          break;
-        } else if (c == '[' && ++depth > kMaxConfigNesting) {
-          throw CLI::ConfigError("line " + std::to_string(line_no) + ": arrays nested deeper than " +
-                                 std::to_string(kMaxConfigNesting));
-        } else if (c == ']') {
-          depth = std::max(0, depth - 1);
-        }
+      sections.push_back(name);
+      n = eol - 1;  // the rest of the line is the header's
+    } else if (c == '=' && depth == 0) {
+      value_next = true;
+    } else if (c == '[' && (depth > 0 || value_next)) {
+      value_next = false;
+      if (++depth > kMaxConfigNesting) {
+        throw CLI::ConfigError("line " + std::to_string(line_no) + ": arrays nested deeper than " +
+                               std::to_string(kMaxConfigNesting));
       }
+    } else if (c == ']' && depth > 0) {
+      --depth;
+    } else {
+      value_next = false;
     }
-    begin = end + 1;
-    ++line_no;
   }
   return text;
 }
@@ -317,8 +353,6 @@ Status validate_ceilings(const cli::EnvelopeOptions& e) {
   }
   return {};
 }
-
-// Points closer than this are one (a centimetre, as the path check's).
 
 // The observers: X Y Z each, finite, at most 256 of a kind and no more than
 // --max-observers allows (where/whether inside the pack: at start-up).

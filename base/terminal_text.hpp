@@ -16,7 +16,9 @@ namespace visvol {
 // stay. Longer than `max_bytes`: cut there, with the length said.
 inline std::string terminal_safe(std::string_view text, std::size_t max_bytes = 4096) {
   std::string out;
-  const std::size_t n = text.size() > max_bytes ? max_bytes : text.size();
+  std::size_t n = text.size() > max_bytes ? max_bytes : text.size();
+  // cut between characters: not inside a UTF-8 sequence
+  while (n > 0 && n < text.size() && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;
   out.reserve(n + 16);
   auto hex = [&](unsigned char c) {
     char code[8];

@@ -478,8 +478,15 @@ void install_output_cleanup_on_signals() {
 namespace {
 const char* g_fault_message = nullptr;
 
-// Async-signal-safe: the removals, write and _exit only.
-extern "C" void remove_temporaries_and_exit(int) {
+// Async-signal-safe: the removals, write and _exit only. A read past the
+// end of a mapped file is BUS_ADRERR; any other SIGBUS (a memory error, a
+// misaligned access) is not what the message says: the default action is
+// restored and the fault repeats with it (a core where one is wanted).
+extern "C" void remove_temporaries_and_exit(int sig, siginfo_t* info, void*) {
+  if (info == nullptr || info->si_code != BUS_ADRERR) {
+    std::signal(sig, SIG_DFL);
+    return;
+  }
   remove_temporaries_in_handler();
   if (g_fault_message != nullptr) {
     const ssize_t n = ::write(STDERR_FILENO, g_fault_message, std::strlen(g_fault_message));
@@ -492,7 +499,8 @@ extern "C" void remove_temporaries_and_exit(int) {
 void install_mapped_read_fault_handler(const char* message) {
   g_fault_message = message;
   struct sigaction sa {};
-  sa.sa_handler = remove_temporaries_and_exit;
+  sa.sa_sigaction = remove_temporaries_and_exit;
+  sa.sa_flags = SA_SIGINFO;
   sigemptyset(&sa.sa_mask);
   ::sigaction(SIGBUS, &sa, nullptr);
 }

@@ -98,9 +98,10 @@ void install_output_cleanup_on_signals();
 
 // For offline tools that read files through memory maps: a read of a mapped
 // page that is no longer in the file (cut short or rewritten in place while
-// read) faults with SIGBUS. Its handler removes the temporaries being
-// written, prints `message` (a string that lives for the process) and exits
-// 1: a line that says what happened, not a crash without a word.
+// read) faults with SIGBUS (BUS_ADRERR). Its handler removes the temporaries
+// being written, prints `message` (a string that lives for the process) and
+// exits 1: a line that says what happened, not a crash without a word. Any
+// other SIGBUS takes the default action.
 void install_mapped_read_fault_handler(const char* message);
 
 // The name every temporary of `path` made on this host starts with, the pid

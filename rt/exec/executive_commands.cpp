@@ -1,7 +1,6 @@
 // The executive's command applier: operator commands taken from the queue, checked, applied and acknowledged.
 // Loop thread (real-time rules: no allocation, no lock, no logging, no blocking), except check_observers() and
 // check_ceiling(), which init() runs on the configuration, and terrain_switch(), which any thread may ask.
-#include "base/tolerances.hpp"
 #include "rt/exec/executive.hpp"
 
 #include <algorithm>
@@ -9,6 +8,7 @@
 #include <cstring>
 #include <string>
 
+#include "base/tolerances.hpp"
 #include "rt/exec/executive_detail.hpp"
 #include "rt/rope/planner.hpp"
 
@@ -139,7 +139,7 @@ Errc Executive::apply_endpoints(const msg::Command& c, const char*& reason) {
     return Errc::invalid_argument;
   }
   if (!under_ceiling(a, forces_->gains()) || !under_ceiling(b, forces_->gains())) {
-    reason = "an endpoint is above the ceiling in force (max-agl or max-altitude)";
+    reason = "an endpoint is above the ceiling in force (max-agl, max-altitude or the field's top)";
     return Errc::invalid_argument;
   }
   const Vec3 old_start = start_m_, old_end = end_m_;

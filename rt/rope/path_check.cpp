@@ -323,7 +323,9 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   auto count_violation = [&](bool met, double fraction, bool flight) {
     if (met) return;
     out.all_met = false;
-    const double unmet = std::max(1e-9, 1.0 - fraction);
+    // a limit broken only where a probe found it (a fraction within a
+    // rounding of 1) still counts: well over the tie, so it ranks
+    const double unmet = std::max(PathCheck::kMinUnmetShare, 1.0 - fraction);
     out.violation += unmet;
     if (flight) out.flight_violation += unmet;
   };

@@ -131,8 +131,12 @@ struct PathCheck {
   bool inside_planning_bounds = true;
   std::vector<VertexCheck> per_vertex;
   bool all_met = false;  // every constraint and limit, and inside the bounds
-  // Sum over requirements of the unmet fraction (0 when all are met): a
-  // ranking of infeasible paths, least violation first.
+  // Sum over requirements of the unmet fraction, at least kMinUnmetShare
+  // each (0 when all are met): a ranking of infeasible paths, least
+  // violation first.
+  static constexpr double kMinUnmetShare = 1e-6;
+  // Two violations closer than this rank alike (a thousandth of the least one).
+  static constexpr double kViolationTie = 1e-9;
   double violation = 0;
   // The part of `violation` that the vehicle's envelope and the planning
   // bounds make (clearance, ceilings, climb, descent, turns): what makes a

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "base/tolerances.hpp"
+
 namespace visvol::rt {
 
 const char* to_string(Objective objective) { return objective == Objective::hide ? "hide" : "show"; }
@@ -123,19 +125,19 @@ Status check_ends(const PlanRequest& r, const PathChecker& checker, double top_m
       msg << -h << " m below the terrain";
       return invalid_argument(msg.str());
     }
-    if (h < e.clearance_m - 0.01) {
+    if (h < e.clearance_m - kHeightTolM) {
       msg << h << " m above the terrain, under the clearance " << e.clearance_m << " m";
       return invalid_argument(msg.str());
     }
-    if (h > e.max_agl_m + 0.01) {
+    if (h > e.max_agl_m + kHeightTolM) {
       msg << h << " m above the terrain, over --max-agl " << e.max_agl_m << " m";
       return invalid_argument(msg.str());
     }
-    if (p->z() > e.max_altitude_m + 0.01) {
+    if (p->z() > e.max_altitude_m + kHeightTolM) {
       msg << p->z() << " m high, over --max-altitude " << e.max_altitude_m << " m";
       return invalid_argument(msg.str());
     }
-    if (p->z() > top_m + 0.01) {
+    if (p->z() > top_m + kHeightTolM) {
       msg << p->z() << " m high, over the field's top " << top_m << " m";
       return invalid_argument(msg.str());
     }
@@ -151,8 +153,10 @@ bool better(const PathCheck& a, const PathCheck& b, Objective objective) {
     // observers see least against their requirements. A sum alone traded a
     // 30 m clearance down to 26 m on a seventh of a Taunus path for 15
     // observers' fractions.
-    if (std::abs(a.flight_violation - b.flight_violation) > 1e-9) return a.flight_violation < b.flight_violation;
-    if (std::abs(a.violation - b.violation) > 1e-9) return a.violation < b.violation;
+    if (std::abs(a.flight_violation - b.flight_violation) > PathCheck::kViolationTie) {
+      return a.flight_violation < b.flight_violation;
+    }
+    if (std::abs(a.violation - b.violation) > PathCheck::kViolationTie) return a.violation < b.violation;
   }
   return objective == Objective::hide ? a.fc < b.fc : a.fc > b.fc;
 }

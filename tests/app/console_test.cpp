@@ -215,6 +215,11 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       // fault); a second [session] was silently ignored
       {"[rope]\nfrom = " + std::string(100000, '[') + std::string(100000, ']') + "\n", "arrays nested deeper than 8"},
       {"[session]\nseconds = 0.3\n[session]\nseconds = 100\n", "section [session] is defined twice"},
+      {"[session]\nseconds = 0.3\n[ \"session\" ]\nseconds = 100\n", "section [session] is defined twice"},
+      // brackets in strings, their escapes and comments are no arrays: the
+      // checks pass them, and CLI11 finds the one mistake here
+      {"# [[[[[[[[[[ a comment\n[thumbnails]\nthumbnail-view = \"a\\\"[[[[[[[[[[\" # ]\nbogus = 1\n",
+       "unknown key 'bogus' in [thumbnails]"},
       // a key's bytes reach the operator's terminal escaped
       {"bogus\x1b]0;x\x07key = 1\n", "unknown key 'bogus\\x1B]0;x\\x07key'"}};
   int k = 0;

@@ -30,12 +30,11 @@ using visvol::test::slurp;
 TEST(ConsoleThreads, ASessionWithCommandsRunsItsThreadsWithoutARace) {
   using namespace visvol::dds;
   using namespace visvol::msg;
-  const std::string tag = std::to_string(getpid());
-  const std::string pack = ::testing::TempDir() + "/console_threads_" + tag + ".vvp";
+  const std::string pack = visvol::test::scratch_path("console_threads_pack");
   ASSERT_TRUE(visvol::storage::build_pack(visvol::fields::testing::fractal(65, 9),
                                           visvol::app::testing::small_pack_params(), "", pack)
                   .ok());
-  const std::string script = ::testing::TempDir() + "/console_threads_script_" + tag + ".txt";
+  const std::string script = visvol::test::scratch_path("console_threads_script");
   std::ofstream(script) << "0.2 move 0 0 0 0.1\n0.4 pull 20 0 -20 0.6\n1.2 release\n";
 
   ParticipantConfig pc;
@@ -48,7 +47,7 @@ TEST(ConsoleThreads, ASessionWithCommandsRunsItsThreadsWithoutARace) {
   ASSERT_TRUE(commands.ok() && acks.ok());
 
   const std::string out = visvol::test::scratch_path("console_threads");
-  const std::string err = out + ".err";
+  const std::string err = visvol::test::scratch_path("console_threads_err");
   int status = -1;
   // a budget that ThreadSanitizer's shadow memory fits in (the process alone
   // is 140 MiB under it)

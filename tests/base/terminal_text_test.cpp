@@ -26,6 +26,8 @@ TEST(TerminalText, ALongTokenIsCutAndItsLengthSaid) {
   const std::string shown = terminal_safe(big, 100);
   EXPECT_EQ(shown, std::string(100, 'x') + "... (8388608 bytes)");
   EXPECT_EQ(terminal_safe("short", 100), "short");
+  // not inside a character: "ü" is two bytes, the cut falls between them
+  EXPECT_EQ(terminal_safe("aaü", 3), "aa... (4 bytes)");
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
-// Paths a test binary makes under ::testing::TempDir(), removed with all that
-// they hold when the binary exits: a run of the suite leaves nothing behind
-// in the temporary folder (before, every run left some 30 folders there, 4
-// GiB after a hundred runs). Header only; any test includes it.
+// Paths a test binary names through scratch_path() under
+// ::testing::TempDir(), removed with all that they hold when the binary
+// exits, passed or failed (the console's and the catalogue's tests left some
+// 30 folders there a run, 4 GiB after a hundred runs). Header only; any test
+// includes it.
 #pragma once
 
 #include <gtest/gtest.h>

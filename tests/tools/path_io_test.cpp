@@ -581,6 +581,38 @@ TEST_F(PathIo, PlanLoitersAreVerticesOtherItemsAreLeftOut) {
   EXPECT_EQ(path->loiters[3].item, "mission.items[11] (doJumpId 1)");
 }
 
+// A takeoff away from the first waypoint (QGroundControl puts a
+// multirotor's at home): its point, at its altitude, starts the path, so the
+// leg to the first waypoint is checked (a 3.4 km climb-out 25 m over the
+// ground read as met, left out); on the waypoint's spot it is dropped. A
+// landing away from the last waypoint is said in a note: its approach is
+// flown after the path.
+TEST_F(PathIo, PlanTakeoffAwayStartsThePathALandingAwayIsNoted) {
+  const std::string wp1 = waypoint(0, "37.79", "-122.43", "50"), wp2 = waypoint(0, "37.78", "-122.42", "60");
+  Result<PathFile> away = read_path_file(
+      file_with("away.plan", plan_text(waypoint(3, "37.76", "-122.43", "30", mavlink::kCmdNavTakeoff) + "," + wp1 +
+                                       "," + wp2 + "," + waypoint(0, "37.78", "-122.40", "0", mavlink::kCmdNavLand))),
+      wkt_);
+  ASSERT_TRUE(away.ok()) << away.status().message();
+  ASSERT_EQ(away->points.size(), 3u);
+  EXPECT_NEAR(away->points[0].z(), 40.0, 1e-9);  // 30 m above a home at 10
+  ASSERT_EQ(away->notes.size(), 2u);
+  EXPECT_NE(away->notes[0].find("mission.items[0] (doJumpId 1), a takeoff 3340 m from the first waypoint"),
+            std::string::npos)
+      << away->notes[0];
+  EXPECT_NE(away->notes[1].find("mission.items[3] (doJumpId 1), a landing 1760 m from the last waypoint"),
+            std::string::npos)
+      << away->notes[1];
+  // on the spots: no leg, no note (visvol's own plans)
+  Result<PathFile> spot = read_path_file(
+      file_with("spot.plan", plan_text(waypoint(0, "37.79001", "-122.43", "50", mavlink::kCmdNavTakeoff) + "," + wp1 +
+                                       "," + wp2 + "," + waypoint(0, "37.78", "-122.42", "0", mavlink::kCmdNavLand))),
+      wkt_);
+  ASSERT_TRUE(spot.ok()) << spot.status().message();
+  EXPECT_EQ(spot->points.size(), 2u);
+  EXPECT_TRUE(spot->notes.empty());
+}
+
 // What a loiter item says of its circle, as MAVLink places it: turns or
 // seconds in param 1, the radius in param 3 (LOITER_TO_ALT: param 2),
 // negative counter-clockwise; one over the waypoint before it has no vertex
@@ -767,19 +799,10 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
       {"one.plan", plan_text(wp),
        "one.plan: 1 waypoints (waypoint or loiter items) in mission.items (of 1); a path needs at least 2"},
       // what is flown and not in the file: a spline's curve (judged as straight
-      // legs, it read as met 157 m off them), a climb-out or a landing away
-      // from the path, waypoints after the mission has ended or while it circles
+      // legs, it read as met 157 m off them), waypoints after the mission has
+      // ended or while it circles
       {"spline.plan", plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", 82) + "," + wp),
        "spline.plan: mission.items[1] (doJumpId 1): command 82 (a spline waypoint): the autopilot flies a curve"},
-      {"takeoff.plan",
-       plan_text(waypoint(0, "37.76", "-122.43", "60", mavlink::kCmdNavTakeoff) + "," + wp + "," +
-                 waypoint(0, "37.78", "-122.42", "60")),
-       "takeoff.plan: mission.items[0] (doJumpId 1): a takeoff 3340 m from the first waypoint: the leg between them "
-       "is flown and is not in the path read"},
-      {"landing.plan",
-       plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60") + "," +
-                 waypoint(0, "37.78", "-122.40", "0", mavlink::kCmdNavLand)),
-       "landing.plan: mission.items[2] (doJumpId 1): a landing 1760 m from the last waypoint"},
       {"land_first.plan",
        plan_text(waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch) + "," + wp + "," +
                  waypoint(0, "37.78", "-122.42", "60")),

@@ -271,12 +271,18 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   EXPECT_NE(up.out.find("clockwise at 600.0 m"), std::string::npos) << up.out;
   EXPECT_NE(up.out.find("max-climb 15.0 deg: worst 15.0 deg, holds on 1.000 of the length met"), std::string::npos)
       << up.out;
-  // a multirotor flies a loiter's turns of a radius as the circle (as
-  // ArduCopter does; it was read as a hover at the centre)
-  std::ofstream(plan) << mission_with(120.0).dump(2);
+  // ArduCopter flies a loiter's turns of a radius as the circle (it was read
+  // as a hover at the centre); PX4 holds position over the point
+  nlohmann::json copter = mission_with(120.0);
+  copter["mission"]["firmwareType"] = 3;  // MAV_AUTOPILOT_ARDUPILOTMEGA
+  std::ofstream(plan) << copter.dump(2);
   const Outcome rotor_turns = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor");
   EXPECT_NE(rotor_turns.out.find("loiter     mission.items[1] (doJumpId 2): 2.0 turns of 120 m"), std::string::npos)
       << rotor_turns.out << rotor_turns.err;
+  std::ofstream(plan) << mission_with(120.0).dump(2);
+  const Outcome px4_turns = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor");
+  EXPECT_NE(px4_turns.out.find("loiter     mission.items[1] (doJumpId 2): hovers at 400.0 m"), std::string::npos)
+      << px4_turns.out << px4_turns.err;
   // a multirotor hovers out a LOITER_TIME: its seconds count in the duration
   // and, where an observer sees the point, in the exposure (they did not)
   nlohmann::json timed = mission_with(0.0);

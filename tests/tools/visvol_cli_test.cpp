@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/scratch.hpp"
 #include "cli_runner.hpp"
 
 namespace {
@@ -412,9 +413,8 @@ namespace {
 // ignored with -o), and a bad --json-file is refused before the build, by
 // name (it was found only once the build had run).
 TEST(CliBuild, APackBuildsSummaryIsJsonWhenAsked) {
-  const std::string tag = std::to_string(getpid());
-  const std::string out = ::testing::TempDir() + "/cli_json_" + tag + ".vvp";
-  const std::string summary = ::testing::TempDir() + "/cli_json_" + tag + ".json";
+  const std::string out = visvol::test::scratch_path("cli_json_pack");
+  const std::string summary = visvol::test::scratch_path("cli_json_summary");
   const Outcome r = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + out + " --json --json-file " + summary);
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json printed = nlohmann::json::parse(r.out);
@@ -426,12 +426,17 @@ TEST(CliBuild, APackBuildsSummaryIsJsonWhenAsked) {
   std::remove(out.c_str());
   std::remove(summary.c_str());
 
-  const std::string never = ::testing::TempDir() + "/cli_json_never_" + tag + ".vvp";
+  const std::string never = visvol::test::scratch_path("cli_json_never");
   const Outcome bad =
       visvol("build " + kDem + " " + kSmallPackOptions + " -o " + never + " --json-file /nonexistent/dir/summary.json");
   EXPECT_EQ(bad.status, 2) << bad.err;
   EXPECT_NE(bad.err.find("--json-file"), std::string::npos) << bad.err;
   EXPECT_EQ(bad.err.find("building"), std::string::npos) << "refused before the build: " << bad.err;
+  EXPECT_NE(access(never.c_str(), F_OK), 0);
+  // the summary over the pack it describes: refused, by name
+  const Outcome over = visvol("build " + kDem + " " + kSmallPackOptions + " -o " + never + " --json-file " + never);
+  EXPECT_EQ(over.status, 2) << over.err;
+  EXPECT_NE(over.err.find("is the pack's -o"), std::string::npos) << over.err;
   EXPECT_NE(access(never.c_str(), F_OK), 0);
 }
 
@@ -443,9 +448,8 @@ namespace {
 // next read of a mapped page faults. One line and exit 1 ("Bus error",
 // status 135, before).
 TEST_F(Cli, APackCutShortWhileReadIsSaidNotACrash) {
-  const std::string tag = std::to_string(getpid());
-  const std::string live = ::testing::TempDir() + "/cli_live_" + tag + ".vvp";
-  const std::string err = ::testing::TempDir() + "/cli_live_" + tag + ".err";
+  const std::string live = visvol::test::scratch_path("cli_live_pack");
+  const std::string err = visvol::test::scratch_path("cli_live_err");
   ASSERT_EQ(std::system(("cp " + *pack_ + " " + live).c_str()), 0);
   const Outcome info = visvol("info " + live + " --json");
   ASSERT_EQ(info.status, 0) << info.err;
@@ -453,20 +457,26 @@ TEST_F(Cli, APackCutShortWhileReadIsSaidNotACrash) {
   const nlohmann::json& b = j["planning_bounds"];
   const double x = 0.5 * (b["xmin_m"].get<double>() + b["xmax_m"].get<double>());
   const double y = 0.5 * (b["ymin_m"].get<double>() + b["ymax_m"].get<double>());
-  FILE* sample = ::popen((std::string(VISVOL_BIN) + " sample " + live + " >/dev/null 2>" + err).c_str(), "w");
+  const std::string out = visvol::test::scratch_path("cli_live_out");
+  FILE* sample = ::popen((std::string(VISVOL_BIN) + " sample " + live + " >" + out + " 2>" + err).c_str(), "w");
   ASSERT_NE(sample, nullptr);
   std::fprintf(sample, "%.2f %.2f 300\n", x, y);
   std::fflush(sample);
-  ::usleep(500 * 1000);  // the first point read, the pack mapped
+  // the first point answered: the pack is open and mapped (30 s at most, a
+  // sanitizer build on a loaded machine)
+  for (int k = 0; k < 300 && slurp(out).find('\n') == std::string::npos; ++k) ::usleep(100 * 1000);
+  ASSERT_NE(slurp(out).find('\n'), std::string::npos) << slurp(err);
   ASSERT_EQ(::truncate(live.c_str(), 0), 0);
   std::fprintf(sample, "%.2f %.2f 200\n", x + 100, y - 100);
   const int status = ::pclose(sample);
   ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   EXPECT_EQ(WEXITSTATUS(status), 1);
-  EXPECT_NE(slurp(err).find("a pack was cut short or rewritten while this command read it"), std::string::npos)
+  EXPECT_NE(slurp(err).find("(a pack, or a DEM) was cut short or rewritten while this command read it"),
+            std::string::npos)
       << slurp(err);
   std::remove(live.c_str());
   std::remove(err.c_str());
+  std::remove(out.c_str());
 }
 
 }  // namespace

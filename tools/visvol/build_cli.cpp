@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "base/terminal_text.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/terrain_force.hpp"
 #include "io/json_text.hpp"
@@ -191,11 +192,11 @@ void print_pack_summary(const BuildOptions& o, const PreparedBuild& b, const sto
   const FieldParams& p = b.params;
   const fields::ImportReport& imported = b.imported;
   const fields::HeightRange hr = fields::height_range(hf);
-  std::printf("DEM        %s (%s, %d x %d)\n", o.dem.c_str(), imported.source.driver.c_str(), imported.source.nx,
-              imported.source.ny);
-  if (!imported.steps.empty()) std::printf("import     %s\n", imported.steps.c_str());
+  std::printf("DEM        %s (%s, %d x %d)\n", terminal_safe(o.dem).c_str(), imported.source.driver.c_str(),
+              imported.source.nx, imported.source.ny);
+  if (!imported.steps.empty()) std::printf("import     %s\n", terminal_safe(imported.steps).c_str());
   std::printf("terrain    %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx, hf.ny, hf.spacing_m,
-              fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
+              terminal_safe(fields::crs_name(hf.crs_wkt), 200).c_str(), hr.min_m, hr.max_m);
   std::printf("field      %d levels, range %s %d posts, eye %.2f m, curvature %.5f, %d exact rings\n", p.nz,
               fields::to_string(p.range_shape), p.range_posts, p.eye_height_m, p.curvature_coeff, p.exact_rings);
   std::printf("\nlevel  grid         spacing  range      F_p time  Mcells/s/core\n");

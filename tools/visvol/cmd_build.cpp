@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
+#include "base/terminal_text.hpp"
 #include "build_cli.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
@@ -83,9 +85,9 @@ void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams&
                 const std::vector<fields::BuildStats>& stats, double wall_s) {
   const fields::HeightRange hr = fields::height_range(hf);
   const fields::VolumeGeometry& g = levels[0].field.geometry;
-  std::printf("DEM        %s\n", o.dem.c_str());
+  std::printf("DEM        %s\n", terminal_safe(o.dem).c_str());
   std::printf("           %d x %d posts, %.2f m spacing, %s, heights %.1f..%.1f m\n", hf.nx, hf.ny, hf.spacing_m,
-              fields::crs_name(hf.crs_wkt).c_str(), hr.min_m, hr.max_m);
+              terminal_safe(fields::crs_name(hf.crs_wkt), 200).c_str(), hr.min_m, hr.max_m);
   std::printf("field      %d levels from %.1f m every %.2f m (top %.1f m), eye %.2f m,\n", g.nz, g.z0_m, g.dz_m,
               g.top_m(), p.eye_height_m);
   std::printf("           range %s %d posts, curvature %.5f, %d exact rings\n", fields::to_string(p.range_shape),
@@ -205,6 +207,15 @@ std::string pack_summary_json(const BuildOptions& o, const PreparedBuild& b, con
   return json_text(j, 2) + "\n";
 }
 
+// Do two output names name one file (the pack need not exist yet)? By their
+// folders as resolved and their last names.
+bool names_one_file(const std::string& a, const std::string& b) {
+  std::error_code ea, eb;
+  const std::filesystem::path pa = std::filesystem::weakly_canonical(std::filesystem::absolute(a, ea), ea);
+  const std::filesystem::path pb = std::filesystem::weakly_canonical(std::filesystem::absolute(b, eb), eb);
+  return !ea && !eb && pa == pb;
+}
+
 int run_pack_build(const BuildOptions& o, const PreparedBuild& b) {
   storage::PackBuildReport report;
   Progress progress("building " + o.out);
@@ -231,6 +242,10 @@ int run_build(const BuildOptions& o) {
   // a bad summary file costs nothing: refused before the build, by name
   if (!o.json_file.empty()) {
     if (Status s = check_output_path(o.json_file); !s.ok()) return fail("build", s.with_context("--json-file"));
+    // the summary written over the pack just built
+    if (!o.out.empty() && names_one_file(o.json_file, o.out)) {
+      return fail("build", invalid_argument("--json-file " + o.json_file + " is the pack's -o: name another file"));
+    }
   }
   Result<PreparedBuild> prepared = prepare_build(o);
   if (!prepared.ok()) return fail("build", prepared.status());

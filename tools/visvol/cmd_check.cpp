@@ -187,6 +187,7 @@ int run_check(const CheckOptions& o) {
   Result<rt::PathChecker> checker = rt::PathChecker::create(rt::level_terrain(p.levels.front()), &field, spec);
   if (!checker.ok()) return fail("check", checker.status());
   if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
+  notes.insert(notes.end(), file->notes.begin(), file->notes.end());
   for (const LoiterItem& a : file->approach) {
     // the path ends at the last waypoint: what is flown after it is the crew's to judge
     const std::string radius =

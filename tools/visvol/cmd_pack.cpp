@@ -176,13 +176,15 @@ int run_info(const InfoOptions& o) {
     std::printf("%s\n", json_text(j, 2).c_str());
     return kExitOk;
   }
-  std::printf("DEM        %s (%s)\n", o.path.c_str(), rep.source.driver.c_str());
+  // the DEM's own strings (its CRS's name, its unit) are input, shown escaped
+  std::printf("DEM        %s (%s)\n", terminal_safe(o.path).c_str(), rep.source.driver.c_str());
   std::printf("source     %d x %d, pixel %.6g x %.6g, %s, heights in %s%s\n", rep.source.nx, rep.source.ny, gt[1],
-              -gt[5], rep.source.crs_name.empty() ? "no CRS" : rep.source.crs_name.c_str(),
-              rep.source.vertical_unit.empty() ? "m" : rep.source.vertical_unit.c_str(),
+              -gt[5], rep.source.crs_name.empty() ? "no CRS" : terminal_safe(rep.source.crs_name, 200).c_str(),
+              rep.source.vertical_unit.empty() ? "m" : terminal_safe(rep.source.vertical_unit, 80).c_str(),
               rep.source.has_nodata ? (", nodata " + std::to_string(rep.source.nodata)).c_str() : "");
-  if (!rep.steps.empty()) std::printf("import     %s\n", rep.steps.c_str());
-  std::printf("terrain    %d x %d posts, %.2f m spacing, %s\n", hf->nx, hf->ny, hf->spacing_m, rep.output_crs.c_str());
+  if (!rep.steps.empty()) std::printf("import     %s\n", terminal_safe(rep.steps).c_str());
+  std::printf("terrain    %d x %d posts, %.2f m spacing, %s\n", hf->nx, hf->ny, hf->spacing_m,
+              terminal_safe(rep.output_crs, 200).c_str());
   std::printf("           post (0, 0) at (%.2f, %.2f), heights %.1f..%.1f m\n", hf->origin_x, hf->origin_y, hr.min_m,
               hr.max_m);
   return kExitOk;
@@ -253,6 +255,8 @@ int run_sample(const SampleOptions& o) {
       const fields::TffSample s = sampler.terrain_force(x, y, z);
       std::printf("%.3f %.3f %.3f %.3f\n", s.dx_m, s.dy_m, s.dz_m, s.signed_distance_m);
     }
+    // a line answered as it is asked, when a program feeds the points through a pipe
+    std::fflush(stdout);
   }
   return bad == 0 ? kExitOk : kExitUsage;
 }

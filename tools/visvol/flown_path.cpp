@@ -111,10 +111,13 @@ class Flight {
       return invalid_argument(l.item + ": altitude " + describe_number(l.altitude_m) + " m is beyond +-" +
                               describe_number(kMaxLoiterAltitudeM / 1000) + " km of the datum");
     }
-    // A multirotor hovers over a loiter's point, but for turns of a radius:
-    // ArduCopter flies those as the circle (checked as a hover at the
-    // centre, a 250 m circle 7 m over the ground read as met).
-    const bool circles = l.kind == LoiterKind::turns && std::fabs(l.radius_m) >= kSpotM;
+    // A multirotor hovers over a loiter's point, but ArduCopter flies turns
+    // of a radius as the circle (checked as a hover at the centre, a 250 m
+    // circle 7 m over the ground read as met); the autopilot is the
+    // mission's firmwareType, else the vehicle's.
+    const bool ardupilot = file_.firmware_type >= 0 ? file_.firmware_type == mavlink::kAutopilotArduPilotMega
+                                                    : e_.autopilot == rt::Autopilot::ardupilot;
+    const bool circles = ardupilot && l.kind == LoiterKind::turns && std::fabs(l.radius_m) >= kSpotM;
     if (e_.type == rt::VehicleType::multirotor && !circles) return hover(l, centre);
     const double radius_m = l.radius_m != 0 ? std::fabs(l.radius_m) : e_.min_turn_radius_m;
     if (radius_m < kSpotM) return turn_on_the_spot(l, centre, radius_m);

@@ -57,8 +57,8 @@ int main(int argc, char** argv) {
   // packs are read through memory maps: one cut short under a command faults
   // its next read (a "Bus error" before)
   visvol::install_mapped_read_fault_handler(
-      "visvol: a pack was cut short or rewritten while this command read it (copied over in place?); build or "
-      "copy a new pack beside it and rename it over the old one\n");
+      "visvol: a file read through memory (a pack, or a DEM) was cut short or rewritten while this command read it "
+      "(copied over in place?); write a new one beside it and rename it over the old one\n");
   CLI::App app{
       "visvol: visibility volumes above terrain (the field F_p of Srikanth et al., "
       "\"Visibility Volumes for Interactive Path Optimization\")"};

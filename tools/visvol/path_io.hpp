@@ -122,12 +122,16 @@ struct PathFile {
   std::vector<LoiterItem> loiters;
   // .plan: those approach loiters, which a check does not fly (it says so)
   std::vector<LoiterItem> approach;
+  // .plan: what the reader noticed of the mission that a check should say
+  // (a takeoff's leg added, a landing away from the path)
+  std::vector<std::string> notes;
   // .plan: per point, the seconds a waypoint's param 1 holds a multirotor
   // there (0 for a loiter's point); empty for the other formats
   std::vector<double> hold_s;
   // .plan: what the mission states of its vehicle (absent where it does not)
   std::optional<double> cruise_speed_m_per_s, hover_speed_m_per_s;
   int vehicle_type = -1;       // MAV_TYPE (1 fixed wing, 2 quadrotor...)
+  int firmware_type = -1;      // MAV_AUTOPILOT (3 ArduPilot, 12 PX4), -1 not given
   bool speed_changes = false;  // DO_CHANGE_SPEED items: the speed differs along the way
   // .plan with altitudes above home: the planned home (pack CRS, altitude
   // above mean sea level) they were lifted by

@@ -269,62 +269,47 @@ Result<LoiterItem> read_loiter(long long command, const nlohmann::json& params, 
   return l;
 }
 
-// The takeoff and landing items that give a position (not 0, 0 or null:
-// "where the aircraft is"), and where in the file.
-struct MissionEnds {
-  std::optional<Vec3> takeoff, landing;  // longitude, latitude (degrees), 0
-  std::string takeoff_where, landing_where;
-};
+bool is_takeoff(long long command) {
+  return command == mavlink::kCmdNavTakeoff || command == mavlink::kCmdNavVtolTakeoff || command == kTakeoffLocal;
+}
 
-Status remember_end(const nlohmann::json& item, long long command, const std::string& where, MissionEnds& ends) {
-  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) return Status::ok_status();
+// An end item's position, where it gives one: not 0, 0 or null ("where the
+// aircraft is"). Longitude, latitude in degrees.
+Result<std::optional<Vec3>> end_position(const nlohmann::json& item, const std::string& where) {
+  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7)
+    return std::optional<Vec3>();
   const nlohmann::json& lat = item["params"][4];
   const nlohmann::json& lon = item["params"][5];
-  if (!lat.is_number() || !lon.is_number()) return Status::ok_status();  // none given: where the aircraft is
+  if (!lat.is_number() || !lon.is_number()) return std::optional<Vec3>();
   const double la = lat.get<double>(), lo = lon.get<double>();
-  if (!std::isfinite(la) || !std::isfinite(lo) || (la == 0 && lo == 0)) return Status::ok_status();
+  if (!std::isfinite(la) || !std::isfinite(lo) || (la == 0 && lo == 0)) return std::optional<Vec3>();
   if (std::fabs(la) > 90 || std::fabs(lo) > 180) {
     return invalid_argument(where + "latitude " + shown(la, 6) + ", longitude " + shown(lo, 6) +
                             " is not a WGS84 position in degrees");
   }
-  const bool takeoff =
-      command == mavlink::kCmdNavTakeoff || command == mavlink::kCmdNavVtolTakeoff || command == kTakeoffLocal;
-  (takeoff ? ends.takeoff : ends.landing) = Vec3(lo, la, 0);
-  (takeoff ? ends.takeoff_where : ends.landing_where) = where;
-  return Status::ok_status();
+  return std::optional<Vec3>(Vec3(lo, la, 0));
 }
 
-// A takeoff or landing away from the path's first or last waypoint flies a
-// leg the path read does not hold (a 3.4 km climb-out at 25 m over the
-// ground read as met): refused, as an end between waypoints is. On the spot
-// (visvol's own plans: the same position), the climb and the descent are
-// the mission's ends, not its path.
-Status check_ends_at_the_path(const MissionEnds& ends, const std::vector<Vec3>& lon_lat) {
-  constexpr double kEndAwayM = 5.0, kMetresPerDegree = 111320.0, kRadPerDeg = 0.017453292519943295;
-  auto apart_m = [&](const Vec3& a, const Vec3& b) {
-    const double east = (a.x() - b.x()) * kMetresPerDegree * std::cos(0.5 * (a.y() + b.y()) * kRadPerDeg);
-    return std::hypot(east, (a.y() - b.y()) * kMetresPerDegree);
-  };
-  for (const auto& [end, where, vertex, name] :
-       {std::tuple{&ends.takeoff, &ends.takeoff_where, &lon_lat.front(), "first"},
-        std::tuple{&ends.landing, &ends.landing_where, &lon_lat.back(), "last"}}) {
-    if (!*end) continue;
-    const double d = apart_m(**end, *vertex);
-    if (d > kEndAwayM) {
-      return invalid_argument(*where + "a " + (end == &ends.takeoff ? "takeoff" : "landing") + " " + shown(d, 0) +
-                              " m from the " + name +
-                              " waypoint: the leg between them is flown and is not in the path read; put it "
-                              "over that waypoint, or add a waypoint where it is");
-    }
-  }
-  return Status::ok_status();
+// Metres between two longitude, latitude points a few kilometres apart at
+// most where it matters (equirectangular; longitudes across 180 wrapped).
+double apart_m(const Vec3& a, const Vec3& b) {
+  constexpr double kMetresPerDegree = 111320.0, kRadPerDeg = 0.017453292519943295;
+  double dlon = a.x() - b.x();
+  if (dlon > 180) dlon -= 360;
+  if (dlon < -180) dlon += 360;
+  const double east = dlon * kMetresPerDegree * std::cos(0.5 * (a.y() + b.y()) * kRadPerDeg);
+  return std::hypot(east, (a.y() - b.y()) * kMetresPerDegree);
 }
+
+// A takeoff or landing this near the first or last waypoint is on its spot:
+// the climb or descent there is the mission's end, not its path.
+constexpr double kEndOnTheSpotM = 5.0;
 
 }  // namespace
 
-// The waypoints of a QGroundControl .plan (waypoints, spline waypoints and
-// loiters, a loiter at its centre, or none over the waypoint before it) and
-// its loiters, to the pack's CRS.
+// The waypoints of a QGroundControl .plan (a takeoff's point away from the
+// first, waypoints and loiters, a loiter at its centre, or none over the
+// waypoint before it) and its loiters, to the pack's CRS.
 Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path, const std::string& crs_wkt) {
   const std::string file = path + ": ";
   if (!j["fileType"].is_string() || j["fileType"].get<std::string>() != "Plan") {
@@ -347,13 +332,24 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   std::optional<Vec3> home;         // longitude, latitude, altitude, once an item needs it
   std::string end_after_waypoints;  // an end item read after a waypoint (where, command), or empty
   std::string unlimited_loiter;     // where an unlimited loiter was read, or empty
-  MissionEnds ends;                 // the takeoff and landing positions given
+  // A takeoff with a position starts the path at its point and altitude (the
+  // leg to the first waypoint is flown: QGroundControl puts a multirotor's
+  // takeoff at home, a fixed-wing's ahead of it); on the first waypoint's
+  // spot it is dropped. Where it was read, while it waits for that waypoint.
+  std::string takeoff_where;
+  std::optional<Vec3> landing;  // the last landing's position, where it gives one
+  std::string landing_where;
   bool landing_after_waypoints = false;
   for (const auto& [key, speed] :
        {std::pair{"cruiseSpeed", &out.cruise_speed_m_per_s}, std::pair{"hoverSpeed", &out.hover_speed_m_per_s}}) {
     Result<std::optional<double>> read = read_speed(mission, key, file);
     if (!read.ok()) return read.status();
     *speed = *read;
+  }
+  long long firmware_type = 0;
+  if (mission.contains("firmwareType") && integer_of(mission["firmwareType"], firmware_type) && firmware_type >= 0 &&
+      firmware_type < 1000) {
+    out.firmware_type = static_cast<int>(firmware_type);
   }
   long long vehicle_type = 0;
   if (mission.contains("vehicleType") && integer_of(mission["vehicleType"], vehicle_type) && vehicle_type >= 0 &&
@@ -418,9 +414,18 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               " (a landing or return to launch) comes before the first waypoint: the mission ends "
                               "there, and the waypoints after it are never flown");
     }
-    if (role == ItemRole::end) VISVOL_RETURN_IF_ERROR(remember_end(item, command, where, ends));
+    bool takeoff_point = false;
+    if (role == ItemRole::end) {
+      Result<std::optional<Vec3>> at = end_position(item, where);
+      if (!at.ok()) return at.status();
+      takeoff_point = is_takeoff(command) && out.points.empty() && at->has_value();
+      if (!is_takeoff(command) && at->has_value()) {
+        landing = **at;
+        landing_where = where;
+      }
+    }
     if (command == kCmdDoChangeSpeed) out.speed_changes = true;
-    if (role != ItemRole::vertex) continue;  // takeoff, landing, DO_...: not the path
+    if (role != ItemRole::vertex && !takeoff_point) continue;  // landing, DO_...: not the path
     if (!unlimited_loiter.empty()) {
       return invalid_argument(unlimited_loiter +
                               "command 17 (an unlimited loiter) comes before this waypoint: the aircraft circles "
@@ -474,7 +479,27 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               ") is not supported; visvol reads waypoints in frame 0 (MAV_FRAME_GLOBAL, above mean "
                               "sea level) or 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, above the planned home)");
     }
-    const bool loiter = command != mavlink::kCmdNavWaypoint && command != mavlink::kCmdNavSplineWaypoint;
+    if (takeoff_point) {
+      out.points.push_back({lon, lat, altitude_m});
+      out.hold_s.push_back(0.0);
+      takeoff_where = where;
+      continue;
+    }
+    // the first waypoint: a takeoff on its spot is the mission's end, not a leg
+    if (!takeoff_where.empty()) {
+      const double d = apart_m(out.points.back(), Vec3(lon, lat, 0));
+      if (d <= kEndOnTheSpotM) {
+        out.points.pop_back();
+        out.hold_s.pop_back();
+      } else {
+        out.notes.push_back(takeoff_where.substr(file.size(), takeoff_where.size() - file.size() - 2) + ", a takeoff " +
+                            shown(d, 0) +
+                            " m from the first waypoint: the leg from its point, at its altitude, is checked as "
+                            "the path's first; the climb from the ground is not");
+      }
+      takeoff_where.clear();
+    }
+    const bool loiter = command != mavlink::kCmdNavWaypoint;
     if (loiter) {
       Result<LoiterItem> l = read_loiter(command, params, where);
       if (!l.ok()) return l.status();
@@ -508,7 +533,13 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       out.loiters.pop_back();
     }
   }
-  if (out.points.size() >= 2) VISVOL_RETURN_IF_ERROR(check_ends_at_the_path(ends, out.points));
+  // a landing away from the last waypoint flies its approach after the path
+  if (landing && !out.points.empty() && apart_m(*landing, out.points.back()) > kEndOnTheSpotM) {
+    out.notes.push_back(landing_where.substr(file.size(), landing_where.size() - file.size() - 2) + ", a landing " +
+                        shown(apart_m(*landing, out.points.back()), 0) +
+                        " m from the last waypoint: its approach and touchdown are flown after the path and are "
+                        "not checked here");
+  }
   if (out.points.size() < 2) {
     return invalid_argument(file + std::to_string(out.points.size()) +
                             " waypoints (waypoint or loiter items) in mission.items (of " +

@@ -33,7 +33,6 @@
 #include <string_view>
 #include <vector>
 
-#include "base/tolerances.hpp"
 #include "drivers/dds/command_processor.hpp"
 
 namespace {
@@ -195,8 +194,9 @@ bool constraints_allowed(const visvol_msgs_msg_dds__Command_& msg) {
     if (h.kind != 1) continue;
     for (std::uint32_t j = 0; j < n; ++j) {
       const auto& v = msg.constraints._buffer[j];
-      if (v.kind == 2 && visvol::same_point(h.position_m.x, h.position_m.y, h.position_m.z, v.position_m.x,
-                                            v.position_m.y, v.position_m.z)) {
+      // the rule written out again, not the codec's function: an oracle of its own
+      if (v.kind == 2 && std::hypot(v.position_m.x - h.position_m.x, v.position_m.y - h.position_m.y,
+                                    v.position_m.z - h.position_m.z) < 0.01) {
         return false;
       }
     }

@@ -575,6 +575,12 @@ TEST(PlanRanking, TheEnvelopeComesBeforeTheObserversAndBothBeforeFc) {
     EXPECT_TRUE(detail::better(feasible, exposed, o));
     EXPECT_FALSE(detail::better(exposed, feasible, o));
   }
+  // a limit broken only where a probe found it (its fraction a rounding
+  // under 1) counts as the least unmet share, and ranks behind a flyable path
+  PathCheck grazing;
+  grazing.violation = grazing.flight_violation = PathCheck::kMinUnmetShare;
+  EXPECT_TRUE(detail::better(exposed, grazing, Objective::hide));
+  EXPECT_FALSE(detail::better(grazing, exposed, Objective::hide));
   // the same flight violation: the observers' shares decide, then F_c
   PathCheck less = exposed;
   less.violation = 2.0;

@@ -70,23 +70,45 @@ constexpr std::size_t kMaxConfigBytes = 1 << 20;
 // is one: hidden-from = [[x, y, z], ...] is two).
 constexpr int kMaxConfigNesting = 8;
 
-// A section header's name as TOML compares it: [ session ], ["session"]
-// and [session] are one.
+// A section header's name as TOML compares it: [ session ], ["session"],
+// [[session]] (which CLI11 reads as the same) and [session] are one.
 std::string section_name(const std::string& header) {
   std::string name;
   for (const char c : header) {
-    if (c != ' ' && c != '\t' && c != '"' && c != '\'') name += c;
+    if (c != ' ' && c != '\t' && c != '"' && c != '\'' && c != '[' && c != ']') name += c;
   }
   return name;
 }
 
-// What CLI11's reader does not refuse itself, refused before it reads: a file
-// over kMaxConfigBytes, arrays nested deeper than kMaxConfigNesting (100,000
-// levels overflowed its recursion: a segmentation fault), and a section
-// defined twice (TOML forbids it; the second [session] was silently
-// ignored). Brackets count inside a value that starts as an array only (not
-// in strings, their escapes, comments or an unquoted value such as
-// out = /data/run[1/). Returns the text.
+// A key as the option it names: quotes and blanks gone, and a dotted key
+// (session.seconds at the top level) by its last part.
+std::string key_name(const std::string& key) {
+  std::string name;
+  for (const char c : key) {
+    if (c == '.') {
+      name.clear();
+    } else if (c != ' ' && c != '\t' && c != '"' && c != '\'') {
+      name += c;
+    }
+  }
+  return name;
+}
+
+[[noreturn]] void config_refused(int line_no, const std::string& what) {
+  throw CLI::ConfigError("line " + std::to_string(line_no) + ": " + what);
+}
+
+// What CLI11's reader (2.1) would get wrong, made plain or refused before it
+// reads; returns the text it then reads.
+// - Refused: a file over kMaxConfigBytes; brackets nested deeper than
+//   kMaxConfigNesting in a value that is an array, strings inside it
+//   included (CLI11 unquotes "[[[...]]]" and reads it as arrays: 100,000
+//   levels overflowed its recursion, a segmentation fault); a section or a
+//   key given twice (TOML forbids it; CLI11 kept one silently); [default]
+//   (CLI11's name for the top level); an unclosed or a multi-line string.
+// - Made plain: comments and carriage returns removed, an array over several
+//   lines joined onto its key's line (CLI11 read "[rope] # note" as a key,
+//   and an array opened alone on its line as a section).
 std::string prechecked_config(std::istream& input) {
   std::string text;
   char chunk[4096];
@@ -98,66 +120,106 @@ std::string prechecked_config(std::istream& input) {
     }
   }
   std::vector<std::string> sections;
-  int depth = 0, line_no = 1;
-  char quote = 0;           // the string being read: '"' or '\'', or none
-  bool comment = false;     // to the end of the line
-  bool line_start = true;   // nothing but blanks on the line so far
-  bool value_next = false;  // after '=': the value's first character decides
-  for (std::size_t n = 0; n < text.size(); ++n) {
-    const char c = text[n];
-    if (c == '\n') {
-      ++line_no;
-      comment = false;
-      line_start = true;
-      value_next = false;
-      if (quote == '\'') quote = 0;  // (single-line strings end with their line)
-      if (quote == '"') quote = 0;
-      continue;
+  std::vector<std::pair<std::string, int>> keys;  // option names given, and their lines
+  std::string out, pending;                       // the text for CLI11; a line an array still continues
+  int depth = 0, pending_line = 0;
+  std::size_t begin = 0;
+  for (int line_no = 1; begin <= text.size(); ++line_no) {
+    const std::size_t eol = std::min(text.find('\n', begin), text.size());
+    const std::string raw = text.substr(begin, eol - begin);
+    begin = eol + 1;
+    if (raw.find("\"\"\"") != std::string::npos || raw.find("'''") != std::string::npos) {
+      config_refused(line_no, "multi-line strings are not read; write the value on one line");
     }
-    if (comment) continue;
-    if (quote != 0) {
-      if (quote == '"' && c == '\\') {
-        ++n;  // an escape: the next character is the string's
-      } else if (c == quote) {
-        quote = 0;
+    // the line without its comment and carriage returns; strings kept whole
+    std::string line;
+    char quote = 0;
+    bool counting = depth > 0;  // brackets count inside an array's value
+    bool value_next = false;
+    for (std::size_t n = 0; n < raw.size(); ++n) {
+      const char c = raw[n];
+      if (c == '\r') continue;
+      if (quote != 0) {
+        line += c;
+        if (quote == '"' && c == '\\' && n + 1 < raw.size()) {
+          line += raw[++n];
+        } else if (c == quote) {
+          quote = 0;
+        } else if (counting && (c == '[' || c == ']')) {
+          depth += c == '[' ? 1 : -1;
+        }
+      } else if (c == '#') {
+        break;
+      } else {
+        line += c;
+        if (c == '"' || c == '\'') {
+          quote = c;
+          // a quoted value that CLI11 unquotes and reads as an array
+          if (value_next && n + 1 < raw.size() && raw[n + 1] == '[') counting = true;
+          value_next = false;
+        } else if (c == '=' && depth == 0 && !counting) {
+          value_next = true;
+        } else if (c == '[' && (counting || value_next)) {
+          counting = true;
+          ++depth;
+        } else if (c == ']' && counting) {
+          --depth;
+        } else if (c != ' ' && c != '\t') {
+          value_next = false;
+        }
+      }
+      if (depth > kMaxConfigNesting) {
+        config_refused(line_no, "brackets nested deeper than " + std::to_string(kMaxConfigNesting) +
+                                    " in a value (an array, or a string CLI11 reads as one)");
+      }
+      depth = std::max(depth, 0);
+    }
+    if (quote != 0) config_refused(line_no, "a string is not closed on its line");
+    if (!pending.empty()) {  // an array's next line
+      pending += " " + line;
+      if (depth == 0) {
+        out += pending + "\n";
+        pending.clear();
       }
       continue;
     }
-    if (c == ' ' || c == '\t' || c == '\r') continue;
-    const bool first_on_line = line_start;
-    line_start = false;
-    if (c == '#') {
-      comment = true;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-      value_next = false;
-    } else if (c == '[' && depth == 0 && first_on_line) {
-      // a section's header: [name], or [[name]] (refused by name later)
-      const std::size_t close = text.find(']', n);
-      const std::size_t eol = std::min(text.find('\n', n), text.size());
-      const std::string header = text.substr(n, (close < eol ? close + 1 : eol) - n);
-      const std::string name = section_name(header);
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos) {
+      out += "\n";
+      continue;
+    }
+    if (line[first] == '[' && !counting) {
+      const std::string name = section_name(line);
+      if (name == "default" || name == "DEFAULT") {
+        config_refused(line_no, "unknown section [" + name + "] (the sections are " + section_names() + ")");
+      }
       if (std::find(sections.begin(), sections.end(), name) != sections.end()) {
-        throw CLI::ConfigError("line " + std::to_string(line_no) + ": section " + terminal_safe(name, 80) +
-                               " is defined twice (a section is one table)");
+        config_refused(line_no, "section [" + terminal_safe(name, 80) + "] is defined twice (a section is one table)");
       }
       sections.push_back(name);
-      n = eol - 1;  // the rest of the line is the header's
-    } else if (c == '=' && depth == 0) {
-      value_next = true;
-    } else if (c == '[' && (depth > 0 || value_next)) {
-      value_next = false;
-      if (++depth > kMaxConfigNesting) {
-        throw CLI::ConfigError("line " + std::to_string(line_no) + ": arrays nested deeper than " +
-                               std::to_string(kMaxConfigNesting));
+      out += "[" + name + "]\n";
+      continue;
+    }
+    const std::size_t equals = line.find('=');
+    if (equals != std::string::npos) {
+      const std::string key = key_name(line.substr(0, equals));
+      for (const auto& [seen, at] : keys) {
+        if (seen == key) {
+          config_refused(line_no, "key '" + terminal_safe(key, 80) + "' is given twice (lines " + std::to_string(at) +
+                                      " and " + std::to_string(line_no) + ")");
+        }
       }
-    } else if (c == ']' && depth > 0) {
-      --depth;
+      keys.emplace_back(key, line_no);
+    }
+    if (depth > 0) {
+      pending = line;
+      pending_line = line_no;
     } else {
-      value_next = false;
+      out += line + "\n";
     }
   }
-  return text;
+  if (!pending.empty()) config_refused(pending_line, "an array is not closed");
+  return out;
 }
 
 // TOML (or INI) as CLI11 reads it, with the sections above: a key in its own

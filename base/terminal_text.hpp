@@ -11,31 +11,42 @@
 namespace visvol {
 
 // `text` with every control character shown as \xNN: C0 (but the newline, so
-// that messages keep their lines), DEL, and C1 as UTF-8 writes it (0xC2
-// 0x80..0x9F; a terminal reads U+009B as CSI). Other bytes, UTF-8 included,
-// stay. Longer than `max_bytes`: cut there, with the length said.
+// that messages keep their lines), DEL, C1 as UTF-8 writes it (0xC2
+// 0x80..0x9F; a terminal reads U+009B as CSI) and any byte that is not part
+// of a whole UTF-8 character (a lone 0x9B is CSI to an 8-bit terminal).
+// Other characters stay. Longer than `max_bytes`: cut there, with the length
+// said.
 inline std::string terminal_safe(std::string_view text, std::size_t max_bytes = 4096) {
   std::string out;
   std::size_t n = text.size() > max_bytes ? max_bytes : text.size();
   // cut between characters: not inside a UTF-8 sequence
   while (n > 0 && n < text.size() && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;
   out.reserve(n + 16);
-  auto hex = [&](unsigned char c) {
+  auto hex = [&](unsigned c) {
     char code[8];
-    std::snprintf(code, sizeof code, "\\x%02X", static_cast<unsigned>(c));
+    std::snprintf(code, sizeof code, "\\x%02X", c);
     out += code;
   };
+  auto at = [&](std::size_t i) { return i < text.size() ? static_cast<unsigned char>(text[i]) : 0u; };
   for (std::size_t i = 0; i < n; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    const bool c1 = c == 0xC2 && i + 1 < text.size() && static_cast<unsigned char>(text[i + 1]) >= 0x80 &&
-                    static_cast<unsigned char>(text[i + 1]) <= 0x9F;
-    if (c1) {
-      hex(c);
-      hex(static_cast<unsigned char>(text[++i]));
+    const unsigned c = at(i);
+    // a UTF-8 character's length from its first byte (0: not a first byte,
+    // a byte an 8-bit terminal may read as C1, 0x9B its CSI)
+    const std::size_t length = c < 0x80                 ? 1
+                               : c >= 0xC2 && c <= 0xDF ? 2
+                               : c >= 0xE0 && c <= 0xEF ? 3
+                               : c >= 0xF0 && c <= 0xF4 ? 4
+                                                        : 0;
+    bool whole = length > 0 && i + length <= text.size();
+    for (std::size_t k = 1; whole && k < length; ++k) whole = (at(i + k) & 0xC0) == 0x80;
+    const bool c1 = c == 0xC2 && whole && at(i + 1) <= 0x9F;  // U+0080..U+009F
+    if (!whole || c1) {
+      hex(c);  // (a C1 character's second byte follows as a byte of no character)
     } else if ((c < 0x20 && c != '\n') || c == 0x7F) {
       hex(c);
     } else {
-      out += static_cast<char>(c);
+      out.append(text.substr(i, length));
+      i += length - 1;
     }
   }
   if (text.size() > n) out += "... (" + std::to_string(text.size()) + " bytes)";

@@ -132,7 +132,7 @@ Status check_height_tile(const LevelEntry& level, const TileEntry& tile, const s
 
 Status check_area_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,
                        const std::string& path) {
-  // sqrt(1 + Tx^2 + Ty^2): 1 or more (the slack, a rounding), and no more
+  // sqrt(1 + Tx^2 + Ty^2): 1 or more (in float too), and no more
   // than the steepest slope the level's heights allow (their whole span, one
   // level either side, between neighbouring posts, on both axes)
   const double steepest = (level.nz + 1) * level.dz_m / level.spacing_m;
@@ -141,7 +141,7 @@ Status check_area_tile(const LevelEntry& level, const TileEntry& tile, const std
     float a;
     std::memcpy(&a, data + (static_cast<std::size_t>(y) * kTile2dPosts + static_cast<std::size_t>(x)) * sizeof a,
                 sizeof a);
-    if (std::isfinite(a) && a >= 0.9999f && a <= highest) return Status::ok_status();
+    if (std::isfinite(a) && a >= 1.0f && a <= highest) return Status::ok_status();
     const int i = tile.tx * kTile2dPosts + x, j = tile.ty * kTile2dPosts + y;
     return corrupt(path + ": area tile (" + std::to_string(tile.tx) + ", " + std::to_string(tile.ty) + ") of level " +
                    std::to_string(tile.level) + ": post (" + std::to_string(i) + ", " + std::to_string(j) +

@@ -213,7 +213,20 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       {"segments = 1\n", "--segments: 1 must be in 2.."},
       // 100,000 nested arrays overflowed CLI11's reader (a segmentation
       // fault); a second [session] was silently ignored
-      {"[rope]\nfrom = " + std::string(100000, '[') + std::string(100000, ']') + "\n", "arrays nested deeper than 8"},
+      {"[rope]\nfrom = " + std::string(100000, '[') + std::string(100000, ']') + "\n", "brackets nested deeper than 8"},
+      // the same in quotes, which CLI11 takes off and then reads as arrays
+      {"[rope]\nfrom = \"" + std::string(100000, '[') + std::string(100000, ']') + "\"\n",
+       "brackets nested deeper than 8"},
+      // a section or a key given twice in disguise; CLI11's name for the top level
+      {"[session]\nseconds = 0.3\n[[session]]\nseconds = 100\n", "section [session] is defined twice"},
+      {"[session]\nseconds = 0.3\nquiet = true\nseconds = 100\n", "key 'seconds' is given twice (lines 4 and 6)"},
+      {"session.seconds = 100\n[session]\nseconds = 0.3\n", "key 'seconds' is given twice"},
+      {"[default]\nseconds = 1\n", "unknown section [default]"},
+      {"namespace = \"abc\n", "a string is not closed on its line"},
+      // what CLI11 misread, made plain: a comment after a header, CRLF, an
+      // array opened alone on its line (the values then checked as usual)
+      {"[rope] # the rope's options\r\nsegments = 1\r\n", "--segments: 1 must be in 2.."},
+      {"[observers]\nhidden-from = [\n  1, 2,  # x, y\n  nan\n]\n", "--hidden-from"},
       {"[session]\nseconds = 0.3\n[session]\nseconds = 100\n", "section [session] is defined twice"},
       {"[session]\nseconds = 0.3\n[ \"session\" ]\nseconds = 100\n", "section [session] is defined twice"},
       // brackets in strings, their escapes and comments are no arrays: the

@@ -14,6 +14,11 @@ TEST(TerminalText, ControlCharactersAreShownNotSent) {
   EXPECT_EQ(terminal_safe("c1\xc2\x9b"
                           "31m"),
             "c1\\xC2\\x9B31m");
+  // a lone byte of no character: 0x9B is CSI to an 8-bit terminal
+  EXPECT_EQ(terminal_safe("lone\x9b"
+                          "31m"),
+            "lone\\x9B31m");
+  EXPECT_EQ(terminal_safe("cut\xc3"), "cut\\xC3");
 }
 
 TEST(TerminalText, LinesAndOtherUtf8Stay) {

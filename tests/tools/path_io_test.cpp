@@ -603,6 +603,19 @@ TEST_F(PathIo, PlanTakeoffAwayStartsThePathALandingAwayIsNoted) {
   EXPECT_NE(away->notes[1].find("mission.items[3] (doJumpId 1), a landing 1760 m from the last waypoint"),
             std::string::npos)
       << away->notes[1];
+  // a takeoff "where the aircraft is" (0, 0: Mission Planner's way) is at
+  // the planned home, as one at home's position; a return to launch is noted
+  Result<PathFile> from_home = read_path_file(
+      file_with("home.plan", plan_text(waypoint(3, "0", "0", "30", mavlink::kCmdNavTakeoff) + "," + wp1 + "," + wp2 +
+                                           "," + waypoint(0, "0", "0", "0", mavlink::kCmdNavReturnToLaunch),
+                                       "[37.76, -122.43, 10.0]")),
+      wkt_);
+  ASSERT_TRUE(from_home.ok()) << from_home.status().message();
+  ASSERT_EQ(from_home->points.size(), 3u);
+  EXPECT_NEAR(from_home->points[0].z(), 40.0, 1e-9);
+  ASSERT_EQ(from_home->notes.size(), 2u);
+  EXPECT_NE(from_home->notes[0].find("a takeoff 3340 m from the first waypoint"), std::string::npos);
+  EXPECT_NE(from_home->notes[1].find("a return to launch: the way home"), std::string::npos) << from_home->notes[1];
   // on the spots: no leg, no note (visvol's own plans)
   Result<PathFile> spot = read_path_file(
       file_with("spot.plan", plan_text(waypoint(0, "37.79001", "-122.43", "50", mavlink::kCmdNavTakeoff) + "," + wp1 +
@@ -808,6 +821,17 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
                  waypoint(0, "37.78", "-122.42", "60")),
        "land_first.plan: mission.items[0] (doJumpId 1): command 20 (a landing or return to launch) comes before the "
        "first waypoint: the mission ends there"},
+      // a landing's or takeoff's numbers are read as a waypoint's (a string
+      // latitude, 1e308 m, frame 99 were left unread)
+      {"land_lat.plan", plan_text(wp + "," + wp + "," + waypoint(0, R"("37.78")", "-122.42", "0", 21)),
+       "land_lat.plan: mission.items[2] (doJumpId 1): params[4] (latitude) \"37.78\" is not a number (or null)"},
+      {"land_alt.plan", plan_text(wp + "," + wp + "," + waypoint(0, "37.78", "-122.42", "1e308", 21)),
+       "land_alt.plan: mission.items[2] (doJumpId 1): params[6] (altitude)"},
+      {"land_frame.plan", plan_text(wp + "," + wp + "," + waypoint(99, "37.78", "-122.42", "0", 21)),
+       "land_frame.plan: mission.items[2] (doJumpId 1): frame 99"},
+      {"takeoff_params.plan",
+       plan_text(R"({"type":"SimpleItem","command":22,"frame":0,"params":{"lat":1}},)" + wp + "," + wp),
+       "takeoff_params.plan: mission.items[0]: params is missing or not an array of 7"},
       {"unlimited.plan",
        plan_text(wp + "," + waypoint(0, "37.78", "-122.42", "60", mavlink::kCmdNavLoiterUnlim) + "," +
                  waypoint(0, "37.77", "-122.41", "60")),

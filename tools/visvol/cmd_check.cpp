@@ -188,6 +188,15 @@ int run_check(const CheckOptions& o) {
   if (!checker.ok()) return fail("check", checker.status());
   if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
   notes.insert(notes.end(), file->notes.begin(), file->notes.end());
+  // the mission's firmware decides how a multirotor flies its loiters
+  const bool file_ardupilot = file->firmware_type == mavlink::kAutopilotArduPilotMega;
+  const bool file_px4 = file->firmware_type == mavlink::kAutopilotPx4;
+  if ((file_ardupilot && envelope->autopilot != rt::Autopilot::ardupilot) ||
+      (file_px4 && envelope->autopilot != rt::Autopilot::px4)) {
+    notes.push_back(std::string("the mission's firmwareType is ") + (file_ardupilot ? "ArduPilot" : "PX4") +
+                    ", the vehicle's autopilot " + rt::to_string(envelope->autopilot) +
+                    ": its loiters are flown as the mission's firmware flies them");
+  }
   for (const LoiterItem& a : file->approach) {
     // the path ends at the last waypoint: what is flown after it is the crew's to judge
     const std::string radius =

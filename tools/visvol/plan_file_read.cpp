@@ -269,6 +269,9 @@ Result<LoiterItem> read_loiter(long long command, const nlohmann::json& params, 
   return l;
 }
 
+// Beyond this, a takeoff's or landing's number is no height or degree.
+constexpr double kMaxEndAltitudeM = 1e5;
+
 bool is_takeoff(long long command) {
   return command == mavlink::kCmdNavTakeoff || command == mavlink::kCmdNavVtolTakeoff || command == kTakeoffLocal;
 }
@@ -276,16 +279,40 @@ bool is_takeoff(long long command) {
 // An end item's position, where it gives one: not 0, 0 or null ("where the
 // aircraft is"). Longitude, latitude in degrees.
 Result<std::optional<Vec3>> end_position(const nlohmann::json& item, const std::string& where) {
-  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7)
-    return std::optional<Vec3>();
-  const nlohmann::json& lat = item["params"][4];
-  const nlohmann::json& lon = item["params"][5];
-  if (!lat.is_number() || !lon.is_number()) return std::optional<Vec3>();
+  // checked as a waypoint's are: a landing's or takeoff's numbers that mean
+  // nothing were left unread (a string latitude, altitude 1e308, frame 99)
+  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
+    return invalid_argument(where + "params is missing or not an array of 7");
+  }
+  const nlohmann::json& params = item["params"];
+  static constexpr std::array<const char*, 3> kNames = {"latitude", "longitude", "altitude"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const nlohmann::json& p = params[4 + k];
+    if (p.is_null()) continue;
+    if (!p.is_number() || !std::isfinite(p.get<double>()) || std::fabs(p.get<double>()) > kMaxEndAltitudeM) {
+      return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kNames[k] + ") " + json_brief(p) +
+                              " is not a number (or null)");
+    }
+  }
+  long long frame = 0;
+  if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
+    return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
+                            " is not an integer");
+  }
+  const nlohmann::json& lat = params[4];
+  const nlohmann::json& lon = params[5];
+  if (lat.is_null() || lon.is_null()) return std::optional<Vec3>();  // where the aircraft is
   const double la = lat.get<double>(), lo = lon.get<double>();
-  if (!std::isfinite(la) || !std::isfinite(lo) || (la == 0 && lo == 0)) return std::optional<Vec3>();
+  if (la == 0 && lo == 0) return std::optional<Vec3>();
   if (std::fabs(la) > 90 || std::fabs(lo) > 180) {
     return invalid_argument(where + "latitude " + shown(la, 6) + ", longitude " + shown(lo, 6) +
                             " is not a WGS84 position in degrees");
+  }
+  if (frame != mavlink::kFrameGlobal && frame != mavlink::kFrameGlobalInt &&
+      frame != mavlink::kFrameGlobalRelativeAlt && frame != mavlink::kFrameGlobalRelativeAltInt) {
+    return invalid_argument(where + "frame " + std::to_string(frame) + " (" +
+                            frame_name(frame >= 0 && frame < 64 ? static_cast<int>(frame) : -1) +
+                            ") is not supported for a position; frame 0 or 3");
   }
   return std::optional<Vec3>(Vec3(lo, la, 0));
 }
@@ -339,6 +366,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   std::string takeoff_where;
   std::optional<Vec3> landing;  // the last landing's position, where it gives one
   std::string landing_where;
+  std::string return_where;  // a return to launch after the waypoints
   bool landing_after_waypoints = false;
   for (const auto& [key, speed] :
        {std::pair{"cruiseSpeed", &out.cruise_speed_m_per_s}, std::pair{"hoverSpeed", &out.hover_speed_m_per_s}}) {
@@ -415,14 +443,20 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               "there, and the waypoints after it are never flown");
     }
     bool takeoff_point = false;
+    std::optional<Vec3> takeoff_home;  // a takeoff "where the aircraft is": the planned home, if known
     if (role == ItemRole::end) {
       Result<std::optional<Vec3>> at = end_position(item, where);
       if (!at.ok()) return at.status();
-      takeoff_point = is_takeoff(command) && out.points.empty() && at->has_value();
+      if (is_takeoff(command) && out.points.empty() && !at->has_value() && item["params"][6].is_number()) {
+        Vec3 planned;
+        if (read_home(mission, where, planned).ok()) takeoff_home = planned;
+      }
+      takeoff_point = is_takeoff(command) && out.points.empty() && (at->has_value() || takeoff_home);
       if (!is_takeoff(command) && at->has_value()) {
         landing = **at;
         landing_where = where;
       }
+      if (command == mavlink::kCmdNavReturnToLaunch && !out.points.empty()) return_where = where;
     }
     if (command == kCmdDoChangeSpeed) out.speed_changes = true;
     if (role != ItemRole::vertex && !takeoff_point) continue;  // landing, DO_...: not the path
@@ -445,7 +479,13 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
       return invalid_argument(where + "params is missing or not an array of 7");
     }
-    const nlohmann::json& params = item["params"];
+    nlohmann::json at_home;  // a takeoff from where the aircraft is: at the planned home
+    if (takeoff_home) {
+      at_home = item["params"];
+      at_home[4] = takeoff_home->y();
+      at_home[5] = takeoff_home->x();
+    }
+    const nlohmann::json& params = takeoff_home ? at_home : item["params"];
     static constexpr std::array<const char*, 3> kNames = {"latitude", "longitude", "altitude"};
     double v[3] = {0, 0, 0};
     for (std::size_t k = 0; k < 3; ++k) {
@@ -532,6 +572,11 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       out.approach.insert(out.approach.begin(), out.loiters.back());
       out.loiters.pop_back();
     }
+  }
+  if (!return_where.empty()) {
+    out.notes.push_back(return_where.substr(file.size(), return_where.size() - file.size() - 2) +
+                        ", a return to launch: the way home from the last waypoint is flown after the path and is "
+                        "not checked here");
   }
   // a landing away from the last waypoint flies its approach after the path
   if (landing && !out.points.empty() && apart_m(*landing, out.points.back()) > kEndOnTheSpotM) {

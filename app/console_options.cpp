@@ -101,11 +101,13 @@ std::string key_name(const std::string& key) {
 // What CLI11's reader (2.1) would get wrong, made plain or refused before it
 // reads; returns the text it then reads.
 // - Refused: a file over kMaxConfigBytes; brackets nested deeper than
-//   kMaxConfigNesting in a value that is an array, strings inside it
-//   included (CLI11 unquotes "[[[...]]]" and reads it as arrays: 100,000
-//   levels overflowed its recursion, a segmentation fault); a section or a
-//   key given twice (TOML forbids it; CLI11 kept one silently); [default]
-//   (CLI11's name for the top level); an unclosed or a multi-line string.
+//   kMaxConfigNesting anywhere in a value, strings included (CLI11 unquotes
+//   and splits a value on commas and blanks, and reads every piece shaped
+//   [...] as arrays: 100,000 levels overflowed its recursion, a segmentation
+//   fault); a section or a key given twice (TOML forbids it; CLI11 kept one
+//   silently), [default] (CLI11's name for the top level) and [[tables]];
+//   an unclosed or a multi-line string; '#' or '\' in a string (CLI11 cuts a
+//   value at '#' and reads no escapes).
 // - Made plain: comments and carriage returns removed, an array over several
 //   lines joined onto its key's line (CLI11 read "[rope] # note" as a key,
 //   and an array opened alone on its line as a section).
@@ -122,59 +124,59 @@ std::string prechecked_config(std::istream& input) {
   std::vector<std::string> sections;
   std::vector<std::pair<std::string, int>> keys;  // option names given, and their lines
   std::string out, pending;                       // the text for CLI11; a line an array still continues
-  int depth = 0, pending_line = 0;
+  int depth = 0;                                  // unquoted brackets open: the array goes on
+  int nest = 0;                                   // every bracket open in the value, quoted ones too
+  int pending_line = 0;
   std::size_t begin = 0;
   for (int line_no = 1; begin <= text.size(); ++line_no) {
     const std::size_t eol = std::min(text.find('\n', begin), text.size());
     const std::string raw = text.substr(begin, eol - begin);
     begin = eol + 1;
-    if (raw.find("\"\"\"") != std::string::npos || raw.find("'''") != std::string::npos) {
-      config_refused(line_no, "multi-line strings are not read; write the value on one line");
-    }
     // the line without its comment and carriage returns; strings kept whole
     std::string line;
     char quote = 0;
-    bool counting = depth > 0;  // brackets count inside an array's value
-    bool value_next = false;
+    bool in_value = depth > 0;  // after the key's '=' (or an array's next line)
+    bool array = depth > 0;     // the value opens with '[': its unquoted brackets decide where it ends
+    bool value_start = false;   // nothing but blanks since the '='
     for (std::size_t n = 0; n < raw.size(); ++n) {
       const char c = raw[n];
       if (c == '\r') continue;
+      if (quote == 0 && c == '#') break;
+      line += c;
+      if (value_start && c != ' ' && c != '\t') {
+        array = c == '[';
+        value_start = false;
+      }
       if (quote != 0) {
-        line += c;
-        if (quote == '"' && c == '\\' && n + 1 < raw.size()) {
-          line += raw[++n];
-        } else if (c == quote) {
+        if (c == quote) {
           quote = 0;
-        } else if (counting && (c == '[' || c == ']')) {
-          depth += c == '[' ? 1 : -1;
+        } else if (c == '#' || c == '\\') {
+          config_refused(line_no, std::string("'") + c +
+                                      "' in a string: the console's reader cuts a value at '#' and reads no escapes");
         }
-      } else if (c == '#') {
-        break;
-      } else {
-        line += c;
-        if (c == '"' || c == '\'') {
-          quote = c;
-          // a quoted value that CLI11 unquotes and reads as an array
-          if (value_next && n + 1 < raw.size() && raw[n + 1] == '[') counting = true;
-          value_next = false;
-        } else if (c == '=' && depth == 0 && !counting) {
-          value_next = true;
-        } else if (c == '[' && (counting || value_next)) {
-          counting = true;
-          ++depth;
-        } else if (c == ']' && counting) {
-          --depth;
-        } else if (c != ' ' && c != '\t') {
-          value_next = false;
+      } else if (c == '"' || c == '\'') {
+        quote = c;
+      } else if (c == '=' && !in_value) {
+        in_value = true;
+        value_start = true;
+        nest = 0;
+      } else if (array && c == '[') {
+        ++depth;
+      } else if (array && c == ']') {
+        depth = std::max(depth - 1, 0);
+      }
+      if (in_value && (c == '[' || c == ']')) {
+        nest = c == '[' ? nest + 1 : std::max(nest - 1, 0);
+        if (nest > kMaxConfigNesting) {
+          config_refused(line_no, "brackets nested deeper than " + std::to_string(kMaxConfigNesting) +
+                                      " in a value (CLI11 reads them as arrays, quoted or not)");
         }
       }
-      if (depth > kMaxConfigNesting) {
-        config_refused(line_no, "brackets nested deeper than " + std::to_string(kMaxConfigNesting) +
-                                    " in a value (an array, or a string CLI11 reads as one)");
-      }
-      depth = std::max(depth, 0);
     }
     if (quote != 0) config_refused(line_no, "a string is not closed on its line");
+    if (line.find("\"\"\"") != std::string::npos || line.find("'''") != std::string::npos) {
+      config_refused(line_no, "multi-line strings are not read; write the value on one line");
+    }
     if (!pending.empty()) {  // an array's next line
       pending += " " + line;
       if (depth == 0) {
@@ -188,21 +190,27 @@ std::string prechecked_config(std::istream& input) {
       out += "\n";
       continue;
     }
-    if (line[first] == '[' && !counting) {
+    if (line[first] == '[' && line.find('=') == std::string::npos) {
+      if (line.compare(first, 2, "[[") == 0) config_refused(line_no, "arrays of tables ([[...]]) are not read");
       const std::string name = section_name(line);
-      if (name == "default" || name == "DEFAULT") {
-        config_refused(line_no, "unknown section [" + name + "] (the sections are " + section_names() + ")");
+      std::string lower = name;
+      for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      if (lower == "default") {
+        config_refused(line_no,
+                       "unknown section [" + terminal_safe(name, 80) + "] (the sections are " + section_names() + ")");
       }
       if (std::find(sections.begin(), sections.end(), name) != sections.end()) {
         config_refused(line_no, "section [" + terminal_safe(name, 80) + "] is defined twice (a section is one table)");
       }
       sections.push_back(name);
+      depth = 0;
       out += "[" + name + "]\n";
       continue;
     }
     const std::size_t equals = line.find('=');
     if (equals != std::string::npos) {
-      const std::string key = key_name(line.substr(0, equals));
+      std::string key = key_name(line.substr(0, equals));
+      if (key == "o") key = "out";  // -o, as CLI11 reads a one-letter key
       for (const auto& [seen, at] : keys) {
         if (seen == key) {
           config_refused(line_no, "key '" + terminal_safe(key, 80) + "' is given twice (lines " + std::to_string(at) +

@@ -19,8 +19,8 @@ namespace visvol {
 inline std::string terminal_safe(std::string_view text, std::size_t max_bytes = 4096) {
   std::string out;
   std::size_t n = text.size() > max_bytes ? max_bytes : text.size();
-  // cut between characters: not inside a UTF-8 sequence
-  while (n > 0 && n < text.size() && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80) --n;
+  // cut between characters: not inside a UTF-8 sequence (3 bytes back at most)
+  for (int k = 0; k < 3 && n > 0 && n < text.size() && (static_cast<unsigned char>(text[n]) & 0xC0) == 0x80; ++k) --n;
   out.reserve(n + 16);
   auto hex = [&](unsigned c) {
     char code[8];
@@ -39,6 +39,13 @@ inline std::string terminal_safe(std::string_view text, std::size_t max_bytes = 
                                                         : 0;
     bool whole = length > 0 && i + length <= text.size();
     for (std::size_t k = 1; whole && k < length; ++k) whole = (at(i + k) & 0xC0) == 0x80;
+    // and the shortest form of a code point of Unicode: no overlong form (E0
+    // 80..9F, F0 80..8F), no surrogate (ED A0..BF), nothing past U+10FFFF (F4 90..)
+    const unsigned second = at(i + 1);
+    if (whole && ((c == 0xE0 && second < 0xA0) || (c == 0xED && second > 0x9F) || (c == 0xF0 && second < 0x90) ||
+                  (c == 0xF4 && second > 0x8F))) {
+      whole = false;
+    }
     const bool c1 = c == 0xC2 && whole && at(i + 1) <= 0x9F;  // U+0080..U+009F
     if (!whole || c1) {
       hex(c);  // (a C1 character's second byte follows as a byte of no character)

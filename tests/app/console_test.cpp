@@ -218,7 +218,12 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       {"[rope]\nfrom = \"" + std::string(100000, '[') + std::string(100000, ']') + "\"\n",
        "brackets nested deeper than 8"},
       // a section or a key given twice in disguise; CLI11's name for the top level
-      {"[session]\nseconds = 0.3\n[[session]]\nseconds = 100\n", "section [session] is defined twice"},
+      {"[session]\nseconds = 0.3\n[[session]]\nseconds = 100\n", "arrays of tables ([[...]]) are not read"},
+      // CLI11 splits a value on commas and blanks and reads any piece [...] as arrays
+      {"[rope]\nfrom = 1, " + std::string(100000, '[') + std::string(100000, ']') + "\n",
+       "brackets nested deeper than 8"},
+      // it cuts a value at '#', and reads no escapes
+      {"[session]\nout = \"runs#2\"\n", "'#' in a string"},
       {"[session]\nseconds = 0.3\nquiet = true\nseconds = 100\n", "key 'seconds' is given twice (lines 4 and 6)"},
       {"session.seconds = 100\n[session]\nseconds = 0.3\n", "key 'seconds' is given twice"},
       {"[default]\nseconds = 1\n", "unknown section [default]"},
@@ -231,7 +236,7 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       {"[session]\nseconds = 0.3\n[ \"session\" ]\nseconds = 100\n", "section [session] is defined twice"},
       // brackets in strings, their escapes and comments are no arrays: the
       // checks pass them, and CLI11 finds the one mistake here
-      {"# [[[[[[[[[[ a comment\n[thumbnails]\nthumbnail-view = \"a\\\"[[[[[[[[[[\" # ]\nbogus = 1\n",
+      {"# [[[[[[[[[[ a comment\n[thumbnails]\nthumbnail-view = \"a[b]\" # ]]]]\nbogus = 1\n",
        "unknown key 'bogus' in [thumbnails]"},
       // a key's bytes reach the operator's terminal escaped
       {"bogus\x1b]0;x\x07key = 1\n", "unknown key 'bogus\\x1B]0;x\\x07key'"}};

@@ -19,6 +19,10 @@ TEST(TerminalText, ControlCharactersAreShownNotSent) {
                           "31m"),
             "lone\\x9B31m");
   EXPECT_EQ(terminal_safe("cut\xc3"), "cut\\xC3");
+  // an overlong CSI (E0 82 9B) and a surrogate are no characters either
+  EXPECT_EQ(terminal_safe("\xe0\x82\x9b"), "\\xE0\\x82\\x9B");
+  EXPECT_EQ(terminal_safe("\xed\xa0\x80"), "\\xED\\xA0\\x80");
+  EXPECT_EQ(terminal_safe("\xe2\x82\xac"), "\xe2\x82\xac");  // the euro sign stays
 }
 
 TEST(TerminalText, LinesAndOtherUtf8Stay) {

@@ -616,6 +616,20 @@ TEST_F(PathIo, PlanTakeoffAwayStartsThePathALandingAwayIsNoted) {
   ASSERT_EQ(from_home->notes.size(), 2u);
   EXPECT_NE(from_home->notes[0].find("a takeoff 3340 m from the first waypoint"), std::string::npos);
   EXPECT_NE(from_home->notes[1].find("a return to launch: the way home"), std::string::npos) << from_home->notes[1];
+  // a loiter first: its vertex counts the takeoff's point where it is kept,
+  // and not where it is dropped; a hold for every point
+  const std::string loiter1 = waypoint(0, "37.79", "-122.43", "50", mavlink::kCmdNavLoiterTurns);
+  for (const auto& [takeoff_lat, kept] : {std::pair{"37.76", true}, std::pair{"37.79001", false}}) {
+    Result<PathFile> l = read_path_file(
+        file_with("loiter_first.plan", plan_text(waypoint(0, takeoff_lat, "-122.43", "50", mavlink::kCmdNavTakeoff) +
+                                                 "," + loiter1 + "," + wp2)),
+        wkt_);
+    ASSERT_TRUE(l.ok()) << l.status().message();
+    ASSERT_EQ(l->loiters.size(), 1u);
+    EXPECT_EQ(l->loiters[0].vertex, kept ? 1u : 0u) << takeoff_lat;
+    EXPECT_EQ(l->points.size(), kept ? 3u : 2u) << takeoff_lat;
+    EXPECT_EQ(l->hold_s.size(), l->points.size()) << takeoff_lat;
+  }
   // on the spots: no leg, no note (visvol's own plans)
   Result<PathFile> spot = read_path_file(
       file_with("spot.plan", plan_text(waypoint(0, "37.79001", "-122.43", "50", mavlink::kCmdNavTakeoff) + "," + wp1 +
@@ -824,7 +838,7 @@ TEST_F(PathIo, BadPlansAreRefusedNamingTheFileTheItemAndTheProblem) {
       // a landing's or takeoff's numbers are read as a waypoint's (a string
       // latitude, 1e308 m, frame 99 were left unread)
       {"land_lat.plan", plan_text(wp + "," + wp + "," + waypoint(0, R"("37.78")", "-122.42", "0", 21)),
-       "land_lat.plan: mission.items[2] (doJumpId 1): params[4] (latitude) \"37.78\" is not a number (or null)"},
+       "land_lat.plan: mission.items[2] (doJumpId 1): params[4] (latitude) \"37.78\" is not a number"},
       {"land_alt.plan", plan_text(wp + "," + wp + "," + waypoint(0, "37.78", "-122.42", "1e308", 21)),
        "land_alt.plan: mission.items[2] (doJumpId 1): params[6] (altitude)"},
       {"land_frame.plan", plan_text(wp + "," + wp + "," + waypoint(99, "37.78", "-122.42", "0", 21)),

@@ -283,6 +283,11 @@ TEST_F(PlanCheck, CheckFliesALoitersCircle) {
   const Outcome px4_turns = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor");
   EXPECT_NE(px4_turns.out.find("loiter     mission.items[1] (doJumpId 2): hovers at 400.0 m"), std::string::npos)
       << px4_turns.out << px4_turns.err;
+  // --autopilot wins over the file's firmware, as --speed over its speed, and says so
+  const Outcome told = visvol("check " + *pack_ + " " + plan + " --vehicle multirotor --autopilot ardupilot");
+  EXPECT_NE(told.out.find("2.0 turns of 120 m"), std::string::npos) << told.out << told.err;
+  EXPECT_NE(told.out.find("autopilot ardupilot (--autopilot); the .plan's firmwareType is px4"), std::string::npos)
+      << told.out;
   // a multirotor hovers out a LOITER_TIME: its seconds count in the duration
   // and, where an observer sees the point, in the exposure (they did not)
   nlohmann::json timed = mission_with(0.0);

@@ -86,6 +86,25 @@ std::vector<std::string> plan_vehicle_notes(const PathFile& f, const EnvelopeOpt
   } else if (speed && std::fabs(*speed - e.speed_m_per_s) > 1e-9) {
     notes.push_back(printed("speed %.1f m/s (--speed); the .plan's %s is %.1f m/s", e.speed_m_per_s, key, *speed));
   }
+  // the autopilot: --autopilot, else the .plan's firmwareType (it decides
+  // whether a multirotor circles a loiter's turns), said where it matters
+  const bool stated_ardupilot = f.firmware_type == mavlink::kAutopilotArduPilotMega;
+  const bool stated = stated_ardupilot || f.firmware_type == mavlink::kAutopilotPx4;
+  const rt::Autopilot file_autopilot = stated_ardupilot ? rt::Autopilot::ardupilot : rt::Autopilot::px4;
+  const bool circles_matter = !fixed_wing && std::any_of(f.loiters.begin(), f.loiters.end(), [](const LoiterItem& l) {
+    return l.kind == LoiterKind::turns && l.radius_m != 0;
+  });
+  if (stated && !given.autopilot) {
+    if (circles_matter && file_autopilot != e.autopilot) {
+      notes.push_back(std::string("autopilot ") + rt::to_string(file_autopilot) +
+                      ": the .plan's firmwareType (the vehicle's " + rt::to_string(e.autopilot) +
+                      "; --autopilot sets another)");
+    }
+    e.autopilot = file_autopilot;
+  } else if (stated && circles_matter && file_autopilot != e.autopilot) {
+    notes.push_back(std::string("autopilot ") + rt::to_string(e.autopilot) +
+                    " (--autopilot); the .plan's firmwareType is " + rt::to_string(file_autopilot));
+  }
   if (f.speed_changes) {
     notes.push_back(
         printed("the mission changes speed (DO_CHANGE_SPEED): times are at %.1f m/s throughout", e.speed_m_per_s));
@@ -188,15 +207,6 @@ int run_check(const CheckOptions& o) {
   if (!checker.ok()) return fail("check", checker.status());
   if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
   notes.insert(notes.end(), file->notes.begin(), file->notes.end());
-  // the mission's firmware decides how a multirotor flies its loiters
-  const bool file_ardupilot = file->firmware_type == mavlink::kAutopilotArduPilotMega;
-  const bool file_px4 = file->firmware_type == mavlink::kAutopilotPx4;
-  if ((file_ardupilot && envelope->autopilot != rt::Autopilot::ardupilot) ||
-      (file_px4 && envelope->autopilot != rt::Autopilot::px4)) {
-    notes.push_back(std::string("the mission's firmwareType is ") + (file_ardupilot ? "ArduPilot" : "PX4") +
-                    ", the vehicle's autopilot " + rt::to_string(envelope->autopilot) +
-                    ": its loiters are flown as the mission's firmware flies them");
-  }
   for (const LoiterItem& a : file->approach) {
     // the path ends at the last waypoint: what is flown after it is the crew's to judge
     const std::string radius =

@@ -113,11 +113,9 @@ class Flight {
     }
     // A multirotor hovers over a loiter's point, but ArduCopter flies turns
     // of a radius as the circle (checked as a hover at the centre, a 250 m
-    // circle 7 m over the ground read as met); the autopilot is the
-    // mission's firmwareType where it names ArduPilot or PX4, else the
-    // vehicle's (a check's note says when they differ).
-    const bool ardupilot = file_.firmware_type == mavlink::kAutopilotArduPilotMega ||
-                           (file_.firmware_type != mavlink::kAutopilotPx4 && e_.autopilot == rt::Autopilot::ardupilot);
+    // circle 7 m over the ground read as met). The autopilot: --autopilot,
+    // else the mission's firmwareType, else the vehicle's (check's notes).
+    const bool ardupilot = e_.autopilot == rt::Autopilot::ardupilot;
     const bool circles = ardupilot && l.kind == LoiterKind::turns && std::fabs(l.radius_m) >= kSpotM;
     if (e_.type == rt::VehicleType::multirotor && !circles) return hover(l, centre);
     const double radius_m = l.radius_m != 0 ? std::fabs(l.radius_m) : e_.min_turn_radius_m;

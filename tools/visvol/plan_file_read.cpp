@@ -278,7 +278,11 @@ bool is_takeoff(long long command) {
 
 // An end item's position, where it gives one: not 0, 0 or null ("where the
 // aircraft is"). Longitude, latitude in degrees.
-Result<std::optional<Vec3>> end_position(const nlohmann::json& item, const std::string& where) {
+Result<std::optional<Vec3>> end_position(const nlohmann::json& item, long long command, const std::string& where) {
+  if (command == kTakeoffLocal || command == mavlink::kCmdNavLandLocal) {
+    return invalid_argument(where + "command " + std::to_string(command) +
+                            " (a takeoff or landing in local metres): local frames are not read; use 22 or 21");
+  }
   // checked as a waypoint's are: a landing's or takeoff's numbers that mean
   // nothing were left unread (a string latitude, altitude 1e308, frame 99)
   if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
@@ -291,7 +295,7 @@ Result<std::optional<Vec3>> end_position(const nlohmann::json& item, const std::
     if (p.is_null()) continue;
     if (!p.is_number() || !std::isfinite(p.get<double>()) || std::fabs(p.get<double>()) > kMaxEndAltitudeM) {
       return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kNames[k] + ") " + json_brief(p) +
-                              " is not a number (or null)");
+                              " is not a number within +-" + shown(kMaxEndAltitudeM, 0) + " (or null)");
     }
   }
   long long frame = 0;
@@ -366,7 +370,8 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   std::string takeoff_where;
   std::optional<Vec3> landing;  // the last landing's position, where it gives one
   std::string landing_where;
-  std::string return_where;  // a return to launch after the waypoints
+  std::string return_where;    // a return to launch after the waypoints
+  bool waypoint_read = false;  // a waypoint or loiter (not a takeoff's point) read
   bool landing_after_waypoints = false;
   for (const auto& [key, speed] :
        {std::pair{"cruiseSpeed", &out.cruise_speed_m_per_s}, std::pair{"hoverSpeed", &out.hover_speed_m_per_s}}) {
@@ -430,12 +435,12 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     }
     // a takeoff, landing or return between waypoints flies legs that are not
     // in the file (home and back, a climb out): the path read would skip them
-    if (role == ItemRole::end && !out.points.empty()) {
+    if (role == ItemRole::end && waypoint_read) {
       end_after_waypoints = where + "command " + std::to_string(command);
       landing_after_waypoints = landing_after_waypoints || command == mavlink::kCmdNavLand ||
                                 command == mavlink::kCmdNavVtolLand || command == mavlink::kCmdNavLandLocal;
     }
-    if (role == ItemRole::end && out.points.empty() && command != mavlink::kCmdNavTakeoff &&
+    if (role == ItemRole::end && !waypoint_read && command != mavlink::kCmdNavTakeoff &&
         command != mavlink::kCmdNavVtolTakeoff && command != kTakeoffLocal) {
       // a landing or a return first: the mission ends there
       return invalid_argument(where + "command " + std::to_string(command) +
@@ -445,18 +450,19 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     bool takeoff_point = false;
     std::optional<Vec3> takeoff_home;  // a takeoff "where the aircraft is": the planned home, if known
     if (role == ItemRole::end) {
-      Result<std::optional<Vec3>> at = end_position(item, where);
+      Result<std::optional<Vec3>> at = end_position(item, command, where);
       if (!at.ok()) return at.status();
-      if (is_takeoff(command) && out.points.empty() && !at->has_value() && item["params"][6].is_number()) {
+      if (is_takeoff(command) && out.points.empty() && !waypoint_read && !at->has_value() &&
+          item["params"][6].is_number()) {
         Vec3 planned;
         if (read_home(mission, where, planned).ok()) takeoff_home = planned;
       }
-      takeoff_point = is_takeoff(command) && out.points.empty() && (at->has_value() || takeoff_home);
+      takeoff_point = is_takeoff(command) && out.points.empty() && !waypoint_read && (at->has_value() || takeoff_home);
       if (!is_takeoff(command) && at->has_value()) {
         landing = **at;
         landing_where = where;
       }
-      if (command == mavlink::kCmdNavReturnToLaunch && !out.points.empty()) return_where = where;
+      if (command == mavlink::kCmdNavReturnToLaunch && waypoint_read) return_where = where;
     }
     if (command == kCmdDoChangeSpeed) out.speed_changes = true;
     if (role != ItemRole::vertex && !takeoff_point) continue;  // landing, DO_...: not the path
@@ -525,6 +531,7 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       takeoff_where = where;
       continue;
     }
+    waypoint_read = true;
     // the first waypoint: a takeoff on its spot is the mission's end, not a leg
     if (!takeoff_where.empty()) {
       const double d = apart_m(out.points.back(), Vec3(lon, lat, 0));

@@ -333,7 +333,9 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
   app.add_option("--max-observers", o.max_observers,
                  "Hidden-from and visible-to points a constraint set may name, 0..512 (each kind is folded into one "
                  "hull of the rope's level: three sets of two are reserved whatever the number; default: 512 "
-                 "where they fit in a quarter of --budget-mib, else only those given)");
+                 "where they fit in a quarter of --budget-mib, else only those given)")
+      // checked as given: -1, the default's own mark, was taken when typed
+      ->check(CLI::Range(0, kMaxObservers));
   app.add_option("--k1", o.k1, "Visibility gain (sign from the objective)")->capture_default_str();
   app.add_option("--k2", o.k2, "Terrain force field gain")->capture_default_str();
   app.add_option("--k3", o.k3, "Operator pull gain")->capture_default_str();

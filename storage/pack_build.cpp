@@ -238,14 +238,6 @@ Result<PlanningBounds> planning_bounds_for(const fields::VolumeGeometry& finest,
   return invalid_argument(msg.str());
 }
 
-nlohmann::json planning_json(const PlanningBounds& b) {
-  return {{"xmin_m", b.box.xmin_m},
-          {"ymin_m", b.box.ymin_m},
-          {"xmax_m", b.box.xmax_m},
-          {"ymax_m", b.box.ymax_m},
-          {"margin_m", b.margin_m}};
-}
-
 std::string metadata(const Heightfield& hf, const PackBuildParams& p, const std::string& source_json,
                      const std::vector<fields::LodInput>& inputs, const PlanningBounds& planning) {
   nlohmann::json j;

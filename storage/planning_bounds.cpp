@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
 namespace visvol::storage {
 
@@ -50,6 +51,14 @@ std::string describe(const PlanningBounds& bounds) {
   const int decimals = std::fabs(m - std::round(m)) < 0.005 ? 0 : 2;
   std::snprintf(margin, sizeof margin, " (margin %.*f m)", decimals, m);
   return describe(bounds.box) + margin;
+}
+
+nlohmann::json planning_json(const PlanningBounds& bounds) {
+  return {{"xmin_m", bounds.box.xmin_m},
+          {"ymin_m", bounds.box.ymin_m},
+          {"xmax_m", bounds.box.xmax_m},
+          {"ymax_m", bounds.box.ymax_m},
+          {"margin_m", bounds.margin_m}};
 }
 
 }  // namespace visvol::storage

@@ -11,6 +11,7 @@
 // Pure arithmetic: no I/O, no allocation; thread-safe.
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 
@@ -49,5 +50,9 @@ fields::Bounds2D post_extent(const fields::VolumeGeometry& level);
 std::string describe(const fields::Bounds2D& box);
 // The same and "(margin 240 m)", the margin to the centimetre when not whole metres.
 std::string describe(const PlanningBounds& bounds);
+
+// The box and its margin as a pack's metadata records them (xmin_m, ymin_m,
+// xmax_m, ymax_m, margin_m): the metadata, and the summaries that show them.
+nlohmann::json planning_json(const PlanningBounds& bounds);
 
 }  // namespace visvol::storage

@@ -111,12 +111,10 @@ void print_text(const BuildOptions& o, const Heightfield& hf, const FieldParams&
   std::printf("\ntotal %.2f s on %d threads\n", wall_s, stats[0].threads);
 }
 
-std::string summary_json(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
-                         const std::vector<LodLevel>& levels, const std::vector<fields::BuildStats>& stats,
-                         double wall_s) {
-  using nlohmann::json;
+// What every build summary says of its terrain and field parameters.
+nlohmann::json build_inputs_json(const BuildOptions& o, const Heightfield& hf, const FieldParams& p) {
   const fields::HeightRange hr = fields::height_range(hf);
-  json j;
+  nlohmann::json j;
   j["dem"] = o.dem;
   j["nx"] = hf.nx;
   j["ny"] = hf.ny;
@@ -126,15 +124,24 @@ std::string summary_json(const BuildOptions& o, const Heightfield& hf, const Fie
   j["crs"] = fields::crs_name(hf.crs_wkt);
   j["height_min_m"] = hr.min_m;
   j["height_max_m"] = hr.max_m;
-  const fields::VolumeGeometry& g = levels[0].field.geometry;
-  j["nz"] = g.nz;
-  j["z0_m"] = g.z0_m;
-  j["dz_m"] = g.dz_m;
+  j["nz"] = p.nz;
   j["eye_height_m"] = p.eye_height_m;
   j["range_shape"] = fields::to_string(p.range_shape);
   j["range_posts"] = p.range_posts;
   j["curvature_coeff"] = p.curvature_coeff;
   j["exact_rings"] = p.exact_rings;
+  return j;
+}
+
+std::string summary_json(const BuildOptions& o, const Heightfield& hf, const FieldParams& p,
+                         const std::vector<LodLevel>& levels, const std::vector<fields::BuildStats>& stats,
+                         double wall_s) {
+  using nlohmann::json;
+  json j = build_inputs_json(o, hf, p);
+  const fields::VolumeGeometry& g = levels[0].field.geometry;
+  j["nz"] = g.nz;
+  j["z0_m"] = g.z0_m;
+  j["dz_m"] = g.dz_m;
   j["threads"] = stats[0].threads;
   j["wall_s"] = wall_s;
   for (std::size_t l = 0; l < levels.size(); ++l) {
@@ -165,26 +172,9 @@ std::string summary_json(const BuildOptions& o, const Heightfield& hf, const Fie
 
 // The summary of a pack build as JSON: what print_pack_summary says, and the pack.
 std::string pack_summary_json(const BuildOptions& o, const PreparedBuild& b, const storage::PackBuildReport& report) {
-  using nlohmann::json;
   const Heightfield& hf = b.terrain;
   const FieldParams& p = b.params;
-  const fields::HeightRange hr = fields::height_range(hf);
-  json j;
-  j["dem"] = o.dem;
-  j["nx"] = hf.nx;
-  j["ny"] = hf.ny;
-  j["cell_size_m"] = hf.spacing_m;
-  j["origin_x"] = hf.origin_x;
-  j["origin_y"] = hf.origin_y;
-  j["crs"] = fields::crs_name(hf.crs_wkt);
-  j["height_min_m"] = hr.min_m;
-  j["height_max_m"] = hr.max_m;
-  j["nz"] = p.nz;
-  j["eye_height_m"] = p.eye_height_m;
-  j["range_shape"] = fields::to_string(p.range_shape);
-  j["range_posts"] = p.range_posts;
-  j["curvature_coeff"] = p.curvature_coeff;
-  j["exact_rings"] = p.exact_rings;
+  nlohmann::json j = build_inputs_json(o, hf, p);
   for (std::size_t l = 0; l < report.levels.size(); ++l) {
     const double spacing = hf.spacing_m * static_cast<double>(1 << l);
     j["levels_of_detail"].push_back({{"nx", hf.nx >> l},
@@ -196,12 +186,7 @@ std::string pack_summary_json(const BuildOptions& o, const PreparedBuild& b, con
                                      {"cells_per_s_per_core", report.levels[l].cells_per_s_per_core()}});
   }
   j["terrain_force_field"] = {{"wall_s", report.tff_s}, {"band_offset_m", o.tff_offset_m}, {"levels", o.tff_levels}};
-  const fields::Bounds2D& box = report.planning.box;
-  j["planning_bounds"] = {{"xmin_m", box.xmin_m},
-                          {"ymin_m", box.ymin_m},
-                          {"xmax_m", box.xmax_m},
-                          {"ymax_m", box.ymax_m},
-                          {"margin_m", report.planning.margin_m}};
+  j["planning_bounds"] = storage::planning_json(report.planning);
   j["pack"] = {{"path", o.out}, {"bytes", report.file_bytes}};
   j["wall_s"] = report.wall_s;
   return json_text(j, 2) + "\n";

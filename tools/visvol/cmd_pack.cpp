@@ -45,9 +45,11 @@ nlohmann::json member(const nlohmann::json& meta, const char* key, const nlohman
   return it != meta.end() && it->type() == fallback.type() ? *it : fallback;
 }
 
-nlohmann::json planning_json(const storage::PlanningBounds& p) {
-  return {{"xmin_m", p.box.xmin_m}, {"ymin_m", p.box.ymin_m}, {"xmax_m", p.box.xmax_m},
-          {"ymax_m", p.box.ymax_m}, {"margin_m", p.margin_m}, {"recorded", p.recorded}};
+// The bounds as the metadata records them, and whether it did.
+nlohmann::json info_planning_json(const storage::PlanningBounds& p) {
+  nlohmann::json j = storage::planning_json(p);
+  j["recorded"] = p.recorded;
+  return j;
 }
 
 // "planning   x A..B, y C..D (margin M m)", saying so when derived or empty.
@@ -86,7 +88,7 @@ nlohmann::json pack_info_json(const Pack& pack) {
   j["tff_band_offset_m"] = pack.header().band_offset_m;
   j["tff_band_levels"] = pack.header().band_levels;
   j["tiles"] = pack.tile_count();
-  j["planning_bounds"] = planning_json(pack.metadata().planning);
+  j["planning_bounds"] = info_planning_json(pack.metadata().planning);
   j["build"] = member(meta, "build", nlohmann::json::object());
   j["source"] = member(meta, "source", nlohmann::json::object());
   j["tool"] = pack.metadata().tool;

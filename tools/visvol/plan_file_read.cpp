@@ -272,6 +272,34 @@ Result<LoiterItem> read_loiter(long long command, const nlohmann::json& params, 
 // Beyond this, a takeoff's or landing's number is no height or degree.
 constexpr double kMaxEndAltitudeM = 1e5;
 
+// What a position item holds, each checked as every such item's is:
+// params[4..6], its frame, a latitude and longitude in range.
+constexpr std::array<const char*, 3> kPositionNames = {"latitude", "longitude", "altitude"};
+
+Status check_params(const nlohmann::json& item, const std::string& where) {
+  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
+    return invalid_argument(where + "params is missing or not an array of 7");
+  }
+  return Status::ok_status();
+}
+
+Result<long long> item_frame(const nlohmann::json& item, const std::string& where) {
+  long long frame = 0;
+  if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
+    return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
+                            " is not an integer");
+  }
+  return frame;
+}
+
+Status check_wgs84(double lat, double lon, const std::string& where) {
+  if (std::fabs(lat) > 90 || std::fabs(lon) > 180) {
+    return invalid_argument(where + "latitude " + shown(lat, 6) + ", longitude " + shown(lon, 6) +
+                            " is not a WGS84 position in degrees");
+  }
+  return Status::ok_status();
+}
+
 bool is_takeoff(long long command) {
   return command == mavlink::kCmdNavTakeoff || command == mavlink::kCmdNavVtolTakeoff || command == kTakeoffLocal;
 }
@@ -285,33 +313,25 @@ Result<std::optional<Vec3>> end_position(const nlohmann::json& item, long long c
   }
   // checked as a waypoint's are: a landing's or takeoff's numbers that mean
   // nothing were left unread (a string latitude, altitude 1e308, frame 99)
-  if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
-    return invalid_argument(where + "params is missing or not an array of 7");
-  }
+  VISVOL_RETURN_IF_ERROR(check_params(item, where));
   const nlohmann::json& params = item["params"];
-  static constexpr std::array<const char*, 3> kNames = {"latitude", "longitude", "altitude"};
   for (std::size_t k = 0; k < 3; ++k) {
     const nlohmann::json& p = params[4 + k];
     if (p.is_null()) continue;
     if (!p.is_number() || !std::isfinite(p.get<double>()) || std::fabs(p.get<double>()) > kMaxEndAltitudeM) {
-      return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kNames[k] + ") " + json_brief(p) +
-                              " is not a number within +-" + shown(kMaxEndAltitudeM, 0) + " (or null)");
+      return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kPositionNames[k] + ") " +
+                              json_brief(p) + " is not a number within +-" + shown(kMaxEndAltitudeM, 0) + " (or null)");
     }
   }
-  long long frame = 0;
-  if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
-    return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
-                            " is not an integer");
-  }
+  Result<long long> frame_read = item_frame(item, where);
+  if (!frame_read.ok()) return frame_read.status();
+  const long long frame = *frame_read;
   const nlohmann::json& lat = params[4];
   const nlohmann::json& lon = params[5];
   if (lat.is_null() || lon.is_null()) return std::optional<Vec3>();  // where the aircraft is
   const double la = lat.get<double>(), lo = lon.get<double>();
   if (la == 0 && lo == 0) return std::optional<Vec3>();
-  if (std::fabs(la) > 90 || std::fabs(lo) > 180) {
-    return invalid_argument(where + "latitude " + shown(la, 6) + ", longitude " + shown(lo, 6) +
-                            " is not a WGS84 position in degrees");
-  }
+  VISVOL_RETURN_IF_ERROR(check_wgs84(la, lo, where));
   if (frame != mavlink::kFrameGlobal && frame != mavlink::kFrameGlobalInt &&
       frame != mavlink::kFrameGlobalRelativeAlt && frame != mavlink::kFrameGlobalRelativeAltInt) {
     return invalid_argument(where + "frame " + std::to_string(frame) + " (" +
@@ -477,14 +497,10 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
                               " (a takeoff, landing or return to launch) comes between waypoints: the legs it flies "
                               "are not in the file; they may come only before the first waypoint or after the last");
     }
-    long long frame = 0;
-    if (!item.contains("frame") || !integer_of(item["frame"], frame)) {
-      return invalid_argument(where + "frame " + (item.contains("frame") ? json_brief(item["frame"]) : "missing") +
-                              " is not an integer");
-    }
-    if (!item.contains("params") || !item["params"].is_array() || item["params"].size() != 7) {
-      return invalid_argument(where + "params is missing or not an array of 7");
-    }
+    Result<long long> frame_read = item_frame(item, where);
+    if (!frame_read.ok()) return frame_read.status();
+    const long long frame = *frame_read;
+    VISVOL_RETURN_IF_ERROR(check_params(item, where));
     nlohmann::json at_home;  // a takeoff from where the aircraft is: at the planned home
     if (takeoff_home) {
       at_home = item["params"];
@@ -492,21 +508,17 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
       at_home[5] = takeoff_home->x();
     }
     const nlohmann::json& params = takeoff_home ? at_home : item["params"];
-    static constexpr std::array<const char*, 3> kNames = {"latitude", "longitude", "altitude"};
     double v[3] = {0, 0, 0};
     for (std::size_t k = 0; k < 3; ++k) {
       const nlohmann::json& p = params[4 + k];
       if (!p.is_number() || !std::isfinite(p.get<double>())) {
-        return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kNames[k] + ") " + json_brief(p) +
-                                " is not a finite number");
+        return invalid_argument(where + "params[" + std::to_string(4 + k) + "] (" + kPositionNames[k] + ") " +
+                                json_brief(p) + " is not a finite number");
       }
       v[k] = p.get<double>();
     }
     const double lat = v[0], lon = v[1];
-    if (std::fabs(lat) > 90 || std::fabs(lon) > 180) {
-      return invalid_argument(where + "latitude " + shown(lat, 6) + ", longitude " + shown(lon, 6) +
-                              " is not a WGS84 position in degrees");
-    }
+    VISVOL_RETURN_IF_ERROR(check_wgs84(lat, lon, where));
     double altitude_m = v[2];
     if (frame == mavlink::kFrameGlobalRelativeAlt || frame == mavlink::kFrameGlobalRelativeAltInt) {
       if (!home) {

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "base/cli_numbers.hpp"
 #include "base/terminal_text.hpp"
 #include "base/tolerances.hpp"
 #include "io/input_file.hpp"
@@ -353,6 +354,7 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
                  "FOR_S s (systemd's watchdog pings stop), once")
       ->expected(2)
       ->type_name("AT_S FOR_S");
+  decimal_reals(app.get_option("--inject-stall"));
   app.add_option("--device", o.device, "Haptic device: sim (simulated, in-process bus), socketcan, none")
       ->check(CLI::IsMember({"sim", "socketcan", "none"}))
       ->capture_default_str();
@@ -376,6 +378,7 @@ void add_console_options(CLI::App& app, ConsoleOptions& o) {
       ->capture_default_str();
   app.add_option("--thumbnail-size", o.thumbnail_size, "Thumbnail size WxH, pixels")->capture_default_str();
   app.add_option("--thumbnail-max-hz", o.thumbnail_max_hz, "Thumbnails a second at most")->capture_default_str();
+  decimal_numbers(app);
 }
 
 Result<std::pair<int, int>> parse_thumbnail_size(const std::string& text) {

@@ -209,8 +209,11 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       {"[rope]\nnode = 3\n", "key 'node' belongs in [device], not [rope]"},
       {"[dds]\nfrobnicate = 1\n", "unknown key 'frobnicate' in [dds]"},
       {"[rope]\nsegments = 1\n", "--segments: 1 must be in 2.."},
-      {"segments = \"many\"\n", "--segments = many"},
+      {"segments = \"many\"\n", "--segments: 'many' is not a whole number in decimal digits"},
       {"segments = 1\n", "--segments: 1 must be in 2.."},
+      // numbers are decimal: CLI11 alone read 0x10 as sixteen, 010 as octal eight
+      {"[rope]\nsegments = 0x10\n", "--segments: '0x10' is not a whole number in decimal digits"},
+      {"[rope]\nsegments = 001\n", "--segments: 1 must be in 2.."},
       // 100,000 nested arrays overflowed CLI11's reader (a segmentation
       // fault); a second [session] was silently ignored
       {"[rope]\nfrom = " + std::string(100000, '[') + std::string(100000, ']') + "\n", "brackets nested deeper than 8"},

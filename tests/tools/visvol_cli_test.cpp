@@ -71,6 +71,13 @@ TEST(CliUsage, BadArgumentsExitTwoWithOneLine) {
   const Outcome equals = visvol("plan x.vvp --objective hide --clearance= 45 -o out");
   EXPECT_EQ(equals.status, 2);
   EXPECT_NE(equals.err.find("argument 5, '--clearance=', has an empty value"), std::string::npos) << equals.err;
+  // numbers are decimal: "--segments 010" was octal eight, "0x10" sixteen
+  const Outcome hex = visvol("plan x.vvp --objective hide --from 0 0 0 --to 1 1 1 --segments 0x10 -o out");
+  EXPECT_EQ(hex.status, 2);
+  EXPECT_NE(hex.err.find("--segments: '0x10' is not a whole number in decimal digits"), std::string::npos) << hex.err;
+  const Outcome hex_real = visvol("plan x.vvp --objective hide --from 0 0 0 --to 1 1 1 --speed 0x10 -o out");
+  EXPECT_EQ(hex_real.status, 2);
+  EXPECT_NE(hex_real.err.find("--speed: '0x10' is hexadecimal"), std::string::npos) << hex_real.err;
 }
 
 TEST(CliUsage, BadInputNamesTheFile) {

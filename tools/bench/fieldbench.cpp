@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "base/cli_numbers.hpp"
 #include "base/version.hpp"
 #include "fields/exact_visibility.hpp"
 #include "fields/gdal/dem_import.hpp"
@@ -391,6 +392,7 @@ int main(int argc, char** argv) {
   app.add_flag("--stream", stream,
                "Also build a 2048 x 2048 x 128 pack (the DEM resampled to 22.5 m) and report its "
                "peak RSS (a minute or two)");
+  visvol::decimal_numbers(app);
   CLI11_PARSE(app, argc, argv);
   if (repeat < 1 || repeat > 100) {
     std::fprintf(stderr, "visvol-fieldbench: --repeat %d is outside 1..100\n", repeat);

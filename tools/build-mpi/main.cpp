@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "base/arguments.hpp"
+#include "base/cli_numbers.hpp"
 #include "base/version.hpp"
 #include "build_cli.hpp"
 #include "cli.hpp"
@@ -377,6 +378,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"observers", "rows"}))
       ->capture_default_str();
   int code = kExitOk;
+  visvol::decimal_numbers(app);  // "010" is ten, not octal eight
   try {
     app.parse(argc, argv);
     code = run(world, o, split == "observers");

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "base/arguments.hpp"
+#include "base/cli_numbers.hpp"
 #include "base/version.hpp"
 #include "drivers/dds/command_codec.hpp"
 #include "drivers/dds/participant.hpp"
@@ -491,6 +492,7 @@ int main(int argc, char** argv) {
 
   CLI::App* topics_app = app.add_subcommand("topics", "print the topics, types and QoS");
 
+  visvol::decimal_numbers(app);  // "010" is ten, not octal eight
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "base/arguments.hpp"
+#include "base/cli_numbers.hpp"
 #include "base/version.hpp"
 #include "drivers/can/socketcan_bus.hpp"
 #include "drivers/hapticsim/script.hpp"
@@ -144,6 +145,7 @@ int run(int argc, char** argv) {
                        visvol::version_line("visvol-hapticsim"));  // listed in --help; handled first in main
   Options o;
   add_options(app, o);
+  visvol::decimal_numbers(app);  // "010" is ten, not octal eight
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -19,6 +19,7 @@
 #include <string>
 
 #include "base/arguments.hpp"
+#include "base/cli_numbers.hpp"
 #include "base/terminal_text.hpp"
 #include "base/version.hpp"
 #include "cli.hpp"
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
   runners["plan"] = add_plan_command(app);
   runners["check"] = add_check_command(app);
   runners["render"] = add_render_command(app);
+  visvol::decimal_numbers(app);  // "010" is ten, not octal eight
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "base/cli_numbers.hpp"
 #include "base/version.hpp"
 #include "fields/dense_level.hpp"
 #include "fields/gdal/dem_io.hpp"
@@ -535,6 +536,7 @@ int parse_options(int argc, char** argv, Options& o) {
       ->check(CLI::IsMember({"fixed-wing", "multirotor"}))
       ->capture_default_str();
   app.footer(kFooter);
+  visvol::decimal_numbers(app);  // "010" is ten, not octal eight
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/cli_numbers.hpp"
 #include "base/version.hpp"
 #include "drivers/dds/live_publisher.hpp"
 #include "drivers/dds/participant.hpp"
@@ -469,6 +470,7 @@ int main(int argc, char** argv) {
   app.add_option("--compare-dds", o.compare_rounds,
                  "Run N pairs of runs, without and then with DDS publishing, and print their medians side by side")
       ->check(CLI::Range(1, 100));
+  visvol::decimal_numbers(app);
   CLI11_PARSE(app, argc, argv);
   if (o.compare_rounds > 0) return compare_dds(o);
   Figures unused;

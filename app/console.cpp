@@ -699,9 +699,25 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
     return {{"error", "no path"}};
   }
   const rt::PathCheck c = checker->check(final_path.data(), static_cast<int>(final_path.size()));
-  line = c.all_met ? "all met" : "NOT MET:";
-  for (const std::string& u : c.unmet()) line += " " + u + ";";
-  return check_json(c, checker->spec().sample_step_m);
+  std::vector<std::string> unmet = c.unmet();
+  // a spooled rope whose free end has not arrived is no route to the end
+  // (a session that ended mid-drag: every other figure met, 760 m short)
+  const rt::ExecutiveCounters& k = exec->counters();
+  const bool reaches_end = k.mode != msg::InteractionMode::spool || k.spool_arrived;
+  if (!reaches_end) {
+    char gap[160];
+    std::snprintf(gap, sizeof gap, "end: the path stops %.0f m short of it (the spooled rope had not arrived)",
+                  k.spool_gap_m);
+    unmet.insert(unmet.begin(), gap);
+  }
+  const bool all_met = c.all_met && reaches_end;
+  line = all_met ? "all met" : "NOT MET:";
+  for (const std::string& u : unmet) line += " " + u + ";";
+  nlohmann::json j = check_json(c, checker->spec().sample_step_m);
+  j["reaches_end"] = reaches_end;
+  j["all_met"] = all_met;
+  j["unmet"] = unmet;
+  return j;
 }
 
 Status Console::Impl::start_catalogue() {

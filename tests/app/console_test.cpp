@@ -363,6 +363,7 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   EXPECT_EQ(c["envelope"][3]["name"], "max-climb");
   EXPECT_EQ(c["envelope"][5]["name"], "min-turn-radius");
   for (const nlohmann::json& x : c["envelope"]) all = all && x["met"].get<bool>();
+  all = all && c["reaches_end"].get<bool>();
   EXPECT_EQ(c["all_met"].get<bool>(), all);
   EXPECT_EQ(c["unmet"].empty(), all);
 }
@@ -663,6 +664,14 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   EXPECT_EQ(s["device"]["state"], "operational");
   EXPECT_EQ(s["mode"], "spool");
   EXPECT_EQ(s["mode_switches"].get<int>(), 1);
+  // a spooled rope not yet at its end is no route there: the verdict says so
+  // (it said "all met" of a path 760 m short)
+  EXPECT_EQ(s["check"]["reaches_end"].get<bool>(), s["spool"]["arrived"].get<bool>()) << s["check"].dump();
+  if (!s["spool"]["arrived"].get<bool>()) {
+    EXPECT_FALSE(s["check"]["all_met"].get<bool>());
+    EXPECT_EQ(s["check"]["unmet"][0].get<std::string>().rfind("end: the path stops ", 0), 0u) << s["check"].dump();
+    EXPECT_NE(r.out.find("NOT MET: end: the path stops "), std::string::npos) << r.out;
+  }
   EXPECT_EQ(s["path"]["rope_resets"].get<int>(), 0);
   // Overruns on a loaded machine end a grasp (the safe state), and the script
   // grasps once a motion: only an undisturbed session must have paid rope out

@@ -406,6 +406,43 @@ TEST_F(PathIo, OnlyTheFilesOfTheSetNotWrittenGoAndNeverALink) {
   EXPECT_EQ(slurp(victim), "keep\n");
 }
 
+// A path that breaks the envelope (29 m under the ground here) is written
+// for analysis, marked unmet in every file, and gets no mission for the
+// autopilot; one that only misses an observer is flyable and gets its .plan.
+TEST_F(PathIo, OnlyAFlyablePathGetsAMissionAndEveryFileSaysWhatIsUnmet) {
+  const std::string base = dir_ + "/unmet";
+  std::vector<std::string> written;
+  ASSERT_TRUE(write_path_outputs(base, report(preset("multirotor")), written).ok());
+  EXPECT_NE(slurp(base + ".csv").find("# requirements: all met\n"), std::string::npos);
+  PathReport under = report(preset("multirotor"));
+  under.requirements_met = false;
+  under.flyable = false;
+  under.unmet = {"clearance 30.0 m: worst -29.0 m, holds on 0.964 of the length"};
+  written.clear();
+  const Status s = write_path_outputs(base, under, written);
+  EXPECT_EQ(s.code(), Errc::state);
+  EXPECT_NE(s.message().find(".plan not written: the path breaks the vehicle's envelope"), std::string::npos)
+      << s.message();
+  EXPECT_NE(s.message().find("(the earlier " + base + ".plan removed: another plan's)"), std::string::npos)
+      << s.message();
+  EXPECT_FALSE(exists(base + ".plan"));
+  EXPECT_EQ(written.size(), 3u);
+  EXPECT_NE(slurp(base + ".csv").find("# requirements: NOT MET\n#   unmet: clearance 30.0 m: worst -29.0 m"),
+            std::string::npos);
+  const std::string kml = slurp(base + ".kml");
+  EXPECT_NE(kml.find("<name>NOT MET: F_c"), std::string::npos) << kml;
+  EXPECT_NE(kml.find("Unmet: clearance 30.0 m: worst -29.0 m"), std::string::npos) << kml;
+  EXPECT_NE(slurp(base + ".geojson").find("\"requirements_met\": false"), std::string::npos);
+
+  PathReport seen = report(preset("multirotor"));
+  seen.requirements_met = false;
+  seen.unmet = {"hidden-from (550500, 4182100, 5): 0.82 of the length <of 1>"};
+  written.clear();
+  ASSERT_TRUE(write_path_outputs(base, seen, written).ok());
+  EXPECT_TRUE(exists(base + ".plan"));
+  EXPECT_NE(slurp(base + ".kml").find("0.82 of the length &lt;of 1&gt;"), std::string::npos);
+}
+
 TEST_F(PathIo, APackCrsInDegreesPlacesNothing) {
   // a grid in metres under a geographic CRS (a forged or mislabelled pack):
   // latitude 4182200 was written into a .plan

@@ -256,6 +256,7 @@ int run_plan(const PlanOptions& o) {
   report.vehicle = r.envelope;
   report.requirements_met = res->final_check.all_met;
   report.unmet = res->final_check.unmet();
+  report.flyable = res->final_check.flight_violation <= 0;
   for (const rt::Vec3& v : report.vertices) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }
@@ -328,13 +329,14 @@ int run_plan(const PlanOptions& o) {
     }
   }
   if (!delivery.ok()) return fail("plan", delivery);
-  if (!outputs.ok()) return fail("plan", outputs);
+  // an output not written is said first, then what the path does not meet
+  const int status = outputs.ok() ? kExitOk : fail("plan", outputs);
   if (!check.all_met) {
     std::fprintf(stderr, "visvol plan: the path does not meet every requirement (written, marked unmet):\n");
     for (const std::string& u : check.unmet()) std::fprintf(stderr, "  %s\n", u.c_str());
-    return kExitFailure;
+    return std::max(status, static_cast<int>(kExitFailure));
   }
-  return kExitOk;
+  return status;
 }
 
 }  // namespace

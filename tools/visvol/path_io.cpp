@@ -786,6 +786,8 @@ std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo, 
     csv << "# h_ellipsoidal_m: height above the WGS84 ellipsoid (EPSG:4979) = z_m + EGM96 geoid undulation (m)\n";
   }
   csv << "# fp: F_p at the vertex in [0 1]; clearance_m: height above the terrain (m)\n";
+  csv << "# requirements: " << (r.requirements_met ? "all met" : "NOT MET") << '\n';
+  for (const std::string& u : r.unmet) csv << "#   unmet: " << u << '\n';
   csv << "index,x_m,y_m,z_m," << (geo.ok() ? "lon_deg,lat_deg," : "") << (ellipsoidal.ok() ? "h_ellipsoidal_m," : "")
       << "fp,clearance_m\n";
   for (std::size_t i = 0; i < r.vertices.size(); ++i) {
@@ -799,15 +801,29 @@ std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo, 
   return csv.str();
 }
 
+// Text for an XML element: its markup characters as entities.
+std::string xml_escaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    if (c == '&') out += "&amp;";
+    else if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else out += c;
+  }
+  return out;
+}
+
 std::string kml_text(const PathReport& r, const std::vector<Vec3>& geo) {
   const rt::PathMetrics& m = r.metrics;
   std::ostringstream kml;
   kml << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      << "<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>visvol " << r.objective
-      << " path</name>\n<Placemark>\n<name>F_c " << fixed(m.fc, 4) << ", " << fixed(m.length_m / 1000.0, 2)
+      << "<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>visvol " << r.objective << " path"
+      << (r.requirements_met ? "" : ", requirements NOT MET") << "</name>\n<Placemark>\n<name>"
+      << (r.requirements_met ? "" : "NOT MET: ") << "F_c " << fixed(m.fc, 4) << ", " << fixed(m.length_m / 1000.0, 2)
       << " km, clearance " << fixed(m.min_clearance_m, 0) << " m</name>\n"
-      << "<description>Altitudes above mean sea level: the DEM's heights (orthometric, taken as EGM96)."
-      << "</description>\n<LineString>\n<altitudeMode>absolute</altitudeMode>\n<coordinates>\n";
+      << "<description>Altitudes above mean sea level: the DEM's heights (orthometric, taken as EGM96).";
+  for (const std::string& u : r.unmet) kml << " Unmet: " << xml_escaped(u) << '.';
+  kml << "</description>\n<LineString>\n<altitudeMode>absolute</altitudeMode>\n<coordinates>\n";
   for (const Vec3& g : geo) kml << fixed(g.x(), 8) << ',' << fixed(g.y(), 8) << ',' << fixed(g.z(), 2) << '\n';
   kml << "</coordinates>\n</LineString>\n</Placemark>\n</Document>\n</kml>\n";
   return kml.str();
@@ -936,7 +952,13 @@ Status write_path_output_set(const std::string& base, const PathReport& r, std::
   VISVOL_RETURN_IF_ERROR(write_output(base + ".csv", csv_text(r, geo, ellipsoidal), written));
   if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
   VISVOL_RETURN_IF_ERROR(write_output(base + ".kml", kml_text(r, *geo), written));
-  const Status plan_ground = check_plan_ground(r);
+  Status plan_ground = check_plan_ground(r);
+  if (plan_ground.ok() && !r.flyable) {
+    // a crew loads the .plan into the autopilot: no mission into a hillside
+    plan_ground = Status(Errc::state,
+                         "the path breaks the vehicle's envelope or leaves the planning bounds, so it is no mission "
+                         "for an autopilot (the CSV, KML and GeoJSON are written, marked unmet)");
+  }
   if (plan_ground.ok())
     VISVOL_RETURN_IF_ERROR(write_output(base + ".plan", json_text(qgc_plan(r, *geo), 1) + "\n", written));
   if (ellipsoidal.ok()) {

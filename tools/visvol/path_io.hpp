@@ -168,6 +168,10 @@ struct PathReport {
   // properties so that a path that breaks a requirement says so where it goes.
   bool requirements_met = true;
   std::vector<std::string> unmet;
+  // The vehicle's envelope and the planning bounds hold (rt::PathCheck's
+  // flight_violation is 0): only then is a .plan, the mission an autopilot
+  // flies, written.
+  bool flyable = true;
 };
 
 // WGS84 (longitude, latitude, height) of the vertices, or an error when the
@@ -209,7 +213,10 @@ inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as
 // CRS only the CSV is written and the status says why the others are not;
 // without the geoid grid all but the GeoJSON are (and the CSV has no
 // h_ellipsoidal_m), and the status names the grid; a path whose first or last
-// vertex is below its ground height gets no .plan, and the status says so.
+// vertex is below its ground height gets no .plan, nor one that is not
+// `flyable`, and the status says so (Errc::state); an earlier plan's .plan
+// under BASE is then removed. The CSV's '#' lines and the KML's name say
+// whether every requirement is met, and name what is not.
 Status write_path_outputs(const std::string& base, const PathReport& report, std::vector<std::string>& written);
 
 // What write_path_outputs would refuse about its four file names (an existing

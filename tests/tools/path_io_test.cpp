@@ -26,9 +26,9 @@ namespace {
 // EGM96's geoid undulation in San Francisco is about -32 m.
 constexpr double kSfUndulationLowM = -34.0, kSfUndulationHighM = -30.0;
 
-std::string utm10n_wkt() {
+std::string utm10n_wkt(int epsg = 32610) {
   OGRSpatialReference srs;
-  EXPECT_EQ(srs.importFromEPSG(32610), OGRERR_NONE);
+  EXPECT_EQ(srs.importFromEPSG(epsg), OGRERR_NONE);
   char* wkt = nullptr;
   srs.exportToWkt(&wkt);
   std::string out = wkt != nullptr ? wkt : "";
@@ -427,8 +427,9 @@ TEST_F(PathIo, OnlyAFlyablePathGetsAMissionAndEveryFileSaysWhatIsUnmet) {
       << s.message();
   EXPECT_FALSE(exists(base + ".plan"));
   EXPECT_EQ(written.size(), 3u);
-  EXPECT_NE(slurp(base + ".csv").find("# requirements: NOT MET\n#   unmet: clearance 30.0 m: worst -29.0 m"),
-            std::string::npos);
+  EXPECT_NE(slurp(base + ".csv").find("# requirements: NOT MET\n#   unmet: clearance 30.0 m: worst -29.0 m; holds"),
+            std::string::npos)
+      << "a comment is one spreadsheet cell: no comma";
   const std::string kml = slurp(base + ".kml");
   EXPECT_NE(kml.find("<name>NOT MET: F_c"), std::string::npos) << kml;
   EXPECT_NE(kml.find("Unmet: clearance 30.0 m: worst -29.0 m"), std::string::npos) << kml;
@@ -441,6 +442,47 @@ TEST_F(PathIo, OnlyAFlyablePathGetsAMissionAndEveryFileSaysWhatIsUnmet) {
   ASSERT_TRUE(write_path_outputs(base, seen, written).ok());
   EXPECT_TRUE(exists(base + ".plan"));
   EXPECT_NE(slurp(base + ".kml").find("0.82 of the length &lt;of 1&gt;"), std::string::npos);
+}
+
+// WGS84 positions say how they were made. From WGS 84 / UTM the change of
+// projection is exact; from NAD27 / UTM (the bundled SF North DEM's CRS)
+// PROJ needs NOAA's grid for centimetres, and without it shifts the datum to
+// 7 m: the outputs name the transformation and its accuracy, and a coarser
+// one than a metre gets a note for the operator.
+TEST_F(PathIo, WgsPositionsSayHowTheyWereConverted) {
+  PathReport r = report(preset("multirotor"));
+  Wgs84Conversion exact;
+  ASSERT_TRUE(to_wgs84(r.vertices, r.crs_wkt, &exact).ok());
+  EXPECT_EQ(exact.accuracy_m, 0.0) << exact.operation;
+  EXPECT_EQ(wgs84_accuracy_note(exact), "");
+  EXPECT_NE(slurp(write(r, "wgs84") + ".csv").find("in degrees; by Inverse of UTM zone 10N (exact)\n"),
+            std::string::npos);
+
+  r.crs_wkt = utm10n_wkt(26710);  // NAD27 / UTM zone 10N
+  Wgs84Conversion shift;
+  ASSERT_TRUE(to_wgs84(r.vertices, r.crs_wkt, &shift).ok());
+  EXPECT_NE(shift.operation.find("NAD27 to WGS 84"), std::string::npos) << shift.operation;
+  EXPECT_NE(shift.accuracy_m, 0.0) << "a datum shift is never exact";
+  const std::string note = wgs84_accuracy_note(shift);
+  // a machine with the NADCON grid installed converts to centimetres
+  EXPECT_EQ(note.empty(), shift.accuracy_m >= 0 && shift.accuracy_m <= kTrustedWgs84AccuracyM) << note;
+  if (!note.empty()) {
+    EXPECT_EQ(note.rfind("WGS84 positions by " + shift.describe(), 0), 0u) << note;
+  }
+  const std::string base = write(r, "nad27");
+  EXPECT_NE(slurp(base + ".csv").find("in degrees; by " + shift.describe()), std::string::npos);
+  EXPECT_NE(slurp(base + ".kml").find("Positions from the pack's CRS by " + shift.describe()), std::string::npos);
+  const nlohmann::json gj = nlohmann::json::parse(slurp(base + ".geojson"));
+  const nlohmann::json& p = gj["features"][0]["properties"];
+  EXPECT_EQ(p["horizontal_transformation"], shift.operation);
+  if (shift.accuracy_m > 0) {
+    EXPECT_EQ(p["horizontal_accuracy_m"].get<double>(), shift.accuracy_m);
+  }
+  // and the NAD27 positions differ from WGS 84 ones by metres, not zero
+  Result<std::vector<Vec3>> as_wgs84 = to_wgs84(r.vertices, utm10n_wkt());
+  Result<std::vector<Vec3>> as_nad27 = to_wgs84(r.vertices, r.crs_wkt);
+  ASSERT_TRUE(as_wgs84.ok() && as_nad27.ok());
+  EXPECT_GT(std::abs((*as_wgs84)[0].x() - (*as_nad27)[0].x()), 1e-4) << "degrees: about 9 m";
 }
 
 TEST_F(PathIo, APackCrsInDegreesPlacesNothing) {

@@ -262,6 +262,11 @@ int run_plan(const PlanOptions& o) {
   }
   std::vector<std::string> written;
   const Status outputs = write_path_outputs(o.out, report, written);
+  // a crew flies the WGS84 positions: say when they are only metres good
+  std::string datum_note;
+  if (Wgs84Conversion conversion; to_wgs84(report.vertices, report.crs_wkt, &conversion).ok()) {
+    datum_note = wgs84_accuracy_note(conversion);
+  }
 
   const rt::PathMetrics& a = res->initial;
   const rt::PathMetrics& b = res->final_metrics;
@@ -286,7 +291,8 @@ int run_plan(const PlanOptions& o) {
                         {"converged", res->converged},
                         {"diverged", res->diverged},
                         {"wall_s", res->wall_s},
-                        {"outputs", written}};
+                        {"outputs", written},
+                        {"notes", datum_note.empty() ? nlohmann::json::array() : nlohmann::json::array({datum_note})}};
     j.update(check_json(check, r.envelope));
     const fields::Bounds2D& box = planning.bounds;
     j["planning_bounds"] = {
@@ -321,6 +327,7 @@ int run_plan(const PlanOptions& o) {
                 res->equilibrium_s, res->simulated_s, res->first_level + 1, res->wall_s);
     print_check(check, r.envelope);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
+    if (!datum_note.empty()) std::printf("note       %s\n", datum_note.c_str());
     if (publisher) {
       std::printf("published  %llu path updates on DDS domain %u (%llu not sent), %u subscriber(s)%s\n",
                   static_cast<unsigned long long>(publisher->published()), o.dds.domain_id,

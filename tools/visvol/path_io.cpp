@@ -468,9 +468,11 @@ Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path,
     if (!orthometric.ok()) return orthometric.status().with_context(path + ": heights");
     out.points = std::move(*orthometric);
   }
-  Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
+  Wgs84Conversion conversion;
+  Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt, &conversion);
   if (!projected.ok()) return projected.status().with_context(path);
   out.points = std::move(*projected);
+  if (std::string note = wgs84_accuracy_note(conversion); !note.empty()) out.notes.push_back(std::move(note));
   return out;
 }
 
@@ -531,35 +533,101 @@ std::vector<Vec3> lift_polyline(const std::vector<Vec3>& points, double clearanc
 
 namespace {
 
-// OGR's transformation between the pack's CRS and WGS84, x east and y north
-// (longitude first) on both sides.
-Result<std::unique_ptr<OGRCoordinateTransformation>> wgs84_transform(const std::string& crs_wkt, bool to_wgs84) {
+struct ProjContextFree {
+  void operator()(PJ_CONTEXT* c) const { proj_context_destroy(c); }
+};
+struct ProjFree {
+  void operator()(PJ* p) const { proj_destroy(p); }
+};
+using ProjContext = std::unique_ptr<PJ_CONTEXT, ProjContextFree>;
+using ProjObject = std::unique_ptr<PJ, ProjFree>;
+
+// A pack's CRS must be projected, in metres, as its grid is.
+Status check_pack_crs(const std::string& crs_wkt) {
   if (crs_wkt.empty()) return Status(Errc::unsupported, "the pack has no CRS, so there is no WGS84 position");
-  OGRSpatialReference pack, wgs84;
+  OGRSpatialReference pack;
   if (pack.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return corrupt("the pack's CRS WKT does not parse");
-  // a pack's grid is in metres: a CRS in degrees (or feet) would place it wrong
+  // a CRS in degrees (or feet) would place the grid wrong
   if (!pack.IsProjected() || std::fabs(pack.GetLinearUnits() - 1.0) > 1e-9) {
     return corrupt("the pack's CRS (" + std::string(pack.GetName() ? pack.GetName() : "unnamed") +
                    ") is not a projected CRS in metres, as its grid is");
   }
-  wgs84.SetWellKnownGeogCS("WGS84");
-  pack.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  std::unique_ptr<OGRCoordinateTransformation> ct(to_wgs84 ? OGRCreateCoordinateTransformation(&pack, &wgs84)
-                                                           : OGRCreateCoordinateTransformation(&wgs84, &pack));
-  if (!ct) return Status(Errc::unsupported, "no transformation between the pack's CRS and WGS84");
-  return ct;
+  return Status::ok_status();
 }
 
+// PROJ's transformation between the pack's CRS and WGS84, x east and y north
+// (longitude first) on both sides: at each point the most accurate one whose
+// area holds it and whose grids are installed (no network). It keeps the
+// coarsest operation it used, to say how far WGS84 positions can be trusted
+// (NAD27 without NOAA's grid: a datum shift good to 7 m).
+class Wgs84Transform {
+ public:
+  static Result<Wgs84Transform> create(const std::string& crs_wkt) {
+    VISVOL_RETURN_IF_ERROR(check_pack_crs(crs_wkt));
+    Wgs84Transform t;
+    t.ctx_.reset(proj_context_create());
+    if (!t.ctx_) return resource_error("PROJ: no context");
+    proj_log_level(t.ctx_.get(), PJ_LOG_NONE);  // failures are reported in words
+    proj_context_set_enable_network(t.ctx_.get(), 0);
+    const ProjObject pack(proj_create(t.ctx_.get(), crs_wkt.c_str())), wgs84(proj_create(t.ctx_.get(), "EPSG:4326"));
+    if (!pack || !wgs84) return Status(Errc::unsupported, "PROJ does not read the pack's CRS or know EPSG:4326");
+    const ProjObject any_order(proj_create_crs_to_crs_from_pj(t.ctx_.get(), pack.get(), wgs84.get(), nullptr, nullptr));
+    if (any_order) t.pj_.reset(proj_normalize_for_visualization(t.ctx_.get(), any_order.get()));
+    if (!t.pj_) return Status(Errc::unsupported, "no transformation between the pack's CRS and WGS84");
+    return t;
+  }
+
+  // False when the point does not convert.
+  bool convert(double& x, double& y, bool to_wgs84) {
+    const PJ_COORD r = proj_trans(pj_.get(), to_wgs84 ? PJ_FWD : PJ_INV, proj_coord(x, y, 0, 0));
+    if (!std::isfinite(r.xy.x) || !std::isfinite(r.xy.y) || r.xy.x == HUGE_VAL) return false;
+    x = r.xy.x;
+    y = r.xy.y;
+    note_operation();
+    return true;
+  }
+
+  const Wgs84Conversion& coarsest() const { return coarsest_; }
+
+ private:
+  void note_operation() {
+    const ProjObject op(proj_trans_get_last_used_operation(pj_.get()));
+    if (!op) return;
+    const char* name = proj_get_name(op.get());
+    if (name != nullptr && name == last_name_) return;
+    last_name_ = name != nullptr ? name : "";
+    // the longitude-first order is ours, not the transformation's
+    const std::string order = " + axis order change (2D)";
+    std::string shown_name = last_name_;
+    if (shown_name.size() > order.size() &&
+        shown_name.compare(shown_name.size() - order.size(), order.size(), order) == 0)
+      shown_name.resize(shown_name.size() - order.size());
+    const double accuracy = proj_coordoperation_get_accuracy(ctx_.get(), op.get());
+    // a pure change of projection is exact; PROJ says -1 (unknown) for some
+    const bool exact =
+        proj_get_type(op.get()) == PJ_TYPE_CONVERSION || (accuracy < 0 && last_name_.find(" to ") == std::string::npos);
+    const double a = exact ? 0.0 : accuracy;
+    const bool coarser = coarsest_.operation.empty() || (a < 0 && coarsest_.accuracy_m >= 0) ||
+                         (coarsest_.accuracy_m >= 0 && a > coarsest_.accuracy_m);
+    if (coarser) coarsest_ = {shown_name, a};
+  }
+
+  ProjContext ctx_;
+  ProjObject pj_;
+  std::string last_name_;
+  Wgs84Conversion coarsest_;
+};
+
 // Heights stay the DEM's (mean sea level) both ways.
-Result<std::vector<Vec3>> transform_xy(const std::vector<Vec3>& points, const std::string& crs_wkt, bool to_wgs84) {
-  Result<std::unique_ptr<OGRCoordinateTransformation>> ct = wgs84_transform(crs_wkt, to_wgs84);
+Result<std::vector<Vec3>> transform_xy(const std::vector<Vec3>& points, const std::string& crs_wkt, bool to_wgs84,
+                                       Wgs84Conversion* conversion = nullptr) {
+  Result<Wgs84Transform> ct = Wgs84Transform::create(crs_wkt);
   if (!ct.ok()) return ct.status();
   std::vector<Vec3> out;
   out.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     double x = points[i].x(), y = points[i].y();
-    if (!(*ct)->Transform(1, &x, &y) || !std::isfinite(x) || !std::isfinite(y)) {
+    if (!std::isfinite(x) || !std::isfinite(y) || !ct->convert(x, y, to_wgs84)) {
       return invalid_argument("path vertex " + std::to_string(i) + " cannot be converted " +
                               (to_wgs84 ? "to WGS84" : "from WGS84 to the pack's CRS"));
     }
@@ -569,17 +637,35 @@ Result<std::vector<Vec3>> transform_xy(const std::vector<Vec3>& points, const st
     }
     out.push_back({x, y, points[i].z()});
   }
+  if (conversion != nullptr) *conversion = ct->coarsest();
   return out;
 }
 
 }  // namespace
 
-Result<std::vector<Vec3>> to_wgs84(const std::vector<Vec3>& vertices, const std::string& crs_wkt) {
-  return transform_xy(vertices, crs_wkt, true);
+Result<std::vector<Vec3>> to_wgs84(const std::vector<Vec3>& vertices, const std::string& crs_wkt,
+                                   Wgs84Conversion* conversion) {
+  return transform_xy(vertices, crs_wkt, true, conversion);
 }
 
-Result<std::vector<Vec3>> from_wgs84(const std::vector<Vec3>& lon_lat_h, const std::string& crs_wkt) {
-  return transform_xy(lon_lat_h, crs_wkt, false);
+Result<std::vector<Vec3>> from_wgs84(const std::vector<Vec3>& lon_lat_h, const std::string& crs_wkt,
+                                     Wgs84Conversion* conversion) {
+  return transform_xy(lon_lat_h, crs_wkt, false, conversion);
+}
+
+std::string Wgs84Conversion::describe() const {
+  if (accuracy_m == 0) return operation + " (exact)";
+  if (accuracy_m < 0) return operation + " (accuracy not known)";
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", accuracy_m);
+  return operation + " (accurate to " + text + " m)";
+}
+
+std::string wgs84_accuracy_note(const Wgs84Conversion& c) {
+  if (c.operation.empty() || (c.accuracy_m >= 0 && c.accuracy_m <= kTrustedWgs84AccuracyM)) return {};
+  return "WGS84 positions by " + c.describe() +
+         ", the finest transformation PROJ has installed here (a datum shift without a grid): the path in WGS84 "
+         "and the path on the pack's terrain may lie that far apart";
 }
 
 // ---- Heights: EGM96 orthometric <-> WGS84 ellipsoidal ----
@@ -591,21 +677,12 @@ constexpr const char* kEllipsoidalCrs = "EPSG:4979";       // WGS 84 (3D): heigh
 // The grid PROJ's EPSG transformation uses, and its name before PROJ 7.
 constexpr const char* kGeoidGridNames = "us_nga_egm96_15.tif (egm96_15.gtx before PROJ 7)";
 
-struct ProjContextFree {
-  void operator()(PJ_CONTEXT* c) const { proj_context_destroy(c); }
-};
-struct ProjFree {
-  void operator()(PJ* p) const { proj_destroy(p); }
-};
 struct ProjListFree {
   void operator()(PJ_OBJ_LIST* l) const { proj_list_destroy(l); }
 };
 struct ProjFactoryFree {
   void operator()(PJ_OPERATION_FACTORY_CONTEXT* f) const { proj_operation_factory_context_destroy(f); }
 };
-using ProjContext = std::unique_ptr<PJ_CONTEXT, ProjContextFree>;
-using ProjObject = std::unique_ptr<PJ, ProjFree>;
-
 struct GeoidShift {
   std::vector<Vec3> points;
   std::string grid;  // the grid PROJ used
@@ -776,18 +853,28 @@ Status check_plan_ground(const PathReport& r) {
   return check("land_ground_m", r.land_ground_m, r.vertices.back(), "last");
 }
 
-std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo, const Result<GeoidShift>& ellipsoidal) {
+// A comment line of the CSV is one spreadsheet cell: no comma.
+std::string comment_cell(std::string text) {
+  std::replace(text.begin(), text.end(), ',', ';');
+  return text;
+}
+
+std::string csv_text(const PathReport& r, const Result<std::vector<Vec3>>& geo, const Wgs84Conversion& conversion,
+                     const Result<GeoidShift>& ellipsoidal) {
   std::ostringstream csv;
   csv << "# visvol plan path (" << r.objective << "); one row per vertex\n"
       << "# x_m y_m: " << crs_description(r.crs_wkt) << " in metres\n"
       << "# z_m: height above the DEM's vertical datum (orthometric; m; taken as EGM96 like SRTM's)\n";
-  if (geo.ok()) csv << "# lon_deg lat_deg: WGS84 (EPSG:4326) longitude and latitude in degrees\n";
+  if (geo.ok()) {
+    csv << "# lon_deg lat_deg: WGS84 (EPSG:4326) longitude and latitude in degrees; by "
+        << comment_cell(conversion.describe()) << '\n';
+  }
   if (ellipsoidal.ok()) {
     csv << "# h_ellipsoidal_m: height above the WGS84 ellipsoid (EPSG:4979) = z_m + EGM96 geoid undulation (m)\n";
   }
   csv << "# fp: F_p at the vertex in [0 1]; clearance_m: height above the terrain (m)\n";
   csv << "# requirements: " << (r.requirements_met ? "all met" : "NOT MET") << '\n';
-  for (const std::string& u : r.unmet) csv << "#   unmet: " << u << '\n';
+  for (const std::string& u : r.unmet) csv << "#   unmet: " << comment_cell(u) << '\n';
   csv << "index,x_m,y_m,z_m," << (geo.ok() ? "lon_deg,lat_deg," : "") << (ellipsoidal.ok() ? "h_ellipsoidal_m," : "")
       << "fp,clearance_m\n";
   for (std::size_t i = 0; i < r.vertices.size(); ++i) {
@@ -813,7 +900,7 @@ std::string xml_escaped(const std::string& text) {
   return out;
 }
 
-std::string kml_text(const PathReport& r, const std::vector<Vec3>& geo) {
+std::string kml_text(const PathReport& r, const std::vector<Vec3>& geo, const Wgs84Conversion& conversion) {
   const rt::PathMetrics& m = r.metrics;
   std::ostringstream kml;
   kml << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
@@ -821,7 +908,8 @@ std::string kml_text(const PathReport& r, const std::vector<Vec3>& geo) {
       << (r.requirements_met ? "" : ", requirements NOT MET") << "</name>\n<Placemark>\n<name>"
       << (r.requirements_met ? "" : "NOT MET: ") << "F_c " << fixed(m.fc, 4) << ", " << fixed(m.length_m / 1000.0, 2)
       << " km, clearance " << fixed(m.min_clearance_m, 0) << " m</name>\n"
-      << "<description>Altitudes above mean sea level: the DEM's heights (orthometric, taken as EGM96).";
+      << "<description>Altitudes above mean sea level: the DEM's heights (orthometric, taken as EGM96). "
+      << "Positions from the pack's CRS by " << xml_escaped(conversion.describe()) << '.';
   for (const std::string& u : r.unmet) kml << " Unmet: " << xml_escaped(u) << '.';
   kml << "</description>\n<LineString>\n<altitudeMode>absolute</altitudeMode>\n<coordinates>\n";
   for (const Vec3& g : geo) kml << fixed(g.x(), 8) << ',' << fixed(g.y(), 8) << ',' << fixed(g.z(), 2) << '\n';
@@ -886,26 +974,30 @@ nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
           {"version", qgc::kPlanVersion}};
 }
 
-nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const GeoidShift& ellipsoidal) {
+nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const Wgs84Conversion& conversion,
+                       const GeoidShift& ellipsoidal) {
   const rt::PathMetrics& m = r.metrics;
-  nlohmann::json props = {{"objective", r.objective},
-                          {"model", r.model},
-                          {"pack", r.pack},
-                          {"fc", m.fc},
-                          {"length_m", m.length_m},
-                          {"min_clearance_m", m.min_clearance_m},
-                          {"max_climb_deg", m.max_climb_deg},
-                          {"max_descent_deg", m.max_descent_deg},
-                          {"min_turn_radius_m",
-                           std::isfinite(m.min_turn_radius_m) ? nlohmann::json(m.min_turn_radius_m) : nlohmann::json()},
-                          {"height_reference",
-                           "coordinates: height above the WGS84 ellipsoid (RFC 7946); vertex_height_orthometric_m: "
-                           "the DEM's height (above mean sea level)"},
-                          {"vertical_datum", "WGS 84 ellipsoid (EPSG:4979)"},
-                          {"vertical_datum_source", kVerticalDatumSource},
-                          {"geoid_grid", ellipsoidal.grid},
-                          {"requirements_met", r.requirements_met},
-                          {"unmet", r.unmet}};
+  nlohmann::json props = {
+      {"objective", r.objective},
+      {"model", r.model},
+      {"pack", r.pack},
+      {"fc", m.fc},
+      {"length_m", m.length_m},
+      {"min_clearance_m", m.min_clearance_m},
+      {"max_climb_deg", m.max_climb_deg},
+      {"max_descent_deg", m.max_descent_deg},
+      {"min_turn_radius_m",
+       std::isfinite(m.min_turn_radius_m) ? nlohmann::json(m.min_turn_radius_m) : nlohmann::json()},
+      {"height_reference",
+       "coordinates: height above the WGS84 ellipsoid (RFC 7946); vertex_height_orthometric_m: "
+       "the DEM's height (above mean sea level)"},
+      {"vertical_datum", "WGS 84 ellipsoid (EPSG:4979)"},
+      {"vertical_datum_source", kVerticalDatumSource},
+      {"geoid_grid", ellipsoidal.grid},
+      {"horizontal_transformation", conversion.operation},
+      {"horizontal_accuracy_m", conversion.accuracy_m >= 0 ? nlohmann::json(conversion.accuracy_m) : nlohmann::json()},
+      {"requirements_met", r.requirements_met},
+      {"unmet", r.unmet}};
   nlohmann::json fp = nlohmann::json::array(), clearance = nlohmann::json::array(),
                  orthometric = nlohmann::json::array(), coords = nlohmann::json::array();
   for (std::size_t i = 0; i < geo.size(); ++i) {
@@ -945,13 +1037,14 @@ namespace {
 // the positions convert to WGS84 (and the geoid grid is there).
 Status write_path_output_set(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
   VISVOL_RETURN_IF_ERROR(validate_report(r));
-  const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt);
+  Wgs84Conversion conversion;
+  const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt, &conversion);
   const Result<GeoidShift> ellipsoidal =
       geo.ok() ? shift_heights(*geo, true) : Result<GeoidShift>(Status(Errc::unsupported, "no WGS84 positions"));
   // CSV: always (projected coordinates are enough)
-  VISVOL_RETURN_IF_ERROR(write_output(base + ".csv", csv_text(r, geo, ellipsoidal), written));
+  VISVOL_RETURN_IF_ERROR(write_output(base + ".csv", csv_text(r, geo, conversion, ellipsoidal), written));
   if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
-  VISVOL_RETURN_IF_ERROR(write_output(base + ".kml", kml_text(r, *geo), written));
+  VISVOL_RETURN_IF_ERROR(write_output(base + ".kml", kml_text(r, *geo, conversion), written));
   Status plan_ground = check_plan_ground(r);
   if (plan_ground.ok() && !r.flyable) {
     // a crew loads the .plan into the autopilot: no mission into a hillside
@@ -963,7 +1056,7 @@ Status write_path_output_set(const std::string& base, const PathReport& r, std::
     VISVOL_RETURN_IF_ERROR(write_output(base + ".plan", json_text(qgc_plan(r, *geo), 1) + "\n", written));
   if (ellipsoidal.ok()) {
     VISVOL_RETURN_IF_ERROR(
-        write_output(base + ".geojson", json_text(geojson(r, *geo, *ellipsoidal), 1) + "\n", written));
+        write_output(base + ".geojson", json_text(geojson(r, *geo, conversion, *ellipsoidal), 1) + "\n", written));
   }
   if (!plan_ground.ok()) return plan_ground.with_context(".plan not written");
   if (!ellipsoidal.ok()) return ellipsoidal.status().with_context("GeoJSON not written");

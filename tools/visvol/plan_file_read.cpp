@@ -616,9 +616,11 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
   }
   // altitudes above mean sea level: the DEM's heights, kept
   if (home) out.points.push_back(*home);
-  Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt);
+  Wgs84Conversion conversion;
+  Result<std::vector<Vec3>> projected = from_wgs84(out.points, crs_wkt, &conversion);
   if (!projected.ok()) return projected.status().with_context(path);
   out.points = std::move(*projected);
+  if (std::string note = wgs84_accuracy_note(conversion); !note.empty()) out.notes.push_back(std::move(note));
   if (home) {
     out.relative_home = out.points.back();
     out.points.pop_back();

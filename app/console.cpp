@@ -219,6 +219,7 @@ struct Console::Impl {
   rt::ExecutiveCounters counters_at_start;  // before the loop started (then: snapshot())
   double fc_start = 0;
   std::uint64_t rss_peak = 0;
+  bool over_budget_said = false;  // the first time the process's memory went over --budget-mib
 
   Status start();
   Status open_pack();
@@ -917,6 +918,11 @@ Status Console::run(const std::atomic<bool>& stop) {
       next_line_s += 1.0;
       const std::uint64_t rss = rt::resident_bytes();
       m.rss_peak = std::max(m.rss_peak, rss);
+      if (!m.over_budget_said && static_cast<double>(rss) > m.o.budget_mib * kMiB) {
+        m.over_budget_said = true;
+        log_printf(LogLevel::warning, "visvol-console: memory: %.0f MiB resident, over the %.0f MiB budget\n",
+                   static_cast<double>(rss) / kMiB, m.o.budget_mib);
+      }
       const storage::ResidentStats ts = m.field->stats();
       char line[512];
       std::snprintf(line, sizeof line, "%.1f,%.1f,%.1f,%.1f,%.1f,%llu,%llu,%.6f,%d,%s,%.1f,%.1f,%llu\n", t,
@@ -1089,6 +1095,7 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
       {"memory",
        {{"budget_mib", o.budget_mib},
         {"rss_peak_mib", static_cast<double>(rss_peak) / kMiB},
+        {"over_budget", static_cast<double>(rss_peak) > o.budget_mib * kMiB},
         {"rss_end_mib", static_cast<double>(rt::resident_bytes()) / kMiB},
         {"reserved", budget_items}}},
       {"tiles",

@@ -12,6 +12,7 @@
 #include <dds/ddsi/ddsi_serdata.h>
 
 #include "io/input_file.hpp"
+#include "msg/samples.hpp"
 
 namespace visvol::dds {
 namespace {
@@ -151,6 +152,11 @@ Status dds_error(std::string_view what, dds_return_t rc) {
   return Status(code, std::string(what) + ": " + dds_strretcode(rc));
 }
 
+// visvol's own samples stay well under the limit (a PathVertex is under
+// 64 bytes serialised)
+static_assert(4 * msg::kMaxThumbnailBytes <= kMaxSampleBytes, "a thumbnail fits the sample limit");
+static_assert(4 * 64 * msg::kMaxPathVertices <= kMaxSampleBytes, "a path fits the sample limit");
+
 Result<std::unique_ptr<Participant>> Participant::create(const ParticipantConfig& config) {
   VISVOL_RETURN_IF_ERROR(validate(config));
   const std::uint32_t id = config.domain_id;
@@ -159,7 +165,10 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantConfig
   auto it = domains.find(id);
   bool created = false;
   if (it == domains.end()) {
-    const dds_entity_t domain = dds_create_domain(id, config.cyclone_xml.c_str());
+    // Cyclone merges a list of fragments in order: the last one's limit holds
+    const std::string merged = config.cyclone_xml + ",<CycloneDDS><Domain Id=\"any\"><Internal><MaxSampleSize>" +
+                               std::to_string(kMaxSampleBytes) + "B</MaxSampleSize></Internal></Domain></CycloneDDS>";
+    const dds_entity_t domain = dds_create_domain(id, merged.c_str());
     if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) {
       return Status(Errc::state, "DDS domain " + std::to_string(id) +
                                      " already exists in this process, created outside "

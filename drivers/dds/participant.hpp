@@ -41,6 +41,16 @@ std::string_view loopback_config();
 // file and the problem.
 Result<std::string> read_cyclone_config(const std::string& path);
 
+// The largest serialised sample a participant sends or takes, bytes:
+// Cyclone drops a larger one as it arrives (with a line on stderr), before
+// reassembling or decoding it. Every domain visvol creates has it, whatever
+// the configuration given (it is merged in last): a set-constraints command
+// of 25 million observers took a console from 67 to 950 MiB of locked memory
+// before its own limit (msg::kMaxConstraints) could refuse it. visvol's
+// largest samples, a thumbnail's PNG (msg::kMaxThumbnailBytes) and a path of
+// msg::kMaxPathVertices, are a quarter of it at most.
+inline constexpr std::uint32_t kMaxSampleBytes = 1024 * 1024;
+
 struct ParticipantConfig {
   std::uint32_t domain_id = 0;  // 0..kMaxDomainId
   // The Cyclone configuration XML itself (not a file name): see

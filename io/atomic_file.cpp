@@ -445,6 +445,12 @@ Status OutputFile::commit() {
   return fsync_directory_of(path_);
 }
 
+Status OutputFile::flush() {
+  if (done_) return Status(Errc::state, path_ + ": output is closed");
+  if (fd_ >= 0 && ::fsync(fd_) != 0) return fail(output_error(path_ + ": fsync failed: " + std::strerror(errno)));
+  return Status::ok_status();
+}
+
 void OutputFile::discard() {
   if (done_) return;
   if (fd_ >= 0) ::close(fd_);
@@ -462,6 +468,32 @@ Status write_file_atomically(const std::string& path, const std::string& bytes) 
   if (!f.ok()) return f.status();
   VISVOL_RETURN_IF_ERROR(f->write(bytes.data(), bytes.size()));
   return f->commit();
+}
+
+Status write_files_atomically(const std::vector<std::pair<std::string, std::string>>& files,
+                              std::vector<std::string>& written) {
+  std::vector<OutputFile> ready;
+  ready.reserve(files.size());
+  for (const auto& [path, bytes] : files) {
+    Result<OutputFile> f = OutputFile::create(path);
+    if (!f.ok()) return f.status();  // the temporaries made so far go with `ready`
+    VISVOL_RETURN_IF_ERROR(f->write(bytes.data(), bytes.size()));
+    VISVOL_RETURN_IF_ERROR(f->flush());
+    ready.push_back(std::move(*f));
+  }
+  // a signal between two renames would leave half of one set, half of another
+  sigset_t held, before;
+  sigemptyset(&held);
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&held, sig);
+  pthread_sigmask(SIG_BLOCK, &held, &before);
+  Status status;
+  for (OutputFile& f : ready) {
+    status = f.commit();
+    if (!status.ok()) break;
+    written.push_back(f.path());
+  }
+  pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  return status;
 }
 
 void install_output_cleanup_on_signals() {

@@ -24,6 +24,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "base/status.hpp"
 
@@ -62,6 +64,10 @@ class OutputFile {
   // Writes all `bytes` at `offset_bytes`.
   Status write_at(const void* data, std::size_t bytes, std::uint64_t offset_bytes);
 
+  // The bytes written so far made durable under the temporary (fsync): where
+  // the disk is full, this fails before anything is renamed. On failure the
+  // temporary is removed.
+  Status flush();
   // fsync, rename over path(), fsync the directory. On failure the temporary is
   // removed and path() is untouched.
   Status commit();
@@ -90,6 +96,14 @@ Status check_output_path(const std::string& path);
 
 // Writes a whole file: `path` holds the old content or `bytes`, never part.
 Status write_file_atomically(const std::string& path, const std::string& bytes);
+
+// Writes a set of files (path, bytes) that belong together: each is written
+// and made durable under its temporary first, and only when all are do they
+// replace their destinations, with SIGINT, SIGTERM and SIGHUP held off
+// between the renames. A full disk or a bad name leaves every destination as
+// it was; `written` lists those renamed into place.
+Status write_files_atomically(const std::vector<std::pair<std::string, std::string>>& files,
+                              std::vector<std::string>& written);
 
 // For offline tools: SIGINT and SIGTERM remove the temporaries being written,
 // then end the process by the same signal. Call once at the start of main(),

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -235,6 +236,44 @@ TEST_F(AtomicFile, AFailedWriteIsAnOutputErrorAndRemovesTheTemporary) {
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+// A set of files replaces the earlier set whole, or leaves it as it was: the
+// disk filling at the third file (a file size limit here) changes none of them
+// (a plan's four files had been half new, half gone).
+TEST_F(AtomicFile, ASetOfFilesIsReplacedWholeOrNotAtAll) {
+  const std::vector<std::string> names = {dir_ + "/p.csv", dir_ + "/p.kml", dir_ + "/p.plan"};
+  for (const std::string& n : names) write_text(n, "earlier");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{4096, 4096};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    std::vector<std::string> written;
+    const Status st = write_files_atomically(
+        {{names[0], "new csv"}, {names[1], "new kml"}, {names[2], std::string(1 << 20, 'x')}}, written);
+    bool ok = !st.ok() && st.code() == Errc::output && written.empty();
+    for (const std::string& n : names) ok = ok && read_text(n) == "earlier" && !exists(own_temp(n));
+    ::_exit(ok ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+
+  std::vector<std::string> written;
+  ASSERT_TRUE(write_files_atomically({{names[0], "a"}, {names[1], "b"}, {names[2], "c"}}, written).ok());
+  EXPECT_EQ(written, names);
+  EXPECT_EQ(read_text(names[0]) + read_text(names[1]) + read_text(names[2]), "abc");
+  // a bad name among them (a directory where a file goes): nothing changes
+  std::filesystem::remove(names[1]);
+  std::filesystem::create_directory(names[1]);
+  written.clear();
+  const Status refused = write_files_atomically({{names[0], "x"}, {names[1], "y"}, {names[2], "z"}}, written);
+  EXPECT_EQ(refused.code(), Errc::invalid_argument) << refused.message();
+  EXPECT_TRUE(written.empty());
+  EXPECT_EQ(read_text(names[0]) + read_text(names[2]), "ac");
+  EXPECT_FALSE(exists(own_temp(names[0])));
 }
 
 // A child writing an output is killed by `sig`; returns the temporary's name.

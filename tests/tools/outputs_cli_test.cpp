@@ -112,6 +112,30 @@ TEST_F(Outputs, ALinkPlantedAtTheTemporaryNameIsRefused) {
   std::system(("rm -f " + out + ".tmp.*").c_str());
 }
 
+// An output that is the command's own input (by another name, a hard link)
+// would be overwritten while read: export -o its pack replaced the pack by a
+// VTI, build -o its DEM the DEM by a pack. Refused, the input unchanged.
+TEST_F(Outputs, AnOutputThatIsTheCommandsOwnInputIsRefused) {
+  const std::string dem = *dir_ + "/dem_copy.tif", pack = *dir_ + "/pack_copy.vvp";
+  ASSERT_EQ(std::system(("cp " + kDem + " " + dem + " && cp " + *pack_ + " " + pack).c_str()), 0);
+  const std::string linked = *dir_ + "/pack_link.vvp";
+  ASSERT_EQ(::link(pack.c_str(), linked.c_str()), 0);
+  const std::string dem_bytes = slurp(dem), pack_bytes = slurp(pack);
+  const std::pair<std::string, std::string> cases[] = {
+      {"export " + pack + " --layer height --format vti -o " + linked, "-o " + linked + " is the pack " + pack},
+      {"render " + pack + " --size 64x48 -o " + *dir_ + "/./pack_copy.vvp", "is the pack " + pack},
+      {"build " + dem + " " + kSmallPackOptions + " -o " + dem, "-o " + dem + " is the DEM " + dem},
+      {"viewshed " + dem + " " + kCrop + " --observer 550500 4182100 -o " + dem, "is the DEM " + dem}};
+  for (const auto& [args, expected] : cases) {
+    const Outcome r = visvol(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("the command would overwrite its own input"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(slurp(dem), dem_bytes);
+  EXPECT_EQ(slurp(pack), pack_bytes);
+}
+
 TEST_F(Outputs, ALinkADeviceOrAFifoAtTheOutputIsRefusedAndLeftAsItIs) {
   const std::string link = *dir_ + "/link.out", fifo = *dir_ + "/fifo.out";
   ASSERT_EQ(::symlink(victim().c_str(), link.c_str()), 0);

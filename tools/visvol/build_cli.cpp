@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "base/terminal_text.hpp"
+#include "cli.hpp"
 #include "fields/gdal/dem_io.hpp"
 #include "fields/terrain_force.hpp"
 #include "io/json_text.hpp"
@@ -161,6 +162,9 @@ std::string build_source_json(const BuildOptions& o, const PreparedBuild& b) {
 }
 
 Result<PreparedBuild> prepare_build(const BuildOptions& o) {
+  const std::vector<std::pair<std::string, std::string>> inputs = {{"DEM", o.dem}, {"--weights", o.weights}};
+  VISVOL_RETURN_IF_ERROR(output_is_no_input(o.out, "-o", inputs));
+  VISVOL_RETURN_IF_ERROR(output_is_no_input(o.json_file, "--json-file", inputs));
   PreparedBuild b;
   Result<BuildInput> in = build_input(o);
   if (!in.ok()) return in.status();

@@ -1,5 +1,6 @@
 #include "cli.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,6 +21,21 @@ int exit_code(const Status& status) {
 int fail(const std::string& command, const Status& status) {
   std::fprintf(stderr, "visvol %s: %s\n", command.c_str(), terminal_safe(status.message()).c_str());
   return exit_code(status);
+}
+
+Status output_is_no_input(const std::string& output, const std::string& output_name,
+                          const std::vector<std::pair<std::string, std::string>>& inputs) {
+  struct stat out {};
+  if (output.empty() || ::stat(output.c_str(), &out) != 0) return Status::ok_status();
+  for (const auto& [name, path] : inputs) {
+    struct stat in {};
+    if (path.empty() || ::stat(path.c_str(), &in) != 0) continue;
+    if (in.st_dev == out.st_dev && in.st_ino == out.st_ino) {
+      return invalid_argument(output_name + " " + output + " is the " + name + " " + path +
+                              " it reads: the command would overwrite its own input; name another output");
+    }
+  }
+  return Status::ok_status();
 }
 
 Status write_text_file(const std::string& path, const std::string& text) { return write_file_atomically(path, text); }

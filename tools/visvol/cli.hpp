@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "base/status.hpp"
 
@@ -19,6 +21,14 @@ int exit_code(const Status& status);
 
 // Prints "visvol <command>: <message>" on stderr and returns exit_code(status).
 int fail(const std::string& command, const Status& status);
+
+// Refuses an output that is already one of the command's inputs (the same
+// file: device and inode, so "./x", links and hard links too), which the
+// command would overwrite while it reads it (export -o its own pack, build
+// -o its DEM). `inputs`: (what the input is called, its path); empty paths
+// and files that do not exist are skipped. Errc::invalid_argument naming both.
+Status output_is_no_input(const std::string& output, const std::string& output_name,
+                          const std::vector<std::pair<std::string, std::string>>& inputs);
 
 // Writes a small text file whole or not at all (temporary file, fsync, rename).
 Status write_text_file(const std::string& path, const std::string& text);

@@ -276,6 +276,7 @@ int run_export(const ExportOptions& o) {
   Result<storage::ExportFormat> format = storage::parse_export_format(o.format);
   if (!format.ok()) return fail("export", format.status());
   if (Status s = check_output_path(o.out); !s.ok()) return fail("export", s.with_context("-o"));
+  if (Status s = output_is_no_input(o.out, "-o", {{"pack", o.path}}); !s.ok()) return fail("export", s);
   Result<std::shared_ptr<const Pack>> pack = Pack::open(o.path);
   if (!pack.ok()) return fail("export", pack.status());
   Result<PackLevel> level = PackLevel::open(*pack, o.lod);

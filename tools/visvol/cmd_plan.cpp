@@ -184,17 +184,10 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
 // An --init file that is one of the plan's own outputs would be overwritten
 // (or, where the plan writes only part of its set, removed).
 Status check_init_is_no_output(const PlanOptions& o) {
-  if (o.init == "straight" || o.init == "global") return Status::ok_status();
-  struct stat in {};
-  if (::stat(o.init.c_str(), &in) != 0) return Status::ok_status();  // the reader names what is wrong
+  const std::string init = o.init == "straight" || o.init == "global" ? std::string() : o.init;
   for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
-    struct stat out {};
-    const std::string file = o.out + extension;
-    if (::stat(file.c_str(), &out) == 0 && out.st_dev == in.st_dev && out.st_ino == in.st_ino) {
-      return invalid_argument("--init " + o.init + " is " + file +
-                              ", one of -o's outputs: the plan would overwrite "
-                              "its own start (choose another -o)");
-    }
+    VISVOL_RETURN_IF_ERROR(output_is_no_input(o.out + extension, std::string("-o's ") + (extension + 1),
+                                              {{"--init", init}, {"pack", o.pack}}));
   }
   return Status::ok_status();
 }

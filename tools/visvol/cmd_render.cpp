@@ -232,6 +232,9 @@ int run_render(const RenderOptions& o) {
   render::View view = render::View::oblique;
   if (Status s = configure(o, config, view); !s.ok()) return fail("render", s);
   if (Status s = check_output_path(o.out); !s.ok()) return fail("render", s.with_context("-o"));
+  if (Status s = output_is_no_input(o.out, "-o", {{"pack", o.pack}, {"--path", o.path}, {"--transfer", o.transfer}});
+      !s.ok())
+    return fail("render", s);
   Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(o.pack);
   if (!pack.ok()) return fail("render", pack.status());
   Result<PackLevel> finest = PackLevel::open(*pack, 0);

@@ -25,6 +25,7 @@ struct ViewshedOptions {
 
 int run_viewshed(ViewshedOptions& o) {
   if (Status s = check_output_path(o.out); !s.ok()) return fail("viewshed", s.with_context("-o"));
+  if (Status s = output_is_no_input(o.out, "-o", {{"DEM", o.dem}}); !s.ok()) return fail("viewshed", s);
   const auto t0 = std::chrono::steady_clock::now();
   fields::ImportReport imported;
   Result<fields::Heightfield> hf = import(o.dem, o.import, &imported);

@@ -1016,12 +1016,6 @@ nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const 
              {"properties", props}}}}};
 }
 
-Status write_output(const std::string& file, const std::string& text, std::vector<std::string>& written) {
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(file, text));
-  written.push_back(file);
-  return Status::ok_status();
-}
-
 }  // namespace
 
 Status check_path_outputs(const std::string& base) {
@@ -1041,10 +1035,6 @@ Status write_path_output_set(const std::string& base, const PathReport& r, std::
   const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt, &conversion);
   const Result<GeoidShift> ellipsoidal =
       geo.ok() ? shift_heights(*geo, true) : Result<GeoidShift>(Status(Errc::unsupported, "no WGS84 positions"));
-  // CSV: always (projected coordinates are enough)
-  VISVOL_RETURN_IF_ERROR(write_output(base + ".csv", csv_text(r, geo, conversion, ellipsoidal), written));
-  if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
-  VISVOL_RETURN_IF_ERROR(write_output(base + ".kml", kml_text(r, *geo, conversion), written));
   Status plan_ground = check_plan_ground(r);
   if (plan_ground.ok() && !r.flyable) {
     // a crew loads the .plan into the autopilot: no mission into a hillside
@@ -1052,12 +1042,19 @@ Status write_path_output_set(const std::string& base, const PathReport& r, std::
                          "the path breaks the vehicle's envelope or leaves the planning bounds, so it is no mission "
                          "for an autopilot (the CSV, KML and GeoJSON are written, marked unmet)");
   }
-  if (plan_ground.ok())
-    VISVOL_RETURN_IF_ERROR(write_output(base + ".plan", json_text(qgc_plan(r, *geo), 1) + "\n", written));
-  if (ellipsoidal.ok()) {
-    VISVOL_RETURN_IF_ERROR(
-        write_output(base + ".geojson", json_text(geojson(r, *geo, conversion, *ellipsoidal), 1) + "\n", written));
+  // the set replaces the earlier one whole or not at all (a full disk left
+  // the new CSV and KML beside no .plan)
+  std::vector<std::pair<std::string, std::string>> set;
+  set.emplace_back(base + ".csv", csv_text(r, geo, conversion, ellipsoidal));  // projected coordinates suffice
+  if (geo.ok()) {
+    set.emplace_back(base + ".kml", kml_text(r, *geo, conversion));
+    if (plan_ground.ok()) set.emplace_back(base + ".plan", json_text(qgc_plan(r, *geo), 1) + "\n");
+    if (ellipsoidal.ok()) {
+      set.emplace_back(base + ".geojson", json_text(geojson(r, *geo, conversion, *ellipsoidal), 1) + "\n");
+    }
   }
+  VISVOL_RETURN_IF_ERROR(write_files_atomically(set, written));
+  if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
   if (!plan_ground.ok()) return plan_ground.with_context(".plan not written");
   if (!ellipsoidal.ok()) return ellipsoidal.status().with_context("GeoJSON not written");
   return Status::ok_status();

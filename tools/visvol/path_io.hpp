@@ -208,7 +208,8 @@ Result<std::vector<Vec3>> ellipsoidal_to_orthometric(const std::vector<Vec3>& lo
 // The GeoJSON's properties.vertical_datum_source.
 inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as EGM96 orthometric)";
 
-// Writes, each whole or not at all, `written` listing them:
+// Writes the set, replacing an earlier one whole or not at all (a full disk
+// leaves the earlier set as it was), `written` listing them:
 //   BASE.csv: '#' lines naming the CRS and datums, a header row, one row per
 //     vertex: index, x_m, y_m, z_m (pack CRS; z orthometric, the DEM's),
 //     lon_deg, lat_deg (WGS84), h_ellipsoidal_m (WGS84 ellipsoid), fp,

@@ -444,12 +444,15 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
   plan.table_bytes = HullTable::estimate_bytes(plan.radius_posts, params.exact_rings);
   plan.terrain_bytes = padded_terrain_bytes(hf.nx, hf.ny, plan.radius_posts);
   const LevelRowLayout layout(hf.nx, hf.ny, plan.radius_posts);
+  // weight_padded, top_level, eye_m (chunk-padded rows) and the weights a post
+  plan.observer_bytes = static_cast<std::size_t>(layout.chunks) * kLanes * static_cast<std::size_t>(hf.ny) * 12 +
+                        static_cast<std::size_t>(hf.nx) * static_cast<std::size_t>(hf.ny) * sizeof(std::int32_t);
   const std::size_t per_row = layout.bytes_per_observer_row();
   const std::size_t limit = static_cast<std::size_t>(params.max_memory_mib * kMiB);
   const std::size_t slab =
       static_cast<std::size_t>(params.nz + 1) * static_cast<std::size_t>(hf.nx) * sizeof(std::int32_t);
   auto total_for = [&](int batch) {
-    return plan.table_bytes + plan.terrain_bytes + per_row * static_cast<std::size_t>(batch) +
+    return plan.table_bytes + plan.terrain_bytes + plan.observer_bytes + per_row * static_cast<std::size_t>(batch) +
            window_rows(hf.ny, plan.radius_posts, batch) * slab + staging_for(batch, slab);
   };
   int batch = std::min(kMaxBatchRows, hf.ny);
@@ -466,8 +469,9 @@ Result<BuildPlan> plan_visibility_build(const Heightfield& hf, const FieldParams
         << " voxels with hull radius " << plan.radius_posts << " posts needs " << mib(plan.total_bytes())
         << " MiB of working memory (hull levels " << mib(plan.level_bytes) << ", histogram window "
         << mib(plan.window_bytes) << ", finished rows " << mib(plan.staging_bytes) << ", table "
-        << mib(plan.table_bytes) << ", terrain " << mib(plan.terrain_bytes) << "); the limit is " << std::defaultfloat
-        << std::setprecision(6) << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
+        << mib(plan.table_bytes) << ", terrain " << mib(plan.terrain_bytes) << ", observers "
+        << mib(plan.observer_bytes) << "); the limit is " << std::defaultfloat << std::setprecision(6)
+        << params.max_memory_mib << " MiB: use a smaller range, fewer levels or a smaller grid";
     return resource_error(msg.str());
   }
   return plan;

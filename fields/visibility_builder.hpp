@@ -43,10 +43,13 @@ struct BuildPlan {
   int batch_rows = 0;    // observer rows per batch
   std::size_t table_bytes = 0;
   std::size_t terrain_bytes = 0;
-  std::size_t level_bytes = 0;    // hull levels of one batch
-  std::size_t window_bytes = 0;   // rolling histogram window
-  std::size_t staging_bytes = 0;  // finished rows of one batch, in the sink's order
-  std::size_t total_bytes() const { return table_bytes + terrain_bytes + level_bytes + window_bytes + staging_bytes; }
+  std::size_t level_bytes = 0;     // hull levels of one batch
+  std::size_t window_bytes = 0;    // rolling histogram window
+  std::size_t staging_bytes = 0;   // finished rows of one batch, in the sink's order
+  std::size_t observer_bytes = 0;  // per observer: weight, eye, range top (chunk-padded rows), and its weight
+  std::size_t total_bytes() const {
+    return table_bytes + terrain_bytes + level_bytes + window_bytes + staging_bytes + observer_bytes;
+  }
 };
 
 // Sizes the working memory of a build; refuses (Errc::resource) when it would

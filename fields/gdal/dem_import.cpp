@@ -300,8 +300,9 @@ Status check_warp_size(GDALDataset& in, const ImportPlan& plan, const ImportOpti
   }
   std::ostringstream msg;
   msg << path << ": the import would be " << nx << " x " << ny << " posts at " << number(spacing_m)
-      << " m spacing; at most " << kMaxPostsPerSide << " a side and " << options.max_posts
-      << " in all are supported: give a coarser --spacing or a smaller --crop";
+      << " m spacing; at most " << kMaxPostsPerSide << " a side and " << options.max_posts << " in all are supported"
+      << (options.max_posts_reason.empty() ? "" : " (" + options.max_posts_reason + ")")
+      << ": give a coarser --spacing or a smaller --crop";
   return invalid_argument(msg.str());
 }
 
@@ -445,7 +446,7 @@ Result<Heightfield> import_dem(const std::string& path, const ImportOptions& opt
       out_info->nodata = info.has_nodata ? info.nodata : -3.0e38;
     }
   }
-  VISVOL_RETURN_IF_ERROR(gdal::check_metric_grid(*out_info, path, options.max_posts));
+  VISVOL_RETURN_IF_ERROR(gdal::check_metric_grid(*out_info, path, options.max_posts, options.max_posts_reason));
   DemReadOptions read;
   read.nodata = options.nodata;
   read.max_posts = options.max_posts;

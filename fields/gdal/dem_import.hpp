@@ -30,6 +30,8 @@ struct ImportOptions {
   std::optional<BoundingBox> crop;
   std::string resampling = "bilinear";  // near, bilinear, cubic, average
   std::size_t max_posts = std::size_t{1} << 28;
+  // Why max_posts is what it is, for the refusal ("--max-memory 8192 MiB"); empty: the format's limit.
+  std::string max_posts_reason;
 };
 
 Status validate(const ImportOptions& options);

@@ -316,7 +316,8 @@ Status check_geotransform(const DemInfo& info, const std::string& name, bool geo
   return check_extent(info, name, geographic);
 }
 
-Status check_metric_grid(const DemInfo& info, const std::string& name, std::size_t max_posts) {
+Status check_metric_grid(const DemInfo& info, const std::string& name, std::size_t max_posts,
+                         const std::string& max_posts_reason) {
   const double* gt = info.geotransform;
   std::ostringstream msg;
   msg << name << ": ";
@@ -343,8 +344,8 @@ Status check_metric_grid(const DemInfo& info, const std::string& name, std::size
     return invalid_argument(msg.str());
   }
   if (static_cast<std::size_t>(info.nx) * static_cast<std::size_t>(info.ny) > max_posts) {
-    msg << info.nx << " x " << info.ny << " posts is more than the " << max_posts
-        << " this read allows; crop or resample it";
+    msg << info.nx << " x " << info.ny << " posts is more than the " << max_posts << " this read allows"
+        << (max_posts_reason.empty() ? "" : " (" + max_posts_reason + ")") << "; crop or resample it";
     return invalid_argument(msg.str());
   }
   return Status::ok_status();

@@ -42,7 +42,8 @@ Status check_geotransform(const DemInfo& info, const std::string& name, bool geo
 
 // Refuses what the heightfield cannot hold: degrees, non-metre CRS units,
 // rotated, flipped or non-square pixels, sizes beyond the limits.
-Status check_metric_grid(const DemInfo& info, const std::string& name, std::size_t max_posts);
+Status check_metric_grid(const DemInfo& info, const std::string& name, std::size_t max_posts,
+                         const std::string& max_posts_reason = "");
 
 // Band 1 as a heightfield in metres (scale, offset and `vertical_to_m`
 // applied), nodata refused or filled per `options`.

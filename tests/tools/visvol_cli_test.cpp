@@ -88,6 +88,12 @@ TEST(CliUsage, BadInputNamesTheFile) {
   EXPECT_EQ(levels.status, 2);
   EXPECT_NE(levels.err.find("levels: 400"), std::string::npos) << levels.err;
   EXPECT_NE(access("/tmp/never.vvp", F_OK), 0);
+  // a grid --max-memory cannot hold, refused before the import reads it (1 m
+  // posts of this DEM took 3 GB in 13 s to be refused, 9 GB under 8 GiB)
+  const Outcome big = visvol("build " + kDem + " --fill-nodata --spacing 1 --max-memory 1024 -o /tmp/never.vvp");
+  EXPECT_EQ(big.status, 2);
+  EXPECT_NE(big.err.find("the import would be 11100 x 13980 posts at 1 m spacing"), std::string::npos) << big.err;
+  EXPECT_NE(big.err.find("(--max-memory 1024 MiB at 48 bytes a post)"), std::string::npos) << big.err;
 }
 
 TEST_F(Cli, InfoJsonHasTheGeoreference) {
@@ -176,6 +182,12 @@ TEST_F(Cli, SampleAnswersLineByLine) {
   EXPECT_GT(std::stod(h.out), 0.0);
   EXPECT_EQ(visvol("sample " + *pack_ + " --layer fp", "").status, 2);
   EXPECT_EQ(visvol("sample " + *pack_ + " --lod 7", "").status, 2);
+  // a line without end (/dev/zero grew one to gigabytes): refused at 4 KiB,
+  // after the points before it were answered
+  const Outcome endless = visvol("sample " + *pack_, "550500 4182000 200\n" + std::string(5000, '7'));
+  EXPECT_EQ(endless.status, 2);
+  EXPECT_EQ(std::count(endless.out.begin(), endless.out.end(), '\n'), 1);
+  EXPECT_NE(endless.err.find("stdin line 2 is longer than 4096 bytes"), std::string::npos) << endless.err;
 }
 
 TEST_F(Cli, ExportWritesAVolume) {

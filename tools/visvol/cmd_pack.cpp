@@ -211,6 +211,26 @@ struct SampleOptions {
   int lod = 0;
 };
 
+// A point's line is a few dozen bytes.
+constexpr std::size_t kMaxSampleLineBytes = 4096;
+
+// std::getline with a bound: false at the end of the input; `too_long` when
+// the line reached `max_bytes` without its end (what was read is dropped).
+bool read_bounded_line(std::istream& in, std::string& line, std::size_t max_bytes, bool& too_long) {
+  line.clear();
+  too_long = false;
+  int c = 0;
+  while ((c = in.get()) != std::char_traits<char>::eof()) {
+    if (c == '\n') return true;
+    if (line.size() == max_bytes) {
+      too_long = true;
+      return true;
+    }
+    line.push_back(static_cast<char>(c));
+  }
+  return !line.empty();
+}
+
 int run_sample(const SampleOptions& o) {
   if (o.layer != "visibility" && o.layer != "gradient" && o.layer != "height" && o.layer != "tff") {
     return fail("sample",
@@ -226,8 +246,15 @@ int run_sample(const SampleOptions& o) {
   const double y_min = g.origin_y - (g.ny - 1) * g.spacing_m;
   std::string line;
   long line_no = 0, bad = 0;
-  while (std::getline(std::cin, line)) {
+  bool too_long = false;
+  while (read_bounded_line(std::cin, line, kMaxSampleLineBytes, too_long)) {
     ++line_no;
+    if (too_long) {
+      // /dev/zero on stdin grew one line to gigabytes: no text of points
+      return fail("sample", invalid_argument("stdin line " + std::to_string(line_no) + " is longer than " +
+                                             std::to_string(kMaxSampleLineBytes) +
+                                             " bytes: not a line 'x y z' (is the input text?)"));
+    }
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream in(line);
     double x, y, z;

@@ -36,6 +36,10 @@ fields::ImportOptions import_options(const ImportCli& o) {
   options.spacing_m = o.spacing_m;
   options.resampling = o.resampling;
   if (!o.crop.empty()) options.crop = fields::BoundingBox{o.crop[0], o.crop[1], o.crop[2], o.crop[3]};
+  if (o.max_posts > 0 && o.max_posts < options.max_posts) {
+    options.max_posts = o.max_posts;
+    options.max_posts_reason = o.max_posts_reason;
+  }
   return options;
 }
 

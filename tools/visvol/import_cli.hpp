@@ -16,6 +16,9 @@ struct ImportCli {
   double spacing_m = 0;
   std::vector<double> crop;  // xmin ymin xmax ymax
   std::string resampling = "bilinear";
+  // set by a command, not an option: 0 keeps the library's limit
+  std::size_t max_posts = 0;
+  std::string max_posts_reason;
 };
 
 void add_import_options(CLI::App* app, ImportCli& o);

@@ -135,11 +135,19 @@ TEST_F(PlanPublishCli, BadPublishOptionsExitTwoWithOneLine) {
   const std::string ends = " --from 550300 4182450 150 --to 550850 4181850 150 --objective hide --vehicle multirotor";
   for (const std::string& extra :
        {std::string(" --publish --domain 400"), std::string(" --publish --dds-config /nonexistent.xml"),
-        std::string(" --publish --publish-hz 0"), std::string(" --publish --linger -1")}) {
+        std::string(" --publish --publish-hz 0"), std::string(" --publish --linger -1"),
+        // checked without --publish too: a value typed is a value meant
+        std::string(" --publish-hz nan"), std::string(" --linger inf")}) {
     const Outcome r = visvol("plan " + *pack_ + ends + extra + " -o " + *pack_ + "_never");
     EXPECT_EQ(r.status, 2) << extra << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << extra << ": " << r.err;
   }
+  // -o names a base: /dev/null made /dev/null.csv and its siblings in /dev
+  const Outcome device = visvol("plan " + *pack_ + ends + " -o /dev/null");
+  EXPECT_EQ(device.status, 2);
+  EXPECT_NE(device.err.find("/dev/null is not a regular file: -o names the outputs' base"), std::string::npos)
+      << device.err;
+  EXPECT_NE(access("/dev/null.csv", F_OK), 0);
 }
 
 }  // namespace

@@ -195,6 +195,8 @@ Status check_init_is_no_output(const PlanOptions& o) {
 int run_plan(const PlanOptions& o) {
   if (Status s = check_path_outputs(o.out); !s.ok()) return fail("plan", s.with_context("-o"));
   if (Status s = check_init_is_no_output(o); !s.ok()) return fail("plan", s);
+  // checked whether or not --publish is given: a value typed is a value meant
+  if (Status s = validate(o.dds); !s.ok()) return fail("plan", s);
   Result<PlanningPack> opened = open_planning_pack(o.pack);
   if (!opened.ok()) return fail("plan", opened.status());
   const PlanningPack& planning = *opened;

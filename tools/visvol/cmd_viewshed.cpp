@@ -42,7 +42,7 @@ int run_viewshed(ViewshedOptions& o) {
     visible += v == fields::kViewshedVisible;
     in_range += v != fields::kViewshedOutside;
   }
-  std::printf("observer post (%d, %d) at (%.1f, %.1f), ground %.1f m, eye +%.2f m, target +%.2f m\n", vs->observer_i,
+  std::printf("observer post (%d, %d) at (%.1f, %.1f), ground %.1f m, eye %+.2f m, target %+.2f m\n", vs->observer_i,
               vs->observer_j, hf->x_of(vs->observer_i), hf->y_of(vs->observer_j),
               hf->at(vs->observer_i, vs->observer_j), o.params.observer_height_m, o.params.target_height_m);
   std::printf("visible    %zu of %zu cells in range (%.1f%%)\n", visible, in_range,

@@ -1019,6 +1019,13 @@ nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const 
 }  // namespace
 
 Status check_path_outputs(const std::string& base) {
+  // -o /dev/null made /dev/null.csv and its siblings in /dev
+  struct stat st {};
+  if (::lstat(base.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    return invalid_argument(base + " is " + (S_ISDIR(st.st_mode) ? "a directory" : "not a regular file") +
+                            ": -o names the outputs' base (BASE.csv, BASE.kml, BASE.plan, BASE.geojson); for files "
+                            "in a folder give FOLDER/NAME");
+  }
   for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
     VISVOL_RETURN_IF_ERROR(check_output_path(base + extension));
   }

@@ -707,7 +707,7 @@ nlohmann::json Console::Impl::check_path(std::string& line) const {
   const bool reaches_end = k.mode != msg::InteractionMode::spool || k.spool_arrived;
   if (!reaches_end) {
     char gap[160];
-    std::snprintf(gap, sizeof gap, "end: the path stops %.0f m short of it (the spooled rope had not arrived)",
+    std::snprintf(gap, sizeof gap, "end: the path stops %.1f m short of it (the spooled rope had not arrived)",
                   k.spool_gap_m);
     unmet.insert(unmet.begin(), gap);
   }

@@ -7,7 +7,7 @@
 // application and of its subcommands a transform that runs before its other
 // checks: an integer keeps its decimal digits only (leading zeros dropped,
 // so "010" is ten), anything else is refused naming the value; a real number
-// in hexadecimal is refused. Options with a type name of their own (not
+// must be decimal (base/decimal_text.hpp) or a word for infinity or NaN. Options with a type name of their own (not
 // "INT", "UINT" or "FLOAT") get decimal_integers() or decimal_reals() by hand.
 //
 // Start-up only (allocates).
@@ -15,6 +15,8 @@
 
 #include <CLI/CLI.hpp>
 #include <string>
+
+#include "base/decimal_text.hpp"
 
 namespace visvol {
 
@@ -36,11 +38,11 @@ inline std::string plain_decimal_integer(std::string& v, bool may_be_negative) {
   return {};
 }
 
-inline std::string no_hexadecimal_real(const std::string& v) {
-  const std::size_t i = !v.empty() && (v[0] == '+' || v[0] == '-') ? 1 : 0;
-  if (v.size() > i + 1 && v[i] == '0' && (v[i + 1] == 'x' || v[i + 1] == 'X'))
-    return "'" + v + "' is hexadecimal: write the number in decimal";
-  return {};
+// Decimal, or a word for infinity or NaN (the option's own check names its
+// range): strtold also reads " 0x10" as sixteen.
+inline std::string decimal_real(const std::string& v) {
+  if (is_decimal_number(v) || is_non_finite_word(v)) return {};
+  return "'" + v + "' is not a number in decimal";
 }
 
 }  // namespace decimal_text
@@ -51,7 +53,7 @@ inline void decimal_integers(CLI::Option* option, bool may_be_negative) {
 }
 
 inline void decimal_reals(CLI::Option* option) {
-  option->transform(CLI::Validator([](std::string& v) { return decimal_text::no_hexadecimal_real(v); }, "", ""));
+  option->transform(CLI::Validator([](std::string& v) { return decimal_text::decimal_real(v); }, "", ""));
 }
 
 // Every option of `app` and of its subcommands, at any depth, whose type is

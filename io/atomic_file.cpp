@@ -204,9 +204,20 @@ void remove_temporaries_in_handler() {
   }
 }
 
+// While a set of files is renamed into place (write_files_atomically), a
+// signal waits for the last rename (in whichever thread it arrives): kept
+// here, raised again when the set is whole.
+std::atomic<bool> g_renaming_set{false};
+std::atomic<int> g_deferred_signal{0};
+
 // Async-signal-safe: the removals above, signal and raise only.
 extern "C" void remove_temporaries_and_reraise(int sig) {
   const int saved_errno = errno;
+  if (g_renaming_set.load()) {
+    g_deferred_signal.store(sig);
+    errno = saved_errno;
+    return;
+  }
   remove_temporaries_in_handler();
   std::signal(sig, SIG_DFL);
   std::raise(sig);  // delivered with the default action once this returns
@@ -380,6 +391,7 @@ OutputFile& OutputFile::operator=(OutputFile&& other) noexcept {
   slot_ = other.slot_;
   is_directory_ = other.is_directory_;
   done_ = other.done_;
+  flushed_ = other.flushed_;
   other.fd_ = -1;
   other.slot_ = -1;
   other.done_ = true;
@@ -394,6 +406,7 @@ Status OutputFile::fail(Status status) {
 }
 
 Status OutputFile::write(const void* data, std::size_t bytes) {
+  flushed_ = false;
   if (done_ || fd_ < 0) return Status(Errc::state, path_ + ": output is closed");
   const char* p = static_cast<const char*>(data);
   while (bytes > 0) {
@@ -407,6 +420,7 @@ Status OutputFile::write(const void* data, std::size_t bytes) {
 }
 
 Status OutputFile::write_at(const void* data, std::size_t bytes, std::uint64_t offset_bytes) {
+  flushed_ = false;
   if (done_ || fd_ < 0) return Status(Errc::state, path_ + ": output is closed");
   const char* p = static_cast<const char*>(data);
   while (bytes > 0) {
@@ -426,7 +440,7 @@ Status OutputFile::commit() {
   int fd = fd_;
   if (fd < 0) fd = ::open(write_path_.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
   if (fd < 0) return fail(errno_status(errno, path_ + ": the written file " + write_path_ + " is missing"));
-  const bool synced = ::fsync(fd) == 0;
+  const bool synced = (flushed_ && fd == fd_) || ::fsync(fd) == 0;
   const int sync_errno = errno;
   const bool closed = ::close(fd) == 0;
   const int close_errno = errno;
@@ -448,6 +462,7 @@ Status OutputFile::commit() {
 Status OutputFile::flush() {
   if (done_) return Status(Errc::state, path_ + ": output is closed");
   if (fd_ >= 0 && ::fsync(fd_) != 0) return fail(output_error(path_ + ": fsync failed: " + std::strerror(errno)));
+  flushed_ = fd_ >= 0;
   return Status::ok_status();
 }
 
@@ -471,7 +486,8 @@ Status write_file_atomically(const std::string& path, const std::string& bytes) 
 }
 
 Status write_files_atomically(const std::vector<std::pair<std::string, std::string>>& files,
-                              std::vector<std::string>& written) {
+                              const std::vector<std::string>& stale, std::vector<std::string>& written,
+                              std::vector<std::string>& removed) {
   std::vector<OutputFile> ready;
   ready.reserve(files.size());
   for (const auto& [path, bytes] : files) {
@@ -482,17 +498,24 @@ Status write_files_atomically(const std::vector<std::pair<std::string, std::stri
     ready.push_back(std::move(*f));
   }
   // a signal between two renames would leave half of one set, half of another
-  sigset_t held, before;
-  sigemptyset(&held);
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&held, sig);
-  pthread_sigmask(SIG_BLOCK, &held, &before);
+  g_deferred_signal.store(0);
+  g_renaming_set.store(true);
+  // the stale files first: an interrupted set never keeps another's file
+  // (an earlier flyable .plan beside a new path marked unmet)
+  for (const std::string& file : stale) {
+    struct stat st {};
+    if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || ::unlink(file.c_str()) != 0) continue;
+    removed.push_back(file);
+  }
   Status status;
   for (OutputFile& f : ready) {
     status = f.commit();
     if (!status.ok()) break;
     written.push_back(f.path());
   }
-  pthread_sigmask(SIG_SETMASK, &before, nullptr);
+  if (status.ok() && ready.empty() && !removed.empty()) status = fsync_directory_of(removed.front());
+  g_renaming_set.store(false);
+  if (const int sig = g_deferred_signal.exchange(0); sig != 0) std::raise(sig);
   return status;
 }
 

@@ -84,7 +84,8 @@ class OutputFile {
   int fd_ = -1;
   int slot_ = -1;  // in the signal registry, or -1
   bool is_directory_ = false;
-  bool done_ = true;  // committed or discarded
+  bool done_ = true;      // committed or discarded
+  bool flushed_ = false;  // flush() since the last write: commit need not fsync again
 };
 
 // What OutputFile::create would refuse about `path` itself (an existing
@@ -98,12 +99,15 @@ Status check_output_path(const std::string& path);
 Status write_file_atomically(const std::string& path, const std::string& bytes);
 
 // Writes a set of files (path, bytes) that belong together: each is written
-// and made durable under its temporary first, and only when all are do they
-// replace their destinations, with SIGINT, SIGTERM and SIGHUP held off
-// between the renames. A full disk or a bad name leaves every destination as
-// it was; `written` lists those renamed into place.
+// and made durable under its temporary first, and only when all are are the
+// `stale` files of an earlier set removed (regular files only; `removed`
+// lists them) and the new ones renamed into place, SIGINT, SIGTERM and SIGHUP
+// (where install_output_cleanup_on_signals() was called, in any thread)
+// waiting for the last rename. A full disk or a bad name leaves every
+// destination as it was; `written` lists those renamed into place.
 Status write_files_atomically(const std::vector<std::pair<std::string, std::string>>& files,
-                              std::vector<std::string>& written);
+                              const std::vector<std::string>& stale, std::vector<std::string>& written,
+                              std::vector<std::string>& removed);
 
 // For offline tools: SIGINT and SIGTERM remove the temporaries being written,
 // then end the process by the same signal. Call once at the start of main(),

@@ -165,9 +165,13 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantConfig
   auto it = domains.find(id);
   bool created = false;
   if (it == domains.end()) {
-    // Cyclone merges a list of fragments in order: the last one's limit holds
-    const std::string merged = config.cyclone_xml + ",<CycloneDDS><Domain Id=\"any\"><Internal><MaxSampleSize>" +
-                               std::to_string(kMaxSampleBytes) + "B</MaxSampleSize></Internal></Domain></CycloneDDS>";
+    // Cyclone merges a list of fragments in order; a configuration that sets
+    // its own limit keeps it (the operator's choice, larger or smaller)
+    const std::string merged = config.cyclone_xml.find("MaxSampleSize") != std::string::npos
+                                   ? config.cyclone_xml
+                                   : config.cyclone_xml + ",<CycloneDDS><Domain Id=\"any\"><Internal><MaxSampleSize>" +
+                                         std::to_string(kMaxSampleBytes) +
+                                         "B</MaxSampleSize></Internal></Domain></CycloneDDS>";
     const dds_entity_t domain = dds_create_domain(id, merged.c_str());
     if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) {
       return Status(Errc::state, "DDS domain " + std::to_string(id) +

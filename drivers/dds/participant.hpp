@@ -43,8 +43,9 @@ Result<std::string> read_cyclone_config(const std::string& path);
 
 // The largest serialised sample a participant sends or takes, bytes:
 // Cyclone drops a larger one as it arrives (with a line on stderr), before
-// reassembling or decoding it. Every domain visvol creates has it, whatever
-// the configuration given (it is merged in last): a set-constraints command
+// reassembling or decoding it. Every domain visvol creates has it (merged in
+// after the configuration given), unless that configuration sets
+// Internal/MaxSampleSize itself: a set-constraints command
 // of 25 million observers took a console from 67 to 950 MiB of locked memory
 // before its own limit (msg::kMaxConstraints) could refuse it. visvol's
 // largest samples, a thumbnail's PNG (msg::kMaxThumbnailBytes) and a path of

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "base/decimal_text.hpp"
 #include "io/input_file.hpp"
 
 namespace visvol::hapticsim {
@@ -63,7 +64,7 @@ class LineParser {
 Status LineParser::number(const std::string& text, const char* what, double& out) const {
   // decimal only, as a path file's: strtod also reads hexadecimal (0x1p3) and
   // "infinity", which a script should not mean
-  const bool decimal = text.find_first_not_of("0123456789+-.eE") == std::string::npos;
+  const bool decimal = is_decimal_number(text);
   char* end = nullptr;
   out = std::strtod(text.c_str(), &end);
   if (!decimal || end == text.c_str() || *end != '\0' || !std::isfinite(out)) {

@@ -642,6 +642,27 @@ TEST_F(Console, AStalledLoopStopsTheWatchdogPings) {
   EXPECT_GE(s["loop"]["misses"].get<int>(), 1000) << "two seconds of deadlines missed";
 }
 
+// A session that ends in spool mode before the rope's free end arrives has
+// no route to the end: its check is not "all met" (a path 760 m short was).
+TEST_F(Console, APathThatStopsShortOfItsEndIsNotMet) {
+  const std::string out = out_dir("short");
+  const std::string script = out + "_script.txt";
+  std::ofstream(script) << "0.2 mode on\n0.3 mode off\n";  // spool mode, the lead laid, never dragged
+  const Outcome r = console("--pack " + *pack_ + " --seconds 1.5 --no-dds --priority 0 --no-lock --segments 32 " +
+                            "--thumbnail-view none --script " + script + " --out " + out);
+  std::remove(script.c_str());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  ASSERT_EQ(s["mode"], "spool") << r.out;
+  EXPECT_FALSE(s["spool"]["arrived"].get<bool>());
+  const nlohmann::json& c = s["check"];
+  EXPECT_FALSE(c["reaches_end"].get<bool>()) << c.dump();
+  EXPECT_FALSE(c["all_met"].get<bool>()) << c.dump();
+  ASSERT_FALSE(c["unmet"].empty());
+  EXPECT_EQ(c["unmet"][0].get<std::string>().rfind("end: the path stops ", 0), 0u) << c.dump();
+  EXPECT_NE(r.out.find("NOT MET: end: the path stops "), std::string::npos) << r.out;
+}
+
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
   const std::string out = out_dir("run");
   const Outcome r =

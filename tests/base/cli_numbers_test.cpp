@@ -81,12 +81,17 @@ TEST(DecimalNumbers, AnUnsignedOptionRefusesANegativeNumber) {
   EXPECT_NE(error.find("negative"), std::string::npos) << error;
 }
 
-TEST(DecimalNumbers, ARealInHexadecimalIsRefusedEveryOtherFormKept) {
-  for (const char* value : {"0x10", "-0X1p3", "+0x.8"}) {
+TEST(DecimalNumbers, ARealMustBeDecimalOrAWordForInfinityOrNan) {
+  // strtold read all of these, " 0x10" as sixteen
+  for (const char* value : {"0x10", "-0X1p3", "+0x.8", " 0x10", " 10", "10 ", "1e", ".", "5m", "0b1"}) {
     Numbers n;
     const std::string error = n.parse({"--speed", value});
-    EXPECT_NE(error.find("is hexadecimal"), std::string::npos) << value << ": " << error;
+    EXPECT_NE(error.find("is not a number in decimal"), std::string::npos) << value << ": " << error;
     EXPECT_EQ(n.speed, 0) << value;
+  }
+  for (const char* value : {"5.", ".5", "-2.5E-3", "+7"}) {
+    Numbers n;
+    EXPECT_EQ(n.parse({"--speed", value}), "") << value;
   }
   Numbers decimal;
   ASSERT_EQ(decimal.parse({"--speed", "010.5"}), "");
@@ -102,7 +107,7 @@ TEST(DecimalNumbers, ARealInHexadecimalIsRefusedEveryOtherFormKept) {
 
 TEST(DecimalNumbers, EveryValueOfAListAndEveryLevelOfSubcommands) {
   Numbers list;
-  EXPECT_NE(list.parse({"--from", "1", "0x2", "3"}).find("is hexadecimal"), std::string::npos);
+  EXPECT_NE(list.parse({"--from", "1", "0x2", "3"}).find("is not a number in decimal"), std::string::npos);
   Numbers nested;
   EXPECT_NE(nested.parse({"plan", "--clearance", "0x1e"}).find("--clearance"), std::string::npos);
   Numbers fine;

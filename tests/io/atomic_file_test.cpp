@@ -244,16 +244,21 @@ TEST_F(AtomicFile, AFailedWriteIsAnOutputErrorAndRemovesTheTemporary) {
 TEST_F(AtomicFile, ASetOfFilesIsReplacedWholeOrNotAtAll) {
   const std::vector<std::string> names = {dir_ + "/p.csv", dir_ + "/p.kml", dir_ + "/p.plan"};
   for (const std::string& n : names) write_text(n, "earlier");
+  // the earlier set's file the new one lacks: removed only with the new set
+  const std::string stale = dir_ + "/p.geojson";
+  write_text(stale, "earlier");
   const pid_t pid = ::fork();
   if (pid == 0) {
     std::signal(SIGXFSZ, SIG_IGN);
     const rlimit limit{4096, 4096};
     ::setrlimit(RLIMIT_FSIZE, &limit);
-    std::vector<std::string> written;
-    const Status st = write_files_atomically(
-        {{names[0], "new csv"}, {names[1], "new kml"}, {names[2], std::string(1 << 20, 'x')}}, written);
-    bool ok = !st.ok() && st.code() == Errc::output && written.empty();
+    std::vector<std::string> written, removed;
+    const Status st =
+        write_files_atomically({{names[0], "new csv"}, {names[1], "new kml"}, {names[2], std::string(1 << 20, 'x')}},
+                               {stale}, written, removed);
+    bool ok = !st.ok() && st.code() == Errc::output && written.empty() && removed.empty();
     for (const std::string& n : names) ok = ok && read_text(n) == "earlier" && !exists(own_temp(n));
+    ok = ok && read_text(stale) == "earlier";
     ::_exit(ok ? 0 : 1);
   }
   int status = 0;
@@ -261,15 +266,20 @@ TEST_F(AtomicFile, ASetOfFilesIsReplacedWholeOrNotAtAll) {
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
 
-  std::vector<std::string> written;
-  ASSERT_TRUE(write_files_atomically({{names[0], "a"}, {names[1], "b"}, {names[2], "c"}}, written).ok());
+  std::vector<std::string> written, removed;
+  ASSERT_TRUE(
+      write_files_atomically({{names[0], "a"}, {names[1], "b"}, {names[2], "c"}}, {stale}, written, removed).ok());
   EXPECT_EQ(written, names);
+  EXPECT_EQ(removed, std::vector<std::string>{stale});
+  EXPECT_FALSE(exists(stale));
   EXPECT_EQ(read_text(names[0]) + read_text(names[1]) + read_text(names[2]), "abc");
   // a bad name among them (a directory where a file goes): nothing changes
   std::filesystem::remove(names[1]);
   std::filesystem::create_directory(names[1]);
   written.clear();
-  const Status refused = write_files_atomically({{names[0], "x"}, {names[1], "y"}, {names[2], "z"}}, written);
+  removed.clear();
+  const Status refused =
+      write_files_atomically({{names[0], "x"}, {names[1], "y"}, {names[2], "z"}}, {}, written, removed);
   EXPECT_EQ(refused.code(), Errc::invalid_argument) << refused.message();
   EXPECT_TRUE(written.empty());
   EXPECT_EQ(read_text(names[0]) + read_text(names[2]), "ac");

@@ -446,9 +446,9 @@ TEST_F(PathIo, OnlyAFlyablePathGetsAMissionAndEveryFileSaysWhatIsUnmet) {
 
 // WGS84 positions say how they were made. From WGS 84 / UTM the change of
 // projection is exact; from NAD27 / UTM (the bundled SF North DEM's CRS)
-// PROJ needs NOAA's grid for centimetres, and without it shifts the datum to
-// 7 m: the outputs name the transformation and its accuracy, and a coarser
-// one than a metre gets a note for the operator.
+// PROJ shifts the datum, to 7 m with Debian's proj-data (EPSG's figure): the
+// outputs name the transformation and its accuracy, and a coarser one than a
+// metre gets a note for the operator.
 TEST_F(PathIo, WgsPositionsSayHowTheyWereConverted) {
   PathReport r = report(preset("multirotor"));
   Wgs84Conversion exact;
@@ -464,7 +464,7 @@ TEST_F(PathIo, WgsPositionsSayHowTheyWereConverted) {
   EXPECT_NE(shift.operation.find("NAD27 to WGS 84"), std::string::npos) << shift.operation;
   EXPECT_NE(shift.accuracy_m, 0.0) << "a datum shift is never exact";
   const std::string note = wgs84_accuracy_note(shift);
-  // a machine with the NADCON grid installed converts to centimetres
+  // the note where the accuracy is coarser than a metre or not known, only there
   EXPECT_EQ(note.empty(), shift.accuracy_m >= 0 && shift.accuracy_m <= kTrustedWgs84AccuracyM) << note;
   if (!note.empty()) {
     EXPECT_EQ(note.rfind("WGS84 positions by " + shift.describe(), 0), 0u) << note;

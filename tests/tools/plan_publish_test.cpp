@@ -148,6 +148,9 @@ TEST_F(PlanPublishCli, BadPublishOptionsExitTwoWithOneLine) {
   EXPECT_NE(device.err.find("/dev/null is not a regular file: -o names the outputs' base"), std::string::npos)
       << device.err;
   EXPECT_NE(access("/dev/null.csv", F_OK), 0);
+  const Outcome folder = visvol("plan " + *pack_ + ends + " -o " + ::testing::TempDir());
+  EXPECT_EQ(folder.status, 2);
+  EXPECT_NE(folder.err.find("is a directory: -o names the outputs' base"), std::string::npos) << folder.err;
 }
 
 }  // namespace

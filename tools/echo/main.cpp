@@ -93,9 +93,12 @@ std::string seconds(double s) {
 // A number from the command line that must be finite.
 const CLI::Validator kFinite(
     [](std::string& text) -> std::string {
+      // decimal only: strtod also reads 0x10 as sixteen
+      if (!visvol::is_decimal_number(text) && !visvol::is_non_finite_word(text)) {
+        return "'" + text + "' is not a decimal number";
+      }
       char* end = nullptr;
       const double v = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
       if (!std::isfinite(v)) return "'" + text + "' is not a finite number";
       return std::string();
     },

@@ -47,12 +47,13 @@ void add_build_options(CLI::App* c, BuildOptions& o);
 // What the build imports and records: the import options (--crop as given,
 // or the crop --area needs) and the planning margin to record, if not the rule's.
 // Memory a build holds per post of the imported grid, bytes, beyond the
-// field's own working set (fields::plan_visibility_build): the import's peak
-// (GDAL's warp of SF North to 1 m posts: 2.98 GB for 155 M posts, 19 bytes a
-// post), then the heights and their level-0 copy (8), the coarser levels (1.3),
-// the padded terrain and its ground levels (8), the observers' weights, eyes
-// and range tops (16), with room to spare. Checked against --max-memory before
-// the import reads anything.
+// field's own working set (fields::plan_visibility_build), the larger of two
+// moments with room to spare: the import's peak (GDAL's warp of SF North to
+// 1 m posts: 2.98 GB for 155 M posts, 19 bytes a post), and the build's
+// arrays once it runs (the heights and their level-0 copy 8, the coarser
+// levels 1.3, the padded terrain and its ground levels 8, the observers'
+// weights, eyes and range tops 16: about 34). Checked against --max-memory
+// before the import reads anything.
 inline constexpr int kBuildBytesPerPost = 48;
 // Of those, what the build holds beside the field builder's working set
 // while it runs (the heights, their level-0 copy, the coarser levels, the

@@ -256,12 +256,10 @@ int run_plan(const PlanOptions& o) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }
   std::vector<std::string> written;
-  const Status outputs = write_path_outputs(o.out, report, written);
+  Wgs84Conversion conversion;
+  const Status outputs = write_path_outputs(o.out, report, written, &conversion);
   // a crew flies the WGS84 positions: say when they are only metres good
-  std::string datum_note;
-  if (Wgs84Conversion conversion; to_wgs84(report.vertices, report.crs_wkt, &conversion).ok()) {
-    datum_note = wgs84_accuracy_note(conversion);
-  }
+  const std::string datum_note = wgs84_accuracy_note(conversion);
 
   const rt::PathMetrics& a = res->initial;
   const rt::PathMetrics& b = res->final_metrics;
@@ -334,7 +332,8 @@ int run_plan(const PlanOptions& o) {
   // an output not written is said first, then what the path does not meet
   const int status = outputs.ok() ? kExitOk : fail("plan", outputs);
   if (!check.all_met) {
-    std::fprintf(stderr, "visvol plan: the path does not meet every requirement (written, marked unmet):\n");
+    std::fprintf(stderr, "visvol plan: the path does not meet every requirement (%s):\n",
+                 written.empty() ? "no file written" : "what is written is marked unmet");
     for (const std::string& u : check.unmet()) std::fprintf(stderr, "  %s\n", u.c_str());
     return std::max(status, static_cast<int>(kExitFailure));
   }

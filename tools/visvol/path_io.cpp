@@ -19,6 +19,7 @@
 #include <sstream>
 #include <utility>
 
+#include "base/decimal_text.hpp"
 #include "io/atomic_file.hpp"
 #include "io/input_file.hpp"
 #include "io/json_input.hpp"
@@ -76,34 +77,9 @@ namespace {
 // anything larger is not a path.
 constexpr std::uintmax_t kMaxPathFileBytes = 64u << 20;
 
-// Whether `s` is a decimal number as people write them: [+-] digits, a
-// point, [eE] exponent. strtod also reads hexadecimal ("0x1A" is 26),
-// "inf" and "nan", which in a path file are mistakes, not positions.
-bool is_decimal(const std::string& s) {
-  std::size_t i = 0;
-  const auto digits = [&] {
-    const std::size_t from = i;
-    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
-    return i - from;
-  };
-  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
-  std::size_t mantissa = digits();
-  if (i < s.size() && s[i] == '.') {
-    ++i;
-    mantissa += digits();
-  }
-  if (mantissa == 0) return false;
-  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
-    ++i;
-    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
-    if (digits() == 0) return false;
-  }
-  return i == s.size();
-}
-
 // A decimal number that fits a double (1e400 does not).
 bool decimal_number(const std::string& s, double& v) {
-  if (!is_decimal(s)) return false;
+  if (!is_decimal_number(s)) return false;
   errno = 0;
   v = std::strtod(s.c_str(), nullptr);
   return errno != ERANGE || std::fabs(v) < 1;  // underflow to (near) zero is fine
@@ -579,10 +555,19 @@ class Wgs84Transform {
 
   // False when the point does not convert.
   bool convert(double& x, double& y, bool to_wgs84) {
-    const PJ_COORD r = proj_trans(pj_.get(), to_wgs84 ? PJ_FWD : PJ_INV, proj_coord(x, y, 0, 0));
+    // no time (HUGE_VAL): a time-dependent transformation would take year 0
+    const PJ_COORD in = proj_coord(x, y, 0, HUGE_VAL);
+    const PJ_DIRECTION direction = to_wgs84 ? PJ_FWD : PJ_INV;
+    const PJ_COORD r = proj_trans(pj_.get(), direction, in);
     if (!std::isfinite(r.xy.x) || !std::isfinite(r.xy.y) || r.xy.x == HUGE_VAL) return false;
     x = r.xy.x;
     y = r.xy.y;
+    // which operation PROJ took costs 45 us a point to ask (a copy of it):
+    // asked again only where the last one's answer differs from this one's
+    if (last_op_) {
+      const PJ_COORD same = proj_trans(last_op_.get(), direction, in);
+      if (same.xy.x == r.xy.x && same.xy.y == r.xy.y) return true;
+    }
     note_operation();
     return true;
   }
@@ -591,9 +576,13 @@ class Wgs84Transform {
 
  private:
   void note_operation() {
-    const ProjObject op(proj_trans_get_last_used_operation(pj_.get()));
-    if (!op) return;
-    const char* name = proj_get_name(op.get());
+    last_op_.reset(proj_trans_get_last_used_operation(pj_.get()));
+    const PJ* op = last_op_.get();
+    if (op == nullptr) {
+      if (coarsest_.operation.empty()) coarsest_ = {"a transformation PROJ does not name", -1};
+      return;
+    }
+    const char* name = proj_get_name(op);
     if (name != nullptr && name == last_name_) return;
     last_name_ = name != nullptr ? name : "";
     // the longitude-first order is ours, not the transformation's
@@ -602,10 +591,10 @@ class Wgs84Transform {
     if (shown_name.size() > order.size() &&
         shown_name.compare(shown_name.size() - order.size(), order.size(), order) == 0)
       shown_name.resize(shown_name.size() - order.size());
-    const double accuracy = proj_coordoperation_get_accuracy(ctx_.get(), op.get());
+    const double accuracy = proj_coordoperation_get_accuracy(ctx_.get(), op);
     // a pure change of projection is exact; PROJ says -1 (unknown) for some
     const bool exact =
-        proj_get_type(op.get()) == PJ_TYPE_CONVERSION || (accuracy < 0 && last_name_.find(" to ") == std::string::npos);
+        proj_get_type(op) == PJ_TYPE_CONVERSION || (accuracy < 0 && last_name_.find(" to ") == std::string::npos);
     const double a = exact ? 0.0 : accuracy;
     const bool coarser = coarsest_.operation.empty() || (a < 0 && coarsest_.accuracy_m >= 0) ||
                          (coarsest_.accuracy_m >= 0 && a > coarsest_.accuracy_m);
@@ -614,6 +603,7 @@ class Wgs84Transform {
 
   ProjContext ctx_;
   ProjObject pj_;
+  ProjObject last_op_;  // the operation PROJ took for the last point asked
   std::string last_name_;
   Wgs84Conversion coarsest_;
 };
@@ -658,14 +648,14 @@ std::string Wgs84Conversion::describe() const {
   if (accuracy_m < 0) return operation + " (accuracy not known)";
   char text[32];
   std::snprintf(text, sizeof text, "%g", accuracy_m);
-  return operation + " (accurate to " + text + " m)";
+  return operation + " (accurate to " + text + " m by EPSG)";
 }
 
 std::string wgs84_accuracy_note(const Wgs84Conversion& c) {
   if (c.operation.empty() || (c.accuracy_m >= 0 && c.accuracy_m <= kTrustedWgs84AccuracyM)) return {};
   return "WGS84 positions by " + c.describe() +
-         ", the finest transformation PROJ has installed here (a datum shift without a grid): the path in WGS84 "
-         "and the path on the pack's terrain may lie that far apart";
+         ", the finest transformation PROJ has here: the path in WGS84 and the path on the pack's terrain may "
+         "lie that far apart";
 }
 
 // ---- Heights: EGM96 orthometric <-> WGS84 ellipsoidal ----
@@ -1021,7 +1011,7 @@ nlohmann::json geojson(const PathReport& r, const std::vector<Vec3>& geo, const 
 Status check_path_outputs(const std::string& base) {
   // -o /dev/null made /dev/null.csv and its siblings in /dev
   struct stat st {};
-  if (::lstat(base.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+  if (::stat(base.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
     return invalid_argument(base + " is " + (S_ISDIR(st.st_mode) ? "a directory" : "not a regular file") +
                             ": -o names the outputs' base (BASE.csv, BASE.kml, BASE.plan, BASE.geojson); for files "
                             "in a folder give FOLDER/NAME");
@@ -1036,10 +1026,31 @@ namespace {
 
 // Writes what it can of the set: the CSV whatever the CRS, the rest where
 // the positions convert to WGS84 (and the geoid grid is there).
-Status write_path_output_set(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
+// What the set lacks, and why, as one status (the first reason's code).
+Status not_written(const std::vector<std::pair<std::string, Status>>& missing,
+                   const std::vector<std::string>& removed) {
+  Status out;
+  std::string text;
+  for (const auto& [what, why] : missing) {
+    if (why.ok()) continue;
+    if (out.ok()) out = why;
+    text += (text.empty() ? "" : "; ") + what + " not written: " + why.message();
+  }
+  if (out.ok()) return out;
+  std::string gone;
+  for (const std::string& f : removed) gone += (gone.empty() ? "" : ", ") + f;
+  if (!gone.empty()) text += " (the earlier " + gone + " removed: another plan's)";
+  return Status(out.code(), text);
+}
+
+}  // namespace
+
+Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written,
+                          Wgs84Conversion* conversion_out) {
   VISVOL_RETURN_IF_ERROR(validate_report(r));
   Wgs84Conversion conversion;
   const Result<std::vector<Vec3>> geo = to_wgs84(r.vertices, r.crs_wkt, &conversion);
+  if (conversion_out != nullptr) *conversion_out = conversion;
   const Result<GeoidShift> ellipsoidal =
       geo.ok() ? shift_heights(*geo, true) : Result<GeoidShift>(Status(Errc::unsupported, "no WGS84 positions"));
   Status plan_ground = check_plan_ground(r);
@@ -1047,10 +1058,11 @@ Status write_path_output_set(const std::string& base, const PathReport& r, std::
     // a crew loads the .plan into the autopilot: no mission into a hillside
     plan_ground = Status(Errc::state,
                          "the path breaks the vehicle's envelope or leaves the planning bounds, so it is no mission "
-                         "for an autopilot (the CSV, KML and GeoJSON are written, marked unmet)");
+                         "for an autopilot (the other files are marked unmet)");
   }
   // the set replaces the earlier one whole or not at all (a full disk left
-  // the new CSV and KML beside no .plan)
+  // the new CSV and KML beside no .plan); the earlier set's files this one
+  // lacks go first, so that none of them is left beside it
   std::vector<std::pair<std::string, std::string>> set;
   set.emplace_back(base + ".csv", csv_text(r, geo, conversion, ellipsoidal));  // projected coordinates suffice
   if (geo.ok()) {
@@ -1060,36 +1072,14 @@ Status write_path_output_set(const std::string& base, const PathReport& r, std::
       set.emplace_back(base + ".geojson", json_text(geojson(r, *geo, conversion, *ellipsoidal), 1) + "\n");
     }
   }
-  VISVOL_RETURN_IF_ERROR(write_files_atomically(set, written));
-  if (!geo.ok()) return geo.status().with_context("GeoJSON, KML and .plan not written");
-  if (!plan_ground.ok()) return plan_ground.with_context(".plan not written");
-  if (!ellipsoidal.ok()) return ellipsoidal.status().with_context("GeoJSON not written");
-  return Status::ok_status();
-}
-
-// Where this plan wrote part of the set, the files of an earlier one under
-// `base` that it did not write are removed (regular files only), so that no
-// file of the set is another plan's; named after `error`. (Where it wrote
-// none, the earlier set stands whole.)
-Status without_stale_outputs(const std::string& base, const std::vector<std::string>& written, const Status& error) {
-  if (written.empty()) return error;
-  std::string removed;
+  std::vector<std::string> stale, removed;
   for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
     const std::string file = base + extension;
-    struct stat st {};
-    if (std::find(written.begin(), written.end(), file) != written.end()) continue;
-    if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || ::unlink(file.c_str()) != 0) continue;
-    removed += (removed.empty() ? "" : ", ") + file;
+    if (std::none_of(set.begin(), set.end(), [&](const auto& f) { return f.first == file; })) stale.push_back(file);
   }
-  if (removed.empty()) return error;
-  return Status(error.code(), error.message() + " (the earlier " + removed + " removed: another plan's)");
-}
-
-}  // namespace
-
-Status write_path_outputs(const std::string& base, const PathReport& r, std::vector<std::string>& written) {
-  const Status s = write_path_output_set(base, r, written);
-  return s.ok() ? s : without_stale_outputs(base, written, s);
+  VISVOL_RETURN_IF_ERROR(write_files_atomically(set, stale, written, removed));
+  if (!geo.ok()) return not_written({{"GeoJSON, KML and .plan", geo.status()}}, removed);
+  return not_written({{".plan", plan_ground}, {"GeoJSON", ellipsoidal.status()}}, removed);
 }
 
 }  // namespace visvol::cli

@@ -181,7 +181,7 @@ struct PathReport {
 struct Wgs84Conversion {
   std::string operation;
   double accuracy_m = 0;
-  std::string describe() const;  // "NAD27 to WGS 84 (6) ... (accurate to 7 m)"
+  std::string describe() const;  // "NAD27 to WGS 84 (6) ... (accurate to 7 m by EPSG)"
 };
 // Coarser than this, the outputs and the operator are told.
 inline constexpr double kTrustedWgs84AccuracyM = 1.0;
@@ -235,7 +235,9 @@ inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as
 // `flyable`, and the status says so (Errc::state); an earlier plan's .plan
 // under BASE is then removed. The CSV's '#' lines and the KML's name say
 // whether every requirement is met, and name what is not.
-Status write_path_outputs(const std::string& base, const PathReport& report, std::vector<std::string>& written);
+// `conversion`, where given, gets how the positions reached WGS84.
+Status write_path_outputs(const std::string& base, const PathReport& report, std::vector<std::string>& written,
+                          Wgs84Conversion* conversion = nullptr);
 
 // What write_path_outputs would refuse about its four file names (an existing
 // symlink, device, FIFO or directory, no such directory), checked before the

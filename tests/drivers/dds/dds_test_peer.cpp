@@ -14,6 +14,11 @@
 //       acknowledgement to SOURCE; exit 0 when all are acknowledged, 3 on
 //       timeout
 //
+//   oversize DOMAIN NS TIMEOUT_S          a sender of its own limit (64 MiB,
+//       in its configuration): a set-constraints command of 2 MiB (sequence
+//       1), then a good one (2); print "ack SEQ RESULT" for each
+//       acknowledgement; exit 0 once 2 is answered, 3 on timeout
+//
 // Exit 2 on bad arguments. Output lines are flushed as they are printed.
 #include <chrono>
 #include <cmath>
@@ -38,7 +43,7 @@ using namespace visvol;
 using namespace visvol::dds;
 
 int usage() {
-  std::fprintf(stderr, "usage: dds_test_peer listen|publish|commands DOMAIN NS ARG [ARG]\n");
+  std::fprintf(stderr, "usage: dds_test_peer listen|publish|commands|oversize DOMAIN NS ARG [ARG]\n");
   return 2;
 }
 
@@ -48,10 +53,15 @@ bool parse_number(const char* text, double& out) {
   return end != text && *end == '\0' && std::isfinite(out) && out >= 0.0;
 }
 
-std::unique_ptr<Participant> participant(double domain, const char* ns) {
+std::unique_ptr<Participant> participant(double domain, const char* ns, bool large_samples) {
   ParticipantConfig c;
   c.domain_id = static_cast<std::uint32_t>(domain);
   c.cyclone_xml = std::string(loopback_config());
+  if (large_samples) {
+    // a configuration's own sample limit is kept (visvol's 1 MiB is not added)
+    const std::size_t end = c.cyclone_xml.rfind("</Domain>");
+    c.cyclone_xml.insert(end, "<Internal><MaxSampleSize>64MiB</MaxSampleSize></Internal>");
+  }
   c.topic_namespace = ns;
   Result<std::unique_ptr<Participant>> p = Participant::create(c);
   if (!p.ok()) {
@@ -195,6 +205,51 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
   return 0;
 }
 
+int oversize(Participant& p, double timeout_s) {
+  Result<Writer> writer = Writer::create(p, Topic::command);
+  Result<Reader> acks = Reader::create(p, Topic::command_ack);
+  if (!writer.ok() || !acks.ok()) return 1;
+  if (!writer->wait_for_readers(1, timeout_s).ok() || !acks->wait_for_writers(1, timeout_s).ok()) {
+    std::printf("timeout no command intake\n");
+    return 3;
+  }
+  CommandMessage m;
+  msg::Command c{};
+  msg::copy_text(c.source, "oversize");
+  c.kind = msg::CommandKind::set_constraints;
+  c.sequence = 1;
+  visvol_msgs_msg_dds__Command_ raw = m.fill(c);
+  std::vector<visvol_msgs_msg_dds__Constraint_> huge(2 * kMaxSampleBytes / 32);  // 40 bytes each serialised
+  raw.constraints._buffer = huge.data();
+  raw.constraints._length = static_cast<std::uint32_t>(huge.size());
+  raw.constraints._maximum = static_cast<std::uint32_t>(huge.size());
+  if (writer->write(&raw) != 0) {
+    std::printf("error the oversize command was not sent\n");
+    return 1;
+  }
+  c.kind = msg::CommandKind::start;
+  c.sequence = 2;
+  (void)writer->write(&m.fill(c));
+  bool second = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!second && seconds_since(t0) < timeout_s) {
+    (void)acks->wait(0.05);
+    (void)acks->take<visvol_msgs_msg_dds__CommandAck_>(
+        [&](const visvol_msgs_msg_dds__CommandAck_& a, const dds_sample_info_t&) {
+          if (std::string(a.source) != "oversize") return;
+          second = second || a.sequence_number == 2;
+          const char* result = to_string(static_cast<msg::AckResult>(a.result));
+          std::printf("ack %llu %s\n", static_cast<unsigned long long>(a.sequence_number), result ? result : "?");
+        });
+    std::fflush(stdout);
+  }
+  if (!second) {
+    std::printf("timeout\n");
+    return 3;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -204,13 +259,14 @@ int main(int argc, char** argv) {
   if (!parse_number(argv[2], domain) || domain > kMaxDomainId || !parse_number(argv[4], arg)) {
     return usage();
   }
-  if (mode != "commands" && (argc < 6 || !parse_number(argv[5], arg2))) return usage();
-  std::unique_ptr<Participant> p = participant(domain, argv[3]);
+  if (mode != "commands" && mode != "oversize" && (argc < 6 || !parse_number(argv[5], arg2))) return usage();
+  std::unique_ptr<Participant> p = participant(domain, argv[3], mode == "oversize");
   if (!p) return 1;
   int rc = 2;
   if (mode == "listen") rc = listen(*p, static_cast<std::uint64_t>(arg), arg2);
   if (mode == "publish") rc = publish(*p, static_cast<std::uint64_t>(arg), arg2);
   if (mode == "commands") rc = commands(*p, arg, argc > 5 ? argv[5] : "peer");
+  if (mode == "oversize") rc = oversize(*p, arg);
   std::fflush(stdout);
   return rc;
 }

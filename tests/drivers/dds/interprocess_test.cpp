@@ -143,5 +143,26 @@ TEST(Interprocess, CommandsFromAnotherProcessAreValidatedAndAnswered) {
   EXPECT_EQ((*intake)->stats().commands.received, 8u);
 }
 
+// A sender without visvol's sample limit (its own configuration allows 64
+// MiB): its 2 MiB command is dropped by this process's Cyclone as it arrives,
+// unanswered, and the next one is answered (25 million constraints took a
+// console to 950 MiB of locked memory before).
+TEST(Interprocess, ASampleOverTheLimitFromAnotherProcessIsDroppedAsItArrives) {
+  auto p = make_participant(loopback(kDomain));
+  ASSERT_NE(p, nullptr);
+  msg::CommandQueue queue;
+  IntakeConfig config;
+  config.limits.min = {0.0, 0.0, 0.0};
+  config.limits.max = {1000.0, 1000.0, 1000.0};
+  Result<std::unique_ptr<CommandIntake>> intake = CommandIntake::start(*p, config, queue);
+  ASSERT_TRUE(intake.ok());
+  Child sender(peer("oversize", "20"));
+  ASSERT_TRUE(sender.started());
+  ASSERT_EQ(sender.wait(30.0), 0) << sender.output();
+  EXPECT_NE(sender.output().find("ack 2 accepted"), std::string::npos) << sender.output();
+  EXPECT_EQ(sender.output().find("ack 1 "), std::string::npos) << sender.output();
+  EXPECT_EQ((*intake)->stats().commands.received, 1u);
+}
+
 }  // namespace
 }  // namespace visvol::dds

@@ -515,7 +515,13 @@ Status write_files_atomically(const std::vector<std::pair<std::string, std::stri
   }
   if (status.ok() && ready.empty() && !removed.empty()) status = fsync_directory_of(removed.front());
   g_renaming_set.store(false);
-  if (const int sig = g_deferred_signal.exchange(0); sig != 0) std::raise(sig);
+  if (const int sig = g_deferred_signal.exchange(0); sig != 0) {
+    // an operator who pressed Ctrl-C to cancel must know the set was replaced
+    std::fprintf(stderr, "interrupted (signal %d) as the outputs were renamed into place: written whole first:", sig);
+    for (const std::string& f : written) std::fprintf(stderr, " %s", f.c_str());
+    std::fprintf(stderr, "\n");
+    std::raise(sig);
+  }
   return status;
 }
 

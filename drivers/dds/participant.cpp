@@ -152,6 +152,15 @@ Status dds_error(std::string_view what, dds_return_t rc) {
   return Status(code, std::string(what) + ": " + dds_strretcode(rc));
 }
 
+bool sets_max_sample_size(const std::string& xml) {
+  std::string text = xml;
+  for (std::size_t open = text.find("<!--"); open != std::string::npos; open = text.find("<!--", open)) {
+    const std::size_t close = text.find("-->", open + 4);
+    text.erase(open, close == std::string::npos ? std::string::npos : close + 3 - open);
+  }
+  return text.find("<MaxSampleSize") != std::string::npos;
+}
+
 // visvol's own samples stay well under the limit (a PathVertex is under
 // 64 bytes serialised)
 static_assert(4 * msg::kMaxThumbnailBytes <= kMaxSampleBytes, "a thumbnail fits the sample limit");
@@ -167,7 +176,7 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantConfig
   if (it == domains.end()) {
     // Cyclone merges a list of fragments in order; a configuration that sets
     // its own limit keeps it (the operator's choice, larger or smaller)
-    const std::string merged = config.cyclone_xml.find("MaxSampleSize") != std::string::npos
+    const std::string merged = sets_max_sample_size(config.cyclone_xml)
                                    ? config.cyclone_xml
                                    : config.cyclone_xml + ",<CycloneDDS><Domain Id=\"any\"><Internal><MaxSampleSize>" +
                                          std::to_string(kMaxSampleBytes) +

@@ -52,6 +52,11 @@ Result<std::string> read_cyclone_config(const std::string& path);
 // msg::kMaxPathVertices, are a quarter of it at most.
 inline constexpr std::uint32_t kMaxSampleBytes = 1024 * 1024;
 
+// Whether a Cyclone configuration sets Internal/MaxSampleSize itself: an
+// element of that name outside comments (one that named it in a comment
+// switched visvol's limit off).
+bool sets_max_sample_size(const std::string& xml);
+
 struct ParticipantConfig {
   std::uint32_t domain_id = 0;  // 0..kMaxDomainId
   // The Cyclone configuration XML itself (not a file name): see

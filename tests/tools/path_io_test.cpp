@@ -449,6 +449,31 @@ TEST_F(PathIo, OnlyAFlyablePathGetsAMissionAndEveryFileSaysWhatIsUnmet) {
 // PROJ shifts the datum, to 7 m with Debian's proj-data (EPSG's figure): the
 // outputs name the transformation and its accuracy, and a coarser one than a
 // metre gets a note for the operator.
+// A fixed-wing's landing circles over the last vertex before it lands: a
+// circle that comes under the clearance (one came 32 m under the ground, of a
+// path that met everything) gets no mission; the path's files are written.
+TEST_F(PathIo, NoMissionWhoseLandingCircleComesUnderTheClearance) {
+  PathReport r = report(preset("fixed-wing"));
+  r.landing_loiter_clearance_m = -32.0;
+  std::vector<std::string> written;
+  const Status s = write_path_outputs(dir_ + "/circle", r, written);
+  EXPECT_EQ(s.code(), Errc::state);
+  EXPECT_NE(s.message().find(".plan not written: the landing's loiter circle (80 m around the last vertex at 230.0 m) "
+                             "comes to -32.0 m over the ground, under the 30.0 m clearance"),
+            std::string::npos)
+      << s.message();
+  EXPECT_FALSE(exists(dir_ + "/circle.plan"));
+  EXPECT_EQ(written.size(), 3u);
+  r.landing_loiter_clearance_m = -std::numeric_limits<double>::infinity();
+  written.clear();
+  EXPECT_NE(write_path_outputs(dir_ + "/off", r, written).message().find("leaves the terrain the pack knows"),
+            std::string::npos);
+  r.landing_loiter_clearance_m = 30.5;  // over the clearance: the mission stands
+  written.clear();
+  EXPECT_TRUE(write_path_outputs(dir_ + "/fine", r, written).ok());
+  EXPECT_TRUE(exists(dir_ + "/fine.plan"));
+}
+
 TEST_F(PathIo, WgsPositionsSayHowTheyWereConverted) {
   PathReport r = report(preset("multirotor"));
   Wgs84Conversion exact;

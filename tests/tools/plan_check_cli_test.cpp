@@ -77,6 +77,13 @@ TEST_F(PlanCheck, AFixedWingsFilesReadBackItsWorstValues) {
   const Outcome r = visvol("plan " + *pack_ + kEnds + " --objective hide --segments 48 --max-seconds 5 --json -o " + b);
   ASSERT_NE(r.status, 2) << r.err;
   const nlohmann::json s = nlohmann::json::parse(r.out);
+  // the lowest clearance the files name is the verdict's, between vertices too
+  // (the vertices' alone read 38.99 m against the check's 37.34 m)
+  ASSERT_EQ(s["envelope"][0]["name"], "clearance");
+  std::ifstream geojson_file(b + ".geojson");
+  const nlohmann::json gj = nlohmann::json::parse(geojson_file);
+  EXPECT_NEAR(gj["features"][0]["properties"]["min_clearance_m"].get<double>(), s["envelope"][0]["worst"].get<double>(),
+              1e-6);
   for (const char* ext : {".plan", ".geojson", ".csv"}) {
     const Outcome c = visvol("check " + *pack_ + " " + b + ext + " --json");
     ASSERT_NE(c.status, 2) << ext << ": " << c.err;
@@ -86,6 +93,13 @@ TEST_F(PlanCheck, AFixedWingsFilesReadBackItsWorstValues) {
       ASSERT_FALSE(j["notes"].empty());
       EXPECT_NE(j["notes"].back().get<std::string>().find("the landing's approach: not flown or checked here"),
                 std::string::npos)
+          << j["notes"].dump();
+      // its radius as a radius, its altitude as the end's (the radius read as an altitude)
+      char circle[96];
+      std::snprintf(circle, sizeof circle, "a loiter of 80 m radius at %.1f m (the DEM's datum)",
+                    j["per_vertex"].back()["z_m"].get<double>());
+      EXPECT_NE(j["notes"].back().get<std::string>().find(circle), std::string::npos) << j["notes"].dump();
+      EXPECT_NE(j["notes"].back().get<std::string>().find("(its circle at least "), std::string::npos)
           << j["notes"].dump();
     }
     for (std::size_t k = 0; k < s["envelope"].size(); ++k) {

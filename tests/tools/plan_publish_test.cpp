@@ -17,6 +17,7 @@ namespace {
 
 using visvol::cli::subsample_indices;
 using visvol::test::Outcome;
+using visvol::test::slurp;
 using visvol::test::visvol;
 
 constexpr std::uint32_t kDomain = 218;
@@ -148,6 +149,13 @@ TEST_F(PlanPublishCli, BadPublishOptionsExitTwoWithOneLine) {
   EXPECT_NE(device.err.find("/dev/null is not a regular file: -o names the outputs' base"), std::string::npos)
       << device.err;
   EXPECT_NE(access("/dev/null.csv", F_OK), 0);
+  // /dev/stderr is a regular file when stderr is one: /dev/stderr.csv and its siblings
+  const Outcome in_dev = visvol::test::run_command("sh -c '" + std::string(VISVOL_BIN) + " plan " + *pack_ + ends +
+                                                   " -o /dev/stderr 2>" + *pack_ + "_err.txt'");
+  EXPECT_EQ(in_dev.status, 2);
+  EXPECT_NE(slurp(*pack_ + "_err.txt").find("a system folder"), std::string::npos) << slurp(*pack_ + "_err.txt");
+  std::remove((*pack_ + "_err.txt").c_str());
+  EXPECT_NE(access("/dev/stderr.csv", F_OK), 0);
   const Outcome folder = visvol("plan " + *pack_ + ends + " -o " + ::testing::TempDir());
   EXPECT_EQ(folder.status, 2);
   EXPECT_NE(folder.err.find("is a directory: -o names the outputs' base"), std::string::npos) << folder.err;

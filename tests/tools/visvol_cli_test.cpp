@@ -188,6 +188,13 @@ TEST_F(Cli, SampleAnswersLineByLine) {
   EXPECT_EQ(endless.status, 2);
   EXPECT_EQ(std::count(endless.out.begin(), endless.out.end(), '\n'), 1);
   EXPECT_NE(endless.err.find("stdin line 2 is longer than 4096 bytes"), std::string::npos) << endless.err;
+  // results written to a full disk are lost: never exit 0 (sample and info did)
+  for (const std::string& command : {"sample " + *pack_, "info " + *pack_}) {
+    const Outcome full = visvol::test::run_command(
+        "sh -c '" + std::string(VISVOL_BIN) + " " + command + " > /dev/full'", "550500 4182000 200\n");
+    EXPECT_EQ(full.status, 1) << command;
+    EXPECT_NE(full.err.find("writing the standard output failed"), std::string::npos) << command << ": " << full.err;
+  }
 }
 
 TEST_F(Cli, ExportWritesAVolume) {

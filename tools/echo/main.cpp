@@ -471,6 +471,7 @@ int main(int argc, char** argv) {
     sub->add_option("--count", watch.count, "exit after N messages (0: until interrupted)")
         ->check(CLI::NonNegativeNumber);
     sub->add_option("--timeout", watch.timeout_s, "give up after S seconds (exit 1 if --count was not reached)")
+        ->check(kFinite)  // CLI::Range lets NaN through: it never timed out
         ->check(CLI::Range(0.0, 86400.0));
     sub->add_flag("--vertices", watch.vertices, "print every vertex of a path");
   }
@@ -488,6 +489,7 @@ int main(int argc, char** argv) {
                    "before may be answered by the old acknowledgement")
       ->check(CLI::NonNegativeNumber);
   command_app->add_option("--timeout", command.timeout_s, "seconds to wait for the console and its answer (default 5)")
+      ->check(kFinite)
       ->check(CLI::Range(0.1, 3600.0));
   command_app->add_flag("--wait-applied", command.wait_applied,
                         "wait until the planner reports the command applied or failed");

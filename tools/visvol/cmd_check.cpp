@@ -208,12 +208,29 @@ int run_check(const CheckOptions& o) {
   if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
   notes.insert(notes.end(), file->notes.begin(), file->notes.end());
   for (const LoiterItem& a : file->approach) {
-    // the path ends at the last waypoint: what is flown after it is the crew's to judge
-    const std::string radius =
-        a.radius_m != 0 ? printed("%.0f m", std::fabs(a.radius_m)) : std::string("the autopilot's radius");
-    notes.push_back(a.item + ", a loiter to altitude of " + radius +
-                    " over the last waypoint, and the landing after it are the landing's approach: not flown or "
-                    "checked here");
+    // the path ends at the last waypoint: what is flown after it is the crew's
+    // to judge, but a circle into the ground is said (one came 32 m under it)
+    const double r = std::fabs(a.radius_m);
+    std::string circle =
+        a.radius_m != 0 ? printed("a loiter of %.0f m radius", r) : std::string("a loiter of the autopilot's radius");
+    circle += printed(" at %.1f m (the DEM's datum)", a.altitude_m);
+    std::string lowest;
+    if (a.radius_m != 0) {
+      const rt::Vec3& c = file->points[a.vertex];
+      const double wanted = std::ceil(2 * M_PI * r / (0.25 * p.levels.front().geometry().spacing_m));
+      const int samples = static_cast<int>(std::clamp(wanted, 72.0, double(1 << 20)));
+      double least = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < samples; ++k) {
+        const double t = 2 * M_PI * k / samples;
+        least = std::min(least, a.altitude_m - checker->ground_m(c.x() + r * std::cos(t), c.y() + r * std::sin(t)));
+      }
+      lowest = least < spec.envelope.clearance_m - kHeightTolM
+                   ? printed(" (WARNING: its circle comes to %.1f m over the ground, under the %.1f m clearance)",
+                             least, spec.envelope.clearance_m)
+                   : printed(" (its circle at least %.1f m over the ground)", least);
+    }
+    notes.push_back(a.item + ", " + circle + " over the last waypoint" + lowest +
+                    ", and the landing after it are the landing's approach: not flown or checked here");
   }
   // samples every sixteenth of a post along the path, a sight line from each to
   // every observer: a path zigzagging across the pack millions of times, or

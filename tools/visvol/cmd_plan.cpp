@@ -192,6 +192,27 @@ Status check_init_is_no_output(const PlanOptions& o) {
   return Status::ok_status();
 }
 
+// A fixed-wing .plan circles over the last vertex at its altitude before it
+// lands (path_io.hpp): the least height of that circle above the finest
+// terrain, sampled a quarter post apart; -infinity where it leaves the grid;
+// NaN for a multirotor or no turn radius (the autopilot's own circle).
+double landing_loiter_clearance(const fields::FieldSampler<PackLevel>& finest, const fields::VolumeGeometry& g,
+                                const rt::VehicleEnvelope& v, const rt::Vec3& centre) {
+  const double radius = v.min_turn_radius_m;
+  if (v.type != rt::VehicleType::fixed_wing || !(radius > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const double x_max = g.origin_x + (g.nx - 1) * g.spacing_m, y_min = g.origin_y - (g.ny - 1) * g.spacing_m;
+  const double wanted = std::ceil(2 * M_PI * radius / (0.25 * g.spacing_m));
+  const int samples = static_cast<int>(std::clamp(wanted, 72.0, double(1 << 20)));
+  double lowest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < samples; ++k) {
+    const double a = 2 * M_PI * k / samples;
+    const double x = centre.x() + radius * std::cos(a), y = centre.y() + radius * std::sin(a);
+    if (x < g.origin_x || x > x_max || y < y_min || y > g.origin_y) return -std::numeric_limits<double>::infinity();
+    lowest = std::min(lowest, centre.z() - finest.height(x, y));
+  }
+  return lowest;
+}
+
 int run_plan(const PlanOptions& o) {
   if (Status s = check_path_outputs(o.out); !s.ok()) return fail("plan", s.with_context("-o"));
   if (Status s = check_init_is_no_output(o); !s.ok()) return fail("plan", s);
@@ -252,6 +273,13 @@ int run_plan(const PlanOptions& o) {
   report.requirements_met = res->final_check.all_met;
   report.unmet = res->final_check.unmet();
   report.flyable = res->final_check.flight_violation <= 0;
+  report.landing_loiter_clearance_m =
+      landing_loiter_clearance(finest, levels.front().geometry(), r.envelope, report.vertices.back());
+  // the lowest clearance the outputs name is the check's, between vertices
+  // too (the vertices' alone read higher than the verdict)
+  for (const rt::LimitResult& l : res->final_check.envelope) {
+    if (l.name == "clearance") report.metrics.min_clearance_m = std::min(report.metrics.min_clearance_m, l.worst);
+  }
   for (const rt::Vec3& v : report.vertices) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }
@@ -382,7 +410,8 @@ Runner add_plan_command(CLI::App& app) {
   c->footer(
       "Exit status: 0 when the path meets every requirement (constraints, envelope, planning bounds: "
       "checked with exact sight lines on the finest terrain), 1 when one is unmet (the path is still "
-      "written and marked unmet) or planning failed, 2 for bad arguments or input.");
+      "written and marked unmet; a path that breaks the envelope or leaves the planning bounds gets no .plan) "
+      "or planning failed, 2 for bad arguments or input.");
   c->add_flag("--json", o->json, "Print the summary as one JSON object");
   c->add_flag("--publish", o->publish,
               "Publish the path on DDS (the console's path topics) while it settles and when done");

@@ -95,6 +95,7 @@ Extent extent_of(const fields::VolumeGeometry& g) {
 struct RenderPath {
   std::vector<PathPoint> points;
   PathFormat format = PathFormat::text;
+  bool said_unmet = false;  // the file says its requirements are not met (visvol plan's CSV and GeoJSON)
 };
 
 Result<RenderPath> read_render_path(const std::string& file, const std::string& crs_wkt,
@@ -113,6 +114,7 @@ Result<RenderPath> read_render_path(const std::string& file, const std::string& 
   const Extent e = extent_of(finest.level().geometry());
   RenderPath out;
   out.format = read->format;
+  out.said_unmet = read->requirements_met.has_value() && !*read->requirements_met;
   out.points.reserve(read->points.size());
   for (std::size_t i = 0; i < read->points.size(); ++i) {
     const rt::Vec3& v = read->points[i];
@@ -224,6 +226,13 @@ void print_path(const std::string& file, const RenderPath& path) {
   const PathPoint &a = path.points.front(), &b = path.points.back();
   std::printf("path  %zu points from %s (%s): start (%.2f, %.2f, %.2f), end (%.2f, %.2f, %.2f) m\n", path.points.size(),
               file.c_str(), format, a.x_m, a.y_m, a.z_m, b.x_m, b.y_m, b.z_m);
+  // a picture of a path passes from hand to hand: what its file says of it goes with it
+  if (path.said_unmet) {
+    std::printf(
+        "note  %s says its requirements are NOT MET (see its unmet lines): this draws the path, it does "
+        "not vouch for it\n",
+        file.c_str());
+  }
 }
 
 int run_render(const RenderOptions& o) {

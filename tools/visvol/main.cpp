@@ -12,7 +12,9 @@
 //
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <map>
 #include <new>
@@ -32,7 +34,15 @@ namespace {
 // running out) ends it with a message and exit 1, never an abort.
 int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
   try {
-    return runner();
+    const int status = runner();
+    // what a command printed is its result (sample's values, check's
+    // verdict): lost to a full disk or /dev/full, it must not exit 0
+    if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+      std::fprintf(stderr, "visvol %s: writing the standard output failed (%s): its results are incomplete\n",
+                   command.c_str(), std::strerror(errno));
+      return visvol::cli::kExitFailure;
+    }
+    return status;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "visvol %s: out of memory\n", command.c_str());
   } catch (const std::exception& e) {

@@ -20,6 +20,7 @@
 #include <utility>
 
 #include "base/decimal_text.hpp"
+#include "base/tolerances.hpp"
 #include "io/atomic_file.hpp"
 #include "io/input_file.hpp"
 #include "io/json_input.hpp"
@@ -431,6 +432,10 @@ Result<PathFile> parse_geojson(const nlohmann::json& j, const std::string& path,
   VISVOL_RETURN_IF_ERROR(read_positions(line["coordinates"], path, out));
   VISVOL_RETURN_IF_ERROR(check_count(out, path));
   VISVOL_RETURN_IF_ERROR(read_vertex_fp(properties, out.points.size(), path, out.fp));
+  if (properties.is_object() && properties.contains("requirements_met") &&
+      properties["requirements_met"].is_boolean()) {
+    out.requirements_met = properties["requirements_met"].get<bool>();
+  }
   if (crs_wkt.empty()) {
     return invalid_argument(path +
                             ": a GeoJSON path is in WGS84 longitude and latitude, and there is no pack CRS "
@@ -470,7 +475,13 @@ Result<PathFile> parse_path_text(std::string& text, const std::string& path, con
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && text[first] == '{') return parse_json_path(text, path, crs_wkt);
-  if (is_plan_csv(text)) return parse_plan_csv(text, path);
+  if (is_plan_csv(text)) {
+    Result<PathFile> csv = parse_plan_csv(text, path);
+    // the verdict visvol plan wrote in its '#' lines
+    if (csv.ok() && text.find("\n# requirements: NOT MET") != std::string::npos) csv->requirements_met = false;
+    if (csv.ok() && text.find("\n# requirements: all met") != std::string::npos) csv->requirements_met = true;
+    return csv;
+  }
   return parse_text_points(text, path);
 }
 
@@ -1016,6 +1027,18 @@ Status check_path_outputs(const std::string& base) {
                             ": -o names the outputs' base (BASE.csv, BASE.kml, BASE.plan, BASE.geojson); for files "
                             "in a folder give FOLDER/NAME");
   }
+  // -o /dev/stderr (a regular file when stderr is) made /dev/stderr.csv and
+  // its siblings: no outputs among the devices or the kernel's files
+  std::error_code ec;
+  const std::filesystem::path folder =
+      std::filesystem::weakly_canonical(std::filesystem::absolute(base, ec).parent_path(), ec);
+  const std::string f = folder.string();
+  const bool shared_memory = f == "/dev/shm" || f.rfind("/dev/shm/", 0) == 0;  // a scratch folder like /tmp
+  for (const char* system : {"/dev", "/proc", "/sys"}) {
+    if (!ec && !shared_memory && (f == system || f.rfind(std::string(system) + "/", 0) == 0)) {
+      return invalid_argument(base + ": the outputs would go in " + f + ", a system folder: name a folder of yours");
+    }
+  }
   for (const char* extension : {".csv", ".kml", ".plan", ".geojson"}) {
     VISVOL_RETURN_IF_ERROR(check_output_path(base + extension));
   }
@@ -1054,6 +1077,19 @@ Status write_path_outputs(const std::string& base, const PathReport& r, std::vec
   const Result<GeoidShift> ellipsoidal =
       geo.ok() ? shift_heights(*geo, true) : Result<GeoidShift>(Status(Errc::unsupported, "no WGS84 positions"));
   Status plan_ground = check_plan_ground(r);
+  if (plan_ground.ok() && r.landing_loiter_clearance_m < r.vehicle.clearance_m - kHeightTolM) {
+    // its approach circle into a hillside (a met path's mission did)
+    char lowest[64] = "leaves the terrain the pack knows";
+    if (std::isfinite(r.landing_loiter_clearance_m)) {
+      std::snprintf(lowest, sizeof lowest, "comes to %.1f m over the ground", r.landing_loiter_clearance_m);
+    }
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "the landing's loiter circle (%.0f m around the last vertex at %.1f m) %s, under the %.1f m "
+                  "clearance: no mission with that approach (another end, or a higher one)",
+                  r.vehicle.min_turn_radius_m, r.vertices.back().z(), lowest, r.vehicle.clearance_m);
+    plan_ground = Status(Errc::state, text);
+  }
   if (plan_ground.ok() && !r.flyable) {
     // a crew loads the .plan into the autopilot: no mission into a hillside
     plan_ground = Status(Errc::state,

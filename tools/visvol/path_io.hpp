@@ -122,6 +122,9 @@ struct PathFile {
   std::vector<LoiterItem> loiters;
   // .plan: those approach loiters, which a check does not fly (it says so)
   std::vector<LoiterItem> approach;
+  // What the file says of itself (visvol plan's CSV '# requirements:' lines,
+  // its GeoJSON's requirements_met): unset where it says nothing.
+  std::optional<bool> requirements_met;
   // .plan: what the reader noticed of the mission that a check should say
   // (a takeoff's leg added, a landing away from the path)
   std::vector<std::string> notes;
@@ -172,6 +175,11 @@ struct PathReport {
   // flight_violation is 0): only then is a .plan, the mission an autopilot
   // flies, written.
   bool flyable = true;
+  // A fixed-wing .plan's landing circles over the last vertex at its altitude
+  // (min-turn-radius): the circle's least height above the finest terrain
+  // (-infinity where it leaves the terrain the pack knows; NaN: not computed,
+  // no circle). Under the vehicle's clearance, no .plan is written.
+  double landing_loiter_clearance_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 // How positions went between the pack's CRS and WGS84: the coarsest of the

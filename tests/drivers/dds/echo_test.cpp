@@ -134,6 +134,11 @@ TEST(Echo, BadArgumentsExitTwoWithOneLine) {
       {"command", "switch-terrain", "../x"},
       {"command", "--source", "", "start"},
       {"path", "--count", "-3"},
+      // NaN passed CLI11's range: a path watch that never timed out
+      {"path", "--timeout", "nan"},
+      {"command", "--timeout", "nan", "stop"},
+      // decimal only: strtod read 0x10 as sixteen
+      {"command", "set-constraints", "--hidden-from", "0x10,2,3"},
       {"nonsense"},
   };
   for (const auto& args : cases) {

@@ -67,6 +67,16 @@ TEST(ParticipantConfig, RejectsBadValuesWithReasons) {
   EXPECT_TRUE(validate(c).ok());
 }
 
+// A configuration's own sample limit is kept; one that names it only in a
+// comment gets visvol's (8 million constraints got through such a one).
+TEST(ParticipantConfig, OnlyAnElementSetsTheSampleLimit) {
+  EXPECT_FALSE(sets_max_sample_size(std::string(loopback_config())));
+  EXPECT_TRUE(sets_max_sample_size("<CycloneDDS><Domain><Internal><MaxSampleSize>8MiB</MaxSampleSize></Internal>"));
+  EXPECT_FALSE(sets_max_sample_size("<CycloneDDS><!-- Cyclone's default MaxSampleSize --><Domain/></CycloneDDS>"));
+  EXPECT_FALSE(sets_max_sample_size("<CycloneDDS><!-- <MaxSampleSize>8MiB</MaxSampleSize> --></CycloneDDS>"));
+  EXPECT_FALSE(sets_max_sample_size("<CycloneDDS><!-- never closed <MaxSampleSize>"));
+}
+
 TEST(ParticipantConfig, ReadErrorsNameTheFile) {
   Result<std::string> r = read_cyclone_config("/nonexistent/cyclone.xml");
   ASSERT_FALSE(r.ok());

@@ -298,6 +298,7 @@ std::optional<ConsoleOptions> Console::next_session() const {
   next.visible_to.clear();
   next.session = m.o.session + 1;
   next.switched_from = m.pack_id;
+  next.switched_from_path = m.o.pack;
   return next;
 }
 
@@ -310,7 +311,11 @@ ConsoleOptions session_after_failed_switch(const ConsoleOptions& failed, const s
     if (id == failed.switched_from) back.pack = path;  // next_session() put the pack it left here
     if (id != failed.switched_from && id != failed_id) back.terrains.push_back(path);
   }
+  // a catalogue's pack is in no list: back to its file all the same (the
+  // console went back to the broken pack, failed again and ended)
+  if (!failed.switched_from_path.empty()) back.pack = failed.switched_from_path;
   back.switched_from.clear();
+  back.switched_from_path.clear();
   back.switch_failed = failed_id + ": " + error;
   return back;
 }

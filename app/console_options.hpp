@@ -70,8 +70,9 @@ struct ConsoleOptions {
   double thumbnail_max_hz = 1.0;
   // Set by the console itself for a session after a terrain switch (not options).
   int session = 1;
-  std::string switched_from;  // the previous session's pack id
-  std::string switch_failed;  // "PACKID: why" when a switch to it failed and this session came back
+  std::string switched_from;       // the previous session's pack id
+  std::string switched_from_path;  // and its file, to go back to (a catalogue's pack is in no list here)
+  std::string switch_failed;       // "PACKID: why" when a switch to it failed and this session came back
 };
 
 // "WxH" in pixels, each side 32..4096; invalid_argument naming the option.

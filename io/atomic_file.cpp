@@ -214,9 +214,13 @@ std::atomic<int> g_deferred_signal{0};
 extern "C" void remove_temporaries_and_reraise(int sig) {
   const int saved_errno = errno;
   if (g_renaming_set.load()) {
+    // kept first, then the flag read again: a set that ended meanwhile may
+    // not have seen it, and this handler ends the process as below
     g_deferred_signal.store(sig);
-    errno = saved_errno;
-    return;
+    if (g_renaming_set.load()) {
+      errno = saved_errno;
+      return;
+    }
   }
   remove_temporaries_in_handler();
   std::signal(sig, SIG_DFL);
@@ -392,6 +396,7 @@ OutputFile& OutputFile::operator=(OutputFile&& other) noexcept {
   is_directory_ = other.is_directory_;
   done_ = other.done_;
   flushed_ = other.flushed_;
+  renamed_ = other.renamed_;
   other.fd_ = -1;
   other.slot_ = -1;
   other.done_ = true;
@@ -452,6 +457,7 @@ Status OutputFile::commit() {
   if (std::rename(write_path_.c_str(), path_.c_str()) != 0) {
     return fail(errno_status(errno, path_ + ": cannot rename " + write_path_ + " into place"));
   }
+  renamed_ = true;
   if (is_directory_) remove_temporary(temp_path_, true);
   unregister_live(temp_path_, slot_);
   slot_ = -1;
@@ -510,14 +516,15 @@ Status write_files_atomically(const std::vector<std::pair<std::string, std::stri
   Status status;
   for (OutputFile& f : ready) {
     status = f.commit();
+    if (f.renamed()) written.push_back(f.path());  // in place, even where the folder's fsync failed after
     if (!status.ok()) break;
-    written.push_back(f.path());
   }
   if (status.ok() && ready.empty() && !removed.empty()) status = fsync_directory_of(removed.front());
   g_renaming_set.store(false);
   if (const int sig = g_deferred_signal.exchange(0); sig != 0) {
     // an operator who pressed Ctrl-C to cancel must know the set was replaced
-    std::fprintf(stderr, "interrupted (signal %d) as the outputs were renamed into place: written whole first:", sig);
+    std::fprintf(stderr, "interrupted (signal %d) as the outputs were renamed into place: %s:", sig,
+                 status.ok() ? "written whole first" : "these were written before a failure");
     for (const std::string& f : written) std::fprintf(stderr, " %s", f.c_str());
     std::fprintf(stderr, "\n");
     std::raise(sig);
@@ -531,6 +538,7 @@ void install_output_cleanup_on_signals() {
     if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;  // nohup stays
     struct sigaction sa {};
     sa.sa_handler = remove_temporaries_and_reraise;
+    sa.sa_flags = SA_RESTART;  // a signal deferred while a set is renamed returns: its system calls go on
     sigemptyset(&sa.sa_mask);
     ::sigaction(sig, &sa, nullptr);
   }

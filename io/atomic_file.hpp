@@ -73,6 +73,8 @@ class OutputFile {
   Status commit();
   // Removes the temporary now (errors ignored); later calls do nothing.
   void discard();
+  // commit() renamed it into place (true even where the folder's fsync failed after).
+  bool renamed() const { return renamed_; }
 
  private:
   OutputFile() = default;
@@ -85,7 +87,8 @@ class OutputFile {
   int slot_ = -1;  // in the signal registry, or -1
   bool is_directory_ = false;
   bool done_ = true;      // committed or discarded
-  bool flushed_ = false;  // flush() since the last write: commit need not fsync again
+  bool flushed_ = false;  // flush() since the last write (write(), write_at()): commit need not fsync again
+  bool renamed_ = false;  // commit() put it in place (its folder's fsync may still have failed)
 };
 
 // What OutputFile::create would refuse about `path` itself (an existing
@@ -104,7 +107,8 @@ Status write_file_atomically(const std::string& path, const std::string& bytes);
 // lists them) and the new ones renamed into place, SIGINT, SIGTERM and SIGHUP
 // (where install_output_cleanup_on_signals() was called, in any thread)
 // waiting for the last rename. A full disk or a bad name leaves every
-// destination as it was; `written` lists those renamed into place.
+// destination as it was; `written` lists those renamed into place (a rename
+// that fails after the stale files went leaves part of a set: rare, said).
 Status write_files_atomically(const std::vector<std::pair<std::string, std::string>>& files,
                               const std::vector<std::string>& stale, std::vector<std::string>& written,
                               std::vector<std::string>& removed);

@@ -54,7 +54,8 @@ inline constexpr std::uint32_t kMaxSampleBytes = 1024 * 1024;
 
 // Whether a Cyclone configuration sets Internal/MaxSampleSize itself: an
 // element of that name outside comments (one that named it in a comment
-// switched visvol's limit off).
+// switched visvol's limit off), in any of its <Domain> entries (one set for
+// another domain id keeps visvol's limit off for this one too).
 bool sets_max_sample_size(const std::string& xml);
 
 struct ParticipantConfig {

@@ -1,7 +1,9 @@
 #include "check_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 #include "rt/rope/check_json.hpp"
@@ -92,6 +94,21 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Hol
   }
   std::printf("requirements NOT MET:\n");
   for (const std::string& u : c.unmet()) std::printf("  %s\n", u.c_str());
+}
+
+double circle_clearance_m(const std::function<double(double, double)>& ground_m, const fields::VolumeGeometry& g,
+                          double x, double y, double altitude_m, double radius_m) {
+  const double x_max = g.origin_x + (g.nx - 1) * g.spacing_m, y_min = g.origin_y - (g.ny - 1) * g.spacing_m;
+  const double wanted = std::ceil(2 * M_PI * radius_m / (g.spacing_m / 16));
+  const int samples = static_cast<int>(std::clamp(wanted, 72.0, double(1 << 22)));
+  double lowest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < samples; ++k) {
+    const double a = 2 * M_PI * k / samples;
+    const double px = x + radius_m * std::cos(a), py = y + radius_m * std::sin(a);
+    if (px < g.origin_x || px > x_max || py < y_min || py > g.origin_y) return -std::numeric_limits<double>::infinity();
+    lowest = std::min(lowest, altitude_m - ground_m(px, py));
+  }
+  return lowest;
 }
 
 }  // namespace visvol::cli

@@ -2,10 +2,12 @@
 // (rt::PathCheck): the JSON members and the text lines they share.
 #pragma once
 
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "fields/volume.hpp"
 #include "rt/rope/path_check.hpp"
 
 namespace visvol::cli {
@@ -35,5 +37,12 @@ nlohmann::json vertices_json(const rt::PathCheck& check, const std::vector<rt::V
 // "envelope   max-climb 15.0 deg: worst 12.3 deg, met", then "requirements  all met"
 // or "requirements  NOT MET: ...".
 void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {});
+
+// A landing's loiter circle (`radius_m` around (x, y) at `altitude_m`, the
+// DEM's datum): its least height over the finest terrain `ground_m(x, y)`,
+// sampled a sixteenth of a post apart as the path's check samples;
+// -infinity where it leaves the grid `g` (terrain the pack does not know).
+double circle_clearance_m(const std::function<double(double, double)>& ground_m, const fields::VolumeGeometry& g,
+                          double x, double y, double altitude_m, double radius_m);
 
 }  // namespace visvol::cli

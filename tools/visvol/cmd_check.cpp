@@ -217,14 +217,10 @@ int run_check(const CheckOptions& o) {
     std::string lowest;
     if (a.radius_m != 0) {
       const rt::Vec3& c = file->points[a.vertex];
-      const double wanted = std::ceil(2 * M_PI * r / (0.25 * p.levels.front().geometry().spacing_m));
-      const int samples = static_cast<int>(std::clamp(wanted, 72.0, double(1 << 20)));
-      double least = std::numeric_limits<double>::infinity();
-      for (int k = 0; k < samples; ++k) {
-        const double t = 2 * M_PI * k / samples;
-        least = std::min(least, a.altitude_m - checker->ground_m(c.x() + r * std::cos(t), c.y() + r * std::sin(t)));
-      }
-      lowest = least < spec.envelope.clearance_m - kHeightTolM
+      const double least = circle_clearance_m([&](double x, double y) { return checker->ground_m(x, y); },
+                                              p.levels.front().geometry(), c.x(), c.y(), a.altitude_m, r);
+      lowest = !std::isfinite(least) ? std::string(" (WARNING: its circle leaves the terrain the pack knows)")
+               : least < spec.envelope.clearance_m - kHeightTolM
                    ? printed(" (WARNING: its circle comes to %.1f m over the ground, under the %.1f m clearance)",
                              least, spec.envelope.clearance_m)
                    : printed(" (its circle at least %.1f m over the ground)", least);

@@ -193,24 +193,15 @@ Status check_init_is_no_output(const PlanOptions& o) {
 }
 
 // A fixed-wing .plan circles over the last vertex at its altitude before it
-// lands (path_io.hpp): the least height of that circle above the finest
-// terrain, sampled a quarter post apart; -infinity where it leaves the grid;
-// NaN for a multirotor or no turn radius (the autopilot's own circle).
+// lands (path_io.hpp): that circle's least height over the finest terrain;
+// NaN for a multirotor, or a turn radius of 0 (the autopilot's own circle).
 double landing_loiter_clearance(const fields::FieldSampler<PackLevel>& finest, const fields::VolumeGeometry& g,
-                                const rt::VehicleEnvelope& v, const rt::Vec3& centre) {
-  const double radius = v.min_turn_radius_m;
-  if (v.type != rt::VehicleType::fixed_wing || !(radius > 0)) return std::numeric_limits<double>::quiet_NaN();
-  const double x_max = g.origin_x + (g.nx - 1) * g.spacing_m, y_min = g.origin_y - (g.ny - 1) * g.spacing_m;
-  const double wanted = std::ceil(2 * M_PI * radius / (0.25 * g.spacing_m));
-  const int samples = static_cast<int>(std::clamp(wanted, 72.0, double(1 << 20)));
-  double lowest = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < samples; ++k) {
-    const double a = 2 * M_PI * k / samples;
-    const double x = centre.x() + radius * std::cos(a), y = centre.y() + radius * std::sin(a);
-    if (x < g.origin_x || x > x_max || y < y_min || y > g.origin_y) return -std::numeric_limits<double>::infinity();
-    lowest = std::min(lowest, centre.z() - finest.height(x, y));
+                                const rt::VehicleEnvelope& v, const rt::Vec3& end) {
+  if (v.type != rt::VehicleType::fixed_wing || !(v.min_turn_radius_m > 0)) {
+    return std::numeric_limits<double>::quiet_NaN();
   }
-  return lowest;
+  return circle_clearance_m([&](double x, double y) { return finest.height(x, y); }, g, end.x(), end.y(), end.z(),
+                            v.min_turn_radius_m);
 }
 
 int run_plan(const PlanOptions& o) {
@@ -252,6 +243,12 @@ int run_plan(const PlanOptions& o) {
   });
   if (!res.ok()) return fail("plan", res.status());
   progress.finish();
+  // the lowest clearance every output names (files, --json, DDS) is the
+  // check's, between vertices too (the vertices' alone read higher than the verdict)
+  for (const rt::LimitResult& l : res->final_check.envelope) {
+    if (l.name == "clearance")
+      res->final_metrics.min_clearance_m = std::min(res->final_metrics.min_clearance_m, l.worst);
+  }
   Status delivery;
   if (publisher) {
     const auto& limits = res->final_check.envelope;
@@ -275,11 +272,6 @@ int run_plan(const PlanOptions& o) {
   report.flyable = res->final_check.flight_violation <= 0;
   report.landing_loiter_clearance_m =
       landing_loiter_clearance(finest, levels.front().geometry(), r.envelope, report.vertices.back());
-  // the lowest clearance the outputs name is the check's, between vertices
-  // too (the vertices' alone read higher than the verdict)
-  for (const rt::LimitResult& l : res->final_check.envelope) {
-    if (l.name == "clearance") report.metrics.min_clearance_m = std::min(report.metrics.min_clearance_m, l.worst);
-  }
   for (const rt::Vec3& v : report.vertices) {
     report.per_vertex.push_back({finest.visibility(v.x(), v.y(), v.z()), v.z() - finest.height(v.x(), v.y())});
   }
@@ -287,7 +279,13 @@ int run_plan(const PlanOptions& o) {
   Wgs84Conversion conversion;
   const Status outputs = write_path_outputs(o.out, report, written, &conversion);
   // a crew flies the WGS84 positions: say when they are only metres good
-  const std::string datum_note = wgs84_accuracy_note(conversion);
+  std::vector<std::string> notes;
+  if (std::string note = wgs84_accuracy_note(conversion); !note.empty()) notes.push_back(std::move(note));
+  if (r.envelope.type == rt::VehicleType::fixed_wing && !(r.envelope.min_turn_radius_m > 0)) {
+    notes.push_back(
+        "the .plan's landing circle has the autopilot's own radius (min-turn-radius 0: PX4 80 m, "
+        "ArduPlane 60 m by default): not checked against the terrain");
+  }
 
   const rt::PathMetrics& a = res->initial;
   const rt::PathMetrics& b = res->final_metrics;
@@ -313,7 +311,7 @@ int run_plan(const PlanOptions& o) {
                         {"diverged", res->diverged},
                         {"wall_s", res->wall_s},
                         {"outputs", written},
-                        {"notes", datum_note.empty() ? nlohmann::json::array() : nlohmann::json::array({datum_note})}};
+                        {"notes", notes}};
     j.update(check_json(check, r.envelope));
     const fields::Bounds2D& box = planning.bounds;
     j["planning_bounds"] = {
@@ -348,7 +346,7 @@ int run_plan(const PlanOptions& o) {
                 res->equilibrium_s, res->simulated_s, res->first_level + 1, res->wall_s);
     print_check(check, r.envelope);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
-    if (!datum_note.empty()) std::printf("note       %s\n", datum_note.c_str());
+    for (const std::string& n : notes) std::printf("note       %s\n", n.c_str());
     if (publisher) {
       std::printf("published  %llu path updates on DDS domain %u (%llu not sent), %u subscriber(s)%s\n",
                   static_cast<unsigned long long>(publisher->published()), o.dds.domain_id,
@@ -361,7 +359,7 @@ int run_plan(const PlanOptions& o) {
   const int status = outputs.ok() ? kExitOk : fail("plan", outputs);
   if (!check.all_met) {
     std::fprintf(stderr, "visvol plan: the path does not meet every requirement (%s):\n",
-                 written.empty() ? "no file written" : "what is written is marked unmet");
+                 written.empty() ? "no file written" : "the CSV, KML and GeoJSON written say so");
     for (const std::string& u : check.unmet()) std::fprintf(stderr, "  %s\n", u.c_str());
     return std::max(status, static_cast<int>(kExitFailure));
   }
@@ -410,7 +408,8 @@ Runner add_plan_command(CLI::App& app) {
   c->footer(
       "Exit status: 0 when the path meets every requirement (constraints, envelope, planning bounds: "
       "checked with exact sight lines on the finest terrain), 1 when one is unmet (the path is still "
-      "written and marked unmet; a path that breaks the envelope or leaves the planning bounds gets no .plan) "
+      "written and marked unmet; a path that breaks the envelope or leaves the planning bounds, or whose "
+      "fixed-wing landing circle comes under the clearance, gets no .plan) "
       "or planning failed, 2 for bad arguments or input.");
   c->add_flag("--json", o->json, "Print the summary as one JSON object");
   c->add_flag("--publish", o->publish,

@@ -12,6 +12,7 @@
 //
 // Exit status: 0 success, 1 failure while working, 2 bad arguments or input.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -37,10 +38,13 @@ int run_guarded(const std::string& command, const visvol::cli::Runner& runner) {
     const int status = runner();
     // what a command printed is its result (sample's values, check's
     // verdict): lost to a full disk or /dev/full, it must not exit 0
-    if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    errno = 0;
+    const bool flushed = std::fflush(stdout) == 0;
+    const int flush_errno = errno;
+    if (!flushed || std::ferror(stdout) != 0) {
       std::fprintf(stderr, "visvol %s: writing the standard output failed (%s): its results are incomplete\n",
-                   command.c_str(), std::strerror(errno));
-      return visvol::cli::kExitFailure;
+                   command.c_str(), !flushed && flush_errno != 0 ? std::strerror(flush_errno) : "an earlier write");
+      return std::max(status, static_cast<int>(visvol::cli::kExitFailure));
     }
     return status;
   } catch (const std::bad_alloc&) {

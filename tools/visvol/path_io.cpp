@@ -1077,6 +1077,12 @@ Status write_path_outputs(const std::string& base, const PathReport& r, std::vec
   const Result<GeoidShift> ellipsoidal =
       geo.ok() ? shift_heights(*geo, true) : Result<GeoidShift>(Status(Errc::unsupported, "no WGS84 positions"));
   Status plan_ground = check_plan_ground(r);
+  if (plan_ground.ok() && !r.flyable) {
+    // a crew loads the .plan into the autopilot: no mission into a hillside
+    plan_ground = Status(Errc::state,
+                         "the path breaks the vehicle's envelope or leaves the planning bounds, so it is no mission "
+                         "for an autopilot (the other files are marked unmet)");
+  }
   if (plan_ground.ok() && r.landing_loiter_clearance_m < r.vehicle.clearance_m - kHeightTolM) {
     // its approach circle into a hillside (a met path's mission did)
     char lowest[64] = "leaves the terrain the pack knows";
@@ -1089,12 +1095,6 @@ Status write_path_outputs(const std::string& base, const PathReport& r, std::vec
                   "clearance: no mission with that approach (another end, or a higher one)",
                   r.vehicle.min_turn_radius_m, r.vertices.back().z(), lowest, r.vehicle.clearance_m);
     plan_ground = Status(Errc::state, text);
-  }
-  if (plan_ground.ok() && !r.flyable) {
-    // a crew loads the .plan into the autopilot: no mission into a hillside
-    plan_ground = Status(Errc::state,
-                         "the path breaks the vehicle's envelope or leaves the planning bounds, so it is no mission "
-                         "for an autopilot (the other files are marked unmet)");
   }
   // the set replaces the earlier one whole or not at all (a full disk left
   // the new CSV and KML beside no .plan); the earlier set's files this one
@@ -1113,7 +1113,9 @@ Status write_path_outputs(const std::string& base, const PathReport& r, std::vec
     const std::string file = base + extension;
     if (std::none_of(set.begin(), set.end(), [&](const auto& f) { return f.first == file; })) stale.push_back(file);
   }
-  VISVOL_RETURN_IF_ERROR(write_files_atomically(set, stale, written, removed));
+  if (Status w = write_files_atomically(set, stale, written, removed); !w.ok()) {
+    return not_written({{"the set", w}}, removed);  // the earlier files removed are said too
+  }
   if (!geo.ok()) return not_written({{"GeoJSON, KML and .plan", geo.status()}}, removed);
   return not_written({{".plan", plan_ground}, {"GeoJSON", ellipsoidal.status()}}, removed);
 }

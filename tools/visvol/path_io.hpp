@@ -240,8 +240,9 @@ inline constexpr const char* kVerticalDatumSource = "EGM96 (DEM heights taken as
 // without the geoid grid all but the GeoJSON are (and the CSV has no
 // h_ellipsoidal_m), and the status names the grid; a path whose first or last
 // vertex is below its ground height gets no .plan, nor one that is not
-// `flyable`, and the status says so (Errc::state); an earlier plan's .plan
-// under BASE is then removed. The CSV's '#' lines and the KML's name say
+// `flyable`, nor one whose landing circle comes under the clearance
+// (landing_loiter_clearance_m), and the status says so (Errc::state); an
+// earlier plan's .plan under BASE is then removed. The CSV's '#' lines and the KML's name say
 // whether every requirement is met, and name what is not.
 // `conversion`, where given, gets how the positions reached WGS84.
 Status write_path_outputs(const std::string& base, const PathReport& report, std::vector<std::string>& written,

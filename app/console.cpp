@@ -245,7 +245,7 @@ struct Console::Impl {
   Status check_outputs() const;
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   Status make_output_dirs(const std::string& out) const;
-  static std::string path_csv(const msg::PathSample& fp);
+  std::string path_csv(const msg::PathSample& fp, const nlohmann::json& check) const;
   nlohmann::json summary_json(const rt::LoopRun& run, double wall_s, const msg::PathSample& fp,
                               const nlohmann::json& check) const;
   void print_summary(const rt::LoopRun& run, double wall_s, const msg::PathSample& fp, const std::string& verdict,
@@ -990,7 +990,9 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
                printable(path_fitter().read_error()).c_str());
   }
   const msg::PathSample& fp = *flyable_sample;
-  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp)));
+  std::string verdict;
+  const nlohmann::json check = check_path(verdict);
+  VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp, check)));
   std::string health_csv =
       "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"
       "resident_tiles_mib,rss_mib,fallbacks\n";
@@ -1000,8 +1002,6 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
     const Status t = thumbs->write_last(out + "/thumbnail.png");
     if (!t.ok()) log_printf(LogLevel::warning, "visvol-console: warning: %s\n", t.message().c_str());
   }
-  std::string verdict;
-  const nlohmann::json check = check_path(verdict);
   VISVOL_RETURN_IF_ERROR(
       write_file_atomically(out + "/summary.json", json_text(summary_json(run, wall_s, fp, check), 2) + "\n"));
   print_summary(run, wall_s, fp, verdict, out);
@@ -1021,8 +1021,28 @@ Status Console::Impl::make_output_dirs(const std::string& out) const {
   return {};
 }
 
-std::string Console::Impl::path_csv(const msg::PathSample& fp) {
-  std::string csv = "x_m,y_m,z_m,fp,clearance_m\n";
+std::string Console::Impl::path_csv(const msg::PathSample& fp, const nlohmann::json& check) const {
+  // what the path is and whether it holds, as the plan CSV says it (a path
+  // 760 m short of its end was a bare table): '#' lines, no commas in them
+  auto cell = [](std::string text) {
+    std::replace(text.begin(), text.end(), ',', ';');
+    return text;
+  };
+  std::string csv = "# visvol-console path: the rope where the session ended, fitted into the envelope\n";
+  csv += "# x_m y_m: the pack's CRS (" + cell(storage::epsg_from_wkt(pack->metadata().crs_wkt)) + ") in metres\n";
+  csv += "# z_m: height above the DEM's vertical datum (m); fp: F_p; clearance_m: height above the terrain (m)\n";
+  const auto all_met = check.find("all_met");
+  const bool met = all_met != check.end() && all_met->is_boolean() && all_met->get<bool>();
+  csv += std::string("# requirements: ") + (met ? "all met" : "NOT MET") + "\n";
+  if (check.contains("unmet") && check["unmet"].is_array()) {
+    for (const nlohmann::json& u : check["unmet"]) {
+      if (u.is_string()) csv += "#   unmet: " + cell(u.get<std::string>()) + "\n";
+    }
+  }
+  if (check.contains("error") && check["error"].is_string()) {
+    csv += "#   not checked: " + cell(check["error"].get<std::string>()) + "\n";
+  }
+  csv += "x_m,y_m,z_m,fp,clearance_m\n";
   char line[192];
   for (std::uint32_t i = 0; i < fp.vertex_count; ++i) {
     const msg::PathVertex& v = fp.vertices[i];

@@ -38,6 +38,22 @@ namespace {
 using visvol::test::Outcome;
 using visvol::test::slurp;
 
+// The data rows of a session's path.csv: after its '#' lines and its header.
+std::vector<std::string> path_rows(const std::string& file) {
+  std::istringstream csv(slurp(file));
+  std::vector<std::string> rows;
+  bool header = false;
+  for (std::string row; std::getline(csv, row);) {
+    if (row.empty() || row[0] == '#') continue;
+    if (!header) {
+      header = true;  // x_m,y_m,z_m,fp,clearance_m
+      continue;
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 Outcome console(const std::string& args, const std::string& prefix = "") {
   // the runner's binary is visvol; point it at the console instead
   const std::string dir = ::testing::TempDir();
@@ -352,10 +368,9 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   // runs in real time and need not have settled)
   const double worst_agl = c["envelope"][1]["worst"].get<double>();
   double highest_vertex = -1e9;
-  std::istringstream csv(slurp(out + "/path.csv"));
-  std::string row;
-  std::getline(csv, row);  // header
-  while (std::getline(csv, row)) highest_vertex = std::max(highest_vertex, std::stod(row.substr(row.rfind(',') + 1)));
+  for (const std::string& row : path_rows(out + "/path.csv")) {
+    highest_vertex = std::max(highest_vertex, std::stod(row.substr(row.rfind(',') + 1)));
+  }
   EXPECT_GE(worst_agl, highest_vertex - 0.01);
   EXPECT_LE(worst_agl, highest_vertex + 60.0) << "a sample between vertices, not another path";
   EXPECT_EQ(c["envelope"][1]["met"].get<bool>(), worst_agl <= 120.01);
@@ -400,11 +415,8 @@ TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   EXPECT_EQ(c["envelope"][4]["limit"].get<double>(), 10.0);
   EXPECT_EQ(c["envelope"][5]["limit"].get<double>(), 150.0);
 
-  std::istringstream csv(slurp(out + "/path.csv"));
-  std::string row;
-  std::getline(csv, row);  // header
   std::vector<std::array<double, 3>> v;
-  while (std::getline(csv, row)) {
+  for (const std::string& row : path_rows(out + "/path.csv")) {
     std::array<double, 3> p{};
     ASSERT_EQ(std::sscanf(row.c_str(), "%lf,%lf,%lf", &p[0], &p[1], &p[2]), 3) << row;
     v.push_back(p);
@@ -661,6 +673,10 @@ TEST_F(Console, APathThatStopsShortOfItsEndIsNotMet) {
   ASSERT_FALSE(c["unmet"].empty());
   EXPECT_EQ(c["unmet"][0].get<std::string>().rfind("end: the path stops ", 0), 0u) << c.dump();
   EXPECT_NE(r.out.find("NOT MET: end: the path stops "), std::string::npos) << r.out;
+  // and the path's own file says so, as a plan's CSV does
+  const std::string csv = slurp(out + "/path.csv");
+  EXPECT_NE(csv.find("\n# requirements: NOT MET\n#   unmet: end: the path stops "), std::string::npos)
+      << csv.substr(0, 600);
 }
 
 TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
@@ -715,10 +731,14 @@ TEST_F(Console, RunsWithTheSimulatedDeviceAndWritesItsOutputs) {
 #ifndef VISVOL_SANITIZED_ADDRESS  // ASan's shadow and quarantine are not the console's memory
   EXPECT_LE(s["memory"]["rss_peak_mib"].get<double>(), s["memory"]["budget_mib"].get<double>());
 #endif
-  const std::string csv = slurp(out + "/path.csv");
   const int vertices = s["path"]["flyable"]["vertices"].get<int>();
   EXPECT_GE(vertices, 2);
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), vertices + 1);  // header + the flyable path's vertices
+  EXPECT_EQ(path_rows(out + "/path.csv").size(), static_cast<std::size_t>(vertices));  // the flyable path's
+  // and its verdict, as summary.json's
+  const std::string csv = slurp(out + "/path.csv");
+  EXPECT_NE(csv.find(s["check"]["all_met"].get<bool>() ? "\n# requirements: all met\n" : "\n# requirements: NOT MET\n"),
+            std::string::npos)
+      << csv.substr(0, 400);
   const std::string health = slurp(out + "/health.csv");
   EXPECT_GE(std::count(health.begin(), health.end(), '\n'), 3);  // header + a line a second
   EXPECT_GE(s["thumbnails"]["rendered"].get<int>(), 1);          // at least the one where the rope ended
@@ -1112,8 +1132,8 @@ TEST_F(Console, SwitchesTerrainOnCommand) {
   EXPECT_EQ(after["switched_from"], first_id);
   EXPECT_EQ(after["switched_to"], "");
   EXPECT_GT(after["loop"]["ticks"].get<int>(), 1000);  // it ran on the other pack
-  const std::string csv = slurp(out + "/path.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), after["path"]["flyable"]["vertices"].get<int>() + 1);
+  EXPECT_EQ(path_rows(out + "/path.csv").size(),
+            static_cast<std::size_t>(after["path"]["flyable"]["vertices"].get<int>()));
 }
 
 // A pack of the --catalogue folder, verified while the session runs, is one

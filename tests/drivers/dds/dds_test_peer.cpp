@@ -155,14 +155,30 @@ int publish(Participant& p, std::uint64_t count, double linger_s) {
   return 0;
 }
 
-int commands(Participant& p, double timeout_s, const std::string& source) {
-  Result<Writer> writer = Writer::create(p, Topic::command);
-  Result<Reader> acks = Reader::create(p, Topic::command_ack);
-  if (!writer.ok() || !acks.ok()) return 1;
-  if (!writer->wait_for_readers(1, timeout_s).ok() || !acks->wait_for_writers(1, timeout_s).ok()) {
+// A sender's command writer and acknowledgement reader, matched with an
+// intake: status 0, else 1 (not made) or 3 (no intake within the time, said).
+struct CommandEndpoints {
+  Result<Writer> writer;
+  Result<Reader> acks;
+  int status = 0;
+};
+
+CommandEndpoints command_endpoints(Participant& p, double timeout_s) {
+  CommandEndpoints e{Writer::create(p, Topic::command), Reader::create(p, Topic::command_ack)};
+  if (!e.writer.ok() || !e.acks.ok()) {
+    e.status = 1;
+  } else if (!e.writer->wait_for_readers(1, timeout_s).ok() || !e.acks->wait_for_writers(1, timeout_s).ok()) {
     std::printf("timeout no command intake\n");
-    return 3;
+    e.status = 3;
   }
+  return e;
+}
+
+int commands(Participant& p, double timeout_s, const std::string& source) {
+  CommandEndpoints e = command_endpoints(p, timeout_s);
+  if (e.status != 0) return e.status;
+  Result<Writer>& writer = e.writer;
+  Result<Reader>& acks = e.acks;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   CommandMessage m;
   msg::Command c{};
@@ -207,13 +223,10 @@ int commands(Participant& p, double timeout_s, const std::string& source) {
 }
 
 int oversize(Participant& p, double timeout_s) {
-  Result<Writer> writer = Writer::create(p, Topic::command);
-  Result<Reader> acks = Reader::create(p, Topic::command_ack);
-  if (!writer.ok() || !acks.ok()) return 1;
-  if (!writer->wait_for_readers(1, timeout_s).ok() || !acks->wait_for_writers(1, timeout_s).ok()) {
-    std::printf("timeout no command intake\n");
-    return 3;
-  }
+  CommandEndpoints e = command_endpoints(p, timeout_s);
+  if (e.status != 0) return e.status;
+  Result<Writer>& writer = e.writer;
+  Result<Reader>& acks = e.acks;
   CommandMessage m;
   msg::Command c{};
   msg::copy_text(c.source, "oversize");

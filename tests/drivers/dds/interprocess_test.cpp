@@ -111,14 +111,19 @@ TEST(Interprocess, OfflinePublisherLingersUntilDelivered) {
   EXPECT_TRUE(converged);
 }
 
+// An intake for a pack of 1000 m a side.
+IntakeConfig kilometre_box() {
+  IntakeConfig config;
+  config.limits.min = {0.0, 0.0, 0.0};
+  config.limits.max = {1000.0, 1000.0, 1000.0};
+  return config;
+}
+
 TEST(Interprocess, CommandsFromAnotherProcessAreValidatedAndAnswered) {
   auto p = make_participant(loopback(kDomain));
   ASSERT_NE(p, nullptr);
   msg::CommandQueue queue;
-  IntakeConfig config;
-  config.limits.min = {0.0, 0.0, 0.0};
-  config.limits.max = {1000.0, 1000.0, 1000.0};
-  Result<std::unique_ptr<CommandIntake>> intake = CommandIntake::start(*p, config, queue);
+  Result<std::unique_ptr<CommandIntake>> intake = CommandIntake::start(*p, kilometre_box(), queue);
   ASSERT_TRUE(intake.ok());
 
   Child sender(peer("commands", "20"));
@@ -151,10 +156,7 @@ TEST(Interprocess, ASampleOverTheLimitFromAnotherProcessIsDroppedAsItArrives) {
   auto p = make_participant(loopback(kDomain));
   ASSERT_NE(p, nullptr);
   msg::CommandQueue queue;
-  IntakeConfig config;
-  config.limits.min = {0.0, 0.0, 0.0};
-  config.limits.max = {1000.0, 1000.0, 1000.0};
-  Result<std::unique_ptr<CommandIntake>> intake = CommandIntake::start(*p, config, queue);
+  Result<std::unique_ptr<CommandIntake>> intake = CommandIntake::start(*p, kilometre_box(), queue);
   ASSERT_TRUE(intake.ok());
   Child sender(peer("oversize", "3"));
   ASSERT_TRUE(sender.started());

@@ -77,6 +77,14 @@ Status validate(const PlanRequest& r) {
     }
   }
   VISVOL_RETURN_IF_ERROR(validate(r.envelope));
+  if (r.thinning) {
+    for (double tol : {r.thinning->horizontal_m, r.thinning->vertical_m}) {
+      if (!(std::isfinite(tol) && tol > 0 && tol <= 100.0)) {
+        msg << "plan: a waypoint thinning tolerance of " << tol << " m is outside (0, 100] m";
+        return invalid_argument(msg.str());
+      }
+    }
+  }
   int per_kind[2] = {0, 0};
   for (const ConstraintPoint& c : r.constraints) {
     if (!c.point_m.allFinite() || !std::isfinite(c.eye_height_m)) {
@@ -159,6 +167,13 @@ bool better(const PathCheck& a, const PathCheck& b, Objective objective) {
     if (std::abs(a.violation - b.violation) > PathCheck::kViolationTie) return a.violation < b.violation;
   }
   return objective == Objective::hide ? a.fc < b.fc : a.fc > b.fc;
+}
+
+bool meets_less(const PathCheck& a, const PathCheck& b) {
+  if (a.all_met != b.all_met) return b.all_met;
+  if (a.all_met) return false;
+  if (a.flight_violation > b.flight_violation + PathCheck::kViolationTie) return true;
+  return a.violation > b.violation + PathCheck::kViolationTie;
 }
 
 std::vector<const PointHull*> ObserverHulls::of(ConstraintKind kind) const {

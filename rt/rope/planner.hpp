@@ -21,7 +21,10 @@
 //    by rt::PathChecker: exact sight lines and limits on the finest terrain.
 //    The answer is the best of them: every requirement met first, then the
 //    least violation, then F_c. So the rope never makes the start worse, and
-//    a constraint is never traded for F_c.
+//    a constraint is never traded for F_c. Each fitted path is judged with
+//    its waypoints thinned (rt/rope/waypoint_thinning.hpp: the fit's splits
+//    leave runs of vertices on one line), unless the thinned path meets less
+//    than the fitted one: then the fitted one is judged as it is.
 //
 // Offline: allocates. `Level` is a sampler level (storage::PackLevel for
 // `visvol plan`, DenseLevelView in tests).
@@ -47,6 +50,7 @@
 #include "rt/rope/rope.hpp"
 #include "rt/rope/slack.hpp"
 #include "rt/rope/vehicle.hpp"
+#include "rt/rope/waypoint_thinning.hpp"
 
 namespace visvol::rt {
 
@@ -96,6 +100,9 @@ struct PlanRequest {
   double candidate_interval_s = 0.25;       // rope states judged this often on the finest level
   std::size_t max_search_voxels = 8000000;  // the finest level the global search may run on
   int fc_samples = 256;
+  // Waypoints of each fitted path dropped where the path stays within this of
+  // them (none: every fitted vertex kept).
+  std::optional<ThinningTolerance> thinning = ThinningTolerance{};
 };
 
 Status validate(const PlanRequest& request);
@@ -118,6 +125,7 @@ struct PlanResult {
   int first_level = -1;      // the level the rope settled on first (then every finer one)
   std::string chosen;        // which path is the answer: "start", "global search", "rope"
   int candidates = 0;        // paths judged
+  int fitted_waypoints = 0;  // the answer's vertices as fitted, before thinning
   double simulated_s = 0;    // all levels
   double equilibrium_s = 0;  // on the finest level, until equilibrium
   bool converged = false;    // the finest level reached equilibrium
@@ -161,6 +169,11 @@ Status check_ends(const PlanRequest& request, const PathChecker& checker, double
 // violation of the envelope and the bounds, then of the constraint points;
 // then F_c.
 bool better(const PathCheck& a, const PathCheck& b, Objective objective);
+
+// Does path a (its check) meet less than path b: not every requirement where
+// b meets them all, or more violation of the envelope and the bounds, or of
+// the constraint points? (F_c aside.)
+bool meets_less(const PathCheck& a, const PathCheck& b);
 
 // Every observer of a kind on one level as a single hull: a path must stay
 // under every hidden-from hull (so under their lowest) and over every
@@ -252,13 +265,35 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   PathCheck last_check;  // of the path considered last
   // Fits a path into the envelope, judges it, keeps it when it is the best;
   // true when it was kept.
+  int best_fitted = 0;  // vertices of the best path as fitted
   auto consider = [&](const Vec3* v, int count, const char* source) {
     EnvelopeFit f = fit_to_envelope(std::vector<Vec3>(v, v + count), fit, checker->terrain());
-    last_check = checker->check(f.path);
+    const int fitted = static_cast<int>(f.path.size());
+    std::vector<Vec3> path = request.thinning ? thin_waypoints(f.path, *request.thinning) : f.path;
+    last_check = checker->check(path);
+    if (path.size() < f.path.size() && !last_check.all_met) {
+      // Thinned, a leg may cross what its vertices avoided, or leave a turn
+      // no room on a short leg: the fitted path may meet more. Then thinned
+      // ten times closer (on a straight run the split points still go), and
+      // else as fitted.
+      PathCheck as_fitted = checker->check(f.path);
+      if (detail::meets_less(last_check, as_fitted)) {
+        ThinningTolerance closer = *request.thinning;
+        closer.horizontal_m /= 10;
+        closer.vertical_m /= 10;
+        path = thin_waypoints(f.path, closer);
+        last_check = checker->check(path);
+        if (detail::meets_less(last_check, as_fitted)) {
+          path = std::move(f.path);
+          last_check = std::move(as_fitted);
+        }
+      }
+    }
     ++result.candidates;
     if (!best.empty() && !detail::better(last_check, best_check, request.objective)) return false;
-    best = std::move(f.path);
+    best = std::move(path);
     best_check = last_check;
+    best_fitted = fitted;
     result.chosen = source;
     return true;
   };
@@ -400,6 +435,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   }
   result.final_path = best;
   result.final_check = std::move(best_check);
+  result.fitted_waypoints = best_fitted;
   result.final_metrics = path_metrics(result.final_path.data(), static_cast<int>(result.final_path.size()), judge,
                                       request.fc_samples, finest.geometry().spacing_m / 2);
   result.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -301,6 +301,7 @@ int run_plan(const PlanOptions& o) {
                         {"length_start_m", a.length_m},
                         {"length_m", b.length_m},
                         {"vertices", res->final_path.size()},
+                        {"fitted_vertices", res->fitted_waypoints},
                         {"min_clearance_start_m", a.min_clearance_m},
                         {"min_clearance_m", b.min_clearance_m},
                         {"chosen", res->chosen},
@@ -339,6 +340,11 @@ int run_plan(const PlanOptions& o) {
     }
     std::printf("length     %.0f m, %zu waypoints, %.0f s at %.1f m/s\n", b.length_m, res->final_path.size(),
                 check.duration_s, r.envelope.speed_m_per_s);
+    if (res->fitted_waypoints > static_cast<int>(res->final_path.size()) && r.thinning) {
+      std::printf(
+          "           (of %d as fitted: the others lay within %.1f m across and %.1f m up or down of its legs)\n",
+          res->fitted_waypoints, r.thinning->horizontal_m, r.thinning->vertical_m);
+    }
     std::printf("settled    %s after %.1f simulated s on the finest level (%.1f s over %d levels), %.2f s wall\n",
                 res->diverged    ? "NO (the rope diverged; the best path before stands)"
                 : res->converged ? "at equilibrium"

@@ -493,6 +493,38 @@ TEST_F(RealTerrain, TheRopeNeverMakesTheGlobalStartWorse) {
   }
 }
 
+// The envelope fit splits legs, and a lattice path runs straight over many
+// posts: the answer keeps only the waypoints its shape needs (half of them
+// here), and, judged as thinned, still meets everything; checked again here
+// on the finest terrain, every metre (fails if the fitted path were the
+// answer as it is).
+TEST_F(RealTerrain, TheAnswerKeepsOnlyTheWaypointsItsShapeNeeds) {
+  PlanRequest r = hide_request(RopeModel::articulated);
+  r.init = InitialPath::global;
+  r.max_seconds_per_level = 5;
+  r.envelope.min_turn_radius_m = 80;
+  r.envelope.max_climb_deg = r.envelope.max_descent_deg = 15;
+  const Result<PlanResult> thinned = plan(pointers(*levels_), r);
+  r.thinning.reset();
+  const Result<PlanResult> as_fitted = plan(pointers(*levels_), r);
+  ASSERT_TRUE(thinned.ok() && as_fitted.ok());
+  EXPECT_EQ(as_fitted->final_path.size(), static_cast<std::size_t>(as_fitted->fitted_waypoints));
+  const std::vector<Vec3>& p = thinned->final_path;
+  std::cout << "waypoints: " << p.size() << " of " << thinned->fitted_waypoints << " fitted ("
+            << as_fitted->final_path.size() << " unthinned), F_c " << thinned->final_check.fc << " against "
+            << as_fitted->final_check.fc << "\n";
+  EXPECT_LT(p.size() * 3, static_cast<std::size_t>(thinned->fitted_waypoints) * 2);
+  EXPECT_TRUE(thinned->final_check.all_met);
+  EXPECT_GE(densest_clearance(p), r.envelope.clearance_m - 0.01);
+  for (std::size_t k = 1; k < p.size(); ++k) {
+    const Vec3 d = p[k] - p[k - 1];
+    EXPECT_LE(std::atan2(std::abs(d.z()), std::hypot(d.x(), d.y())) * 180 / M_PI, 15.0 + 1e-6) << "segment " << k;
+  }
+  for (double radius : turn_radii_m(p.data(), static_cast<int>(p.size()))) EXPECT_GE(radius, 80.0 - 1e-6);
+  // thinning is no licence to hide less: F_c within a thousandth of the unthinned answer's
+  EXPECT_LE(thinned->final_check.fc, as_fitted->final_check.fc * 1.001);
+}
+
 TEST_F(RealTerrain, BesideTheFieldTheRopeIsPushedBackIn) {
   // Beside the field the sampler clamps to its edge: only the containment
   // push brings a rope back (every other force off).

@@ -369,9 +369,9 @@ std::string figure(double v, int decimals) {
 }
 
 void print_header() {
-  std::printf("\n%-10s %-6s %-30s %8s %8s %8s %7s %8s %6s %3s %6s %6s %6s %-4s %-4s %-11s %s\n", "case", "obj.",
+  std::printf("\n%-10s %-6s %-30s %8s %8s %8s %7s %8s %6s %3s %6s %6s %6s %-4s %-4s %-11s %-13s %s\n", "case", "obj.",
               "constraints", "Fc start", "Fc final", "Fc opt", "fin/opt", "opt fit", "opt ok", "lvl", "eq s", "sim s",
-              "wall s", "conv", "met", "feasible", "chosen");
+              "wall s", "conv", "met", "feasible", "chosen", "waypoints");
 }
 
 const char* feasible_text(const Row& row) {
@@ -385,12 +385,13 @@ void print_row(const Row& row) {
   const PlanResult& p = row.plan;
   const Optimum& o = row.optimum;
   const double ratio = o.found && o.fc > 0 ? p.final_metrics.fc / o.fc : std::nan("");
-  std::printf("%-10s %-6s %-30s %8.4f %8.4f %8s %7s %8s %6s %3d %6.2f %6.2f %6.2f %-4s %-4s %-11s %s\n",
+  std::printf("%-10s %-6s %-30s %8.4f %8.4f %8s %7s %8s %6s %3d %6.2f %6.2f %6.2f %-4s %-4s %-11s %-13s %zu of %d\n",
               row.c->name.c_str(), to_string(row.c->request.objective), row.c->constraints.c_str(), p.initial.fc,
               p.final_metrics.fc, figure(o.found ? o.fc : std::nan(""), 4).c_str(), figure(ratio, 3).c_str(),
               figure(o.found ? o.fitted_fc : std::nan(""), 4).c_str(), o.found ? (o.meets_all ? "yes" : "no") : "none",
               p.global_level, p.equilibrium_s, p.simulated_s, p.wall_s, p.converged ? "yes" : "no",
-              p.final_check.all_met ? "yes" : "NO", feasible_text(row), p.chosen.c_str());
+              p.final_check.all_met ? "yes" : "NO", feasible_text(row), p.chosen.c_str(), p.final_path.size(),
+              p.fitted_waypoints);
   if (!p.final_check.all_met)
     for (const std::string& u : p.final_check.unmet()) std::printf("           unmet: %s\n", u.c_str());
 }
@@ -517,6 +518,8 @@ const char* kFooter = R"(What is printed, one row per plan (global start, articu
   conv, met     the finest level reached equilibrium; the answer meets every requirement (exact sight lines)
   feasible      how a feasible path is known apart from the plan: ref (our corridor), lattice, or not proven
   chosen        the answer: start, global search or rope
+  waypoints     the answer's vertices, of those the envelope fit gave it (the
+                others thinned away: within 0.5 m across and 0.2 m up or down)
 Then the fraction of runs with a proven feasible path meeting every requirement, the median equilibrium
 time against the 2 s goal, the median wall time and the median F_c ratios.
 Exit status: 0 (also when requirements are unmet: a measurement), 1 when a plan or a build failed, 2 for bad

@@ -1,0 +1,42 @@
+// Waypoint thinning: the fewest vertices of a path that stay within a
+// tolerance of it.
+//
+// The envelope fit splits segments where the terrain or an observer's hull
+// needs it, and on a straight stretch every split point lies on one line: a
+// fixed-wing mission of the SF North and Taunus packs had a waypoint every 2
+// to 4 m over half its length (200 to 300 legs under 10 m, 0.2 s apart at 20
+// m/s), which an autopilot reaches several at a time. Thinning keeps the
+// vertices the shape needs: Douglas-Peucker, each removed vertex within
+// `horizontal_m` across and `vertical_m` above or below the leg that replaces
+// it (measured at its horizontal projection onto the leg). The ends are
+// always kept. What the thinned path meets is for rt::PathChecker to judge:
+// a leg may pass over other terrain than the vertices it replaced.
+// Offline: allocates.
+#pragma once
+
+#include <vector>
+
+#include "rt/rope/rope.hpp"
+
+namespace visvol::rt {
+
+struct ThinningTolerance {
+  double horizontal_m = 0.5;
+  double vertical_m = 0.2;
+};
+
+// How far point p lies from leg a-b, as a multiple of the tolerance (the
+// larger of its horizontal and vertical shares): <= 1 is within it. The
+// vertical share is taken where p lies seen from above, so a steep leg is
+// judged strictly (a point on a multirotor's climb but off its spot stays);
+// infinite where a coordinate is not finite.
+double thinning_deviation(const Vec3& a, const Vec3& b, const Vec3& p, const ThinningTolerance& tol);
+
+// The indices of `path` that the thinned path keeps, in order: the first and
+// the last, and every vertex the shape needs.
+std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTolerance& tol);
+
+// The thinned path itself.
+std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTolerance& tol);
+
+}  // namespace visvol::rt

@@ -18,7 +18,8 @@ double held_in_sight_s(const Holds& holds, std::size_t k) {
 
 }  // namespace
 
-nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Holds& holds) {
+nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Holds& holds,
+                          const std::vector<std::string>& more_unmet) {
   nlohmann::json j;
   j["constraints"] = nlohmann::json::array();
   for (std::size_t k = 0; k < c.constraints.size(); ++k) {
@@ -32,8 +33,10 @@ nlohmann::json check_json(const rt::PathCheck& c, const rt::VehicleEnvelope& e, 
   j["vehicle"] = rt::vehicle_json(e);
   j["inside_planning_bounds"] = c.inside_planning_bounds;
   j["inside_bounds_fraction"] = c.inside_bounds_fraction;
-  j["all_met"] = c.all_met;
-  j["unmet"] = c.unmet();
+  j["all_met"] = c.all_met && more_unmet.empty();
+  std::vector<std::string> unmet = c.unmet();
+  unmet.insert(unmet.end(), more_unmet.begin(), more_unmet.end());
+  j["unmet"] = unmet;
   j["length_m"] = c.length_m;
   j["duration_s"] = c.duration_s + holds.total_s;
   j["held_s"] = holds.total_s;
@@ -60,7 +63,8 @@ nlohmann::json vertices_json(const rt::PathCheck& c, const std::vector<rt::Vec3>
   return out;
 }
 
-void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Holds& holds) {
+void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Holds& holds,
+                 const std::vector<std::string>& more_unmet) {
   if (c.constraints.empty()) {
     // "all met" below would otherwise read as hidden from everyone that matters
     std::printf("constraint none given (--hidden-from, --visible-to): no observer's sight lines checked\n");
@@ -87,13 +91,14 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Hol
   }
   std::printf("bounds     %.3f of the length inside the planning bounds %s\n",
               rt::fraction_shown(c.inside_bounds_fraction), c.inside_planning_bounds ? "met" : "NOT MET");
-  if (c.all_met) {
+  if (c.all_met && more_unmet.empty()) {
     std::printf("requirements all met (%s checked on the finest terrain)\n",
                 c.constraints.empty() ? "limits" : "sight lines and limits");
     return;
   }
   std::printf("requirements NOT MET:\n");
   for (const std::string& u : c.unmet()) std::printf("  %s\n", u.c_str());
+  for (const std::string& u : more_unmet) std::printf("  %s\n", u.c_str());
 }
 
 double circle_clearance_m(const std::function<double(double, double)>& ground_m, const fields::VolumeGeometry& g,

@@ -26,7 +26,11 @@ struct Holds {
 //  "inside_planning_bounds", "inside_bounds_fraction", "all_met", "unmet": [...],
 //  "length_m", "duration_s", "held_s", "fc"}; infinite limits are null. Durations
 // and exposures count `holds` (none for a plan).
-nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {});
+// `more_unmet`: requirements beyond the path's own that are unmet (a
+// landing's approach circle under the clearance): in "unmet", and
+// "all_met" false.
+nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {},
+                          const std::vector<std::string>& more_unmet = {});
 
 // Per vertex: x_m, y_m, z_m, fp, ground_m, clearance_m, climb_deg, turn_radius_m, seen_by.
 // (climb_deg is the straight segment's to the next vertex; a fixed-wing's arc
@@ -35,8 +39,9 @@ nlohmann::json vertices_json(const rt::PathCheck& check, const std::vector<rt::V
 
 // Lines "constraint  hidden-from (x, y, z): met on 1.000 of the length" and
 // "envelope   max-climb 15.0 deg: worst 12.3 deg, met", then "requirements  all met"
-// or "requirements  NOT MET: ...".
-void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {});
+// or "requirements  NOT MET: ..." (with `more_unmet`, as check_json).
+void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {},
+                 const std::vector<std::string>& more_unmet = {});
 
 // A landing's loiter circle (`radius_m` around (x, y) at `altitude_m`, the
 // DEM's datum): its least height over the finest terrain `ground_m(x, y)`,

@@ -141,6 +141,58 @@ std::string home_note(const Vec3& home, const fields::Bounds2D& extent, const rt
 // within +-200 km, and no aircraft flies above 100 km.
 constexpr double kMaxAltitudeM = 1e5;
 
+// A .plan's landing approach: the loiter over its last waypoint before the
+// landing. The path ends at that waypoint; the circle is flown after it, and
+// a circle under the clearance is a requirement unmet, as `plan` writes no
+// mission with one (one came 32 m under a hill). Its observers and F_p are
+// not judged, nor the landing.
+struct Approach {
+  std::vector<std::string> notes;
+  std::vector<std::string> unmet;
+  nlohmann::json circles = nlohmann::json::array();  // {item, radius_m, altitude_m, lowest_clearance_m, met}
+};
+
+Approach judge_approach(const PathFile& file, const rt::PathChecker& checker, const fields::VolumeGeometry& g,
+                        double clearance_m) {
+  Approach out;
+  for (const LoiterItem& a : file.approach) {
+    const double r = std::fabs(a.radius_m);
+    std::string circle =
+        a.radius_m != 0 ? printed("a loiter of %.0f m radius", r) : std::string("a loiter of the autopilot's radius");
+    circle += printed(" at %.1f m (the DEM's datum)", a.altitude_m);
+    nlohmann::json j = {{"item", a.item}, {"radius_m", r}, {"altitude_m", a.altitude_m}};
+    if (a.radius_m == 0) {  // the autopilot's parameter: not in the file
+      j["lowest_clearance_m"] = nullptr;
+      j["met"] = nullptr;
+      out.notes.push_back(a.item + ", " + circle + " over the last waypoint, and the landing after it are the " +
+                          "landing's approach: its circle's radius is the autopilot's, not in the file: not checked");
+      out.circles.push_back(std::move(j));
+      continue;
+    }
+    const rt::Vec3& c = file.points[a.vertex];
+    const double least = circle_clearance_m([&](double x, double y) { return checker.ground_m(x, y); }, g, c.x(), c.y(),
+                                            a.altitude_m, r);
+    const bool met = std::isfinite(least) && least >= clearance_m - kHeightTolM;
+    j["lowest_clearance_m"] = std::isfinite(least) ? nlohmann::json(least) : nlohmann::json();
+    j["met"] = met;
+    out.circles.push_back(std::move(j));
+    const std::string lowest = !std::isfinite(least) ? std::string("its circle leaves the terrain the pack knows")
+                                                     : printed("its circle at least %.1f m over the ground", least);
+    out.notes.push_back(a.item + ", " + circle + " over the last waypoint, and the landing after it are the " +
+                        "landing's approach: " + lowest + " (the clearance alone is checked there)");
+    if (!std::isfinite(least)) {
+      out.unmet.push_back("approach: " + a.item + "'s circle (" + circle +
+                          ") leaves the terrain the pack knows: its clearance is unknown");
+    } else if (!met) {
+      out.unmet.push_back(
+          printed("approach: %s's circle (%s) comes to %.1f m over the ground, under the %.1f m "
+                  "clearance",
+                  a.item.c_str(), circle.c_str(), least, clearance_m));
+    }
+  }
+  return out;
+}
+
 int run_check(const CheckOptions& o) {
   Result<PlanningPack> opened = open_planning_pack(o.pack);
   if (!opened.ok()) return fail("check", opened.status());
@@ -207,27 +259,8 @@ int run_check(const CheckOptions& o) {
   if (!checker.ok()) return fail("check", checker.status());
   if (file->relative_home) notes.push_back(home_note(*file->relative_home, extent, *checker));
   notes.insert(notes.end(), file->notes.begin(), file->notes.end());
-  for (const LoiterItem& a : file->approach) {
-    // the path ends at the last waypoint: what is flown after it is the crew's
-    // to judge, but a circle into the ground is said (one came 32 m under it)
-    const double r = std::fabs(a.radius_m);
-    std::string circle =
-        a.radius_m != 0 ? printed("a loiter of %.0f m radius", r) : std::string("a loiter of the autopilot's radius");
-    circle += printed(" at %.1f m (the DEM's datum)", a.altitude_m);
-    std::string lowest;
-    if (a.radius_m != 0) {
-      const rt::Vec3& c = file->points[a.vertex];
-      const double least = circle_clearance_m([&](double x, double y) { return checker->ground_m(x, y); },
-                                              p.levels.front().geometry(), c.x(), c.y(), a.altitude_m, r);
-      lowest = !std::isfinite(least) ? std::string(" (WARNING: its circle leaves the terrain the pack knows)")
-               : least < spec.envelope.clearance_m - kHeightTolM
-                   ? printed(" (WARNING: its circle comes to %.1f m over the ground, under the %.1f m clearance)",
-                             least, spec.envelope.clearance_m)
-                   : printed(" (its circle at least %.1f m over the ground)", least);
-    }
-    notes.push_back(a.item + ", " + circle + " over the last waypoint" + lowest +
-                    ", and the landing after it are the landing's approach: not flown or checked here");
-  }
+  const Approach approach = judge_approach(*file, *checker, p.levels.front().geometry(), spec.envelope.clearance_m);
+  notes.insert(notes.end(), approach.notes.begin(), approach.notes.end());
   // samples every sixteenth of a post along the path, a sight line from each to
   // every observer: a path zigzagging across the pack millions of times, or
   // hundreds of observers of a long one, would take hours
@@ -252,7 +285,8 @@ int run_check(const CheckOptions& o) {
   }
 
   if (o.json) {
-    nlohmann::json j = check_json(c, *envelope, holds);
+    nlohmann::json j = check_json(c, *envelope, holds, approach.unmet);
+    j["approach"] = approach.circles;
     j["pack"] = o.pack;
     j["path"] = o.path;
     j["per_vertex"] = vertices_json(c, path);
@@ -277,9 +311,9 @@ int run_check(const CheckOptions& o) {
     for (const std::string& l : flown->loiters) std::printf("loiter     %s\n", l.c_str());
     std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
     print_vertices(c, path, flown->vertex_of);
-    print_check(c, *envelope, holds);
+    print_check(c, *envelope, holds, approach.unmet);
   }
-  return c.all_met ? kExitOk : kExitFailure;
+  return c.all_met && approach.unmet.empty() ? kExitOk : kExitFailure;
 }
 
 }  // namespace

@@ -491,6 +491,8 @@ Status write_file_atomically(const std::string& path, const std::string& bytes) 
   return f->commit();
 }
 
+void (*g_inside_rename_window_for_tests)() = nullptr;
+
 Status write_files_atomically(const std::vector<std::pair<std::string, std::string>>& files,
                               const std::vector<std::string>& stale, std::vector<std::string>& written,
                               std::vector<std::string>& removed) {
@@ -513,6 +515,7 @@ Status write_files_atomically(const std::vector<std::pair<std::string, std::stri
     if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || ::unlink(file.c_str()) != 0) continue;
     removed.push_back(file);
   }
+  if (g_inside_rename_window_for_tests != nullptr) g_inside_rename_window_for_tests();
   Status status;
   for (OutputFile& f : ready) {
     status = f.commit();
@@ -527,6 +530,7 @@ Status write_files_atomically(const std::vector<std::pair<std::string, std::stri
                  status.ok() ? "written whole first" : "these were written before a failure");
     for (const std::string& f : written) std::fprintf(stderr, " %s", f.c_str());
     std::fprintf(stderr, "\n");
+    std::fflush(stderr);  // (a stderr made fully buffered would lose it to the signal)
     std::raise(sig);
   }
   return status;

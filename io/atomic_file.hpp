@@ -113,6 +113,11 @@ Status write_files_atomically(const std::vector<std::pair<std::string, std::stri
                               const std::vector<std::string>& stale, std::vector<std::string>& written,
                               std::vector<std::string>& removed);
 
+// For tests only (null otherwise): called by write_files_atomically inside
+// the window where signals wait, after the stale files went and before the
+// first rename, so a test can raise a signal exactly there.
+extern void (*g_inside_rename_window_for_tests)();
+
 // For offline tools: SIGINT and SIGTERM remove the temporaries being written,
 // then end the process by the same signal. Call once at the start of main(),
 // before any other handler is installed.

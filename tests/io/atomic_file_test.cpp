@@ -286,6 +286,49 @@ TEST_F(AtomicFile, ASetOfFilesIsReplacedWholeOrNotAtAll) {
   EXPECT_FALSE(exists(own_temp(names[0])));
 }
 
+// A signal that lands while a set is renamed into place waits for the last
+// rename, then ends the process as it would have (its default action): the
+// new set is whole, the earlier set's stale file gone, and stderr says the
+// set was written whole first. Without the wait, the signal raised between
+// the stale file's removal and the first rename would leave the earlier
+// files and no stale one: a set that is neither.
+TEST_F(AtomicFile, ASignalDuringTheRenamesWaitsForTheWholeSet) {
+  const std::vector<std::string> names = {dir_ + "/s.csv", dir_ + "/s.kml", dir_ + "/s.plan"};
+  const std::string stale = dir_ + "/s.geojson";
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    for (const std::string& n : names) write_text(n, "earlier");
+    write_text(stale, "earlier");
+    const std::string err = dir_ + "/stderr.txt";
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);  // as a shell's 2> does
+      if (fd < 0 || ::dup2(fd, 2) != 2) ::_exit(3);
+      install_output_cleanup_on_signals();
+      static int raised = 0;
+      raised = sig;
+      g_inside_rename_window_for_tests = [] { std::raise(raised); };
+      std::vector<std::string> written, removed;
+      (void)write_files_atomically({{names[0], "new"}, {names[1], "new"}, {names[2], "new"}}, {stale}, written,
+                                   removed);
+      ::_exit(4);  // the signal, raised again after the renames, ends the process first
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "signal " << sig << ", exit " << WEXITSTATUS(status);
+    EXPECT_EQ(WTERMSIG(status), sig);
+    for (const std::string& n : names) {
+      EXPECT_EQ(read_text(n), "new") << n << ", signal " << sig;
+      EXPECT_FALSE(exists(temporary_prefix(n) + std::to_string(pid))) << n;
+    }
+    EXPECT_FALSE(exists(stale)) << "signal " << sig;
+    const std::string said = read_text(err);
+    EXPECT_NE(said.find("interrupted (signal " + std::to_string(sig) +
+                        ") as the outputs were renamed into place: written whole first"),
+              std::string::npos)
+        << said;
+  }
+}
+
 // A child writing an output is killed by `sig`; returns the temporary's name.
 std::string killed_while_writing(const std::string& out, int sig, bool library, int& wait_status) {
   int ready[2];

@@ -11,6 +11,7 @@
 
 #include <dds/ddsi/ddsi_serdata.h>
 
+#include "drivers/dds/log_limit.hpp"
 #include "io/input_file.hpp"
 #include "msg/samples.hpp"
 
@@ -174,6 +175,7 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantConfig
   auto it = domains.find(id);
   bool created = false;
   if (it == domains.end()) {
+    install_dds_log_limit();  // before the domain: its configuration problems come through it too
     // Cyclone merges a list of fragments in order; a configuration that sets
     // its own limit keeps it (the operator's choice, larger or smaller)
     const std::string merged = sets_max_sample_size(config.cyclone_xml)

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "dds_test_support.hpp"
+#include "drivers/dds/log_limit.hpp"
 #include "drivers/dds/participant.hpp"
 #include "drivers/dds/topics.hpp"
 #include "test_domains.hpp"
@@ -164,11 +165,40 @@ TEST(Participant, BadXmlFailsCleanly) {
   c.cyclone_xml =
       "<CycloneDDS><Domain Id=\"any\"><General><NoSuchSetting>1</NoSuchSetting>"
       "</General></Domain></CycloneDDS>";
+  const DdsLogCounts before = dds_log_counts();
+  ::testing::internal::CaptureStderr();
   Result<std::unique_ptr<Participant>> p = Participant::create(c);
+  const std::string said = ::testing::internal::GetCapturedStderr();
   ASSERT_FALSE(p.ok());
+  // Cyclone names the problem on stderr, through visvol's limiter
+  EXPECT_NE(said.find("NoSuchSetting"), std::string::npos) << said;
+  EXPECT_GT(dds_log_counts().shown, before.shown);
   EXPECT_NE(p.status().message().find("creating DDS domain 211"), std::string::npos) << p.status().message();
   // The failure leaves nothing behind: a good configuration works afterwards.
   EXPECT_NE(make_participant(loopback(kDomain)), nullptr);
+}
+
+// Cyclone's lines pass 20 at once, then one each 10 s, saying how many
+// were left out (a peer's oversize samples are a line each: a flood filled
+// the log).
+TEST(DdsLog, LinesPassABurstThenOneEachQuietPeriod) {
+  LogLimiter limit(3, 10.0);
+  std::uint64_t left_out = 99;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_TRUE(limit.admit(0.001 * k, left_out)) << k;
+    EXPECT_EQ(left_out, 0u);
+  }
+  for (int k = 0; k < 500; ++k) EXPECT_FALSE(limit.admit(0.01 + 0.01 * k, left_out)) << k;
+  EXPECT_FALSE(limit.admit(10.0, left_out));  // 10 s after the last line shown is the earliest
+  EXPECT_TRUE(limit.admit(10.002, left_out));
+  EXPECT_EQ(left_out, 501u);
+  EXPECT_FALSE(limit.admit(15.0, left_out));
+  EXPECT_TRUE(limit.admit(20.5, left_out));
+  EXPECT_EQ(left_out, 1u);
+  // a quiet spell does not restore the burst: a flood in bursts stays limited
+  EXPECT_TRUE(limit.admit(1000.0, left_out));
+  EXPECT_EQ(left_out, 0u);
+  EXPECT_FALSE(limit.admit(1000.1, left_out));
 }
 
 }  // namespace

@@ -172,7 +172,10 @@ bool better(const PathCheck& a, const PathCheck& b, Objective objective) {
 bool meets_less(const PathCheck& a, const PathCheck& b) {
   if (a.all_met != b.all_met) return b.all_met;
   if (a.all_met) return false;
-  if (a.flight_violation > b.flight_violation + PathCheck::kViolationTie) return true;
+  // as better() ranks them: the envelope and the bounds first
+  if (std::abs(a.flight_violation - b.flight_violation) > PathCheck::kViolationTie) {
+    return a.flight_violation > b.flight_violation;
+  }
   return a.violation > b.violation + PathCheck::kViolationTie;
 }
 

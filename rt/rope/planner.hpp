@@ -21,10 +21,13 @@
 //    by rt::PathChecker: exact sight lines and limits on the finest terrain.
 //    The answer is the best of them: every requirement met first, then the
 //    least violation, then F_c. So the rope never makes the start worse, and
-//    a constraint is never traded for F_c. Each fitted path is judged with
-//    its waypoints thinned (rt/rope/waypoint_thinning.hpp: the fit's splits
-//    leave runs of vertices on one line), unless the thinned path meets less
-//    than the fitted one: then the fitted one is judged as it is.
+//    a constraint is never traded for F_c. A path better than the best
+//    before is kept with its waypoints thinned (rt/rope/waypoint_thinning.hpp:
+//    the fit's splits leave runs of vertices on one line; turns near the
+//    least radius keep theirs), judged again, unless thinned it meets less or
+//    is no longer better than the best before; the answer, if still not
+//    thinned, is where that costs under kThinningFcTie of its F_c and leaves
+//    it no worse than the start. (The rope is laid on the start as fitted.)
 //
 // Offline: allocates. `Level` is a sampler level (storage::PackLevel for
 // `visvol plan`, DenseLevelView in tests).
@@ -154,6 +157,10 @@ std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m)
 // Points of the slack rope as laid (the rope resamples them to its segments).
 inline constexpr int kLaidSegments = 128;
 
+// The share of F_c an answer may lose to have its waypoints thinned (a
+// thousandth: the bench's answers lost a ten-thousandth at most).
+inline constexpr double kThinningFcTie = 1.0e-3;
+
 // The planner's articulated rope: FIRE's share and the viscous damping (1/s)
 // left beside it (the console's rope: none and 6 /s).
 inline constexpr double kPlanFireMixing = 0.1;
@@ -171,8 +178,8 @@ Status check_ends(const PlanRequest& request, const PathChecker& checker, double
 bool better(const PathCheck& a, const PathCheck& b, Objective objective);
 
 // Does path a (its check) meet less than path b: not every requirement where
-// b meets them all, or more violation of the envelope and the bounds, or of
-// the constraint points? (F_c aside.)
+// b meets them all, or more violation of the envelope and the bounds, or (as
+// much of those) more of the constraint points? (F_c aside.)
 bool meets_less(const PathCheck& a, const PathCheck& b);
 
 // Every observer of a kind on one level as a single hull: a path must stay
@@ -265,35 +272,35 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   PathCheck last_check;  // of the path considered last
   // Fits a path into the envelope, judges it, keeps it when it is the best;
   // true when it was kept.
-  int best_fitted = 0;  // vertices of the best path as fitted
+  int best_fitted = 0;               // vertices of the best path as fitted
+  std::vector<Vec3> best_as_fitted;  // and those vertices (the rope is laid on them: thinning moved nothing)
+  bool best_thinned = false;
   auto consider = [&](const Vec3* v, int count, const char* source) {
     EnvelopeFit f = fit_to_envelope(std::vector<Vec3>(v, v + count), fit, checker->terrain());
+    last_check = checker->check(f.path);
+    ++result.candidates;
+    if (!best.empty() && !detail::better(last_check, best_check, request.objective)) return false;
     const int fitted = static_cast<int>(f.path.size());
-    std::vector<Vec3> path = request.thinning ? thin_waypoints(f.path, *request.thinning) : f.path;
-    last_check = checker->check(path);
-    if (path.size() < f.path.size() && !last_check.all_met) {
-      // Thinned, a leg may cross what its vertices avoided, or leave a turn
-      // no room on a short leg: the fitted path may meet more. Then thinned
-      // ten times closer (on a straight run the split points still go), and
-      // else as fitted.
-      PathCheck as_fitted = checker->check(f.path);
-      if (detail::meets_less(last_check, as_fitted)) {
-        ThinningTolerance closer = *request.thinning;
-        closer.horizontal_m /= 10;
-        closer.vertical_m /= 10;
-        path = thin_waypoints(f.path, closer);
-        last_check = checker->check(path);
-        if (detail::meets_less(last_check, as_fitted)) {
-          path = std::move(f.path);
-          last_check = std::move(as_fitted);
+    std::vector<Vec3> path = f.path;
+    if (request.thinning) {
+      // the better path's waypoints thinned, unless that meets less (a leg may
+      // cross what its vertices avoided) or loses its place to the best before
+      const std::vector<bool> turns = turns_to_keep(f.path, envelope.min_turn_radius_m);
+      std::vector<Vec3> thinned = thin_waypoints(f.path, *request.thinning, &turns);
+      if (thinned.size() < f.path.size()) {
+        PathCheck thinned_check = checker->check(thinned);
+        if (!detail::meets_less(thinned_check, last_check) &&
+            (best.empty() || detail::better(thinned_check, best_check, request.objective))) {
+          path = std::move(thinned);
+          last_check = std::move(thinned_check);
         }
       }
     }
-    ++result.candidates;
-    if (!best.empty() && !detail::better(last_check, best_check, request.objective)) return false;
+    best_thinned = path.size() < f.path.size();
     best = std::move(path);
     best_check = last_check;
     best_fitted = fitted;
+    best_as_fitted = std::move(f.path);
     result.chosen = source;
     return true;
   };
@@ -338,7 +345,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
       if (fine == coarsest) break;
     }
   }
-  start_path = best;
+  start_path = best_as_fitted;
   result.initial_path = best;
   result.initial_check = best_check;
   result.initial = path_metrics(best.data(), static_cast<int>(best.size()), judge, request.fc_samples,
@@ -431,6 +438,22 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     if (level == 0) {
       result.converged = settled;
       result.equilibrium_s = level_s;
+    }
+  }
+  if (request.thinning && !best_thinned) {
+    // The answer beat the best before by an F_c its thinned self may not: it
+    // is thinned all the same where that meets as much, costs F_c under
+    // kThinningFcTie of it, and stays no worse than the start.
+    const std::vector<bool> turns = turns_to_keep(best_as_fitted, envelope.min_turn_radius_m);
+    std::vector<Vec3> thinned = thin_waypoints(best_as_fitted, *request.thinning, &turns);
+    if (thinned.size() < best.size()) {
+      PathCheck c = checker->check(thinned);
+      const double fc_cost = (request.objective == Objective::hide ? 1.0 : -1.0) * (c.fc - best_check.fc);
+      if (!detail::meets_less(c, best_check) && fc_cost <= kThinningFcTie * std::abs(best_check.fc) &&
+          !detail::better(result.initial_check, c, request.objective)) {
+        best = std::move(thinned);
+        best_check = std::move(c);
+      }
     }
   }
   result.final_path = best;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <utility>
 
+#include "rt/rope/path_metrics.hpp"
+
 namespace visvol::rt {
 
 double thinning_deviation(const Vec3& a, const Vec3& b, const Vec3& p, const ThinningTolerance& tol) {
@@ -25,19 +27,39 @@ double thinning_deviation(const Vec3& a, const Vec3& b, const Vec3& p, const Thi
   return std::max(across_m / tol.horizontal_m, off_m / tol.vertical_m);
 }
 
-std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTolerance& tol) {
+namespace {
+
+std::vector<int> every_index(int n) {
+  std::vector<int> all(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
+  return all;
+}
+
+}  // namespace
+
+std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTolerance& tol,
+                                 const std::vector<bool>* kept) {
   const int n = static_cast<int>(path.size());
-  if (n <= 2) {
-    std::vector<int> all(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
-    return all;
-  }
+  if (n <= 2) return every_index(n);
   std::vector<char> keep(static_cast<std::size_t>(n), 0);
   keep.front() = keep.back() = 1;
   // Douglas-Peucker on an explicit stack of spans: a span whose farthest
   // inner vertex is within the tolerance loses them all; else that vertex
-  // stays and both halves are thinned.
-  std::vector<std::pair<int, int>> spans{{0, n - 1}};
+  // stays and both halves are thinned. The vertices to keep split the path
+  // into spans first.
+  std::vector<std::pair<int, int>> spans;
+  int from = 0;
+  for (int k = 1; k < n; ++k) {
+    if (k < n - 1 &&
+        !(kept != nullptr && static_cast<std::size_t>(k) < kept->size() && (*kept)[static_cast<std::size_t>(k)])) {
+      continue;
+    }
+    keep[static_cast<std::size_t>(k)] = 1;
+    if (k - from > 1) spans.emplace_back(from, k);
+    from = k;
+  }
+  const double most_work = kMaxThinningWork * n;
+  double work = 0;
   while (!spans.empty()) {
     const auto [first, last] = spans.back();
     spans.pop_back();
@@ -45,6 +67,8 @@ std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTo
     double worst = 1.0;
     const Vec3& a = path[static_cast<std::size_t>(first)];
     const Vec3& b = path[static_cast<std::size_t>(last)];
+    work += last - first - 1;
+    if (work > most_work) return every_index(n);  // a contrived path: left as it is
     for (int k = first + 1; k < last; ++k) {
       const double d = thinning_deviation(a, b, path[static_cast<std::size_t>(k)], tol);
       if (d > worst) {
@@ -63,10 +87,21 @@ std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTo
   return out;
 }
 
-std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTolerance& tol) {
+std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTolerance& tol,
+                                 const std::vector<bool>* keep) {
   std::vector<Vec3> out;
-  for (int i : thinned_indices(path, tol)) out.push_back(path[static_cast<std::size_t>(i)]);
+  for (int i : thinned_indices(path, tol, keep)) out.push_back(path[static_cast<std::size_t>(i)]);
   return out;
+}
+
+std::vector<bool> turns_to_keep(const std::vector<Vec3>& path, double min_turn_radius_m) {
+  std::vector<bool> keep(path.size(), false);
+  if (!(min_turn_radius_m > 0)) return keep;
+  const std::vector<double> room = turn_radii_m(path.data(), static_cast<int>(path.size()));
+  for (std::size_t k = 0; k < path.size() && k < room.size(); ++k) {
+    keep[k] = room[k] < kTurnKeptFactor * min_turn_radius_m;
+  }
+  return keep;
 }
 
 }  // namespace visvol::rt

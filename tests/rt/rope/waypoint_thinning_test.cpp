@@ -7,6 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include "rt/rope/path_metrics.hpp"
+
 namespace visvol::rt {
 namespace {
 
@@ -96,6 +98,58 @@ TEST(WaypointThinning, NothingUnknownIsDropped) {
   EXPECT_EQ(thinned_indices({{0, 0, 0}, {1, 0, 0}}, tol), (std::vector<int>{0, 1}));
   EXPECT_EQ(thinned_indices({{0, 0, 0}}, tol), (std::vector<int>{0}));
   EXPECT_TRUE(thinned_indices({}, tol).empty());
+}
+
+// Vertices marked to keep stay, and the spans between them thin on their own.
+TEST(WaypointThinning, MarkedVerticesStay) {
+  std::vector<Vec3> line;
+  for (int i = 0; i <= 30; ++i) line.emplace_back(3.0 * i, 0.0, 100.0);
+  std::vector<bool> keep(line.size(), false);
+  keep[7] = keep[20] = true;
+  EXPECT_EQ(thinned_indices(line, {}, &keep), (std::vector<int>{0, 7, 20, 30}));
+}
+
+// A turn near the least radius keeps its vertices (its legs must stay near
+// equal for the fillets to fit); the same arc for a vehicle of a third of that
+// radius or less thins, and keeps room for that vehicle's turns.
+TEST(WaypointThinning, TurnsNearTheLeastRadiusKeepTheirVertices) {
+  std::vector<Vec3> arc;  // 200 m radius, a vertex every 3 m, straight legs in and out
+  for (int i = -20; i < 0; ++i) arc.emplace_back(3.0 * i, -200.0, 80.0);
+  for (int i = 0; i <= 100; ++i) {
+    const double a = 3.0 * i / 200.0;
+    arc.emplace_back(200.0 * std::sin(a), -200.0 * std::cos(a), 80.0);
+  }
+  const std::vector<bool> tight = turns_to_keep(arc, 200.0);
+  const std::vector<Vec3> kept = thin_waypoints(arc, {}, &tight);
+  EXPECT_GE(kept.size(), 100u);  // the arc's 101, less those where it meets the straight run
+  for (double r : turn_radii_m(kept.data(), static_cast<int>(kept.size()))) EXPECT_GE(r, 195.0);
+  const std::vector<bool> wide = turns_to_keep(arc, 50.0);
+  const std::vector<Vec3> thinned = thin_waypoints(arc, {}, &wide);
+  EXPECT_LT(thinned.size(), 20u);
+  for (double r : turn_radii_m(thinned.data(), static_cast<int>(thinned.size()))) EXPECT_GE(r, 50.0);
+  EXPECT_TRUE(turns_to_keep(arc, 0.0) == std::vector<bool>(arc.size(), false));
+}
+
+// A contrived path (a zigzag of growing height: each split peels one vertex
+// off a span) costs n^2 deviations: past the bound it is left as it is, the
+// midpoints of its legs too (which a shorter one loses).
+TEST(WaypointThinning, AContrivedPathIsLeftAsItIs) {
+  auto zigzag = [](int corners) {
+    std::vector<Vec3> p;
+    for (int i = 0; i < corners; ++i) {
+      const Vec3 corner(4.0 * i, 0.0, 100.0 + (i % 2) * (1.0 + i));
+      if (i > 0) p.push_back(0.5 * (p.back() + corner));  // on the leg: nothing needs it
+      p.push_back(corner);
+    }
+    return p;
+  };
+  const std::vector<Vec3> short_one = zigzag(20);
+  EXPECT_EQ(thinned_indices(short_one, {}).size(), 20u);
+  const std::vector<Vec3> long_one = zigzag(3000);
+  EXPECT_EQ(thinned_indices(long_one, {}).size(), long_one.size());
+  std::vector<Vec3> line;  // a long straight run is cheap: one span
+  for (int i = 0; i < 100000; ++i) line.emplace_back(3.0 * i, 0.0, 100.0);
+  EXPECT_EQ(thinned_indices(line, {}).size(), 2u);
 }
 
 }  // namespace

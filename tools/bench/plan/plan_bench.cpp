@@ -519,7 +519,8 @@ const char* kFooter = R"(What is printed, one row per plan (global start, articu
   feasible      how a feasible path is known apart from the plan: ref (our corridor), lattice, or not proven
   chosen        the answer: start, global search or rope
   waypoints     the answer's vertices, of those the envelope fit gave it (the
-                others thinned away: within 0.5 m across and 0.2 m up or down)
+                others thinned away: within 0.5 m across and 0.2 m up or down;
+                turns near the least radius keep theirs)
 Then the fraction of runs with a proven feasible path meeting every requirement, the median equilibrium
 time against the 2 s goal, the median wall time and the median F_c ratios.
 Exit status: 0 (also when requirements are unmet: a measurement), 1 when a plan or a build failed, 2 for bad

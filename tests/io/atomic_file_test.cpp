@@ -56,6 +56,13 @@ pid_t dead_pid() {
   return pid;
 }
 
+// A child that tests signals starts from their default actions: a shell
+// that runs the suite in the background (SIGINT ignored) or nohup (SIGHUP)
+// passes on "ignore", which install_output_cleanup_on_signals() keeps.
+void default_signal_actions() {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, SIG_DFL);
+}
+
 class AtomicFile : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -303,6 +310,7 @@ TEST_F(AtomicFile, ASignalDuringTheRenamesWaitsForTheWholeSet) {
     if (pid == 0) {
       const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);  // as a shell's 2> does
       if (fd < 0 || ::dup2(fd, 2) != 2) ::_exit(3);
+      default_signal_actions();
       install_output_cleanup_on_signals();
       static int raised = 0;
       raised = sig;
@@ -335,6 +343,7 @@ std::string killed_while_writing(const std::string& out, int sig, bool library, 
   if (::pipe(ready) != 0) return "";
   const pid_t pid = ::fork();
   if (pid == 0) {
+    default_signal_actions();
     install_output_cleanup_on_signals();
     Result<OutputFile> f = library ? OutputFile::create_for_library(out) : OutputFile::create(out);
     if (!f.ok()) ::_exit(3);

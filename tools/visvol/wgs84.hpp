@@ -44,12 +44,12 @@ Result<std::vector<Vec3>> from_wgs84(const std::vector<Vec3>& lon_lat_h, const s
 // (no network, no ballpark "no shift" fallback). Longitudes and latitudes are
 // kept. Errc::unsupported naming the grid when it is not installed.
 Result<std::vector<Vec3>> orthometric_to_ellipsoidal(const std::vector<Vec3>& lon_lat_h);
-// The same, with the grid PROJ used (for the files that name it).
+Result<std::vector<Vec3>> ellipsoidal_to_orthometric(const std::vector<Vec3>& lon_lat_h);
+// Either of the two, with the grid PROJ used (for the files that name it).
 struct GeoidShift {
   std::vector<Vec3> points;
   std::string grid;
 };
 Result<GeoidShift> shift_heights(const std::vector<Vec3>& lon_lat_h, bool to_ellipsoidal);
-Result<std::vector<Vec3>> ellipsoidal_to_orthometric(const std::vector<Vec3>& lon_lat_h);
 
 }  // namespace visvol::cli

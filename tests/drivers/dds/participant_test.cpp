@@ -2,6 +2,7 @@
 // (domain 211, loopback).
 #include <unistd.h>
 
+#include <dds/ddsrt/log.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -178,10 +179,10 @@ TEST(Participant, BadXmlFailsCleanly) {
   EXPECT_NE(make_participant(loopback(kDomain)), nullptr);
 }
 
-// Cyclone's lines pass 20 at once, then one each 10 s, saying how many
-// were left out (a peer's oversize samples are a line each: a flood filled
-// the log).
-TEST(DdsLog, LinesPassABurstThenOneEachQuietPeriod) {
+// Cyclone's warnings pass 20 at once, then one each 10 s (the burst
+// refilling at that rate), each after a gap saying how many were left out (a
+// peer's oversize samples are a warning each: a flood filled the log).
+TEST(DdsLog, WarningsPassABurstThenOneEachQuietPeriod) {
   LogLimiter limit(3, 10.0);
   std::uint64_t left_out = 99;
   for (int k = 0; k < 3; ++k) {
@@ -189,16 +190,48 @@ TEST(DdsLog, LinesPassABurstThenOneEachQuietPeriod) {
     EXPECT_EQ(left_out, 0u);
   }
   for (int k = 0; k < 500; ++k) EXPECT_FALSE(limit.admit(0.01 + 0.01 * k, left_out)) << k;
-  EXPECT_FALSE(limit.admit(10.0, left_out));  // 10 s after the last line shown is the earliest
-  EXPECT_TRUE(limit.admit(10.002, left_out));
+  EXPECT_EQ(limit.pending(), 500u);
+  EXPECT_FALSE(limit.admit(9.9, left_out));  // a line's worth refills 10 s after the burst went
+  EXPECT_TRUE(limit.admit(10.01, left_out));
   EXPECT_EQ(left_out, 501u);
+  EXPECT_EQ(limit.pending(), 0u);
   EXPECT_FALSE(limit.admit(15.0, left_out));
   EXPECT_TRUE(limit.admit(20.5, left_out));
   EXPECT_EQ(left_out, 1u);
-  // a quiet spell does not restore the burst: a flood in bursts stays limited
-  EXPECT_TRUE(limit.admit(1000.0, left_out));
-  EXPECT_EQ(left_out, 0u);
+  // a quiet spell refills the burst, no more
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(limit.admit(1000.0 + 0.001 * k, left_out)) << k;
   EXPECT_FALSE(limit.admit(1000.1, left_out));
+}
+
+// Errors pass whatever warnings came before: a configuration problem is said
+// after a flood of warnings, of which the sink showed a burst at most (with
+// errors limited as warnings, the 21st run of Participant.BadXmlFailsCleanly
+// in one process said nothing).
+TEST(DdsLog, ErrorsPassAfterAFloodOfWarnings) {
+  ASSERT_NE(make_participant(loopback(kDomain)), nullptr);  // the limiter in place
+  const DdsLogCounts before = dds_log_counts();
+  ::testing::internal::CaptureStderr();
+  for (int k = 0; k < 3 * kLogBurst; ++k) {
+    dds_log(DDS_LC_WARNING, __FILE__, __LINE__, "test", "visvol test: flood line %d\n", k);
+  }
+  const std::string flood = ::testing::internal::GetCapturedStderr();
+  int shown = 0;
+  for (std::size_t at = flood.find("flood line"); at != std::string::npos; at = flood.find("flood line", at + 1)) {
+    ++shown;
+  }
+  EXPECT_GE(shown, 1);
+  EXPECT_LE(shown, kLogBurst);
+  EXPECT_GE(dds_log_counts().left_out - before.left_out, static_cast<std::uint64_t>(2 * kLogBurst));
+  ParticipantConfig c = loopback(kDomain);
+  c.cyclone_xml =
+      "<CycloneDDS><Domain Id=\"any\"><General><AlsoNoSuchSetting>1</AlsoNoSuchSetting>"
+      "</General></Domain></CycloneDDS>";
+  ::testing::internal::CaptureStderr();
+  const Result<std::unique_ptr<Participant>> bad = Participant::create(c);
+  const std::string said = ::testing::internal::GetCapturedStderr();
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(said.find("Cyclone DDS: "), std::string::npos) << said;
+  EXPECT_NE(said.find("AlsoNoSuchSetting"), std::string::npos) << said;
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ DenseLevel::DenseLevel(Heightfield terrain, DenseVolume field, const TffParams& 
 
 Result<std::vector<DenseLevel>> build_dense_levels(const Heightfield& hf, const FieldParams& params, int levels,
                                                    const TffParams& tff) {
-  VISVOL_RETURN_IF_ERROR(validate(tff));
+  VISVOL_RETURN_IF_ERROR(validate(tff, hf.spacing_m));
   Result<std::vector<LodLevel>> pyramid = build_pyramid_dense(hf, params, levels);
   if (!pyramid.ok()) return pyramid.status();
   std::vector<DenseLevel> out;

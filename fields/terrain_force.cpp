@@ -421,6 +421,25 @@ Status validate(const TffParams& p) {
   return Status::ok_status();
 }
 
+int tff_reach_posts(const TffParams& p, double spacing_m) {
+  const double posts = std::ceil(p.band_offset_m / spacing_m) + 1;
+  return posts < 1e9 ? static_cast<int>(posts) : 1000000000;  // (NaN and infinity: the most)
+}
+
+Status validate(const TffParams& p, double spacing_m) {
+  VISVOL_RETURN_IF_ERROR(validate(p));
+  const int reach = tff_reach_posts(p, spacing_m);
+  if (!(spacing_m > 0) || reach > kMaxTffReachPosts) {
+    std::ostringstream msg;
+    msg << "terrain force band: +-" << p.band_offset_m << " m over posts " << spacing_m << " m apart reaches " << reach
+        << " posts, more than " << kMaxTffReachPosts
+        << " (its nearest-point search grows with the square of that): use a smaller --tff-offset (at most "
+        << (kMaxTffReachPosts - 1) * spacing_m << " m here) or coarser posts (--spacing)";
+    return invalid_argument(msg.str());
+  }
+  return Status::ok_status();
+}
+
 NearestTerrainPoint nearest_terrain_point(const Heightfield& hf, const Eigen::Vector3d& q_m, double search_m) {
   // World to local: u = x - origin_x, v = origin_y - y.
   const Vec3 q{q_m.x() - hf.origin_x, hf.origin_y - q_m.y(), q_m.z()};
@@ -441,7 +460,7 @@ void band_rows(ColumnFn search, const Heightfield& hf, const TffParams& params, 
   const std::size_t nx = static_cast<std::size_t>(hf.nx);
   const std::size_t levels = static_cast<std::size_t>(params.band_levels);
   // every cell a search from these rows can reach: within the band's offset
-  const int reach = static_cast<int>(std::ceil(params.band_offset_m / hf.spacing_m)) + 1;
+  const int reach = tff_reach_posts(params, hf.spacing_m);
   const CellRanges cells(hf, j_begin - reach - 1, j_end + reach, reach);
   auto row = [&](int item, int) {
     const int j = j_begin + item;

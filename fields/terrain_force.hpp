@@ -37,6 +37,15 @@ struct TffParams {
 
 Status validate(const TffParams& params);
 
+// The posts of `spacing_m` a band sample's nearest-point search may reach
+// (the band's offset, rounded up, and one): it meets every cell within that,
+// so its cost grows with the square (a 100 m band over 1 cm posts built a
+// 9.5 GB table of cells and ran for hours on a 64 x 64 DEM).
+inline constexpr int kMaxTffReachPosts = 256;
+int tff_reach_posts(const TffParams& params, double spacing_m);
+// validate(params), and its reach at this spacing at most kMaxTffReachPosts.
+Status validate(const TffParams& params, double spacing_m);
+
 struct TffSample {
   float dx_m = 0, dy_m = 0, dz_m = 0;  // outward displacement from the nearest terrain point
   float signed_distance_m = 0;         // |displacement|, negative inside the terrain

@@ -293,7 +293,7 @@ TileRows share_tile_rows(int tiles_y, BuildShare share) {
 }
 
 Result<PackPlan> plan_pack(const Heightfield& hf, const PackBuildParams& params) {
-  VISVOL_RETURN_IF_ERROR(fields::validate(params.tff));
+  VISVOL_RETURN_IF_ERROR(fields::validate(params.tff, hf.spacing_m));  // the finest level's reach is the most
   if (params.lod_levels < 1 || params.lod_levels > kMaxLodLevels) {
     return invalid_argument("levels of detail: " + std::to_string(params.lod_levels) + " is outside 1.." +
                             std::to_string(kMaxLodLevels));

@@ -145,5 +145,22 @@ TEST(TerrainForce, RejectsBadParameters) {
   EXPECT_TRUE(validate(TffParams{100.0, 32}).ok());
 }
 
+// The band's reach in posts bounds the nearest-point search (it meets every
+// cell within it): 100 m over 0.05 m posts is 2001 posts, refused naming
+// what to change (it had built a 9.5 GB table and run for hours); over 0.5 m
+// posts it is 201.
+TEST(TerrainForce, ABandOfTooManyPostsIsRefused) {
+  EXPECT_EQ(tff_reach_posts(TffParams{100.0, 24}, 0.5), 201);
+  EXPECT_TRUE(validate(TffParams{100.0, 24}, 0.5).ok());
+  const Status fine = validate(TffParams{100.0, 24}, 0.05);
+  EXPECT_EQ(fine.code(), Errc::invalid_argument);
+  EXPECT_NE(fine.message().find("2001 posts"), std::string::npos) << fine.message();
+  EXPECT_NE(fine.message().find("--tff-offset"), std::string::npos) << fine.message();
+  EXPECT_NE(fine.message().find("--spacing"), std::string::npos) << fine.message();
+  EXPECT_FALSE(validate(TffParams{100.0, 24}, 0.0).ok());
+  EXPECT_FALSE(validate(TffParams{100.0, 24}, std::nan("")).ok());
+  EXPECT_FALSE(validate(TffParams{0.5, 24}, 30.0).ok());  // and what validate(params) refuses
+}
+
 }  // namespace
 }  // namespace visvol::fields

@@ -420,6 +420,8 @@ TEST(CliBuildRefuses, ATerrainForceBandOfNothing) {
       visvol("build " + kDem + " --fill-nodata --levels 16 --lod 1 --range 8 " + kCrop + " --tff-offset 1e-300");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("--tff-offset"), std::string::npos) << r.err;
+  // a band of too many posts: refused before the import when --spacing sets them
+  expect_refused(" --range 8 " + kCrop + " --spacing 0.3", {"terrain force band", "335 posts", "--tff-offset"});
 }
 
 TEST(CliViewshed, WritesAGeoTiff) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -167,6 +168,44 @@ Status check_visibility_tile(const LevelEntry& level, const TileEntry& tile, con
                        ") of level " + std::to_string(tile.level) + ": F_p at voxel (" +
                        std::to_string(tile.tx * kBrickPosts + x) + ", " + std::to_string(tile.ty * kBrickPosts + y) +
                        ", " + std::to_string(k) + ") is " + number(f) + ", not in [0, 1]");
+      }
+    }
+  }
+  return Status::ok_status();
+}
+
+namespace {
+std::string centimetres(std::int16_t cm) {
+  char text[16];
+  std::snprintf(text, sizeof text, "%.2f", cm * kTffUnitM);
+  return text;
+}
+}  // namespace
+
+Status check_tff_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data, int band_levels,
+                      double band_offset_m, const std::string& path) {
+  // centimetres: the offset, and its rounding
+  const double most_cm = std::ceil(band_offset_m / kTffUnitM) + 1;
+  const int x_end = std::min(kBrickPosts, level.nx - tile.tx * kBrickPosts);
+  const int y_end = std::min(kBrickPosts, level.ny - tile.ty * kBrickPosts);
+  static const char* const kNames[4] = {"x displacement", "y displacement", "z displacement", "signed distance"};
+  for (int b = 0; b < band_levels; ++b) {
+    for (int y = 0; y < y_end; ++y) {
+      for (int x = 0; x < x_end; ++x) {
+        const std::size_t index =
+            ((static_cast<std::size_t>(b) * kBrickPosts + static_cast<std::size_t>(y)) * kBrickPosts +
+             static_cast<std::size_t>(x)) *
+            4;
+        for (int c = 0; c < 4; ++c) {
+          std::int16_t v;
+          std::memcpy(&v, data + (index + static_cast<std::size_t>(c)) * sizeof v, sizeof v);
+          if (std::abs(static_cast<double>(v)) <= most_cm) continue;
+          return corrupt(path + ": terrain force tile (" + std::to_string(tile.tx) + ", " + std::to_string(tile.ty) +
+                         ") of level " + std::to_string(tile.level) + ": sample " + std::to_string(b) + " of column (" +
+                         std::to_string(tile.tx * kBrickPosts + x) + ", " + std::to_string(tile.ty * kBrickPosts + y) +
+                         ") has " + kNames[c] + " " + centimetres(v) + " m, beyond the band's +-" +
+                         number(band_offset_m) + " m");
+        }
       }
     }
   }

@@ -50,6 +50,14 @@ Status check_area_tile(const LevelEntry& level, const TileEntry& tile, const std
 Status check_visibility_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data,
                              const std::string& path);
 
+// A terrain force field tile: every sample's displacement components and
+// signed distance within the band's offset (a sample lies at most that far
+// from its post's ground, so its nearest terrain point is no farther), in
+// the tile's columns of the grid. (-327 m in a +-60 m band sent the
+// console's rope wandering, exit 0.)
+Status check_tff_tile(const LevelEntry& level, const TileEntry& tile, const std::uint8_t* data, int band_levels,
+                      double band_offset_m, const std::string& path);
+
 // The metadata object's members that any reader uses, where present, of the
 // type that reader expects ("tool" a string, "build" an object whose numbers
 // are finite numbers, ...). Members it does not know are left alone.

@@ -389,6 +389,10 @@ Status Pack::verify_tile_bytes(const TileEntry& t, const std::uint8_t* bytes) co
   if (t.layer == static_cast<std::uint16_t>(Layer::height)) return check_height_tile(levels_[t.level], t, bytes, path_);
   // area factors: only exported, and so checked where they are read
   if (t.layer == static_cast<std::uint16_t>(Layer::area)) return check_area_tile(levels_[t.level], t, bytes, path_);
+  if (t.layer == static_cast<std::uint16_t>(Layer::tff)) {
+    return check_tff_tile(levels_[t.level], t, bytes, static_cast<int>(header_->band_levels), header_->band_offset_m,
+                          path_);
+  }
   return Status::ok_status();
 }
 

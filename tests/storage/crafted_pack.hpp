@@ -50,6 +50,17 @@ class CraftedPack {
         static_cast<std::size_t>((k * kBrickPosts + j % kBrickPosts) * kBrickPosts + i % kBrickPosts);
     std::memcpy(bytes_.data() + t.offset + index * sizeof f, &f, sizeof f);
   }
+  // One component (0..2 displacement, 3 signed distance) of the terrain
+  // force sample of band level b over post (i, j) of level l, in cm.
+  void set_tff(int l, int i, int j, int b, int component, std::int16_t cm) {
+    const TileEntry& t = tile(l, Layer::tff, i / kBrickPosts, j / kBrickPosts);
+    const std::size_t index =
+        ((static_cast<std::size_t>(b) * kBrickPosts + static_cast<std::size_t>(j % kBrickPosts)) * kBrickPosts +
+         static_cast<std::size_t>(i % kBrickPosts)) *
+            4 +
+        static_cast<std::size_t>(component);
+    std::memcpy(bytes_.data() + t.offset + index * sizeof cm, &cm, sizeof cm);
+  }
   std::string metadata() {
     return std::string(bytes_.data() + header().metadata_offset, static_cast<std::size_t>(header().metadata_bytes));
   }

@@ -240,6 +240,29 @@ TEST_F(Crafted, AreaFactorsOutOfRangeFailVerifyNamingThePost) {
   std::remove(path.c_str());
 }
 
+// Terrain force samples lie within the band's offset of the terrain (60 m
+// here): one beyond it fails verify and the level's reader, naming the tile,
+// the sample and the column (-327 m in a +-60 m band passed verify, plan and
+// the console, whose rope wandered off).
+TEST_F(Crafted, TerrainForceSamplesBeyondTheBandFailVerifyNamingTheSample) {
+  const std::string path = temp_path("crafted_tff");
+  for (const auto& [component, cm] : std::vector<std::pair<int, int>>{{0, -32768}, {2, 6200}, {3, 32767}}) {
+    CraftedPack p(valid(VisibilityEncoding::uint16));
+    p.set_tff(0, 18, 3, 5, component, static_cast<std::int16_t>(cm));
+    p.write(path);
+    const Result<std::shared_ptr<const Pack>> pack = Pack::open(path);
+    ASSERT_TRUE(pack.ok()) << pack.status().message();
+    const Status st = (*pack)->verify();
+    ASSERT_FALSE(st.ok()) << component << " " << cm;
+    EXPECT_NE(st.message().find(path + ": terrain force tile (1, 0) of level 0: sample 5 of column (18, 3)"),
+              std::string::npos)
+        << st.message();
+    EXPECT_NE(st.message().find("beyond the band's +-60 m"), std::string::npos) << st.message();
+    EXPECT_FALSE(PackLevel::open(*pack, 0).ok());
+  }
+  std::remove(path.c_str());
+}
+
 // The writer refuses up front what the reader would refuse: no build ends
 // in a pack that cannot be opened.
 TEST(CraftedLayout, TheWriterRefusesWhatTheReaderWould) {

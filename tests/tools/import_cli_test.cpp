@@ -82,7 +82,9 @@ TEST(ImportCli, AnOriginBeyondTheCrsIsRefused) {
 
 TEST(ImportCli, AWarpTooLargeIsRefusedBeforeItStarts) {
   const std::string dem = write_text("cli_oversized", ".asc", asc_text(40));
-  expect_refused("build", dem, kAssume + " --spacing 0.01", {"would be 120000 x 120000 posts", "--spacing"});
+  // (a band of 2 m: the default 100 m over 1 cm posts is refused first, for its reach)
+  expect_refused("build", dem, kAssume + " --spacing 0.01 --tff-offset 2",
+                 {"would be 120000 x 120000 posts", "--spacing"});
   std::remove(dem.c_str());
 }
 

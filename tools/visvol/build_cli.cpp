@@ -121,7 +121,8 @@ Status check_tff_options(const BuildOptions& o) {
     return invalid_argument("--tff-levels: " + std::to_string(o.tff_levels) + " is not in 2.." +
                             std::to_string(fields::kMaxBandLevels));
   }
-  if (o.import.spacing_m > 0) {  // posts resampled this fine: refused before the import (the DEM's own: after it)
+  // posts resampled this fine: refused before the import (the DEM's own: after it; a spacing out of range: by it)
+  if (o.import.spacing_m >= fields::kMinPostSpacingM && o.import.spacing_m <= fields::kMaxPostSpacingM) {
     fields::TffParams t;
     t.band_offset_m = o.tff_offset_m;
     t.band_levels = o.tff_levels;

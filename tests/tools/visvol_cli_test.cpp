@@ -137,6 +137,13 @@ TEST_F(Cli, InfoDescribesADem) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("370 x 466 posts, 30.00 m spacing"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("heights 0.0..343.0 m"), std::string::npos);
+  // its import is held to --max-memory, refused from the header (a 3.4 KB
+  // GeoTIFF of 16384 x 16384 posts took 2.4 GB to describe)
+  const Outcome small = visvol("info " + kDem + " --fill-nodata --max-memory 1");
+  EXPECT_EQ(small.status, 2) << small.err;
+  EXPECT_NE(small.err.find("370 x 466 posts is more than the 65536 this read allows (--max-memory 1 MiB"),
+            std::string::npos)
+      << small.err;
 }
 
 TEST_F(Cli, VerifyPassesThenNamesTheCorruptTile) {

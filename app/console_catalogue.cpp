@@ -11,7 +11,7 @@ namespace visvol::app {
 
 Status Console::Impl::start_catalogue() {
   if (o.catalogue.empty()) return {};
-  auto c = TerrainCatalogue::start(o.catalogue, o.level);
+  auto c = TerrainCatalogue::start(o.catalogue, o.level, static_cast<std::uint64_t>(o.budget_mib * kMiB));
   if (!c.ok()) return c.status();
   catalogue = std::move(*c);
   log_printf(LogLevel::info, "visvol-console: catalogue %s: %zu packs (ID.vvp), verifying them\n",

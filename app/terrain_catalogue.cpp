@@ -118,7 +118,8 @@ bool same_file(const CatalogueEntry& e, const struct stat& st) {
 
 }  // namespace
 
-void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& e, const std::atomic<bool>* stop) {
+void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& e, const std::atomic<bool>* stop,
+                            std::uint64_t max_pack_bytes) {
   e.path = path;
   e.state = CatalogueState::verifying;
   e.reason.clear();
@@ -132,6 +133,22 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
   e.inode = st.st_ino;
   e.size_bytes = static_cast<std::uint64_t>(st.st_size);
   e.changed_ns = static_cast<std::int64_t>(st.st_ctim.tv_sec) * 1'000'000'000 + st.st_ctim.tv_nsec;
+  // A pack too large for the console's budget, from its header and level
+  // table: its tables are held while it is verified (a 32768 x 32768 grid's
+  // 214 MB tile table and 4 GiB of heights took a console over its budget).
+  if (max_pack_bytes > 0) {
+    Result<storage::PackFootprint> size = storage::Pack::footprint(path);
+    if (!size.ok()) return refuse(e, size.status().message());
+    const std::uint64_t held = size->table_bytes + size->height_bytes;
+    if (held > max_pack_bytes) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "its tables and heights need %.0f MiB, over the console's %.0f MiB memory budget "
+                    "(--budget-mib)",
+                    static_cast<double>(held) / 1048576.0, static_cast<double>(max_pack_bytes) / 1048576.0);
+      return refuse(e, text);
+    }
+  }
   // not mapped: the header, tables and height tiles read with pread
   Result<std::shared_ptr<const storage::Pack>> pack = storage::Pack::open(path, storage::PackAccess::inspect);
   if (!pack.ok()) return refuse(e, pack.status().message());
@@ -147,7 +164,8 @@ void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& 
   e.state = CatalogueState::verified;
 }
 
-Result<std::unique_ptr<TerrainCatalogue>> TerrainCatalogue::start(const std::string& folder, int level) {
+Result<std::unique_ptr<TerrainCatalogue>> TerrainCatalogue::start(const std::string& folder, int level,
+                                                                  std::uint64_t max_pack_bytes) {
   struct stat st {};
   if (stat(folder.c_str(), &st) != 0) return invalid_argument("--catalogue " + errno_text("cannot read", folder));
   if (!S_ISDIR(st.st_mode)) return invalid_argument("--catalogue " + folder + ": not a folder");
@@ -166,14 +184,19 @@ Result<std::unique_ptr<TerrainCatalogue>> TerrainCatalogue::start(const std::str
     close(in);
     return resource_error("--catalogue: eventfd: " + std::string(std::strerror(errno)));
   }
-  std::unique_ptr<TerrainCatalogue> c(new TerrainCatalogue(folder, level, in, wake));
+  std::unique_ptr<TerrainCatalogue> c(new TerrainCatalogue(folder, level, max_pack_bytes, in, wake));
   c->scan();  // listed before start() returns: entries() shows every pack there (verifying)
   c->thread_ = std::thread([p = c.get()] { p->run(); });
   return c;
 }
 
-TerrainCatalogue::TerrainCatalogue(std::string folder, int level, int inotify_fd, int wake_fd)
-    : folder_(std::move(folder)), level_(level), inotify_fd_(inotify_fd), wake_fd_(wake_fd) {}
+TerrainCatalogue::TerrainCatalogue(std::string folder, int level, std::uint64_t max_pack_bytes, int inotify_fd,
+                                   int wake_fd)
+    : folder_(std::move(folder)),
+      level_(level),
+      max_pack_bytes_(max_pack_bytes),
+      inotify_fd_(inotify_fd),
+      wake_fd_(wake_fd) {}
 
 TerrainCatalogue::~TerrainCatalogue() {
   stop_.store(true);
@@ -310,7 +333,7 @@ void TerrainCatalogue::verify_next() {
   // an exception on this thread would end the console: a pack whose sizes
   // ask for more memory than there is is refused like any other bad pack
   try {
-    verify_catalogue_entry(folder_ + "/" + file_name, level_, e, &stop_);
+    verify_catalogue_entry(folder_ + "/" + file_name, level_, e, &stop_, max_pack_bytes_);
   } catch (const std::exception& ex) {
     refuse(e, folder_ + "/" + file_name + ": cannot be verified: " + ex.what());
   }

@@ -54,9 +54,11 @@ struct CatalogueEntry {
 // Opens the pack at `path` and verifies it as the catalogue does: structure,
 // every tile's checksum, `level` among its levels of detail; fills what it
 // learned into `entry` (state verified, or refused with the reason).
-// `stop`, when set, ends a verification early (refused: "stopped").
+// `stop`, when set, ends a verification early (refused: "stopped"). A pack
+// whose tables and heights exceed `max_pack_bytes` (0: no limit) is
+// refused from its header and level table, before its tables are read.
 void verify_catalogue_entry(const std::string& path, int level, CatalogueEntry& entry,
-                            const std::atomic<bool>* stop = nullptr);
+                            const std::atomic<bool>* stop = nullptr, std::uint64_t max_pack_bytes = 0);
 
 class TerrainCatalogue {
  public:
@@ -67,7 +69,10 @@ class TerrainCatalogue {
 
   // Watches `folder` and verifies what is in it. Errors: the folder cannot be
   // listed or watched (named).
-  static Result<std::unique_ptr<TerrainCatalogue>> start(const std::string& folder, int level);
+  // `max_pack_bytes`: a pack whose tables and heights (Pack::footprint)
+  // exceed it is refused before they are read (0: no limit).
+  static Result<std::unique_ptr<TerrainCatalogue>> start(const std::string& folder, int level,
+                                                         std::uint64_t max_pack_bytes = 0);
   ~TerrainCatalogue();
   TerrainCatalogue(const TerrainCatalogue&) = delete;
   TerrainCatalogue& operator=(const TerrainCatalogue&) = delete;
@@ -88,7 +93,7 @@ class TerrainCatalogue {
   bool wait_idle(double timeout_s) const;
 
  private:
-  TerrainCatalogue(std::string folder, int level, int inotify_fd, int wake_fd);
+  TerrainCatalogue(std::string folder, int level, std::uint64_t max_pack_bytes, int inotify_fd, int wake_fd);
   void run();
   void scan(bool only_new = false);
   void rescan();
@@ -101,6 +106,7 @@ class TerrainCatalogue {
 
   std::string folder_;
   int level_;
+  std::uint64_t max_pack_bytes_;
   int inotify_fd_ = -1, wake_fd_ = -1;
   bool watching_ = true;  // false once the folder was removed or moved
   std::atomic<bool> stop_{false};

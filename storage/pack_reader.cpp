@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -157,6 +158,31 @@ Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAcce
   VISVOL_RETURN_IF_ERROR(pack->check_heights(*file));
   pack->file_.emplace(std::move(*file));
   return std::shared_ptr<const Pack>(std::move(pack));
+}
+
+Result<PackFootprint> Pack::footprint(const std::string& path) {
+  Pack pack;
+  pack.path_ = path;
+  Result<InputFile> file = InputFile::open(path);
+  if (!file.ok()) return file.status();
+  pack.size_ = file->size_bytes();
+  if (pack.size_ < sizeof(PackHeader)) {
+    return corrupt(path + ": " + std::to_string(pack.size_) +
+                   " bytes, smaller than a pack header; not a visvol pack or truncated");
+  }
+  VISVOL_RETURN_IF_ERROR(file->read_at(&pack.header_copy_, sizeof(PackHeader), 0));
+  VISVOL_RETURN_IF_ERROR(pack.validate_header());
+  const PackHeader& h = *pack.header_;
+  PackFootprint out;
+  out.table_bytes = pack.size_ - h.level_table_offset;
+  // (validate_header: 1..kMaxLodLevels levels, their table inside the file)
+  for (std::uint32_t l = 0; l < h.level_count; ++l) {
+    LevelEntry e;
+    VISVOL_RETURN_IF_ERROR(file->read_at(&e, sizeof e, h.level_table_offset + l * sizeof(LevelEntry)));
+    out.height_bytes += static_cast<std::uint64_t>(std::clamp(e.nx, 0, 1 << 20)) *
+                        static_cast<std::uint64_t>(std::clamp(e.ny, 0, 1 << 20)) * sizeof(float);
+  }
+  return out;
 }
 
 Status Pack::validate_header() {

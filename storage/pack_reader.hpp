@@ -59,9 +59,21 @@ struct PackMetadata {
 
 enum class PackAccess : std::uint8_t { mapped, inspect };
 
+// What opening a pack holds before any tile is read: its tables (levels,
+// tiles, metadata), and what a console session on it holds at least: the
+// heights of every level (storage::ResidentPack keeps them resident).
+struct PackFootprint {
+  std::uint64_t table_bytes = 0;
+  std::uint64_t height_bytes = 0;
+};
+
 class Pack {
  public:
   static Result<std::shared_ptr<const Pack>> open(const std::string& path, PackAccess access = PackAccess::mapped);
+  // From the header (its checksum checked) and the level table alone (not
+  // yet checked: read to refuse a pack too large before its tables are, never
+  // to trust one). Reads a page and the level table.
+  static Result<PackFootprint> footprint(const std::string& path);
   ~Pack();
   Pack(const Pack&) = delete;
   Pack& operator=(const Pack&) = delete;

@@ -126,6 +126,29 @@ TEST(TerrainCatalogue, ALevelThePackLacksIsRefused) {
   EXPECT_NE(e->reason.find("level"), std::string::npos) << e->reason;
 }
 
+// A pack whose tables and heights exceed the console's budget is refused
+// from its header and level table, before its tables are read (a 32768 x
+// 32768 grid's 214 MB tile table took a console over its 256 MiB budget as
+// it was verified); within the budget it verifies.
+TEST(TerrainCatalogue, APackLargerThanTheBudgetIsRefusedBeforeItsTablesAreRead) {
+  const std::string dir = make_folder("budget");
+  build(dir + "/big.vvp", 6);
+  Result<storage::PackFootprint> size = storage::Pack::footprint(dir + "/big.vvp");
+  ASSERT_TRUE(size.ok()) << size.status().message();
+  const std::uint64_t held = size->table_bytes + size->height_bytes;
+  auto c = TerrainCatalogue::start(dir, 0, held - 1);
+  ASSERT_TRUE(c.ok());
+  ASSERT_TRUE((*c)->wait_idle(60.0));
+  const std::optional<CatalogueEntry> e = find(**c, "big");
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->state, CatalogueState::refused);
+  EXPECT_NE(e->reason.find("memory budget (--budget-mib)"), std::string::npos) << e->reason;
+  CatalogueEntry fits;
+  fits.id = "big";
+  verify_catalogue_entry(dir + "/big.vvp", 0, fits, nullptr, held);
+  EXPECT_EQ(fits.state, CatalogueState::verified) << fits.reason;
+}
+
 TEST(TerrainCatalogue, APackWithNoPlanningBoundsIsRefused) {
   // built before bounds were recorded, and no wider than twice its range:
   // `visvol plan` and `check` refuse it, and so does the console

@@ -340,6 +340,31 @@ TEST_F(PackFile, AnInspectedPackChecksItsHeightsAsRead) {
   std::remove(bad.c_str());
 }
 
+// A pack's footprint from its header and level table: the tables from the
+// level table to the end of the file, and every level's heights; a file that
+// is no pack is refused as open() refuses it.
+TEST_F(PackFile, AFootprintIsItsTablesAndHeights) {
+  Result<std::shared_ptr<const Pack>> pack = Pack::open(*path_);
+  ASSERT_TRUE(pack.ok());
+  const Result<PackFootprint> size = Pack::footprint(*path_);
+  ASSERT_TRUE(size.ok()) << size.status().message();
+  EXPECT_EQ(size->table_bytes, (*pack)->file_bytes() - (*pack)->header().level_table_offset);
+  std::uint64_t heights = 0;
+  for (int l = 0; l < (*pack)->level_count(); ++l) {
+    heights += std::uint64_t{4} * static_cast<std::uint64_t>((*pack)->level(l).nx) *
+               static_cast<std::uint64_t>((*pack)->level(l).ny);
+  }
+  EXPECT_EQ(size->height_bytes, heights);
+  std::vector<char> bytes = read_bytes(*path_);
+  bytes[0] ^= 1;  // the magic
+  const std::string bad = temp_path("footprint_bad");
+  write_file(bad, bytes);
+  const Result<PackFootprint> refused = Pack::footprint(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("not a visvol pack"), std::string::npos) << refused.status().message();
+  std::remove(bad.c_str());
+}
+
 // The header and tables are the pack's own copy: a file truncated under an
 // open pack (a copy over it) faults none of them (before, the tables at the
 // end of the file were read through the mapping).

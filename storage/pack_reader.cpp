@@ -134,19 +134,25 @@ std::string Pack::describe(const TileEntry& t) {
   return s.str();
 }
 
-Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAccess access) {
-  std::shared_ptr<Pack> pack(new Pack());
-  pack->path_ = path;
+Result<InputFile> Pack::open_header(const std::string& path) {
+  path_ = path;
   // never blocks on a FIFO; refuses what is not a regular file
   Result<InputFile> file = InputFile::open(path);
   if (!file.ok()) return file.status();
-  pack->size_ = file->size_bytes();
-  if (pack->size_ < sizeof(PackHeader)) {
-    return corrupt(path + ": " + std::to_string(pack->size_) +
+  size_ = file->size_bytes();
+  if (size_ < sizeof(PackHeader)) {
+    return corrupt(path + ": " + std::to_string(size_) +
                    " bytes, smaller than a pack header; not a visvol pack or truncated");
   }
-  VISVOL_RETURN_IF_ERROR(file->read_at(&pack->header_copy_, sizeof(PackHeader), 0));
-  VISVOL_RETURN_IF_ERROR(pack->validate_header());
+  VISVOL_RETURN_IF_ERROR(file->read_at(&header_copy_, sizeof(PackHeader), 0));
+  VISVOL_RETURN_IF_ERROR(validate_header());
+  return file;
+}
+
+Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAccess access) {
+  std::shared_ptr<Pack> pack(new Pack());
+  Result<InputFile> file = pack->open_header(path);
+  if (!file.ok()) return file.status();
   VISVOL_RETURN_IF_ERROR(pack->read_tables(*file));
   VISVOL_RETURN_IF_ERROR(pack->validate_tiles());
   VISVOL_RETURN_IF_ERROR(pack->parse_metadata());
@@ -162,16 +168,8 @@ Result<std::shared_ptr<const Pack>> Pack::open(const std::string& path, PackAcce
 
 Result<PackFootprint> Pack::footprint(const std::string& path) {
   Pack pack;
-  pack.path_ = path;
-  Result<InputFile> file = InputFile::open(path);
+  Result<InputFile> file = pack.open_header(path);
   if (!file.ok()) return file.status();
-  pack.size_ = file->size_bytes();
-  if (pack.size_ < sizeof(PackHeader)) {
-    return corrupt(path + ": " + std::to_string(pack.size_) +
-                   " bytes, smaller than a pack header; not a visvol pack or truncated");
-  }
-  VISVOL_RETURN_IF_ERROR(file->read_at(&pack.header_copy_, sizeof(PackHeader), 0));
-  VISVOL_RETURN_IF_ERROR(pack.validate_header());
   const PackHeader& h = *pack.header_;
   PackFootprint out;
   out.table_bytes = pack.size_ - h.level_table_offset;

@@ -121,6 +121,9 @@ class Pack {
   Pack() = default;
   // The header's own checks, then the level table (read first: it bounds the
   // tile table), then the tables and metadata read whole and checked.
+  // Opens `path` for this pack, reads its header and validates it: the first
+  // steps of open() and footprint().
+  Result<InputFile> open_header(const std::string& path);
   Status validate_header();
   Status read_tables(const InputFile& file);
   Status validate_tiles();

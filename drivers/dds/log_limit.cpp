@@ -13,10 +13,9 @@ namespace visvol::dds {
 
 bool LogLimiter::admit(double now_s, std::uint64_t& left_out) {
   left_out = 0;
-  if (started_ && quiet_period_s_ > 0) {
+  if (quiet_period_s_ > 0) {
     tokens_ = std::min(static_cast<double>(burst_), tokens_ + std::max(0.0, now_s - last_s_) / quiet_period_s_);
   }
-  started_ = true;
   last_s_ = now_s;
   if (tokens_ < 1.0) {
     ++left_out_;

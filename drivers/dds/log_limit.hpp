@@ -30,8 +30,7 @@ class LogLimiter {
   int burst_;
   double quiet_period_s_;
   double tokens_;
-  double last_s_ = 0;
-  bool started_ = false;
+  double last_s_ = 0;  // (the bucket starts full: the first line's refill changes nothing)
   std::uint64_t left_out_ = 0;
 };
 

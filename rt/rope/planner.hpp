@@ -275,6 +275,12 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   int best_fitted = 0;               // vertices of the best path as fitted
   std::vector<Vec3> best_as_fitted;  // and those vertices (the rope is laid on them: thinning moved nothing)
   bool best_thinned = false;
+  // A fitted path with the waypoints its shape does not need dropped (turns
+  // near the least radius keep theirs).
+  auto thinned_of = [&](const std::vector<Vec3>& fitted) {
+    const std::vector<bool> turns = turns_to_keep(fitted, envelope.min_turn_radius_m);
+    return thin_waypoints(fitted, *request.thinning, &turns);
+  };
   auto consider = [&](const Vec3* v, int count, const char* source) {
     EnvelopeFit f = fit_to_envelope(std::vector<Vec3>(v, v + count), fit, checker->terrain());
     last_check = checker->check(f.path);
@@ -285,8 +291,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     if (request.thinning) {
       // the better path's waypoints thinned, unless that meets less (a leg may
       // cross what its vertices avoided) or loses its place to the best before
-      const std::vector<bool> turns = turns_to_keep(f.path, envelope.min_turn_radius_m);
-      std::vector<Vec3> thinned = thin_waypoints(f.path, *request.thinning, &turns);
+      std::vector<Vec3> thinned = thinned_of(f.path);
       if (thinned.size() < f.path.size()) {
         PathCheck thinned_check = checker->check(thinned);
         if (!detail::meets_less(thinned_check, last_check) &&
@@ -444,8 +449,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     // The answer beat the best before by an F_c its thinned self may not: it
     // is thinned all the same where that meets as much, costs F_c under
     // kThinningFcTie of it, and stays no worse than the start.
-    const std::vector<bool> turns = turns_to_keep(best_as_fitted, envelope.min_turn_radius_m);
-    std::vector<Vec3> thinned = thin_waypoints(best_as_fitted, *request.thinning, &turns);
+    std::vector<Vec3> thinned = thinned_of(best_as_fitted);
     if (thinned.size() < best.size()) {
       PathCheck c = checker->check(thinned);
       const double fc_cost = (request.objective == Objective::hide ? 1.0 : -1.0) * (c.fc - best_check.fc);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <utility>
 
 #include "rt/rope/path_metrics.hpp"
@@ -31,7 +32,7 @@ namespace {
 
 std::vector<int> every_index(int n) {
   std::vector<int> all(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
+  std::iota(all.begin(), all.end(), 0);
   return all;
 }
 
@@ -50,10 +51,9 @@ std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTo
   std::vector<std::pair<int, int>> spans;
   int from = 0;
   for (int k = 1; k < n; ++k) {
-    if (k < n - 1 &&
-        !(kept != nullptr && static_cast<std::size_t>(k) < kept->size() && (*kept)[static_cast<std::size_t>(k)])) {
-      continue;
-    }
+    const std::size_t at = static_cast<std::size_t>(k);
+    const bool marked = kept != nullptr && at < kept->size() && (*kept)[at];
+    if (k < n - 1 && !marked) continue;
     keep[static_cast<std::size_t>(k)] = 1;
     if (k - from > 1) spans.emplace_back(from, k);
     from = k;

@@ -39,6 +39,12 @@ bool nested_deeper_than(const std::string& text, int max_depth) {
 }  // namespace
 
 Result<nlohmann::json> parse_json_input(const std::string& text, const std::string& what, int max_depth) {
+  // nlohmann takes a NUL byte for the end of the text: what follows it would
+  // be read as nothing (a pack's metadata, a path file's features)
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    return invalid_argument(what + ": not valid JSON: a NUL byte at offset " + std::to_string(nul) +
+                            " (JSON text has none)");
+  }
   if (nested_deeper_than(text, max_depth)) {
     return invalid_argument(what + ": JSON nested deeper than " + std::to_string(max_depth) + " levels");
   }

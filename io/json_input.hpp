@@ -15,7 +15,8 @@ namespace visvol {
 inline constexpr int kMaxJsonDepth = 64;
 
 // The document in `text`, or Errc::invalid_argument "WHAT: not valid JSON:
-// ..." or "WHAT: JSON nested deeper than 64 levels".
+// ..." (a NUL byte anywhere included) or "WHAT: JSON nested deeper than 64
+// levels".
 Result<nlohmann::json> parse_json_input(const std::string& text, const std::string& what,
                                         int max_depth = kMaxJsonDepth);
 

@@ -75,6 +75,11 @@ Status check_reduction(const LevelEntry& fine, const LevelEntry& coarse, const s
                    std::to_string(coarse.nz) + " is not half of the finer level's " + std::to_string(fine.nx) + " x " +
                    std::to_string(fine.ny) + " x " + std::to_string(fine.nz));
   }
+  if (coarse.range_posts != fine.range_posts) {
+    // the builder's range is in posts at every level (pack_build.cpp)
+    return corrupt(where + "range of " + std::to_string(coarse.range_posts) + " posts differs from the finer level's " +
+                   std::to_string(fine.range_posts));
+  }
   const double tolerance_m = 1e-6 * fine.spacing_m;
   if (!near(coarse.spacing_m, 2 * fine.spacing_m, tolerance_m) ||
       !near(coarse.origin_x, fine.origin_x + 0.5 * fine.spacing_m, tolerance_m) ||
@@ -298,6 +303,21 @@ Status check_metadata_types(const Json& metadata, const std::string& path) {
       if (!level.is_object()) return corrupt(name + " is not an object");
       VISVOL_RETURN_IF_ERROR(check_members(level, kLevel, name + "."));
     }
+  }
+  return Status::ok_status();
+}
+
+Status check_metadata_range(const Json& metadata, const LevelEntry& finest, const std::string& path) {
+  const auto build = metadata.find("build");
+  if (build == metadata.end() || !build->contains("range_posts")) return Status::ok_status();
+  const auto shape = build->find("range_shape");
+  const bool none = shape != build->end() && *shape == "none";
+  // a count (check_metadata_types), and level ranges are 0.. (check_level_geometry)
+  const std::uint64_t named = none ? 0 : (*build)["range_posts"].get<std::uint64_t>();
+  if (named != static_cast<std::uint64_t>(finest.range_posts)) {
+    return corrupt(path + ": metadata build.range_posts " + std::to_string(named) +
+                   (none ? " (range_shape none)" : "") + " differs from level 0's range of " +
+                   std::to_string(finest.range_posts) + " posts");
   }
   return Status::ok_status();
 }

@@ -63,4 +63,9 @@ Status check_tff_tile(const LevelEntry& level, const TileEntry& tile, const std:
 // are finite numbers, ...). Members it does not know are left alone.
 Status check_metadata_types(const nlohmann::json& metadata, const std::string& path);
 
+// The range the build parameters name (build.range_posts, 0 for
+// range_shape "none") against the level table's: the two must agree, where
+// the metadata names one. Errc::corrupt naming both.
+Status check_metadata_range(const nlohmann::json& metadata, const LevelEntry& finest, const std::string& path);
+
 }  // namespace visvol::storage

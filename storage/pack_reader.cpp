@@ -206,6 +206,14 @@ Status Pack::validate_header() {
       h.brick_posts != static_cast<std::uint32_t>(kBrickPosts)) {
     return bad("header sizes (header, page, entry, tile) do not match this format");
   }
+  // Zeros in version 1: a writer that gives them a meaning is another version.
+  const auto reserved =
+      std::find_if(std::begin(h.reserved), std::end(h.reserved), [](std::uint8_t v) { return v != 0; });
+  if (reserved != std::end(h.reserved)) {
+    const std::size_t at = offsetof(PackHeader, reserved) + static_cast<std::size_t>(reserved - std::begin(h.reserved));
+    return bad("reserved header byte " + std::to_string(at) + " is " + std::to_string(*reserved) +
+               ", not 0: written by another version of the format or damaged");
+  }
   if (h.level_count < 1 || h.level_count > static_cast<std::uint32_t>(kMaxLodLevels)) {
     return bad("level_count " + std::to_string(h.level_count) + " is outside 1.." + std::to_string(kMaxLodLevels));
   }
@@ -344,6 +352,7 @@ Status Pack::parse_metadata() {
   try {
     const nlohmann::json& j = *parsed;
     VISVOL_RETURN_IF_ERROR(check_metadata_types(j, path_));
+    VISVOL_RETURN_IF_ERROR(check_metadata_range(j, levels_[0], path_));
     auto str = [&](const char* key) {
       return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
     };

@@ -67,5 +67,18 @@ TEST(JsonInput, NamesTheInputOfTextThatIsNotJson) {
   EXPECT_NE(j.status().message().find("cut.json: not valid JSON"), std::string::npos) << j.status().message();
 }
 
+TEST(JsonInput, ANulByteIsRefusedWhereverItIs) {
+  // nlohmann stops at a NUL: a document followed by one and more text read as the document alone
+  std::string after = "{\"a\": 1}";
+  after.push_back('\0');
+  after += "{\"features\": []}";
+  const Result<nlohmann::json> j = parse_json_input(after, "nul.json");
+  ASSERT_FALSE(j.ok());
+  EXPECT_NE(j.status().message().find("nul.json: not valid JSON: a NUL byte at offset 8"), std::string::npos)
+      << j.status().message();
+  const std::string trailing = std::string("[1]") + std::string(4, '\0');
+  EXPECT_FALSE(parse_json_input(trailing, "pad.json").ok());
+}
+
 }  // namespace
 }  // namespace visvol

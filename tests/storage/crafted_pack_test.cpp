@@ -141,6 +141,36 @@ TEST_F(Crafted, CoarserLevelsMustCoverTheFinerLevelsArea) {
       {"shifted", [](CraftedPack& p) { p.level(1).origin_x += 1000; }, "do not cover the finer level's area"},
       {"voxel levels", [](CraftedPack& p) { p.level(1).dz_m *= 2; }, "level 1: voxel levels"},
       {"lifted", [](CraftedPack& p) { p.level(1).z0_m += 50; }, "differ from the finer level's"},
+      // one range in posts at every level, the one the build names
+      {"range", [](CraftedPack& p) { p.level(1).range_posts = 32768; },
+       "level 1: range of 32768 posts differs from the finer level's 6"},
+  });
+}
+
+TEST_F(Crafted, ARangeOtherThanTheBuildNamedIsRefused) {
+  auto in_build = [](const std::string& key, const nlohmann::json& value) {
+    return [key, value](CraftedPack& p) {
+      nlohmann::json j = nlohmann::json::parse(p.metadata());
+      j["build"][key] = value;
+      p.set_metadata(j.dump());
+    };
+  };
+  auto both_levels = [](int range) {
+    return [range](CraftedPack& p) { p.level(0).range_posts = p.level(1).range_posts = range; };
+  };
+  expect_refused_at_open({
+      {"range 0", both_levels(0), "metadata build.range_posts 6 differs from level 0's range of 0 posts"},
+      {"range 32768", both_levels(32768), "differs from level 0's range of 32768 posts"},
+      {"build names another", in_build("range_posts", 7), "build.range_posts 7 differs"},
+      {"shape none", in_build("range_shape", "none"), "build.range_posts 0 (range_shape none) differs"},
+  });
+}
+
+TEST_F(Crafted, NonZeroReservedHeaderBytesAreRefused) {
+  expect_refused_at_open({
+      {"first", [](CraftedPack& p) { p.header().reserved[0] = 1; }, "reserved header byte 108 is 1, not 0"},
+      {"last", [](CraftedPack& p) { p.header().reserved[sizeof p.header().reserved - 1] = 0xff; },
+       "reserved header byte 4091 is 255"},
   });
 }
 
@@ -177,6 +207,8 @@ TEST_F(Crafted, MetadataOfTheWrongTypesIsRefusedByMember) {
       {"range shape", in_build("range_shape", 1), "build.range_shape"},
       {"an array", [](CraftedPack& p) { p.set_metadata("[]"); }, "metadata is not a JSON object"},
       {"not JSON", [](CraftedPack& p) { p.set_metadata("{\"tool\": "); }, "metadata: not valid JSON"},
+      {"NUL after it", [](CraftedPack& p) { p.set_metadata(p.metadata() + std::string(16, '\0')); },
+       "metadata: not valid JSON: a NUL byte"},
       // printing or copying it would recurse once a level
       {"nested",
        [](CraftedPack& p) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../fields/gdal/hostile_rasters.hpp"
 #include "../support/scratch.hpp"
 #include "cli_runner.hpp"
 
@@ -429,6 +430,34 @@ TEST(CliBuildRefuses, ATerrainForceBandOfNothing) {
   EXPECT_NE(r.err.find("--tff-offset"), std::string::npos) << r.err;
   // a band of too many posts: refused before the import when --spacing sets them
   expect_refused(" --range 8 " + kCrop + " --spacing 0.3", {"terrain force band", "335 posts", "--tff-offset"});
+}
+
+TEST(CliBuildRefuses, ADemThatIsNoPlaceOnEarth) {
+  // a UTM grid 90,000 km north: it built, and every plan on it failed at its WGS84 step
+  visvol::fields::testing::TiffSpec far;
+  far.gt[0] = far.gt[3] = 9e7;
+  far.epsg = 32610;
+  const std::string dem = visvol::fields::testing::write_hostile_tiff("cli_far", far);
+  const std::string out = ::testing::TempDir() + "/cli_far_" + std::to_string(getpid()) + ".vvp";
+  const Outcome r = visvol("build " + dem + " --levels 16 --lod 1 --range 2 -o " + out);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find(dem + ": its north-west post (90000015.00, 89999985.00) is no place on Earth in its CRS "
+                             "(WGS 84 / UTM zone 10N)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(access(out.c_str(), F_OK), 0);
+  // the same grid where UTM zone 10N has it, and one without a CRS (local metres), build
+  far.gt[0] = 500000;
+  far.gt[3] = 4001000;
+  const std::string placed = visvol::fields::testing::write_hostile_tiff("cli_placed", far);
+  far.epsg = 0;
+  const std::string local = visvol::fields::testing::write_hostile_tiff("cli_local", far);
+  for (const std::string& d : {placed, local}) {
+    const Outcome ok = visvol("build " + d + " --levels 16 --lod 1 --range 2 -o " + out);
+    EXPECT_EQ(ok.status, 0) << d << ": " << ok.err;
+    std::remove(out.c_str());
+  }
+  for (const std::string& d : {dem, placed, local}) std::remove(d.c_str());
 }
 
 TEST(CliViewshed, WritesAGeoTiff) {

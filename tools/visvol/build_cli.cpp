@@ -12,6 +12,7 @@
 #include "fields/terrain_force.hpp"
 #include "io/json_text.hpp"
 #include "storage/planning_bounds.hpp"
+#include "wgs84.hpp"
 
 namespace visvol::cli {
 
@@ -172,6 +173,31 @@ Status check_area_inside(const BuildOptions& o, const BuildInput& in, const Heig
                                  " of the imported grid do not hold the area; this is a bug");
 }
 
+// A DEM that names a CRS must lie where that CRS places points on Earth:
+// plans and the console give WGS84 positions through it (a UTM grid at
+// northing 9e7 m built, and every plan on it then failed). A DEM without a
+// CRS is in local metres and has no WGS84 outputs.
+Status check_place_on_earth(const std::string& dem, const Heightfield& hf) {
+  if (hf.crs_wkt.empty()) return Status::ok_status();
+  const double east = hf.x_of(hf.nx - 1), south = hf.y_of(hf.ny - 1);
+  const std::vector<Vec3> corners = {
+      {hf.origin_x, hf.origin_y, 0}, {east, hf.origin_y, 0}, {hf.origin_x, south, 0}, {east, south, 0}};
+  const char* names[] = {"north-west", "north-east", "south-west", "south-east"};
+  const std::string crs = fields::crs_name(hf.crs_wkt);
+  const std::string why = "; plans give WGS84 positions through it, so check the DEM's georeferencing";
+  // no points: the CRS alone
+  if (const auto usable = to_wgs84({}, hf.crs_wkt); !usable.ok()) {
+    return invalid_argument(dem + ": " + usable.status().message() + why);
+  }
+  for (std::size_t n = 0; n < corners.size(); ++n) {
+    if (to_wgs84({corners[n]}, hf.crs_wkt).ok()) continue;
+    char where[96];
+    std::snprintf(where, sizeof where, "%s post (%.2f, %.2f)", names[n], corners[n].x(), corners[n].y());
+    return invalid_argument(dem + ": its " + where + " is no place on Earth in its CRS (" + crs + ")" + why);
+  }
+  return Status::ok_status();
+}
+
 }  // namespace
 
 std::string build_source_json(const BuildOptions& o, const PreparedBuild& b) {
@@ -198,6 +224,7 @@ Result<PreparedBuild> prepare_build(const BuildOptions& o) {
   Result<Heightfield> hf = import(o.dem, b.input.import, &b.imported);
   if (!hf.ok()) return hf.status();
   b.terrain = std::move(*hf);
+  VISVOL_RETURN_IF_ERROR(check_place_on_earth(o.dem, b.terrain));
   Result<FieldParams> params = make_params(o, b.terrain);
   if (!params.ok()) return params.status();
   b.params = std::move(*params);

@@ -31,11 +31,11 @@ using ProjObject = std::unique_ptr<PJ, ProjFree>;
 Status check_pack_crs(const std::string& crs_wkt) {
   if (crs_wkt.empty()) return Status(Errc::unsupported, "the pack has no CRS, so there is no WGS84 position");
   OGRSpatialReference pack;
-  if (pack.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return corrupt("the pack's CRS WKT does not parse");
+  if (pack.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return corrupt("the CRS WKT does not parse");
   // a CRS in degrees (or feet) would place the grid wrong
   if (!pack.IsProjected() || std::fabs(pack.GetLinearUnits() - 1.0) > 1e-9) {
-    return corrupt("the pack's CRS (" + std::string(pack.GetName() ? pack.GetName() : "unnamed") +
-                   ") is not a projected CRS in metres, as its grid is");
+    return corrupt("the CRS (" + std::string(pack.GetName() ? pack.GetName() : "unnamed") +
+                   ") is not a projected CRS in metres, as a pack's grid is");
   }
   return Status::ok_status();
 }
@@ -55,10 +55,10 @@ class Wgs84Transform {
     proj_log_level(t.ctx_.get(), PJ_LOG_NONE);  // failures are reported in words
     proj_context_set_enable_network(t.ctx_.get(), 0);
     const ProjObject pack(proj_create(t.ctx_.get(), crs_wkt.c_str())), wgs84(proj_create(t.ctx_.get(), "EPSG:4326"));
-    if (!pack || !wgs84) return Status(Errc::unsupported, "PROJ does not read the pack's CRS or know EPSG:4326");
+    if (!pack || !wgs84) return Status(Errc::unsupported, "PROJ does not read the CRS or know EPSG:4326");
     const ProjObject any_order(proj_create_crs_to_crs_from_pj(t.ctx_.get(), pack.get(), wgs84.get(), nullptr, nullptr));
     if (any_order) t.pj_.reset(proj_normalize_for_visualization(t.ctx_.get(), any_order.get()));
-    if (!t.pj_) return Status(Errc::unsupported, "no transformation between the pack's CRS and WGS84");
+    if (!t.pj_) return Status(Errc::unsupported, "no transformation between the CRS and WGS84");
     return t;
   }
 

@@ -31,6 +31,7 @@
 #include "rt/exec/memory_budget.hpp"
 #include "rt/exec/periodic_loop.hpp"
 #include "rt/exec/realtime.hpp"
+#include "rt/rope/path_check.hpp"
 #include "storage/resident_pack.hpp"
 
 namespace visvol::app {
@@ -82,7 +83,8 @@ struct Console::Impl {
   // for the final path when nothing is sent.
   std::unique_ptr<FlyablePath> flyable;
   std::unique_ptr<PathFitter> fitter;
-  std::vector<rt::Vec3> final_path;  // the flyable path at the end (write_outputs)
+  std::vector<rt::Vec3> final_path;       // the flyable path at the end (write_outputs), thinned
+  std::size_t final_fitted_vertices = 0;  // its vertices as fitted, before thinning
   bool final_flyable = false;
   std::unique_ptr<rt::Executive> exec;
   std::unique_ptr<StallingTask> stall;  // --inject-stall: between the loop and the executive
@@ -117,7 +119,9 @@ struct Console::Impl {
   Status start_fitter();
   const PathFitter& path_fitter() const { return flyable ? flyable->fitter() : *fitter; }
   void fit_final_path();
-  nlohmann::json check_path(std::string& line) const;
+  Result<rt::PathChecker> final_checker() const;
+  void thin_final_path(const rt::PathChecker& checker);
+  nlohmann::json check_path(const Result<rt::PathChecker>& checker, std::string& line) const;
   Status check_outputs() const;
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   Status make_output_dirs(const std::string& out) const;

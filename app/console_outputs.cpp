@@ -13,6 +13,7 @@
 #include "io/json_text.hpp"
 #include "rt/rope/check_json.hpp"
 #include "rt/rope/path_check.hpp"
+#include "rt/rope/waypoint_thinning.hpp"
 #include "storage/pack_identity.hpp"
 
 namespace visvol::app {
@@ -87,8 +88,10 @@ nlohmann::json check_json(const rt::PathCheck& c, double sample_step_m) {
 }
 
 // The flyable path's figures, and how many paths were sent.
-nlohmann::json flyable_json(const msg::PathSample& p, bool inside_envelope, const FlyableStats& sent) {
+nlohmann::json flyable_json(const msg::PathSample& p, std::size_t fitted_vertices, bool inside_envelope,
+                            const FlyableStats& sent) {
   return {{"vertices", p.vertex_count},
+          {"fitted_vertices", fitted_vertices},
           {"fc", p.f_c},
           {"length_m", p.length_m},
           {"min_clearance_m", p.min_clearance_m},
@@ -110,19 +113,33 @@ void Console::Impl::fit_final_path() {
   fit.set_observers(set != nullptr ? set->request : rt::HullRequest{});
   const rt::EnvelopeFit f = fit.fit(rope.vertices(), rope.segments() + 1, exec->forces().gains());
   final_path = f.path;
+  final_fitted_vertices = final_path.size();
   final_flyable = f.feasible;
 }
 
-// The final (flyable) path against the envelope and the observers in force,
-// by exact sight lines on the finest terrain (rt::PathChecker), after the
-// loop stopped. `line` gets the verdict for the operator.
-nlohmann::json Console::Impl::check_path(std::string& line) const {
+// The judge of the final path: exact sight lines on the finest terrain, the
+// envelope and the observers in force, after the loop stopped.
+Result<rt::PathChecker> Console::Impl::final_checker() const {
   rt::PathCheckSpec spec;
   spec.envelope = path_fitter().envelope(exec->forces().gains());
   spec.constraints = observers_of(exec->hulls_in_force());
   spec.curvature_coeff = pack_curvature(*pack);
   spec.planning_bounds = bounds;
-  Result<rt::PathChecker> checker = rt::PathChecker::create(path_fitter().terrain(), nullptr, spec);
+  return rt::PathChecker::create(path_fitter().terrain(), nullptr, spec);
+}
+
+// The final path's waypoints thinned as `visvol plan` thins its answer's
+// (rt::thinned_as_good): where that meets as much and costs F_c under a
+// thousandth. The fit's splits left runs of vertices on one line.
+void Console::Impl::thin_final_path(const rt::PathChecker& checker) {
+  const rt::PathCheck fitted = checker.check(final_path);
+  std::optional<rt::ThinnedPath> thinned = rt::thinned_as_good(final_path, fitted, checker, exec->config().objective);
+  if (thinned) final_path = std::move(thinned->path);
+}
+
+// The final (flyable) path judged by `checker`; `line` gets the verdict for
+// the operator.
+nlohmann::json Console::Impl::check_path(const Result<rt::PathChecker>& checker, std::string& line) const {
   if (!checker.ok()) {
     line = "check: " + checker.status().message();
     return {{"error", checker.status().message()}};
@@ -166,6 +183,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   const std::string out = out_dir();
   VISVOL_RETURN_IF_ERROR(make_output_dirs(out));
   fit_final_path();
+  const Result<rt::PathChecker> checker = final_checker();
+  if (checker.ok() && final_path.size() > 2) thin_final_path(*checker);
   auto flyable_sample = std::make_unique<msg::PathSample>();
   if (!path_fitter().describe(final_path, *flyable_sample)) {
     log_printf(LogLevel::warning, "visvol-console: warning: the final path's F_p is unknown (NaN): %s\n",
@@ -173,7 +192,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   const msg::PathSample& fp = *flyable_sample;
   std::string verdict;
-  const nlohmann::json check = check_path(verdict);
+  const nlohmann::json check = check_path(checker, verdict);
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp, check)));
   std::string health_csv =
       "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"
@@ -283,7 +302,8 @@ nlohmann::json Console::Impl::summary_json(const rt::LoopRun& run, double wall_s
         {"equilibrium_s", c.equilibrium_s},
         {"runs", c.runs},
         {"rope_resets", c.rope_resets},
-        {"flyable", flyable_json(fp, final_flyable, flyable ? flyable->stats() : FlyableStats{})}}},
+        {"flyable",
+         flyable_json(fp, final_fitted_vertices, final_flyable, flyable ? flyable->stats() : FlyableStats{})}}},
       {"vehicle", rt::vehicle_json(vehicle)},
       {"mode", msg::to_string(c.mode)},
       {"mode_switches", c.mode_switches},
@@ -362,11 +382,12 @@ void Console::Impl::print_summary(const rt::LoopRun& run, double wall_s, const m
       run.compute.percentile_us(0.99), static_cast<unsigned long long>(run.totals.overruns),
       static_cast<long long>(run.totals.faults_after_settle.major));
   std::printf(
-      "path: %s, rope F_c %.4f -> %.4f, %s; flyable (%s): F_c %.4f, %.0f m, %u vertices, lowest clearance "
-      "%.1f m, %s; device %s, %llu grasp(s)\n",
+      "path: %s, rope F_c %.4f -> %.4f, %s; flyable (%s): F_c %.4f, %.0f m, %u vertices (of %zu as fitted), "
+      "lowest clearance %.1f m, %s; device %s, %llu grasp(s)\n",
       o.objective.c_str(), fc_start, c.fc, c.converged ? "at rest" : "moving", vehicle.name.c_str(), fp.f_c,
-      fp.length_m, fp.vertex_count, lowest, final_flyable ? "inside the envelope" : "NOT inside the envelope",
-      device_text(c), static_cast<unsigned long long>(c.grasps));
+      fp.length_m, fp.vertex_count, final_fitted_vertices, lowest,
+      final_flyable ? "inside the envelope" : "NOT inside the envelope", device_text(c),
+      static_cast<unsigned long long>(c.grasps));
   std::printf("memory: peak RSS %.1f MiB of a %.0f MiB budget; tiles %.1f of %.1f MiB (pack %.1f MiB)\n",
               static_cast<double>(rss_peak) / kMiB, o.budget_mib, static_cast<double>(ts.resident_bytes) / kMiB,
               static_cast<double>(ts.budget_bytes) / kMiB, static_cast<double>(ts.pack_bytes) / kMiB);

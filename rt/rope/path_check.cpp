@@ -335,4 +335,14 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   return out;
 }
 
+bool meets_less(const PathCheck& a, const PathCheck& b) {
+  if (a.all_met != b.all_met) return b.all_met;
+  if (a.all_met) return false;
+  // as better() ranks them: the envelope and the bounds first
+  if (std::abs(a.flight_violation - b.flight_violation) > PathCheck::kViolationTie) {
+    return a.flight_violation > b.flight_violation;
+  }
+  return a.violation > b.violation + PathCheck::kViolationTie;
+}
+
 }  // namespace visvol::rt

@@ -187,4 +187,9 @@ class PathChecker {
   PathCheckSpec spec_;
 };
 
+// Does path a (its check) meet less than path b: not every requirement where
+// b meets them all, or more violation of the envelope and the bounds, or (as
+// much of those) more of the constraint points? (F_c aside.)
+bool meets_less(const PathCheck& a, const PathCheck& b);
+
 }  // namespace visvol::rt

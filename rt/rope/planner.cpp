@@ -169,16 +169,6 @@ bool better(const PathCheck& a, const PathCheck& b, Objective objective) {
   return objective == Objective::hide ? a.fc < b.fc : a.fc > b.fc;
 }
 
-bool meets_less(const PathCheck& a, const PathCheck& b) {
-  if (a.all_met != b.all_met) return b.all_met;
-  if (a.all_met) return false;
-  // as better() ranks them: the envelope and the bounds first
-  if (std::abs(a.flight_violation - b.flight_violation) > PathCheck::kViolationTie) {
-    return a.flight_violation > b.flight_violation;
-  }
-  return a.violation > b.violation + PathCheck::kViolationTie;
-}
-
 std::vector<const PointHull*> ObserverHulls::of(ConstraintKind kind) const {
   const std::optional<PointHull>& h = kind == ConstraintKind::hidden_from ? hidden_from : visible_to;
   return h ? std::vector<const PointHull*>{&*h} : std::vector<const PointHull*>{};

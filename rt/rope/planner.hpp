@@ -157,10 +157,6 @@ std::vector<Vec3> with_slack(const std::vector<Vec3>& polyline, double length_m)
 // Points of the slack rope as laid (the rope resamples them to its segments).
 inline constexpr int kLaidSegments = 128;
 
-// The share of F_c an answer may lose to have its waypoints thinned (a
-// thousandth: the bench's answers lost a ten-thousandth at most).
-inline constexpr double kThinningFcTie = 1.0e-3;
-
 // The planner's articulated rope: FIRE's share and the viscous damping (1/s)
 // left beside it (the console's rope: none and 6 /s).
 inline constexpr double kPlanFireMixing = 0.1;
@@ -176,11 +172,6 @@ Status check_ends(const PlanRequest& request, const PathChecker& checker, double
 // violation of the envelope and the bounds, then of the constraint points;
 // then F_c.
 bool better(const PathCheck& a, const PathCheck& b, Objective objective);
-
-// Does path a (its check) meet less than path b: not every requirement where
-// b meets them all, or more violation of the envelope and the bounds, or (as
-// much of those) more of the constraint points? (F_c aside.)
-bool meets_less(const PathCheck& a, const PathCheck& b);
 
 // Every observer of a kind on one level as a single hull: a path must stay
 // under every hidden-from hull (so under their lowest) and over every
@@ -278,8 +269,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   // A fitted path with the waypoints its shape does not need dropped (turns
   // near the least radius keep theirs).
   auto thinned_of = [&](const std::vector<Vec3>& fitted) {
-    const std::vector<bool> turns = turns_to_keep(fitted, envelope.min_turn_radius_m);
-    return thin_waypoints(fitted, *request.thinning, &turns);
+    return thin_for_vehicle(fitted, envelope.min_turn_radius_m, *request.thinning);
   };
   auto consider = [&](const Vec3* v, int count, const char* source) {
     EnvelopeFit f = fit_to_envelope(std::vector<Vec3>(v, v + count), fit, checker->terrain());
@@ -294,7 +284,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
       std::vector<Vec3> thinned = thinned_of(f.path);
       if (thinned.size() < f.path.size()) {
         PathCheck thinned_check = checker->check(thinned);
-        if (!detail::meets_less(thinned_check, last_check) &&
+        if (!meets_less(thinned_check, last_check) &&
             (best.empty() || detail::better(thinned_check, best_check, request.objective))) {
           path = std::move(thinned);
           last_check = std::move(thinned_check);
@@ -449,15 +439,11 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
     // The answer beat the best before by an F_c its thinned self may not: it
     // is thinned all the same where that meets as much, costs F_c under
     // kThinningFcTie of it, and stays no worse than the start.
-    std::vector<Vec3> thinned = thinned_of(best_as_fitted);
-    if (thinned.size() < best.size()) {
-      PathCheck c = checker->check(thinned);
-      const double fc_cost = (request.objective == Objective::hide ? 1.0 : -1.0) * (c.fc - best_check.fc);
-      if (!detail::meets_less(c, best_check) && fc_cost <= kThinningFcTie * std::abs(best_check.fc) &&
-          !detail::better(result.initial_check, c, request.objective)) {
-        best = std::move(thinned);
-        best_check = std::move(c);
-      }
+    std::optional<ThinnedPath> thinned =
+        thinned_as_good(best_as_fitted, best_check, *checker, request.objective, *request.thinning);
+    if (thinned && !detail::better(result.initial_check, thinned->check, request.objective)) {
+      best = std::move(thinned->path);
+      best_check = std::move(thinned->check);
     }
   }
   result.final_path = best;

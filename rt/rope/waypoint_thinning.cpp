@@ -104,4 +104,21 @@ std::vector<bool> turns_to_keep(const std::vector<Vec3>& path, double min_turn_r
   return keep;
 }
 
+std::vector<Vec3> thin_for_vehicle(const std::vector<Vec3>& fitted, double min_turn_radius_m,
+                                   const ThinningTolerance& tol) {
+  const std::vector<bool> turns = turns_to_keep(fitted, min_turn_radius_m);
+  return thin_waypoints(fitted, tol, &turns);
+}
+
+std::optional<ThinnedPath> thinned_as_good(const std::vector<Vec3>& fitted, const PathCheck& fitted_check,
+                                           const PathChecker& checker, Objective objective,
+                                           const ThinningTolerance& tol) {
+  std::vector<Vec3> thinned = thin_for_vehicle(fitted, checker.spec().envelope.min_turn_radius_m, tol);
+  if (thinned.size() >= fitted.size()) return std::nullopt;
+  PathCheck c = checker.check(thinned);
+  const double fc_cost = (objective == Objective::hide ? 1.0 : -1.0) * (c.fc - fitted_check.fc);
+  if (meets_less(c, fitted_check) || fc_cost > kThinningFcTie * std::abs(fitted_check.fc)) return std::nullopt;
+  return ThinnedPath{std::move(thinned), std::move(c)};
+}
+
 }  // namespace visvol::rt

@@ -14,8 +14,11 @@
 // Offline: allocates.
 #pragma once
 
+#include <optional>
 #include <vector>
 
+#include "rt/rope/global_search.hpp"
+#include "rt/rope/path_check.hpp"
 #include "rt/rope/rope.hpp"
 
 namespace visvol::rt {
@@ -53,5 +56,26 @@ std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTo
 // 147 m of room at a corner. Straight runs and wide curves thin freely.
 inline constexpr double kTurnKeptFactor = 3.0;
 std::vector<bool> turns_to_keep(const std::vector<Vec3>& path, double min_turn_radius_m);
+
+// A fitted path thinned for a vehicle: its turns within kTurnKeptFactor of
+// `min_turn_radius_m` keep their vertices.
+std::vector<Vec3> thin_for_vehicle(const std::vector<Vec3>& fitted, double min_turn_radius_m,
+                                   const ThinningTolerance& tol);
+
+// The share of F_c a path may lose to have its waypoints thinned (a
+// thousandth: the plan bench's answers lost a ten-thousandth at most).
+inline constexpr double kThinningFcTie = 1.0e-3;
+
+// `fitted` (judged `fitted_check`) thinned for the checker's vehicle and
+// judged again: the thinned path where it meets as much (meets_less) and
+// costs under kThinningFcTie of F_c for `objective`; nothing where it does
+// not or drops no vertex.
+struct ThinnedPath {
+  std::vector<Vec3> path;
+  PathCheck check;
+};
+std::optional<ThinnedPath> thinned_as_good(const std::vector<Vec3>& fitted, const PathCheck& fitted_check,
+                                           const PathChecker& checker, Objective objective,
+                                           const ThinningTolerance& tol = {});
 
 }  // namespace visvol::rt

@@ -422,6 +422,9 @@ TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
     v.push_back(p);
   }
   ASSERT_EQ(static_cast<int>(v.size()), f["vertices"].get<int>());
+  // its waypoints thinned as a plan's (judged again: every limit above met)
+  EXPECT_LE(f["vertices"].get<int>(), f["fitted_vertices"].get<int>());
+  EXPECT_NE(r.out.find(" as fitted), "), std::string::npos) << r.out;
   const double kDeg = 180.0 / 3.14159265358979323846;
   double steepest_up = 0, steepest_down = 0;
   for (std::size_t k = 1; k < v.size(); ++k) {

@@ -113,5 +113,4 @@ inline void expect_position(const nlohmann::json& it, const Vec3& lon_lat, doubl
   EXPECT_DOUBLE_EQ(it["params"][6].get<double>(), altitude_m);
 }
 
-
 }  // namespace visvol::cli::path_files_test

@@ -32,7 +32,6 @@ TEST_F(PathIo, GeoJsonHeightsAreEllipsoidalWithTheOrthometricOnesAsProperties) {
   }
 }
 
-
 // ---- CSV ----
 
 TEST_F(PathIo, CsvStatesItsCrsAndDatumsThenAHeaderRowAndReadsBack) {
@@ -165,7 +164,6 @@ TEST_F(PathIo, OnlyAFlyablePathGetsAMissionAndEveryFileSaysWhatIsUnmet) {
   EXPECT_NE(slurp(base + ".kml").find("0.82 of the length &lt;of 1&gt;"), std::string::npos);
 }
 
-
 // A fixed-wing's landing circles over the last vertex before it lands: a
 // circle that comes under the clearance (one came 32 m under the ground, of a
 // path that met everything) gets no mission; the path's files are written.
@@ -190,7 +188,6 @@ TEST_F(PathIo, NoMissionWhoseLandingCircleComesUnderTheClearance) {
   EXPECT_TRUE(write_path_outputs(dir_ + "/fine", r, written).ok());
   EXPECT_TRUE(exists(dir_ + "/fine.plan"));
 }
-
 
 // ---- .plan ----
 
@@ -256,7 +253,6 @@ TEST_F(PathIo, FixedWingPlanLoitersOverTheEndThenLands) {
   EXPECT_EQ(item(plan, n + 3)["command"], mavlink::kCmdNavLand);
   expect_position(item(plan, n + 3), (*geo)[n - 1], 215.0);
 }
-
 
 // ---- the report ----
 

@@ -99,7 +99,6 @@ TEST_F(PathIo, MissingGeoidGridIsNamedAndNoGeoJsonIsWritten) {
   EXPECT_TRUE(orthometric_to_ellipsoidal({{-122.4194, 37.7749, 100.0}}).ok());
 }
 
-
 // WGS84 positions say how they were made. From WGS 84 / UTM the change of
 // projection is exact; from NAD27 / UTM (the bundled SF North DEM's CRS)
 // PROJ shifts the datum, to 7 m with Debian's proj-data (EPSG's figure): the

@@ -622,13 +622,13 @@ TEST(PlanRanking, TheEnvelopeComesBeforeTheObserversAndBothBeforeFc) {
   EXPECT_TRUE(detail::better(lower, exposed, Objective::hide));
   EXPECT_FALSE(detail::better(lower, exposed, Objective::show));
   // a thinned path "meets less" in the same order: the envelope first, F_c never
-  EXPECT_TRUE(detail::meets_less(exposed, feasible));
-  EXPECT_FALSE(detail::meets_less(feasible, exposed));
-  EXPECT_TRUE(detail::meets_less(skimming, exposed));   // under the clearance, however few observers
-  EXPECT_FALSE(detail::meets_less(exposed, skimming));  // more observers unmet, the envelope held
-  EXPECT_TRUE(detail::meets_less(exposed, less));
-  EXPECT_FALSE(detail::meets_less(lower, exposed));
-  EXPECT_FALSE(detail::meets_less(exposed, lower));
+  EXPECT_TRUE(meets_less(exposed, feasible));
+  EXPECT_FALSE(meets_less(feasible, exposed));
+  EXPECT_TRUE(meets_less(skimming, exposed));   // under the clearance, however few observers
+  EXPECT_FALSE(meets_less(exposed, skimming));  // more observers unmet, the envelope held
+  EXPECT_TRUE(meets_less(exposed, less));
+  EXPECT_FALSE(meets_less(lower, exposed));
+  EXPECT_FALSE(meets_less(exposed, lower));
 }
 
 TEST(PlanValidate, SegmentsAndTheirWorkAreBounded) {

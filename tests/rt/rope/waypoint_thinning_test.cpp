@@ -7,7 +7,9 @@
 #include <cmath>
 #include <random>
 
+#include "../../fields/terrains.hpp"
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/vehicle.hpp"
 
 namespace visvol::rt {
 namespace {
@@ -150,6 +152,41 @@ TEST(WaypointThinning, AContrivedPathIsLeftAsItIs) {
   std::vector<Vec3> line;  // a long straight run is cheap: one span
   for (int i = 0; i < 100000; ++i) line.emplace_back(3.0 * i, 0.0, 100.0);
   EXPECT_EQ(thinned_indices(line, {}).size(), 2u);
+}
+
+// The console's final path and the planner's answer are thinned only where
+// the thinned path, judged again, meets as much: a leg may cross what its
+// vertices went over (here a 15 cm post under a path held exactly at its 30 m
+// clearance, within the 20 cm vertical tolerance).
+TEST(ThinnedAsGood, KeptOnlyWhereItMeetsAsMuch) {
+  fields::Heightfield t = fields::testing::blank(20, 5, 10.0, 0.0f);
+  PathCheckSpec spec;
+  spec.envelope = *vehicle_preset("multirotor");
+  spec.envelope.clearance_m = 30;
+  spec.envelope.max_agl_m = 200;
+  auto along_row = [&]() {
+    std::vector<Vec3> p;
+    for (int i = 2; i <= 17; ++i) p.emplace_back(t.x_of(i), t.y_of(2), 30.0 + t.at(i, 2));
+    return p;
+  };
+  {
+    const auto checker = PathChecker::create(t, nullptr, spec);
+    ASSERT_TRUE(checker.ok()) << checker.status().message();
+    const std::vector<Vec3> level = along_row();
+    const std::optional<ThinnedPath> thinned = thinned_as_good(level, checker->check(level), *checker, Objective::hide);
+    ASSERT_TRUE(thinned.has_value());
+    EXPECT_EQ(thinned->path.size(), 2u);
+    EXPECT_TRUE(thinned->check.all_met);
+  }
+  t.at(10, 2) = 0.15f;
+  const auto checker = PathChecker::create(t, nullptr, spec);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const std::vector<Vec3> over_post = along_row();
+  const PathCheck fitted = checker->check(over_post);
+  ASSERT_TRUE(fitted.all_met);
+  // thinned, its one leg passes 29.85 m over the post
+  ASSERT_FALSE(checker->check(thin_waypoints(over_post, {})).all_met);
+  EXPECT_FALSE(thinned_as_good(over_post, fitted, *checker, Objective::hide).has_value());
 }
 
 }  // namespace

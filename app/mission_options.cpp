@@ -60,7 +60,8 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
                  {"min-turn-radius", &rt::VehicleEnvelope::min_turn_radius_m},
                  {"clearance", &rt::VehicleEnvelope::clearance_m},
                  {"max-agl", &rt::VehicleEnvelope::max_agl_m},
-                 {"max-altitude", &rt::VehicleEnvelope::max_altitude_m}};
+                 {"max-altitude", &rt::VehicleEnvelope::max_altitude_m},
+                 {"acceptance-radius", &rt::VehicleEnvelope::acceptance_radius_m}};
   for (const auto& [key, node] : table) {
     const std::string k(key.str());
     if (k == "type") continue;
@@ -100,7 +101,7 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
     if (!known) {
       return invalid_argument(path + ": unknown key '" + k +
                               "' (known: name, type, autopilot, speed, max-climb, max-descent, min-turn-radius, "
-                              "clearance, max-agl, max-altitude)");
+                              "clearance, max-agl, max-altitude, acceptance-radius)");
     }
   }
   const Status valid = rt::validate(*v);
@@ -110,7 +111,8 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
 
 void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--vehicle", o.vehicle,
-               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m), multirotor (8 m/s, climb 60 deg, "
+               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m, waypoints taken 100 m early), multirotor (8 "
+               "m/s, climb 60 deg, "
                "descent 45 deg) or a TOML file of the keys below")
       ->capture_default_str();
   c.add_option("--speed", o.speed_m_per_s, "Cruise speed, m/s (exposure time, mission speeds)");
@@ -121,6 +123,9 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--max-agl", o.max_agl_m,
                "Highest height above the terrain, m (default none; a planned path stays under the field's top)");
   c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
+  c.add_option("--acceptance-radius", o.acceptance_radius_m,
+               "How far before a waypoint the autopilot takes the next one and its altitude, m: the path clears "
+               "the ground this far behind each point (fixed-wing 100, multirotor 0)");
   c.add_option("--autopilot", o.autopilot,
                "The vehicle's flight stack, px4 or ardupilot: a .plan mission's firmware (default: the vehicle's)");
 }
@@ -149,7 +154,8 @@ Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& o) {
                    {o.min_turn_radius_m, &rt::VehicleEnvelope::min_turn_radius_m},
                    {o.clearance_m, &rt::VehicleEnvelope::clearance_m},
                    {o.max_agl_m, &rt::VehicleEnvelope::max_agl_m},
-                   {o.max_altitude_m, &rt::VehicleEnvelope::max_altitude_m}};
+                   {o.max_altitude_m, &rt::VehicleEnvelope::max_altitude_m},
+                   {o.acceptance_radius_m, &rt::VehicleEnvelope::acceptance_radius_m}};
   for (const auto& x : overrides) {
     if (x.value) (*v).*(x.field) = *x.value;
   }

@@ -35,7 +35,7 @@ namespace visvol::cli {
 struct EnvelopeOptions {
   std::string vehicle = "fixed-wing";
   std::optional<double> speed_m_per_s, max_climb_deg, max_descent_deg, min_turn_radius_m, clearance_m, max_agl_m,
-      max_altitude_m;
+      acceptance_radius_m, max_altitude_m;
   std::optional<std::string> autopilot;  // px4, ardupilot
 };
 

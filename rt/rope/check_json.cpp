@@ -33,6 +33,7 @@ nlohmann::json vehicle_json(const VehicleEnvelope& v) {
           {"max_climb_deg", v.max_climb_deg},
           {"max_descent_deg", v.max_descent_deg},
           {"min_turn_radius_m", v.min_turn_radius_m},
+          {"acceptance_radius_m", v.acceptance_radius_m},
           {"clearance_m", v.clearance_m},
           {"max_agl_m", finite_or_null(v.max_agl_m)},
           {"max_altitude_m", finite_or_null(v.max_altitude_m)},

@@ -6,6 +6,7 @@
 #include "rt/rope/fillet.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/terrain_probe.hpp"
+#include "rt/rope/track_ground.hpp"
 
 namespace visvol::rt {
 
@@ -32,14 +33,18 @@ struct Band {
   double lo = 0, hi = 0;
 };
 
+constexpr double kNoGround = -std::numeric_limits<double>::infinity();
+
 // Heights allowed above (x, y): the envelope first; the hulls narrow it but
 // yield to it (clearance before a hidden-from hull, the ceiling before a
-// visible-to hull).
-Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, double y) {
+// visible-to hull). `behind_m`: the highest ground under the track behind
+// the point that a vehicle taking its heights early may be over at this
+// height (track_ground.hpp).
+Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, double y, double behind_m = kNoGround) {
   const VehicleEnvelope& e = s.envelope;
   const double g = fields::bilinear_height(t, t.i_of(x), t.j_of(y));  // clamped to the grid
   Band b;
-  b.lo = g + e.clearance_m + s.margin_m;
+  b.lo = std::max(g, behind_m) + e.clearance_m + s.margin_m;
   b.hi = std::min({g + e.max_agl_m - s.margin_m, e.max_altitude_m - s.margin_m, s.top_m});
   double lo = b.lo, hi = b.hi;
   for (const PointHull* h : s.above) lo = std::max(lo, h->at(x, y) + s.hull_margin_m);
@@ -158,19 +163,52 @@ std::vector<double> slope_shares(const std::vector<Vec3>& p, double min_turn_rad
   return share;
 }
 
+// The least share of a worst sample's height a vertex beside a fixed end is
+// moved for (a sample at the end itself would ask for an unbounded move).
+constexpr double kMinEndShare = 0.05;
+
 struct SegmentMiss {
   double deficit = 0, excess = 0;  // worst under the band's floor, over its ceiling (m)
   double worst_t = 0.5;            // where, as a fraction of the segment
 };
 
+// The highest ground behind a point of the track, `along_m` from its start,
+// that the vehicle may be over at the point's height (kNoGround without an
+// acceptance radius). Never more than the ends let the path clear: a floor
+// the fixed ends put out of reach (an end low after a ridge) is the check's
+// to report, not the fit's to chase for its every pass.
+struct GroundBehind {
+  const TrackGround* track = nullptr;
+  double reach_m = 0;  // the acceptance radius and two of the fit's sample steps
+  double start_z = 0, end_z = 0, length_m = 0;
+  double climb_per_m = 0, descent_per_m = 0;
+  double above_m = 0;  // the clearance and the fit's margin
+  double operator()(double along_m) const {
+    if (track == nullptr) return kNoGround;
+    const double reachable =
+        std::min(start_z + climb_per_m * along_m, end_z + descent_per_m * (length_m - along_m)) - above_m;
+    return std::min(track->highest_m(along_m - reach_m, along_m), reachable);
+  }
+};
+
+// Horizontal distance along the path to each vertex.
+std::vector<double> along_m(const std::vector<Vec3>& p) {
+  std::vector<double> out(p.size(), 0.0);
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    out[i] = out[i - 1] + std::hypot(p[i].x() - p[i - 1].x(), p[i].y() - p[i - 1].y());
+  }
+  return out;
+}
+
+// Segment a-b starts `a_m` along the track.
 SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& a, const Vec3& b,
-                         double step_m) {
+                         double step_m, const GroundBehind& behind, double a_m) {
   SegmentMiss m;
   const double len = std::hypot(b.x() - a.x(), b.y() - a.y());
   const int k = std::max(2, static_cast<int>(std::ceil(len / step_m)));
   double worst = 0;
   auto judge = [&](const Vec3& p, double f) {
-    const Band band = band_at(s, t, p.x(), p.y());
+    const Band band = band_at(s, t, p.x(), p.y(), behind(a_m + f * len));
     const double d = band.lo - p.z(), e = p.z() - band.hi;
     if (d > m.deficit) m.deficit = d;
     if (e > m.excess) m.excess = e;
@@ -228,14 +266,32 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
   const double descent = slope(spec.envelope.max_descent_deg);
   const std::size_t max_points = spec.max_points > 0 ? spec.max_points : 4 * p.size() + 64;
 
+  // an acceptance radius: the track's ground behind each point, made anew
+  // when the turns move the track (a split leaves it as it is). Two sample
+  // steps more than the radius: a path held at the samples then clears it
+  // everywhere, and at the checker's finer samples with one step more.
+  std::optional<TrackGround> track;
+  GroundBehind behind;
+  auto set_track = [&]() {
+    if (!(spec.envelope.acceptance_radius_m > 0)) return;
+    track.emplace(terrain, p.data(), static_cast<int>(p.size()));
+    behind = {
+        &*track, spec.envelope.acceptance_radius_m + 2 * step, p.front().z(), p.back().z(), track->length_m(), climb,
+        descent, spec.envelope.clearance_m + spec.margin_m};
+  };
   std::vector<double> lo(p.size()), hi(p.size()), z;
-  auto set_band = [&](std::size_t i) {
+  auto set_band = [&](std::size_t i, double at_m) {
     const bool end = i == 0 || i + 1 == p.size();
-    const Band b = end ? Band{p[i].z(), p[i].z()} : band_at(spec, terrain, p[i].x(), p[i].y());
+    const Band b = end ? Band{p[i].z(), p[i].z()} : band_at(spec, terrain, p[i].x(), p[i].y(), behind(at_m));
     lo[i] = b.lo;
     hi[i] = b.hi;
   };
-  for (std::size_t i = 0; i < p.size(); ++i) set_band(i);
+  auto set_bands = [&]() {
+    set_track();
+    const std::vector<double> at = along_m(p);
+    for (std::size_t i = 0; i < p.size(); ++i) set_band(i, at[i]);
+  };
+  set_bands();
 
   bool feasible = false;
   int round = 1;
@@ -248,16 +304,23 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     // sample, all in one pass (one a pass ran out of passes on paths that
     // needed hundreds, and left them over the band between their vertices).
     std::vector<std::pair<std::size_t, Vec3>> splits;
+    const std::vector<double> along = along_m(p);  // of the vertices before the splits
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
-      const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step);
+      const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i]);
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;
-      // between the vertices the band asks both vertices to move by the miss
+      // between the vertices the band asks both vertices to move by the miss;
+      // beside a fixed end, the other by the miss over its share of the
+      // worst sample's height (by the miss alone it crept there a pass at a
+      // time: an early-descent floor near the end took hundreds of passes)
       const double shift = m.deficit > 1e-6 ? m.deficit : -m.excess;
+      const bool fixed_i = i == 0, fixed_next = i + 2 == p.size();
+      const double share_i = fixed_next ? 1.0 - m.worst_t : 1.0, share_next = fixed_i ? m.worst_t : 1.0;
       bool moved = false, held = true;
       for (std::size_t v : {i, i + 1}) {
         if (v == 0 || v + 1 == p.size()) continue;
-        const double want = z[v] + shift;
+        const double share = std::max(v == i ? share_i : share_next, kMinEndShare);
+        const double want = z[v] + shift / share;
         if (shift > 0) {
           held = held && want <= hi[v];
           const double raised = std::min(want, hi[v]);
@@ -280,7 +343,9 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
       p.insert(p.begin() + at, split->second);
       lo.insert(lo.begin() + at, 0.0);
       hi.insert(hi.begin() + at, 0.0);
-      set_band(split->first + 1);
+      const Vec3& from = p[split->first];
+      set_band(split->first + 1,
+               along[split->first] + std::hypot(split->second.x() - from.x(), split->second.y() - from.y()));
       changed = true;
     }
     // the arcs inside the corners: the corner (every vertex on its spot)
@@ -314,7 +379,7 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
         ++round;
         relax_turns(p, spec.envelope.min_turn_radius_m * (1 + spec.turn_margin));
         if (spec.planning_bounds) clamp_to_bounds(p, *spec.planning_bounds);
-        for (std::size_t i = 0; i < p.size(); ++i) set_band(i);
+        set_bands();
         continue;
       }
       out.feasible = feasible && turns;

@@ -12,6 +12,7 @@
 #include "fields/exact_visibility.hpp"
 #include "rt/rope/fillet.hpp"
 #include "rt/rope/terrain_probe.hpp"
+#include "rt/rope/track_ground.hpp"
 
 namespace visvol::rt {
 
@@ -232,6 +233,16 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     agl.probe(h <= e.max_agl_m + kHeightTolM);
   };
 
+  // The clearance of an aircraft that takes each height up to the acceptance
+  // radius early (track_ground.hpp): at each sample, over the highest ground
+  // that far behind it and one sample step more (so that a path met at the
+  // samples is met between them).
+  const double early_m = e.acceptance_radius_m;
+  std::optional<TrackGround> track;
+  if (early_m > 0) track.emplace(terrain_, v, count);
+  Tally early;
+  double early_lowest = std::numeric_limits<double>::infinity();
+
   // samples along every segment, trapezoid weights by length
   for (int s = 0; s + 1 < count; ++s) {
     const Vec3 a = v[s], b = v[s + 1];
@@ -240,6 +251,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     // bounded before the conversion (a segment of 1e10 m, or infinite)
     const double wanted = std::ceil(len / spec_.sample_step_m);
     const int m = wanted >= 1 ? static_cast<int>(std::min(wanted, double(kMaxSegmentSamples))) : 1;
+    const double leg_m = track ? track->at_vertex_m(s + 1) - track->at_vertex_m(s) : 0.0;
     for (int k = 0; k <= m; ++k) {
       const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);
       // the segment's ends are the vertices themselves
@@ -248,6 +260,12 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
                                      : k == m ? &vertex_seen[static_cast<std::size_t>(s + 1)]
                                               : nullptr;
       sample(p, w, at_vertex);
+      if (track) {
+        const double at_m = track->at_vertex_m(s) + leg_m * (static_cast<double>(k) / m);
+        const double h = p.z() - track->highest_m(at_m - early_m - leg_m / m, at_m);
+        early_lowest = std::min(early_lowest, h);
+        early.add(h >= e.clearance_m - kHeightTolM, w);
+      }
     }
     for_each_terrain_probe(terrain_, a, b, terrain_probe);
     const double horizontal = std::hypot(b.x() - a.x(), b.y() - a.y());
@@ -316,6 +334,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   out.envelope.push_back(limit("max-climb", "deg", e.max_climb_deg, steepest_climb, climb));
   out.envelope.push_back(limit("max-descent", "deg", e.max_descent_deg, steepest_descent, descent));
   out.envelope.push_back(limit("min-turn-radius", "m", e.min_turn_radius_m, tightest, turn, true));
+  if (track) out.envelope.push_back(limit("early-descent", "m", e.clearance_m, early_lowest, early, true));
   out.inside_bounds_fraction = bounds.fraction();
   out.inside_planning_bounds = !bounds.failed;
 

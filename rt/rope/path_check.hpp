@@ -12,6 +12,11 @@
 //   segment exactly (at every grid line crossed and the extreme between,
 //   where the bilinear terrain is a quadratic along the segment), so a peak
 //   between samples is never missed.
+// - Early descent (a vehicle with an acceptance radius R, rt/rope/track_ground.hpp):
+//   the clearance at the same samples over the highest terrain under the R
+//   metres of track behind each (and one sample step more), for their share
+//   of the length: the height an autopilot that takes each waypoint's
+//   height R early flies over the ground. Along the segments, not the arcs.
 // - Climb and descent: every segment's angle from the horizontal.
 // - Turn radius: the largest flyable fillet at every interior vertex
 //   (turn_radii_m below), weighted by half of each neighbouring segment.
@@ -95,10 +100,12 @@ struct ConstraintResult {
 };
 
 struct LimitResult {
-  std::string name;  // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius"
-  std::string unit;  // "m", "deg"
-  double limit = 0;  // as asked
-  double worst = 0;  // the path's worst value (lowest for a lower limit, highest for an upper)
+  // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius", and
+  // "early-descent" (last, for a vehicle with an acceptance radius)
+  std::string name;
+  std::string unit;               // "m", "deg"
+  double limit = 0;               // as asked
+  double worst = 0;               // the path's worst value (lowest for a lower limit, highest for an upper)
   double satisfied_fraction = 1;  // of the path's length
   bool met = true;
   bool lower = false;  // a lower limit (clearance, min-turn-radius): the worst is the lowest

@@ -29,6 +29,7 @@ Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
     v.max_climb_deg = 60.0;
     v.max_descent_deg = 45.0;
     v.min_turn_radius_m = 0.0;
+    v.acceptance_radius_m = 0.0;
     return v;
   }
   return invalid_argument("vehicle: '" + name + "' is neither fixed-wing, multirotor nor a file");
@@ -51,6 +52,9 @@ Status validate(const VehicleEnvelope& v) {
   }
   if (!(std::isfinite(v.min_turn_radius_m) && v.min_turn_radius_m >= 0 && v.min_turn_radius_m <= 1e5)) {
     return bad("min-turn-radius", v.min_turn_radius_m, "is outside [0, 100000] m");
+  }
+  if (!(std::isfinite(v.acceptance_radius_m) && v.acceptance_radius_m >= 0 && v.acceptance_radius_m <= 1e4)) {
+    return bad("acceptance-radius", v.acceptance_radius_m, "is outside [0, 10000] m");
   }
   if (!(std::isfinite(v.clearance_m) && v.clearance_m >= 0 && v.clearance_m <= 1e4)) {
     return bad("clearance", v.clearance_m, "is outside [0, 10000] m");

@@ -47,12 +47,18 @@ struct VehicleEnvelope {
   double clearance_m = 30.0;        // least height above the finest terrain
   double max_agl_m = kNone;         // highest height above the finest terrain
   double max_altitude_m = kNone;    // highest height above the datum
+  // How far before a waypoint the autopilot takes the next one, and with it
+  // the next altitude: a fixed-wing's PX4 switches at its L1 distance (about
+  // 95 m at 20 m/s), ArduPlane within WP_RADIUS (90 m). The path must then
+  // clear the highest ground this far behind each point (rt::TrackGround).
+  // 0: the vehicle reaches each waypoint.
+  double acceptance_radius_m = 100.0;
   Autopilot autopilot = Autopilot::px4;
 };
 
 // The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m
-// or wider) and "multirotor" (8 m/s, climb 60 deg, descent 45 deg, no turn
-// limit). Errc::invalid_argument naming the value otherwise.
+// or wider, waypoints taken 100 m early) and "multirotor" (8 m/s, climb 60
+// deg, descent 45 deg, no turn limit, each waypoint reached). Errc::invalid_argument naming the value otherwise.
 Result<VehicleEnvelope> vehicle_preset(const std::string& name);
 
 // Checks every value (finite where it must be, in range, consistent: a

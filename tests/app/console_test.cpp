@@ -305,6 +305,7 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--max-climb 0", "max-climb 0"},
       {"--max-descent 91", "max-descent 91"},
       {"--min-turn-radius -1", "min-turn-radius -1"},
+      {"--acceptance-radius -5", "acceptance-radius -5"},
       {"--speed nan", "speed nan"},
   };
   for (const auto& [args, reason] : cases) {
@@ -358,7 +359,11 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   EXPECT_EQ(c["constraints"][0]["kind"], "hidden-from");
   EXPECT_EQ(c["constraints"][3]["kind"], "visible-to");
   EXPECT_NEAR(c["constraints"][0]["eye_m"][2].get<double>(), h1[2] + 1.5, 1e-3);
-  ASSERT_EQ(c["envelope"].size(), 6u);  // the fixed-wing preset's climb, descent and turn limits too
+  // the fixed-wing preset's climb, descent and turn limits too, and its
+  // clearance over the ground behind (it takes each height 100 m early)
+  ASSERT_EQ(c["envelope"].size(), 7u);
+  EXPECT_EQ(c["envelope"][6]["name"], "early-descent");
+  EXPECT_EQ(s["vehicle"]["acceptance_radius_m"].get<double>(), 100.0);
   EXPECT_EQ(c["envelope"][0]["name"], "clearance");
   EXPECT_EQ(c["envelope"][1]["name"], "max-agl");
   EXPECT_EQ(c["envelope"][1]["limit"].get<double>(), 120.0);
@@ -388,13 +393,17 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
 // path.csv alone (every segment's climb and descent), and by the exact check.
 // The limits are what the default ends allow here: the fit changes heights
 // only (it does not go round a ridge), and between ends inside the planning
-// bounds this fractal's ridges need climbs of about 9 degrees.
+// bounds this fractal's ridges need climbs of about 9 degrees. An autopilot
+// that reaches each waypoint (acceptance radius 0): the default end lies
+// just past a ridge, and one that takes its height 100 m early crosses the
+// ridge 16 m over it (the last 113 m of the path, early-descent NOT MET).
 TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   const std::string out = out_dir("vehicle");
   const Outcome r = console("--pack " + *pack_ +
                             " --seconds 3 --no-dds --priority 0 --no-lock --segments 32 "
                             "--script none --thumbnail-view none --objective show --vehicle fixed-wing "
-                            "--max-climb 12 --max-descent 10 --min-turn-radius 150 --speed 25 --quiet --out " +
+                            "--max-climb 12 --max-descent 10 --min-turn-radius 150 --speed 25 "
+                            "--acceptance-radius 0 --quiet --out " +
                             out);
   ASSERT_EQ(r.status, 0) << r.err;
   // --quiet: no progress lines (the memory table, a line a second), the closing summary stays
@@ -407,6 +416,7 @@ TEST_F(Console, ItsPathIsFittedIntoTheVehiclesEnvelope) {
   EXPECT_EQ(s["vehicle"]["max_descent_deg"].get<double>(), 10.0);
   EXPECT_EQ(s["vehicle"]["min_turn_radius_m"].get<double>(), 150.0);
   EXPECT_EQ(s["vehicle"]["speed_m_per_s"].get<double>(), 25.0);
+  EXPECT_EQ(s["vehicle"]["acceptance_radius_m"].get<double>(), 0.0);
   const nlohmann::json& f = s["path"]["flyable"];
   ASSERT_TRUE(f["inside_envelope"].get<bool>()) << f.dump();
   const nlohmann::json& c = s["check"];

@@ -452,6 +452,8 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
       {kEnds + " --autopilot inav", "--autopilot: 'inav' is neither px4 nor ardupilot"},
       {kEnds + " --vehicle " + autopilot, "autopilot must be \"px4\" or \"ardupilot\""},
       {kEnds + " --vehicle " + escape, "name must be at most 128 bytes, none of them a control character"},
+      {kEnds + " --acceptance-radius nan", "acceptance-radius nan"},
+      {kEnds + " --acceptance-radius -3", "acceptance-radius -3 is outside [0, 10000] m"},
   };
   for (const Case& c : cases) {
     const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);
@@ -553,7 +555,8 @@ TEST_F(PlanCheck, AnInitPathOnTheBoundsEdgeAndOneOfItsOwnOutputs) {
 // vehicle file or --autopilot says ArduPilot (MAV_AUTOPILOT 12 and 3).
 TEST_F(PlanCheck, TheMissionIsWrittenForTheVehiclesAutopilot) {
   const std::string vehicle = ::testing::TempDir() + "/vehicle_apm_" + std::to_string(getpid()) + ".toml";
-  std::ofstream(vehicle) << "name = \"survey quad\"\ntype = \"multirotor\"\nautopilot = \"ardupilot\"\n";
+  std::ofstream(vehicle) << "name = \"survey quad\"\ntype = \"multirotor\"\nautopilot = \"ardupilot\"\n"
+                            "acceptance-radius = 2\n";
   const struct {
     std::string args;
     int firmware;
@@ -571,6 +574,9 @@ TEST_F(PlanCheck, TheMissionIsWrittenForTheVehiclesAutopilot) {
     EXPECT_EQ(plan["mission"]["vehicleType"], 2) << c.args;  // MAV_TYPE_QUADROTOR
     const nlohmann::json s = nlohmann::json::parse(r.out);
     EXPECT_EQ(s["vehicle"]["autopilot"], c.firmware == 3 ? "ardupilot" : "px4") << c.args;
+    // the file's acceptance radius (the preset's multirotor reaches each waypoint)
+    const bool file = c.args.find(vehicle) != std::string::npos;
+    EXPECT_EQ(s["vehicle"]["acceptance_radius_m"].get<double>(), file ? 2.0 : 0.0) << c.args;
     remove_outputs(b);
   }
   std::remove(vehicle.c_str());

@@ -20,8 +20,11 @@ using namespace visvol::fields::testing;
 class FitOnRelief : public ::testing::Test {
  protected:
   fields::Heightfield terrain = fractal(96, 7, 30.0, 150.0);
+  // The fit's band at each point: the ground behind a point (an acceptance
+  // radius) has its own tests (FitEarlyDescent).
   VehicleEnvelope envelope() const {
     VehicleEnvelope e;  // fixed-wing: 15 deg, 80 m turns
+    e.acceptance_radius_m = 0;
     e.clearance_m = 40;
     e.max_agl_m = 400;
     return e;
@@ -242,6 +245,61 @@ TEST_F(FitOnRelief, TheEnvelopeHoldsWhereAnObserversHullCannot) {
   const PathCheck c = judge(fit.path, e);
   for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
   EXPECT_EQ(fit.path.back(), path.back());
+}
+
+// A fixed-wing's autopilot takes each waypoint's height 100 m early (its
+// acceptance radius): the fit holds the height over a ridge until the ridge
+// is that far behind, so the path flown that way clears it too; fitted for
+// an autopilot that reaches each waypoint, the same path descends at once
+// and is flown over the ridge.
+class FitEarlyDescent : public ::testing::Test {
+ protected:
+  FitEarlyDescent() {
+    for (int j = 0; j < 5; ++j) t.at(20, j) = 60.0f;  // a ridge across the track
+  }
+  Vec3 at(double i, double z) const { return {t.x_of(i), t.y_of(2), z}; }
+  PathCheck judge(const std::vector<Vec3>& path) const {
+    PathCheckSpec s;
+    s.envelope = fixed_wing;
+    const auto checker = PathChecker::create(t, nullptr, s);
+    EXPECT_TRUE(checker.ok());
+    return checker->check(path);
+  }
+  fields::Heightfield t = blank(60, 5, 10.0, 0.0f);
+  VehicleEnvelope fixed_wing = *vehicle_preset("fixed-wing");  // 15 deg, clearance 30 m, acceptance 100 m
+};
+
+TEST_F(FitEarlyDescent, TheHeightPastARidgeIsHeldForTheAcceptanceRadius) {
+  const std::vector<Vec3> straight = {at(2, 90), at(57, 40)};
+  EnvelopeFitSpec spec;
+  spec.envelope = fixed_wing;
+  const EnvelopeFit fit = fit_to_envelope(straight, spec, t);
+  EXPECT_TRUE(fit.feasible);
+  const PathCheck c = judge(fit.path);
+  ASSERT_EQ(c.envelope.size(), 7u);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  spec.envelope.acceptance_radius_m = 0;
+  const EnvelopeFit reaching = fit_to_envelope(straight, spec, t);
+  const PathCheck flown = judge(reaching.path);
+  EXPECT_TRUE(flown.envelope[0].met);
+  EXPECT_FALSE(flown.envelope[6].met) << "worst " << flown.envelope[6].worst;
+}
+
+// An end the user put low just past the ridge: no path to it clears the
+// ridge flown that way, and the check says so; the fit holds everything
+// else and does not chase the floor the end puts out of reach.
+TEST_F(FitEarlyDescent, AnEndLowJustPastARidgeIsLeftForTheCheckToReport) {
+  const std::vector<Vec3> straight = {at(2, 90), at(24, 80)};
+  EnvelopeFitSpec spec;
+  spec.envelope = fixed_wing;
+  const EnvelopeFit fit = fit_to_envelope(straight, spec, t);
+  EXPECT_EQ(fit.path.front(), straight.front());
+  EXPECT_EQ(fit.path.back(), straight.back());
+  EXPECT_LE(fit.path.size(), 8u);
+  const PathCheck c = judge(fit.path);
+  for (std::size_t k = 0; k < 6; ++k) EXPECT_TRUE(c.envelope[k].met) << c.envelope[k].name;
+  EXPECT_FALSE(c.envelope[6].met);
+  EXPECT_NEAR(c.envelope[6].worst, 80.0 - 60.0, 0.5);  // at the end itself
 }
 
 }  // namespace

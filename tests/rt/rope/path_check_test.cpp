@@ -282,6 +282,49 @@ TEST(PathCheck, AFixedWingsArcInsideACornerIsChecked) {
   EXPECT_NEAR(on_the_corner.envelope[0].worst, 110.0, 1e-9);
 }
 
+// A fixed-wing's autopilot takes each waypoint's height its acceptance
+// radius early (100 m for the preset): a descent begun just past a ridge is
+// flown over the ridge. The path holds 30 m over the ridge at its vertex;
+// flown that way, it comes to under 6 m over it. Holding the height until
+// the ridge is 100 m behind meets it; a multirotor reaching each waypoint
+// has no such limit.
+TEST(PathCheck, ADescentJustPastARidgeIsFlownOverTheRidge) {
+  fields::Heightfield t = blank(60, 5, 10.0, 0.0f);
+  for (int j = 0; j < 5; ++j) t.at(20, j) = 60.0f;
+  const double run_m = 50.0 / std::tan(14.0 * M_PI / 180.0);  // 50 m down at 14 deg
+  auto path_descending_from = [&](double i) {
+    return std::vector<Vec3>{{t.x_of(2), t.y_of(2), 90.0},
+                             {t.x_of(i), t.y_of(2), 90.0},
+                             {t.x_of(i) + run_m, t.y_of(2), 40.0},
+                             {t.x_of(57), t.y_of(2), 40.0}};
+  };
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");
+  ASSERT_EQ(s.envelope.acceptance_radius_m, 100.0);
+  const auto checker = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const PathCheck early = checker->check(path_descending_from(21));
+  ASSERT_EQ(early.envelope.size(), 7u);
+  const LimitResult& clearance = early.envelope[0];
+  const LimitResult& flown = early.envelope[6];
+  EXPECT_TRUE(clearance.met) << clearance.worst;  // 30 m over the ridge itself
+  ASSERT_EQ(flown.name, "early-descent");
+  EXPECT_FALSE(flown.met);
+  // 90 m past the ridge, 90 tan(14 deg) m down: the ridge leaves the 100 m behind
+  EXPECT_NEAR(flown.worst, 30.0 - 90.0 * std::tan(14.0 * M_PI / 180.0), 0.5);
+  EXPECT_LT(flown.satisfied_fraction, 1.0);
+  EXPECT_FALSE(early.all_met);
+  const PathCheck held = checker->check(path_descending_from(31));
+  EXPECT_TRUE(held.all_met) << held.envelope[6].worst;
+  s.envelope = *vehicle_preset("multirotor");
+  s.envelope.clearance_m = 30;
+  const auto multirotor = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(multirotor.ok());
+  const PathCheck reached = multirotor->check(path_descending_from(21));
+  EXPECT_EQ(reached.envelope.size(), 6u);
+  EXPECT_TRUE(reached.all_met);
+}
+
 TEST(PathCheck, AFixedWingsArcClimbsMoreSteeplyThanItsLegs) {
   const fields::Heightfield t = blank(60, 60, 10.0, 0.0f);
   // two 200 m legs climbing at 12 deg with a right angle between them: the

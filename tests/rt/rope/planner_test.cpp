@@ -497,11 +497,14 @@ TEST_F(RealTerrain, TheRopeNeverMakesTheGlobalStartWorse) {
 // posts: the answer keeps only the waypoints its shape needs (half of them
 // here), and, judged as thinned, still meets everything; checked again here
 // on the finest terrain, every metre (fails if the fitted path were the
-// answer as it is).
+// answer as it is). The lattice path is the answer for an autopilot that
+// reaches each waypoint (with the fixed-wing's 100 m acceptance radius the
+// rope's curve is, and keeps 82 of its 97 waypoints).
 TEST_F(RealTerrain, TheAnswerKeepsOnlyTheWaypointsItsShapeNeeds) {
   PlanRequest r = hide_request(RopeModel::articulated);
   r.init = InitialPath::global;
   r.max_seconds_per_level = 5;
+  r.envelope.acceptance_radius_m = 0;
   r.envelope.min_turn_radius_m = 80;
   r.envelope.max_climb_deg = r.envelope.max_descent_deg = 15;
   const Result<PlanResult> thinned = plan(pointers(*levels_), r);

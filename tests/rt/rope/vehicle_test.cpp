@@ -17,6 +17,9 @@ TEST(Vehicle, PresetsAreValidAndDiffer) {
   EXPECT_EQ(mr->type, VehicleType::multirotor);
   EXPECT_GT(fw->min_turn_radius_m, 0.0);
   EXPECT_EQ(mr->min_turn_radius_m, 0.0);
+  // a fixed-wing's autopilot takes each waypoint 100 m early; a multirotor reaches it
+  EXPECT_EQ(fw->acceptance_radius_m, 100.0);
+  EXPECT_EQ(mr->acceptance_radius_m, 0.0);
   EXPECT_LT(fw->max_climb_deg, mr->max_climb_deg);
   EXPECT_FALSE(vehicle_preset("helicopter").ok());
 }
@@ -33,6 +36,9 @@ TEST(Vehicle, BadValuesAreRefusedByKey) {
   refused([](VehicleEnvelope& v) { v.max_climb_deg = std::nan(""); }, "max-climb");
   refused([](VehicleEnvelope& v) { v.max_descent_deg = 91; }, "max-descent");
   refused([](VehicleEnvelope& v) { v.min_turn_radius_m = -1; }, "min-turn-radius");
+  refused([](VehicleEnvelope& v) { v.acceptance_radius_m = -1; }, "acceptance-radius");
+  refused([](VehicleEnvelope& v) { v.acceptance_radius_m = std::nan(""); }, "acceptance-radius");
+  refused([](VehicleEnvelope& v) { v.acceptance_radius_m = 1e300; }, "[0, 10000] m");
   refused([](VehicleEnvelope& v) { v.speed_m_per_s = 0; }, "speed");
   refused([](VehicleEnvelope& v) { v.speed_m_per_s = 4.9e-324; }, "speed");  // denormal: inf s of exposure
   refused([](VehicleEnvelope& v) { v.speed_m_per_s = 0.05; }, "[0.1, 1000] m/s");

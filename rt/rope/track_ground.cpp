@@ -1,0 +1,70 @@
+#include "rt/rope/track_ground.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rt/rope/terrain_probe.hpp"
+
+namespace visvol::rt {
+
+TrackGround::TrackGround(const fields::Heightfield& terrain, const Vec3* v, int count) : terrain_(&terrain) {
+  const std::size_t n = count > 0 ? static_cast<std::size_t>(count) : 0;
+  track_.assign(v, v + n);
+  vertex_m_.assign(n, 0.0);
+  for (std::size_t k = 0; k < n; ++k) {
+    track_[k].z() = 0;  // the probes then find where the ground itself is extreme
+    if (k == 0) continue;
+    const Vec3& a = track_[k - 1];
+    const Vec3& b = track_[k];
+    const double leg_m = std::hypot(b.x() - a.x(), b.y() - a.y());
+    const bool finite = a.allFinite() && b.allFinite() && std::isfinite(leg_m);
+    vertex_m_[k] = vertex_m_[k - 1] + (finite ? leg_m : 0.0);
+    if (!finite) continue;
+    for_each_terrain_probe(terrain, a, b, [&](const Vec3& p, double u) {
+      at_m_.push_back(vertex_m_[k - 1] + u * leg_m);
+      ground_m_.push_back(fields::bilinear_height(terrain, terrain.i_of(p.x()), terrain.j_of(p.y())));
+    });
+  }
+  // a sparse table: the highest of any run of breakpoints in two lookups
+  most_.push_back(ground_m_);
+  for (std::size_t width = 2; width <= ground_m_.size(); width *= 2) {
+    const std::vector<double>& half = most_.back();
+    std::vector<double> next(ground_m_.size() - width + 1);
+    for (std::size_t i = 0; i < next.size(); ++i) next[i] = std::max(half[i], half[i + width / 2]);
+    most_.push_back(std::move(next));
+  }
+}
+
+double TrackGround::ground_at(double along_m) const {
+  if (track_.empty()) return -std::numeric_limits<double>::infinity();
+  const auto after = std::upper_bound(vertex_m_.begin(), vertex_m_.end(), along_m);
+  std::size_t k = static_cast<std::size_t>(after - vertex_m_.begin());
+  k = std::clamp<std::size_t>(k, 1, std::max<std::size_t>(track_.size() - 1, 1));
+  const Vec3& a = track_[k - 1];
+  const Vec3& b = track_.size() > 1 ? track_[k] : track_[0];
+  const double leg_m = vertex_m_.size() > 1 ? vertex_m_[k] - vertex_m_[k - 1] : 0.0;
+  const double u = leg_m > 0 ? std::clamp((along_m - vertex_m_[k - 1]) / leg_m, 0.0, 1.0) : 0.0;
+  const Vec3 p = a + u * (b - a);
+  if (!p.allFinite()) return -std::numeric_limits<double>::infinity();
+  return fields::bilinear_height(*terrain_, terrain_->i_of(p.x()), terrain_->j_of(p.y()));
+}
+
+double TrackGround::highest_breakpoint(std::size_t first, std::size_t end) const {
+  if (first >= end) return -std::numeric_limits<double>::infinity();
+  std::size_t level = 0;
+  while ((std::size_t{2} << level) <= end - first) ++level;
+  const std::vector<double>& m = most_[level];
+  return std::max(m[first], m[end - (std::size_t{1} << level)]);
+}
+
+double TrackGround::highest_m(double from_m, double to_m) const {
+  const double to = std::clamp(to_m, 0.0, length_m());
+  const double from = std::clamp(std::min(from_m, to), 0.0, to);
+  const std::size_t first =
+      static_cast<std::size_t>(std::upper_bound(at_m_.begin(), at_m_.end(), from) - at_m_.begin());
+  const std::size_t end = static_cast<std::size_t>(std::lower_bound(at_m_.begin(), at_m_.end(), to) - at_m_.begin());
+  return std::max({ground_at(from), ground_at(to), highest_breakpoint(first, end)});
+}
+
+}  // namespace visvol::rt

@@ -1,0 +1,53 @@
+// The highest terrain under a path's track over a stretch of it: the ground
+// an aircraft that takes its heights early flies over.
+//
+// A fixed-wing's autopilot takes the next waypoint, and the height it climbs
+// or descends to, up to its acceptance radius R before the waypoint it flies
+// to (PX4's L1 distance, about 95 m at 20 m/s; ArduPlane's WP_RADIUS): it
+// flies each planned height up to R early. An independent simulation of PX4
+// flying visvol's missions crossed a crest 14.8 m over it where the plan had
+// 31 m: the descent after the crest began a leg early. A path keeps its
+// clearance flown that way where the height at every point clears the
+// highest ground under the R metres of track behind it
+// (VehicleEnvelope::acceptance_radius_m; rt::PathChecker's "early-descent").
+//
+// Positions along the track are horizontal distances from the first vertex,
+// m. The terrain is bilinear: along a straight leg it is one quadratic between
+// the grid lines crossed, so its highest over any stretch lies at the
+// stretch's ends, a grid line or a quadratic's vertex (the points
+// rt::for_each_terrain_probe gives): exact, whatever the sampling.
+// Offline: allocates. Keeps a pointer to the terrain, which must outlive it.
+#pragma once
+
+#include <vector>
+
+#include "fields/heightfield.hpp"
+#include "rt/rope/rope.hpp"
+
+namespace visvol::rt {
+
+class TrackGround {
+ public:
+  // The track of `count` vertices (their heights are not used); legs with a
+  // coordinate that is not finite add no ground.
+  TrackGround(const fields::Heightfield& terrain, const Vec3* v, int count);
+
+  double length_m() const { return vertex_m_.empty() ? 0.0 : vertex_m_.back(); }
+  // Horizontal distance along the track to vertex k.
+  double at_vertex_m(int k) const { return vertex_m_[static_cast<std::size_t>(k)]; }
+  // The highest terrain under the track from `from_m` to `to_m` along it
+  // (clamped to the track; the ground at `to_m` when from_m >= to_m).
+  double highest_m(double from_m, double to_m) const;
+
+ private:
+  double ground_at(double along_m) const;
+  double highest_breakpoint(std::size_t first, std::size_t end) const;  // over [first, end)
+
+  const fields::Heightfield* terrain_;
+  std::vector<Vec3> track_;
+  std::vector<double> vertex_m_;
+  std::vector<double> at_m_, ground_m_;    // breakpoints in order along the track
+  std::vector<std::vector<double>> most_;  // most_[k][i]: highest of ground_m_[i, i + 2^k)
+};
+
+}  // namespace visvol::rt

@@ -120,8 +120,9 @@ struct Console::Impl {
   const PathFitter& path_fitter() const { return flyable ? flyable->fitter() : *fitter; }
   void fit_final_path();
   Result<rt::PathChecker> final_checker() const;
-  void thin_final_path(const rt::PathChecker& checker);
-  nlohmann::json check_path(const Result<rt::PathChecker>& checker, std::string& line) const;
+  rt::PathCheck judge_final_path(const rt::PathChecker& checker);
+  nlohmann::json check_path(const Result<rt::PathChecker>& checker, const std::optional<rt::PathCheck>& judged,
+                            std::string& line) const;
   Status check_outputs() const;
   Status write_outputs(const rt::LoopRun& run, double wall_s);
   Status make_output_dirs(const std::string& out) const;

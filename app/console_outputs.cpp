@@ -128,27 +128,31 @@ Result<rt::PathChecker> Console::Impl::final_checker() const {
   return rt::PathChecker::create(path_fitter().terrain(), nullptr, spec);
 }
 
-// The final path's waypoints thinned as `visvol plan` thins its answer's
-// (rt::thinned_as_good): where that meets as much and costs F_c under a
-// thousandth. The fit's splits left runs of vertices on one line.
-void Console::Impl::thin_final_path(const rt::PathChecker& checker) {
-  const rt::PathCheck fitted = checker.check(final_path);
+// The final path judged, its waypoints thinned as `visvol plan` thins its
+// answer's (rt::thinned_as_good): where that meets as much and costs F_c
+// under a thousandth. The fit's splits left runs of vertices on one line.
+rt::PathCheck Console::Impl::judge_final_path(const rt::PathChecker& checker) {
+  rt::PathCheck fitted = checker.check(final_path);
+  if (final_path.size() <= 2) return fitted;
   std::optional<rt::ThinnedPath> thinned = rt::thinned_as_good(final_path, fitted, checker, exec->config().objective);
-  if (thinned) final_path = std::move(thinned->path);
+  if (!thinned) return fitted;
+  final_path = std::move(thinned->path);
+  return std::move(thinned->check);
 }
 
-// The final (flyable) path judged by `checker`; `line` gets the verdict for
-// the operator.
-nlohmann::json Console::Impl::check_path(const Result<rt::PathChecker>& checker, std::string& line) const {
+// The final (flyable) path's verdict, `judged` by `checker` (nothing where
+// it could not be); `line` gets it for the operator.
+nlohmann::json Console::Impl::check_path(const Result<rt::PathChecker>& checker,
+                                         const std::optional<rt::PathCheck>& judged, std::string& line) const {
   if (!checker.ok()) {
     line = "check: " + checker.status().message();
     return {{"error", checker.status().message()}};
   }
-  if (final_path.size() < 2) {
+  if (!judged) {
     line = "check: no path";
     return {{"error", "no path"}};
   }
-  const rt::PathCheck c = checker->check(final_path.data(), static_cast<int>(final_path.size()));
+  const rt::PathCheck& c = *judged;
   std::vector<std::string> unmet = c.unmet();
   // a spooled rope whose free end has not arrived is no route to the end
   // (a session that ended mid-drag: every other figure met, 760 m short)
@@ -184,7 +188,8 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   VISVOL_RETURN_IF_ERROR(make_output_dirs(out));
   fit_final_path();
   const Result<rt::PathChecker> checker = final_checker();
-  if (checker.ok() && final_path.size() > 2) thin_final_path(*checker);
+  std::optional<rt::PathCheck> judged;
+  if (checker.ok() && final_path.size() >= 2) judged = judge_final_path(*checker);
   auto flyable_sample = std::make_unique<msg::PathSample>();
   if (!path_fitter().describe(final_path, *flyable_sample)) {
     log_printf(LogLevel::warning, "visvol-console: warning: the final path's F_p is unknown (NaN): %s\n",
@@ -192,7 +197,7 @@ Status Console::Impl::write_outputs(const rt::LoopRun& run, double wall_s) {
   }
   const msg::PathSample& fp = *flyable_sample;
   std::string verdict;
-  const nlohmann::json check = check_path(checker, verdict);
+  const nlohmann::json check = check_path(checker, judged, verdict);
   VISVOL_RETURN_IF_ERROR(write_file_atomically(out + "/path.csv", path_csv(fp, check)));
   std::string health_csv =
       "t_s,wake_p99_us,wake_max_us,compute_p99_us,compute_max_us,overruns,misses,fc,converged,device,"

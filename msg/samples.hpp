@@ -134,7 +134,8 @@ struct PathSample {
   char pack_id[kPackIdCapacity];
   Objective objective;
   bool converged;        // the rope has come to rest
-  bool inside_envelope;  // the vertices hold the vehicle's envelope (false: the rope's own path, or no fit)
+  bool inside_envelope;  // the path holds the vehicle's envelope, early descent included (false: the rope's own path,
+                         // or no fit)
   double f_c;            // path measure F_c (sum of F_p along the path, weighted)
   double length_m;
   double min_clearance_m;

@@ -168,8 +168,12 @@ std::vector<double> slope_shares(const std::vector<Vec3>& p, double min_turn_rad
 constexpr double kMinEndShare = 0.05;
 
 struct SegmentMiss {
-  double deficit = 0, excess = 0;  // worst under the band's floor, over its ceiling (m)
-  double worst_t = 0.5;            // where, as a fraction of the segment
+  double deficit = 0, excess = 0;          // worst under the band's floor, over its ceiling (m)
+  double worst_t = 0.5;                    // where the larger of them is, as a fraction of the segment
+  double deficit_t = 0.5, excess_t = 0.5;  // where each is
+  // under the floor of the ground behind where the fixed ends put it out of
+  // reach: not inside the envelope, and nothing the fit can move mends it
+  bool out_of_reach = false;
 };
 
 // The highest ground behind a point of the track, `along_m` from its start,
@@ -183,11 +187,14 @@ struct GroundBehind {
   double start_z = 0, end_z = 0, length_m = 0;
   double climb_per_m = 0, descent_per_m = 0;
   double above_m = 0;  // the clearance and the fit's margin
+  double uncapped(double along_m) const {
+    return track != nullptr ? track->highest_m(along_m - reach_m, along_m) : kNoGround;
+  }
   double operator()(double along_m) const {
     if (track == nullptr) return kNoGround;
     const double reachable =
         std::min(start_z + climb_per_m * along_m, end_z + descent_per_m * (length_m - along_m)) - above_m;
-    return std::min(track->highest_m(along_m - reach_m, along_m), reachable);
+    return std::min(uncapped(along_m), reachable);
   }
 };
 
@@ -208,10 +215,13 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   const int k = std::max(2, static_cast<int>(std::ceil(len / step_m)));
   double worst = 0;
   auto judge = [&](const Vec3& p, double f) {
-    const Band band = band_at(s, t, p.x(), p.y(), behind(a_m + f * len));
+    const double at_m = a_m + f * len, ground_behind_m = behind(at_m);
+    const Band band = band_at(s, t, p.x(), p.y(), ground_behind_m);
     const double d = band.lo - p.z(), e = p.z() - band.hi;
-    if (d > m.deficit) m.deficit = d;
-    if (e > m.excess) m.excess = e;
+    if (d > m.deficit) m.deficit = d, m.deficit_t = f;
+    if (e > m.excess) m.excess = e, m.excess_t = f;
+    const double out_of_reach_m = behind.uncapped(at_m);
+    if (out_of_reach_m > ground_behind_m && p.z() < out_of_reach_m + behind.above_m - 1e-6) m.out_of_reach = true;
     if (std::max(d, e) > worst) {
       worst = std::max(d, e);
       m.worst_t = f;
@@ -307,6 +317,7 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     const std::vector<double> along = along_m(p);  // of the vertices before the splits
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
       const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i]);
+      if (m.out_of_reach) feasible = false;
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;
       // between the vertices the band asks both vertices to move by the miss;
@@ -314,8 +325,9 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
       // worst sample's height (by the miss alone it crept there a pass at a
       // time: an early-descent floor near the end took hundreds of passes)
       const double shift = m.deficit > 1e-6 ? m.deficit : -m.excess;
+      const double shift_t = m.deficit > 1e-6 ? m.deficit_t : m.excess_t;
       const bool fixed_i = i == 0, fixed_next = i + 2 == p.size();
-      const double share_i = fixed_next ? 1.0 - m.worst_t : 1.0, share_next = fixed_i ? m.worst_t : 1.0;
+      const double share_i = fixed_next ? 1.0 - shift_t : 1.0, share_next = fixed_i ? shift_t : 1.0;
       bool moved = false, held = true;
       for (std::size_t v : {i, i + 1}) {
         if (v == 0 || v + 1 == p.size()) continue;

@@ -23,17 +23,12 @@ TrackGround::TrackGround(const fields::Heightfield& terrain, const Vec3* v, int 
     if (!finite) continue;
     for_each_terrain_probe(terrain, a, b, [&](const Vec3& p, double u) {
       at_m_.push_back(vertex_m_[k - 1] + u * leg_m);
-      ground_m_.push_back(fields::bilinear_height(terrain, terrain.i_of(p.x()), terrain.j_of(p.y())));
+      most_.push_back(fields::bilinear_height(terrain, terrain.i_of(p.x()), terrain.j_of(p.y())));
     });
   }
-  // a sparse table: the highest of any run of breakpoints in two lookups
-  most_.push_back(ground_m_);
-  for (std::size_t width = 2; width <= ground_m_.size(); width *= 2) {
-    const std::vector<double>& half = most_.back();
-    std::vector<double> next(ground_m_.size() - width + 1);
-    for (std::size_t i = 0; i < next.size(); ++i) next[i] = std::max(half[i], half[i + width / 2]);
-    most_.push_back(std::move(next));
-  }
+  const std::size_t leaves = most_.size();
+  most_.insert(most_.begin(), leaves, -std::numeric_limits<double>::infinity());
+  for (std::size_t i = leaves; i-- > 1;) most_[i] = std::max(most_[2 * i], most_[2 * i + 1]);
 }
 
 double TrackGround::ground_at(double along_m) const {
@@ -51,11 +46,13 @@ double TrackGround::ground_at(double along_m) const {
 }
 
 double TrackGround::highest_breakpoint(std::size_t first, std::size_t end) const {
-  if (first >= end) return -std::numeric_limits<double>::infinity();
-  std::size_t level = 0;
-  while ((std::size_t{2} << level) <= end - first) ++level;
-  const std::vector<double>& m = most_[level];
-  return std::max(m[first], m[end - (std::size_t{1} << level)]);
+  double best = -std::numeric_limits<double>::infinity();
+  const std::size_t leaves = at_m_.size();
+  for (std::size_t lo = first + leaves, hi = end + leaves; lo < hi; lo /= 2, hi /= 2) {
+    if (lo % 2 == 1) best = std::max(best, most_[lo++]);
+    if (hi % 2 == 1) best = std::max(best, most_[--hi]);
+  }
+  return best;
 }
 
 double TrackGround::highest_m(double from_m, double to_m) const {

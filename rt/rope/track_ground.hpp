@@ -46,8 +46,11 @@ class TrackGround {
   const fields::Heightfield* terrain_;
   std::vector<Vec3> track_;
   std::vector<double> vertex_m_;
-  std::vector<double> at_m_, ground_m_;    // breakpoints in order along the track
-  std::vector<std::vector<double>> most_;  // most_[k][i]: highest of ground_m_[i, i + 2^k)
+  std::vector<double> at_m_;  // breakpoints in order along the track
+  // a segment tree over the breakpoints' ground: leaves at [n, 2n), each
+  // node the highest of its two children (linear memory: a check's path may
+  // hold millions of vertices)
+  std::vector<double> most_;
 };
 
 }  // namespace visvol::rt

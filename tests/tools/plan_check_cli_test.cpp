@@ -466,6 +466,43 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
   std::remove(autopilot.c_str());
 }
 
+// An end 32 m over a slope falling to it: a fixed-wing that takes the end's
+// height 100 m early comes within 30 m of the slope on the way; the plan
+// says so, writes no mission and names the height an end there needs, which
+// meets it. An autopilot that reaches each waypoint has no such limit.
+TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
+  const std::string b = base("low_end");
+  auto plan = [&](const std::string& to_z, const std::string& more = "") {
+    return visvol("plan " + *pack_ + " --from 550230 4182500 150 --to 550910 4182500 " + to_z + more +
+                  " --objective hide --init straight --segments 16 --max-seconds 1 -o " + b);
+  };
+  const Outcome low = plan("93");
+  EXPECT_EQ(low.status, 1) << low.err;
+  EXPECT_NE(low.out.find("early-descent 30.0 m: worst"), std::string::npos) << low.out;
+  EXPECT_NE(low.out.find("NOT MET"), std::string::npos) << low.out;
+  const std::string named = "an end at 95 m or higher meets it there";
+  ASSERT_NE(low.out.find(named), std::string::npos) << low.out;
+  EXPECT_NE(access((b + ".plan").c_str(), F_OK), 0);
+  remove_outputs(b);
+  // (the landing's circle over an end this low comes under the clearance:
+  // its own requirement, named on its own)
+  auto early_line = [](const std::string& out) {
+    const std::size_t at = out.find("envelope   early-descent");
+    return at == std::string::npos ? std::string() : out.substr(at, out.find('\n', at) - at);
+  };
+  const Outcome raised = plan("95");
+  EXPECT_LT(raised.status, 2) << raised.err;
+  const std::string line = early_line(raised.out);
+  EXPECT_EQ(line.substr(line.size() - 4), " met") << raised.out;
+  EXPECT_EQ(raised.out.find("early-descent: the end"), std::string::npos) << raised.out;
+  remove_outputs(b);
+  const Outcome reached = plan("93", " --acceptance-radius 0");
+  EXPECT_LT(reached.status, 2) << reached.err;
+  EXPECT_TRUE(early_line(reached.out).empty()) << reached.out;
+  EXPECT_EQ(reached.out.find("early-descent"), std::string::npos) << reached.out;
+  remove_outputs(b);
+}
+
 // A path thousands of km up, or zigzagging across the pack a million times:
 // refused before its sight lines are drawn (a vertex at 1e10 m took
 // 1.3e9 samples, for minutes; at 1e300 the sample count overflowed an int).

@@ -458,6 +458,19 @@ TEST(CliBuildRefuses, ADemThatIsNoPlaceOnEarth) {
     std::remove(out.c_str());
   }
   for (const std::string& d : {dem, placed, local}) std::remove(d.c_str());
+  // a site grid's local CRS: built, and told that plans on it give no WGS84 positions
+  const std::string site = ::testing::TempDir() + "/cli_site_" + std::to_string(getpid());
+  std::ofstream(site + ".asc") << visvol::fields::testing::asc_text(12);
+  std::ofstream(site + ".prj")
+      << "LOCAL_CS[\"site grid\",LOCAL_DATUM[\"site\",0],UNIT[\"metre\",1],AXIS[\"X\",EAST],AXIS[\"Y\",NORTH]]";
+  const Outcome local_crs = visvol("build " + site + ".asc --levels 16 --lod 1 --range 2 -o " + out);
+  EXPECT_EQ(local_crs.status, 0) << local_crs.err;
+  EXPECT_NE(local_crs.err.find("warning: " + site + ".asc: the CRS (site grid) is not a projected CRS in metres"),
+            std::string::npos)
+      << local_crs.err;
+  EXPECT_NE(local_crs.err.find("plans on this pack give no WGS84 positions"), std::string::npos) << local_crs.err;
+  for (const char* ext : {".asc", ".prj"}) std::remove((site + ext).c_str());
+  std::remove(out.c_str());
 }
 
 TEST(CliViewshed, WritesAGeoTiff) {

@@ -43,6 +43,7 @@
 
 #include "base/arguments.hpp"
 #include "base/cli_numbers.hpp"
+#include "base/terminal_text.hpp"
 #include "base/version.hpp"
 #include "build_cli.hpp"
 #include "cli.hpp"
@@ -202,6 +203,8 @@ Status prepare(const Comm& world, const BuildOptions& o, Job& job) {
   if (world.rank == 0) {
     Result<PreparedBuild> prepared = prepare_build(o);
     if (prepared.ok()) {
+      for (const std::string& w : prepared->warnings)
+        std::fprintf(stderr, "visvol-build-mpi: warning: %s\n", terminal_safe(w).c_str());
       b = std::move(*prepared);
     } else {
       ready = prepared.status();

@@ -173,11 +173,12 @@ Status check_area_inside(const BuildOptions& o, const BuildInput& in, const Heig
                                  " of the imported grid do not hold the area; this is a bug");
 }
 
-// A DEM that names a CRS must lie where that CRS places points on Earth:
-// plans and the console give WGS84 positions through it (a UTM grid at
-// northing 9e7 m built, and every plan on it then failed). A DEM without a
-// CRS is in local metres and has no WGS84 outputs.
-Status check_place_on_earth(const std::string& dem, const Heightfield& hf) {
+// A DEM whose CRS plans convert to WGS84 must lie where that CRS places
+// points on Earth (a UTM grid at northing 9e7 m built, and every plan's WGS84
+// step on it then failed). A DEM without a CRS, or with one plans cannot
+// convert (not projected in metres, unknown to PROJ: `warnings` says so),
+// gets plans in its own coordinates (the CSV) only.
+Status check_place_on_earth(const std::string& dem, const Heightfield& hf, std::vector<std::string>& warnings) {
   if (hf.crs_wkt.empty()) return Status::ok_status();
   const double east = hf.x_of(hf.nx - 1), south = hf.y_of(hf.ny - 1);
   const std::vector<Vec3> corners = {
@@ -187,7 +188,9 @@ Status check_place_on_earth(const std::string& dem, const Heightfield& hf) {
   const std::string why = "; plans give WGS84 positions through it, so check the DEM's georeferencing";
   // no points: the CRS alone
   if (const auto usable = to_wgs84({}, hf.crs_wkt); !usable.ok()) {
-    return invalid_argument(dem + ": " + usable.status().message() + why);
+    warnings.push_back(dem + ": " + usable.status().message() +
+                       ": plans on this pack give no WGS84 positions (their CSV, in the pack's coordinates, only)");
+    return Status::ok_status();
   }
   for (std::size_t n = 0; n < corners.size(); ++n) {
     if (to_wgs84({corners[n]}, hf.crs_wkt).ok()) continue;
@@ -224,7 +227,7 @@ Result<PreparedBuild> prepare_build(const BuildOptions& o) {
   Result<Heightfield> hf = import(o.dem, b.input.import, &b.imported);
   if (!hf.ok()) return hf.status();
   b.terrain = std::move(*hf);
-  VISVOL_RETURN_IF_ERROR(check_place_on_earth(o.dem, b.terrain));
+  VISVOL_RETURN_IF_ERROR(check_place_on_earth(o.dem, b.terrain, b.warnings));
   Result<FieldParams> params = make_params(o, b.terrain);
   if (!params.ok()) return params.status();
   b.params = std::move(*params);

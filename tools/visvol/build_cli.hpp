@@ -71,6 +71,7 @@ struct PreparedBuild {
   fields::ImportReport imported;
   fields::Heightfield terrain;
   fields::FieldParams params;
+  std::vector<std::string> warnings;  // for the user, before the build (a CRS plans cannot convert)
 };
 Result<PreparedBuild> prepare_build(const BuildOptions& o);
 

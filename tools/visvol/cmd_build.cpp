@@ -234,6 +234,9 @@ int run_build(const BuildOptions& o) {
   }
   Result<PreparedBuild> prepared = prepare_build(o);
   if (!prepared.ok()) return fail("build", prepared.status());
+  for (const std::string& w : prepared->warnings) {
+    std::fprintf(stderr, "visvol build: warning: %s\n", terminal_safe(w).c_str());
+  }
   if (!o.out.empty()) return run_pack_build(o, *prepared);
   const Heightfield& hf = prepared->terrain;
   const FieldParams& params = prepared->params;

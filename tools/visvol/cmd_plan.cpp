@@ -204,6 +204,38 @@ double landing_loiter_clearance(const fields::FieldSampler<PackLevel>& finest, c
                             v.min_turn_radius_m);
 }
 
+// The early descent unmet at the end: an autopilot takes the end's height
+// its acceptance radius early, over the ground behind the end, and no path
+// to this end clears that. The height that does, for the operator (the
+// terrain sampled every metre back along the path, a metre over it for what
+// lies between; as far back as the check looks, a sample step more than the
+// radius); "" where the end is not the reason.
+std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double spacing_m, const rt::VehicleEnvelope& v,
+                         const std::vector<rt::Vec3>& path, const rt::PathCheck& check) {
+  const auto early = std::find_if(check.envelope.begin(), check.envelope.end(),
+                                  [](const rt::LimitResult& l) { return l.name == "early-descent"; });
+  if (early == check.envelope.end() || early->met || path.size() < 2) return "";
+  double left_m = v.acceptance_radius_m + rt::kSightStepPosts * spacing_m + 1.0,
+         highest_m = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = path.size() - 1; k > 0 && left_m > 0; --k) {
+    const rt::Vec3 &b = path[k], &a = path[k - 1];
+    const double leg_m = std::hypot(b.x() - a.x(), b.y() - a.y());
+    for (double back_m = 0; back_m <= std::min(leg_m, left_m); back_m += 1.0) {
+      const double u = leg_m > 0 ? back_m / leg_m : 0.0;
+      highest_m = std::max(highest_m, finest.height(b.x() + u * (a.x() - b.x()), b.y() + u * (a.y() - b.y())));
+    }
+    left_m -= leg_m;
+  }
+  const double needed_m = std::ceil(highest_m + v.clearance_m + 1.0);
+  if (!(path.back().z() < needed_m - 1.0)) return "";
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "early-descent: the end at %.1f m is taken %.0f m early, over ground up to %.1f m high on the way "
+                "to it: an end at %.0f m or higher meets it there (or one reached over lower ground)",
+                path.back().z(), v.acceptance_radius_m, highest_m, needed_m);
+  return text;
+}
+
 int run_plan(const PlanOptions& o) {
   if (Status s = check_path_outputs(o.out); !s.ok()) return fail("plan", s.with_context("-o"));
   if (Status s = check_init_is_no_output(o); !s.ok()) return fail("plan", s);
@@ -281,6 +313,11 @@ int run_plan(const PlanOptions& o) {
   // a crew flies the WGS84 positions: say when they are only metres good
   std::vector<std::string> notes;
   if (std::string note = wgs84_accuracy_note(conversion); !note.empty()) notes.push_back(std::move(note));
+  if (std::string note =
+          low_end_note(finest, levels.front().geometry().spacing_m, r.envelope, res->final_path, res->final_check);
+      !note.empty()) {
+    notes.push_back(std::move(note));
+  }
   if (r.envelope.type == rt::VehicleType::fixed_wing && !(r.envelope.min_turn_radius_m > 0)) {
     notes.push_back(
         "the .plan's landing circle has the autopilot's own radius (min-turn-radius 0: PX4 80 m, "

@@ -293,6 +293,7 @@ TEST_F(FitEarlyDescent, AnEndLowJustPastARidgeIsLeftForTheCheckToReport) {
   EnvelopeFitSpec spec;
   spec.envelope = fixed_wing;
   const EnvelopeFit fit = fit_to_envelope(straight, spec, t);
+  EXPECT_FALSE(fit.feasible);  // not inside the envelope: the console says so, as the check does
   EXPECT_EQ(fit.path.front(), straight.front());
   EXPECT_EQ(fit.path.back(), straight.back());
   EXPECT_LE(fit.path.size(), 8u);

@@ -65,5 +65,27 @@ TEST(TrackGround, AStretchIsClampedToTheTrackAndALonePostIsFound) {
   EXPECT_DOUBLE_EQ(g.highest_m(100.0, 200.0), 0.0);  // one post on: the plain
 }
 
+// A climb on the spot (a leg of no horizontal length) adds no track; one
+// vertex is a track of no length; a leg with a coordinate that is not
+// finite adds no ground (the checker refuses such paths before).
+TEST(TrackGround, LegsOfNoLengthAndOneVertexAreTracksOfNoLength) {
+  fields::Heightfield t = fields::testing::blank(20, 5, 10.0, 0.0f);
+  t.at(10, 2) = 40.0f;
+  const Vec3 a{t.x_of(5), t.y_of(2), 50}, b{t.x_of(15), t.y_of(2), 50};
+  const std::vector<Vec3> on_the_spot = {a, a + Vec3(0, 0, 30), b, b + Vec3(0, 0, 10)};
+  const TrackGround g(t, on_the_spot.data(), 4);
+  EXPECT_DOUBLE_EQ(g.at_vertex_m(1), 0.0);
+  EXPECT_DOUBLE_EQ(g.at_vertex_m(3), 100.0);
+  EXPECT_DOUBLE_EQ(g.highest_m(0.0, 100.0), 40.0);
+  EXPECT_DOUBLE_EQ(g.highest_m(60.0, 100.0), 0.0);
+  const TrackGround one(t, &a, 1);
+  EXPECT_DOUBLE_EQ(one.length_m(), 0.0);
+  EXPECT_DOUBLE_EQ(one.highest_m(-5.0, 5.0), 0.0);  // the ground under it
+  const std::vector<Vec3> broken = {a, Vec3(NAN, t.y_of(2), 50), b};
+  const TrackGround nan_leg(t, broken.data(), 3);
+  EXPECT_DOUBLE_EQ(nan_leg.length_m(), 0.0);
+  EXPECT_FALSE(nan_leg.highest_m(0.0, 10.0) > 0.0);
+}
+
 }  // namespace
 }  // namespace visvol::rt

@@ -221,6 +221,7 @@ TEST_F(PathIo, MultirotorPlanTakesOffAtHomeFliesTheWaypointsAndLandsAtTheEnd) {
     SCOPED_TRACE(i);
     EXPECT_EQ(item(plan, i + 1)["command"], mavlink::kCmdNavWaypoint);
     expect_position(item(plan, i + 1), (*geo)[i], r.vertices[i].z());
+    EXPECT_DOUBLE_EQ(item(plan, i + 1)["params"][1].get<double>(), 0.0);  // acceptance: the autopilot's own
   }
   EXPECT_EQ(item(plan, n + 1)["command"], mavlink::kCmdNavLand);
   expect_position(item(plan, n + 1), (*geo)[n - 1], 215.0);
@@ -245,7 +246,11 @@ TEST_F(PathIo, FixedWingPlanLoitersOverTheEndThenLands) {
   EXPECT_EQ(item(plan, 0)["command"], mavlink::kCmdNavTakeoff);
   EXPECT_DOUBLE_EQ(item(plan, 0)["params"][0].get<double>(), v.max_climb_deg);  // takeoff pitch
   expect_position(item(plan, 0), (*geo)[0], r.vertices[0].z());
-  for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(item(plan, i + 1)["command"], mavlink::kCmdNavWaypoint);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(item(plan, i + 1)["command"], mavlink::kCmdNavWaypoint);
+    // param 2: the acceptance radius the check assumed (the heights early)
+    EXPECT_DOUBLE_EQ(item(plan, i + 1)["params"][1].get<double>(), v.acceptance_radius_m);
+  }
   EXPECT_EQ(item(plan, n + 1)["command"], mavlink::kCmdDoLandStart);
   EXPECT_EQ(item(plan, n + 2)["command"], mavlink::kCmdNavLoiterToAlt);
   expect_position(item(plan, n + 2), (*geo)[n - 1], r.vertices[n - 1].z());

@@ -228,11 +228,28 @@ std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double s
   }
   const double needed_m = std::ceil(highest_m + v.clearance_m + 1.0);
   if (!(path.back().z() < needed_m - 1.0)) return "";
-  char text[320];
+  char text[400];
   std::snprintf(text, sizeof text,
-                "early-descent: the end at %.1f m is taken %.0f m early, over ground up to %.1f m high on the way "
-                "to it: an end at %.0f m or higher meets it there (or one reached over lower ground)",
+                "early-descent: the end at %.1f m is taken %.0f m early, over ground up to %.1f m high on this "
+                "path's way to it: an end at %.0f m or higher would clear that ground (a plan to another end may "
+                "come another way: check it again)",
                 path.back().z(), v.acceptance_radius_m, highest_m, needed_m);
+  return text;
+}
+
+// Fixed-wing guidance takes a waypoint early whatever the mission asks: PX4's
+// L1 controller at its switch distance, FW_L1_PERIOD x FW_L1_DAMPING / pi
+// seconds of flight (20 x 0.75 / pi by default), never closer than that.
+constexpr double kL1SwitchS = 20.0 * 0.75 / 3.14159265358979323846;
+std::string early_switch_note(const rt::VehicleEnvelope& v) {
+  const double l1_m = kL1SwitchS * v.speed_m_per_s;
+  if (v.type != rt::VehicleType::fixed_wing || !(v.acceptance_radius_m < l1_m)) return "";
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "the path is checked for an autopilot that takes each waypoint %.0f m early (the .plan's waypoints "
+                "ask for that, param 2); PX4's fixed-wing L1 guidance switches %.0f m early at %.0f m/s by default: "
+                "give --acceptance-radius the distance yours does",
+                v.acceptance_radius_m, l1_m, v.speed_m_per_s);
   return text;
 }
 
@@ -313,6 +330,7 @@ int run_plan(const PlanOptions& o) {
   // a crew flies the WGS84 positions: say when they are only metres good
   std::vector<std::string> notes;
   if (std::string note = wgs84_accuracy_note(conversion); !note.empty()) notes.push_back(std::move(note));
+  if (std::string note = early_switch_note(r.envelope); !note.empty()) notes.push_back(std::move(note));
   if (std::string note =
           low_end_note(finest, levels.front().geometry().spacing_m, r.envelope, res->final_path, res->final_check);
       !note.empty()) {

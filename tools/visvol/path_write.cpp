@@ -185,8 +185,12 @@ nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
   const double takeoff_pitch_deg = fixed_wing ? r.vehicle.max_climb_deg : 0.0;
   items.push_back(mission_item(id++, kCmdNavTakeoff, kFrameGlobal,
                                {takeoff_pitch_deg, 0, 0, no_yaw, start.y(), start.x(), start.z()}, true));
+  // param 2, the acceptance radius: where the check assumed the autopilot
+  // takes each waypoint (0, a multirotor's: the autopilot's own)
+  const double accept_m = r.vehicle.acceptance_radius_m;
   for (const Vec3& g : geo) {
-    items.push_back(mission_item(id++, kCmdNavWaypoint, kFrameGlobal, {0, 0, 0, no_yaw, g.y(), g.x(), g.z()}, true));
+    items.push_back(
+        mission_item(id++, kCmdNavWaypoint, kFrameGlobal, {0, accept_m, 0, no_yaw, g.y(), g.x(), g.z()}, true));
   }
   if (fixed_wing) {
     // the landing sequence (an RTL with mission landing flies it too): circle

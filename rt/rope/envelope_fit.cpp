@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/tolerances.hpp"
 #include "rt/rope/fillet.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/terrain_probe.hpp"
@@ -187,6 +188,12 @@ struct GroundBehind {
   double start_z = 0, end_z = 0, length_m = 0;
   double climb_per_m = 0, descent_per_m = 0;
   double above_m = 0;  // the clearance and the fit's margin
+  // as the checker judges it (its window at most a step past the radius, no margin)
+  double judged_reach_m = 0, clearance_m = 0;
+  bool out_of_reach(double along_m, double z_m) const {
+    return track != nullptr && uncapped(along_m) > (*this)(along_m) &&
+           z_m < track->highest_m(along_m - judged_reach_m, along_m) + clearance_m - kHeightTolM;
+  }
   double uncapped(double along_m) const {
     return track != nullptr ? track->highest_m(along_m - reach_m, along_m) : kNoGround;
   }
@@ -220,8 +227,7 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
     const double d = band.lo - p.z(), e = p.z() - band.hi;
     if (d > m.deficit) m.deficit = d, m.deficit_t = f;
     if (e > m.excess) m.excess = e, m.excess_t = f;
-    const double out_of_reach_m = behind.uncapped(at_m);
-    if (out_of_reach_m > ground_behind_m && p.z() < out_of_reach_m + behind.above_m - 1e-6) m.out_of_reach = true;
+    if (behind.out_of_reach(at_m, p.z())) m.out_of_reach = true;
     if (std::max(d, e) > worst) {
       worst = std::max(d, e);
       m.worst_t = f;
@@ -285,9 +291,16 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
   auto set_track = [&]() {
     if (!(spec.envelope.acceptance_radius_m > 0)) return;
     track.emplace(terrain, p.data(), static_cast<int>(p.size()));
-    behind = {
-        &*track, spec.envelope.acceptance_radius_m + 2 * step, p.front().z(), p.back().z(), track->length_m(), climb,
-        descent, spec.envelope.clearance_m + spec.margin_m};
+    behind = {&*track,
+              spec.envelope.acceptance_radius_m + 2 * step,
+              p.front().z(),
+              p.back().z(),
+              track->length_m(),
+              climb,
+              descent,
+              spec.envelope.clearance_m + spec.margin_m,
+              spec.envelope.acceptance_radius_m + step,
+              spec.envelope.clearance_m};
   };
   std::vector<double> lo(p.size()), hi(p.size()), z;
   auto set_band = [&](std::size_t i, double at_m) {

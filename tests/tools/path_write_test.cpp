@@ -230,7 +230,8 @@ TEST_F(PathIo, MultirotorPlanTakesOffAtHomeFliesTheWaypointsAndLandsAtTheEnd) {
 
 TEST_F(PathIo, FixedWingPlanLoitersOverTheEndThenLands) {
   rt::VehicleEnvelope v = preset("fixed-wing");
-  v.speed_m_per_s = 23.5;  // the envelope's, not a constant
+  v.speed_m_per_s = 23.5;      // the envelope's, not a constant
+  v.acceptance_radius_m = 45;  // the vehicle's, written as each waypoint's param 2
   v.min_turn_radius_m = 95.0;
   PathReport r = report(v);
   r.vehicle.autopilot = rt::Autopilot::ardupilot;

@@ -480,7 +480,7 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
   EXPECT_EQ(low.status, 1) << low.err;
   EXPECT_NE(low.out.find("early-descent 30.0 m: worst"), std::string::npos) << low.out;
   EXPECT_NE(low.out.find("NOT MET"), std::string::npos) << low.out;
-  const std::string named = "an end at 95 m or higher would clear that ground";
+  const std::string named = "an end under 95 m cannot clear that ground";
   ASSERT_NE(low.out.find(named), std::string::npos) << low.out;
   EXPECT_NE(access((b + ".plan").c_str(), F_OK), 0);
   remove_outputs(b);
@@ -488,22 +488,47 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
   // its own requirement, named on its own)
   auto early_line = [](const std::string& out) {
     const std::size_t at = out.find("envelope   early-descent");
-    return at == std::string::npos ? std::string() : out.substr(at, out.find('\n', at) - at);
+    return at == std::string::npos ? std::string("(none)") : out.substr(at, out.find('\n', at) - at);
   };
   const Outcome raised = plan("95");
   EXPECT_LT(raised.status, 2) << raised.err;
   const std::string line = early_line(raised.out);
-  EXPECT_EQ(line.substr(line.size() - 4), " met") << raised.out;
+  EXPECT_EQ(line.substr(line.size() - 4), " met") << raised.out;  // not "NOT MET"
   EXPECT_EQ(raised.out.find("early-descent: the end"), std::string::npos) << raised.out;
   remove_outputs(b);
   const Outcome reached = plan("93", " --acceptance-radius 0");
   EXPECT_LT(reached.status, 2) << reached.err;
-  EXPECT_TRUE(early_line(reached.out).empty()) << reached.out;
+  EXPECT_EQ(early_line(reached.out), "(none)") << reached.out;
   // a fixed-wing that takes its waypoints later than PX4's guidance does: said
-  EXPECT_NE(reached.out.find("PX4's fixed-wing L1 guidance switches 95 m early at 20 m/s"), std::string::npos)
+  EXPECT_NE(reached.out.find("reaches each waypoint (acceptance radius 0); PX4's fixed-wing L1 guidance (up to "
+                             "1.13) switches 95 m early at 20 m/s"),
+            std::string::npos)
       << reached.out;
   EXPECT_EQ(raised.out.find("L1 guidance"), std::string::npos) << raised.out;  // 100 m: no earlier than that
   EXPECT_EQ(reached.out.find("early-descent"), std::string::npos) << reached.out;
+  remove_outputs(b);
+}
+
+// The .plan's waypoints carry the acceptance radius it was planned for
+// (param 2); check takes it, the larger of it and the vehicle's, and says so.
+TEST_F(PlanCheck, CheckTakesTheAcceptanceRadiusTheMissionAsksFor) {
+  const std::string b = base("accept");
+  const Outcome planned = visvol("plan " + *pack_ + kEnds +
+                                 " --acceptance-radius 200 --objective hide --init straight --segments 16 "
+                                 "--max-seconds 1 -o " +
+                                 b);
+  ASSERT_LT(planned.status, 2) << planned.err;
+  ASSERT_EQ(access((b + ".plan").c_str(), F_OK), 0) << planned.out << planned.err;
+  const nlohmann::json plan = nlohmann::json::parse(slurp(b + ".plan"));
+  EXPECT_EQ(plan["mission"]["items"][1]["params"][1].get<double>(), 200.0);
+  const Outcome checked = visvol("check " + *pack_ + " " + b + ".plan --json");
+  ASSERT_LT(checked.status, 2) << checked.err;
+  const nlohmann::json j = nlohmann::json::parse(checked.out);
+  EXPECT_EQ(j["vehicle"]["acceptance_radius_m"].get<double>(), 200.0) << checked.out;
+  const Outcome given = visvol("check " + *pack_ + " " + b + ".plan --acceptance-radius 120");
+  EXPECT_NE(given.out.find("acceptance radius 120 m (--acceptance-radius); the .plan's waypoints ask for 200 m"),
+            std::string::npos)
+      << given.out;
   remove_outputs(b);
 }
 

@@ -465,7 +465,7 @@ TEST(CliBuildRefuses, ADemThatIsNoPlaceOnEarth) {
       << "LOCAL_CS[\"site grid\",LOCAL_DATUM[\"site\",0],UNIT[\"metre\",1],AXIS[\"X\",EAST],AXIS[\"Y\",NORTH]]";
   const Outcome local_crs = visvol("build " + site + ".asc --levels 16 --lod 1 --range 2 -o " + out);
   EXPECT_EQ(local_crs.status, 0) << local_crs.err;
-  EXPECT_NE(local_crs.err.find("warning: " + site + ".asc: the CRS (site grid) is not a projected CRS in metres"),
+  EXPECT_NE(local_crs.err.find("warning: " + site + ".asc: its CRS (site grid) is not a projected CRS in metres"),
             std::string::npos)
       << local_crs.err;
   EXPECT_NE(local_crs.err.find("plans on this pack give no WGS84 positions"), std::string::npos) << local_crs.err;

@@ -1,5 +1,6 @@
 #include "build_cli.hpp"
 
+#include <ogr_spatialref.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -186,11 +187,18 @@ Status check_place_on_earth(const std::string& dem, const Heightfield& hf, std::
   const char* names[] = {"north-west", "north-east", "south-west", "south-east"};
   const std::string crs = fields::crs_name(hf.crs_wkt);
   const std::string why = "; plans give WGS84 positions through it, so check the DEM's georeferencing";
-  // no points: the CRS alone
-  if (const auto usable = to_wgs84({}, hf.crs_wkt); !usable.ok()) {
-    warnings.push_back(dem + ": " + usable.status().message() +
-                       ": plans on this pack give no WGS84 positions (their CSV, in the pack's coordinates, only)");
+  // a CRS plans do not convert (a site grid's, one PROJ names no projection
+  // for): said; one that does not parse, or that PROJ cannot use here: refused
+  OGRSpatialReference srs;
+  if (srs.importFromWkt(hf.crs_wkt.c_str()) != OGRERR_NONE) return invalid_argument(dem + ": its CRS does not parse");
+  if (!srs.IsProjected() || std::fabs(srs.GetLinearUnits() - 1.0) > 1e-9) {
+    warnings.push_back(dem + ": its CRS (" + crs +
+                       ") is not a projected CRS in metres: plans on this pack give no WGS84 positions (their CSV, in "
+                       "the pack's coordinates, only)");
     return Status::ok_status();
+  }
+  if (const auto usable = to_wgs84({}, hf.crs_wkt); !usable.ok()) {
+    return invalid_argument(dem + ": " + usable.status().message() + why);
   }
   for (std::size_t n = 0; n < corners.size(); ++n) {
     if (to_wgs84({corners[n]}, hf.crs_wkt).ok()) continue;

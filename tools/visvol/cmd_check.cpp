@@ -105,6 +105,20 @@ std::vector<std::string> plan_vehicle_notes(const PathFile& f, const EnvelopeOpt
     notes.push_back(std::string("autopilot ") + rt::to_string(e.autopilot) +
                     " (--autopilot); the .plan's firmwareType is " + rt::to_string(file_autopilot));
   }
+  // the acceptance radius: an autopilot takes a waypoint no later than the
+  // mission asks, nor than its own distance (the vehicle's)
+  if (f.acceptance_radius_m && *f.acceptance_radius_m > e.acceptance_radius_m) {
+    if (!given.acceptance_radius_m) {
+      notes.push_back(
+          printed("acceptance radius %.0f m: the .plan's waypoints' (param 2; the vehicle's %.0f m; "
+                  "--acceptance-radius sets another)",
+                  *f.acceptance_radius_m, e.acceptance_radius_m));
+      e.acceptance_radius_m = *f.acceptance_radius_m;
+    } else {
+      notes.push_back(printed("acceptance radius %.0f m (--acceptance-radius); the .plan's waypoints ask for %.0f m",
+                              e.acceptance_radius_m, *f.acceptance_radius_m));
+    }
+  }
   if (f.speed_changes) {
     notes.push_back(
         printed("the mission changes speed (DO_CHANGE_SPEED): times are at %.1f m/s throughout", e.speed_m_per_s));

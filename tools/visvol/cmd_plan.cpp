@@ -231,25 +231,36 @@ std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double s
   char text[400];
   std::snprintf(text, sizeof text,
                 "early-descent: the end at %.1f m is taken %.0f m early, over ground up to %.1f m high on this "
-                "path's way to it: an end at %.0f m or higher would clear that ground (a plan to another end may "
-                "come another way: check it again)",
+                "path's way to it: an end under %.0f m cannot clear that ground (a plan to a higher end may come "
+                "another way: check it again)",
                 path.back().z(), v.acceptance_radius_m, highest_m, needed_m);
   return text;
 }
 
-// Fixed-wing guidance takes a waypoint early whatever the mission asks: PX4's
-// L1 controller at its switch distance, FW_L1_PERIOD x FW_L1_DAMPING / pi
-// seconds of flight (20 x 0.75 / pi by default), never closer than that.
+// PX4's fixed-wing guidance takes a waypoint at its own switch distance when
+// that is farther than the mission asks: its L1 controller (PX4 up to 1.13)
+// at FW_L1_PERIOD x FW_L1_DAMPING / pi seconds of flight over the ground (20
+// x 0.75 / pi by default; NPFG, 1.14 on, nearer). ArduPlane takes the
+// mission's radius (param 2).
 constexpr double kL1SwitchS = 20.0 * 0.75 / 3.14159265358979323846;
 std::string early_switch_note(const rt::VehicleEnvelope& v) {
   const double l1_m = kL1SwitchS * v.speed_m_per_s;
-  if (v.type != rt::VehicleType::fixed_wing || !(v.acceptance_radius_m < l1_m)) return "";
+  if (v.type != rt::VehicleType::fixed_wing || v.autopilot != rt::Autopilot::px4 || !(v.acceptance_radius_m < l1_m)) {
+    return "";
+  }
+  char asked[96];
+  if (v.acceptance_radius_m > 0) {
+    std::snprintf(asked, sizeof asked, "takes each waypoint %.0f m early (param 2 asks for that)",
+                  v.acceptance_radius_m);
+  } else {
+    std::snprintf(asked, sizeof asked, "reaches each waypoint (acceptance radius 0)");
+  }
   char text[400];
   std::snprintf(text, sizeof text,
-                "the path is checked for an autopilot that takes each waypoint %.0f m early (the .plan's waypoints "
-                "ask for that, param 2); PX4's fixed-wing L1 guidance switches %.0f m early at %.0f m/s by default: "
-                "give --acceptance-radius the distance yours does",
-                v.acceptance_radius_m, l1_m, v.speed_m_per_s);
+                "the path is checked for an autopilot that %s; PX4's fixed-wing L1 guidance (up to 1.13) switches "
+                "%.0f m early at %.0f m/s over the ground by default, more with a tailwind: give "
+                "--acceptance-radius the distance yours does",
+                asked, l1_m, v.speed_m_per_s);
   return text;
 }
 

@@ -137,6 +137,9 @@ struct PathFile {
   int vehicle_type = -1;       // MAV_TYPE (1 fixed wing, 2 quadrotor...)
   int firmware_type = -1;      // MAV_AUTOPILOT (3 ArduPilot, 12 PX4), -1 not given
   bool speed_changes = false;  // DO_CHANGE_SPEED items: the speed differs along the way
+  // the largest acceptance radius its waypoints ask for (param 2, m): an
+  // autopilot takes them at least that early; absent where all are 0
+  std::optional<double> acceptance_radius_m;
   // .plan with altitudes above home: the planned home (pack CRS, altitude
   // above mean sea level) they were lifted by
   std::optional<Vec3> relative_home;

@@ -578,6 +578,10 @@ Result<PathFile> parse_qgc_plan(const nlohmann::json& j, const std::string& path
     // param 1: the seconds a multirotor holds there (a fixed-wing ignores it)
     Result<double> hold = loiter_param(params, 0, "hold, s", 0, 1e6, 0.0, where);
     if (!hold.ok()) return hold.status();
+    // param 2: how near the autopilot must come (0: its own distance)
+    Result<double> accept = loiter_param(params, 1, "acceptance radius, m", 0, 1e4, 0.0, where);
+    if (!accept.ok()) return accept.status();
+    if (*accept > 0) out.acceptance_radius_m = std::max(out.acceptance_radius_m.value_or(0.0), *accept);
     out.points.push_back({lon, lat, altitude_m});
     out.hold_s.push_back(*hold);
   }

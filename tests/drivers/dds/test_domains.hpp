@@ -13,11 +13,12 @@
 //   216  dds_echo_test            visvol-echo against this process
 //   219  visvol-dds-bench         tools/bench/dds (its default; --domain to change)
 //
-//   223..226  app_console_test        a console per case (one case at a time)
+//   223, 224  app_console_dds_test    a console per case (one case at a time)
+//   225, 226, 229  app_console_terrain_test  the same
 //   227  app_console_threads_test a console under ThreadSanitizer
 //   228  app_console_test         the console under a socket that plays systemd
 //
-// Other suites that use DDS: take ids outside 211..219 and 223..228.
+// Other suites that use DDS: take ids outside 211..219 and 223..229.
 #pragma once
 
 #include <cstdint>

@@ -35,9 +35,7 @@
 #include "storage/pack_reader.hpp"
 #include "tests/support/scratch.hpp"
 
-
 namespace visvol::app::console_process_test {
-
 
 using visvol::test::Outcome;
 using visvol::test::slurp;

@@ -1,6 +1,5 @@
 #include "build_cli.hpp"
 
-#include <ogr_spatialref.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -189,14 +188,17 @@ Status check_place_on_earth(const std::string& dem, const Heightfield& hf, std::
   const std::string why = "; plans give WGS84 positions through it, so check the DEM's georeferencing";
   // a CRS plans do not convert (a site grid's, one PROJ names no projection
   // for): said; one that does not parse, or that PROJ cannot use here: refused
-  OGRSpatialReference srs;
-  if (srs.importFromWkt(hf.crs_wkt.c_str()) != OGRERR_NONE) return invalid_argument(dem + ": its CRS does not parse");
-  if (!srs.IsProjected() || std::fabs(srs.GetLinearUnits() - 1.0) > 1e-9) {
+  const std::optional<bool> metres = projected_in_metres(hf.crs_wkt);
+  if (!metres) return invalid_argument(dem + ": its CRS does not parse");
+  if (!*metres) {
     warnings.push_back(dem + ": its CRS (" + crs +
                        ") is not a projected CRS in metres: plans on this pack give no WGS84 positions (their CSV, in "
                        "the pack's coordinates, only)");
     return Status::ok_status();
   }
+  // one transformation for the four corners; where that fails, the CRS or
+  // the corner that does
+  if (to_wgs84(corners, hf.crs_wkt).ok()) return Status::ok_status();
   if (const auto usable = to_wgs84({}, hf.crs_wkt); !usable.ok()) {
     return invalid_argument(dem + ": " + usable.status().message() + why);
   }

@@ -16,6 +16,13 @@ namespace visvol::cli {
 
 using detail::shown;
 
+std::optional<bool> projected_in_metres(const std::string& crs_wkt) {
+  OGRSpatialReference srs;
+  if (srs.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return std::nullopt;
+  // a CRS in degrees (or feet) would place the grid wrong
+  return srs.IsProjected() && std::fabs(srs.GetLinearUnits() - 1.0) <= 1e-9;
+}
+
 namespace {
 
 struct ProjContextFree {
@@ -30,10 +37,11 @@ using ProjObject = std::unique_ptr<PJ, ProjFree>;
 // A pack's CRS must be projected, in metres, as its grid is.
 Status check_pack_crs(const std::string& crs_wkt) {
   if (crs_wkt.empty()) return Status(Errc::unsupported, "the pack has no CRS, so there is no WGS84 position");
-  OGRSpatialReference pack;
-  if (pack.importFromWkt(crs_wkt.c_str()) != OGRERR_NONE) return corrupt("the CRS WKT does not parse");
-  // a CRS in degrees (or feet) would place the grid wrong
-  if (!pack.IsProjected() || std::fabs(pack.GetLinearUnits() - 1.0) > 1e-9) {
+  const std::optional<bool> metres = projected_in_metres(crs_wkt);
+  if (!metres) return corrupt("the CRS WKT does not parse");
+  if (!*metres) {
+    OGRSpatialReference pack;
+    pack.importFromWkt(crs_wkt.c_str());
     return corrupt("the CRS (" + std::string(pack.GetName() ? pack.GetName() : "unnamed") +
                    ") is not a projected CRS in metres, as a pack's grid is");
   }

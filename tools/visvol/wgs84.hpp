@@ -5,6 +5,7 @@
 // (path_io.hpp) read and write.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,10 @@ inline constexpr double kTrustedWgs84AccuracyM = 1.0;
 // A line for the operator when `c` is coarser than kTrustedWgs84AccuracyM or
 // not known; "" otherwise.
 std::string wgs84_accuracy_note(const Wgs84Conversion& c);
+
+// Whether a CRS is one plans convert to WGS84: projected, in metres, as a
+// pack's grid is; nothing where its WKT does not parse.
+std::optional<bool> projected_in_metres(const std::string& crs_wkt);
 
 // WGS84 (longitude, latitude, height) of the vertices, or an error when the
 // pack has no CRS to convert from. Heights are kept.

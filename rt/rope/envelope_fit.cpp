@@ -184,7 +184,8 @@ struct SegmentMiss {
 // to report, not the fit's to chase for its every pass.
 struct GroundBehind {
   const TrackGround* track = nullptr;
-  double reach_m = 0;  // the acceptance radius and two of the fit's sample steps
+  double reach_m = 0;   // the acceptance radius and two of the fit's sample steps
+  double radius_m = 0;  // the acceptance radius
   double start_z = 0, end_z = 0, length_m = 0;
   double climb_per_m = 0, descent_per_m = 0;
   double above_m = 0;  // the clearance and the fit's margin
@@ -199,9 +200,37 @@ struct GroundBehind {
   }
   double operator()(double along_m) const {
     if (track == nullptr) return kNoGround;
-    const double reachable =
-        std::min(start_z + climb_per_m * along_m, end_z + descent_per_m * (length_m - along_m)) - above_m;
-    return std::min(uncapped(along_m), reachable);
+    return std::min(uncapped(along_m), reachable(along_m));
+  }
+  double reachable(double along_m) const {
+    return std::min(start_z + climb_per_m * along_m, end_z + descent_per_m * (length_m - along_m)) - above_m;
+  }
+
+  // The held stretches of the segments no longer than the radius beside
+  // vertex i of a path whose vertices lie `along` the track (a split point
+  // lies on it): flown no lower than the lower of their two heights, so
+  // vertex i's height must clear their ground (track_ground.hpp).
+  double held_uncapped(const std::vector<double>& along, std::size_t i) const {
+    if (track == nullptr || along.size() < 2) return kNoGround;
+    const std::size_t n = along.size();
+    double ground = kNoGround;
+    auto stretch = [&](std::size_t first) {  // segment first..first+1
+      if (along[first + 1] - along[first] > radius_m) return;
+      const double from = std::max(along[first] - radius_m, 0.0);
+      const double to = first + 2 == n ? along[first + 1] : along[first + 1] - radius_m;
+      if (to > from) ground = std::max(ground, track->highest_m(from, to));
+    };
+    if (i > 0) stretch(i - 1);
+    if (i + 1 < n) stretch(i);
+    return ground;
+  }
+  double held(const std::vector<double>& along, std::size_t i) const {
+    const double ground = held_uncapped(along, i);
+    return ground == kNoGround ? kNoGround : std::min(ground, reachable(along[i]));
+  }
+  bool held_out_of_reach(const std::vector<double>& along, std::size_t i, double z_m) const {
+    const double ground = held_uncapped(along, i);
+    return ground != kNoGround && ground > held(along, i) && z_m < ground + clearance_m - kHeightTolM;
   }
 };
 
@@ -293,6 +322,7 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     track.emplace(terrain, p.data(), static_cast<int>(p.size()));
     behind = {&*track,
               spec.envelope.acceptance_radius_m + 2 * step,
+              spec.envelope.acceptance_radius_m,
               p.front().z(),
               p.back().z(),
               track->length_m(),
@@ -303,16 +333,17 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
               spec.envelope.clearance_m};
   };
   std::vector<double> lo(p.size()), hi(p.size()), z;
-  auto set_band = [&](std::size_t i, double at_m) {
+  auto set_band = [&](std::size_t i, const std::vector<double>& along) {
     const bool end = i == 0 || i + 1 == p.size();
-    const Band b = end ? Band{p[i].z(), p[i].z()} : band_at(spec, terrain, p[i].x(), p[i].y(), behind(at_m));
+    const double ground = std::max(behind(along[i]), behind.held(along, i));
+    const Band b = end ? Band{p[i].z(), p[i].z()} : band_at(spec, terrain, p[i].x(), p[i].y(), ground);
     lo[i] = b.lo;
     hi[i] = b.hi;
   };
   auto set_bands = [&]() {
     set_track();
-    const std::vector<double> at = along_m(p);
-    for (std::size_t i = 0; i < p.size(); ++i) set_band(i, at[i]);
+    const std::vector<double> along = along_m(p);
+    for (std::size_t i = 0; i < p.size(); ++i) set_band(i, along);
   };
   set_bands();
 
@@ -328,9 +359,25 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     // needed hundreds, and left them over the band between their vertices).
     std::vector<std::pair<std::size_t, Vec3>> splits;
     const std::vector<double> along = along_m(p);  // of the vertices before the splits
+    for (std::size_t i = 1; i + 1 < p.size(); ++i)
+      if (behind.held_out_of_reach(along, i, z[i])) feasible = false;
+    // The fixed end under its last segment's held stretch (a segment no
+    // longer than the radius): only a shorter segment mends it, down to the
+    // radius itself behind the end, so not where the end is under that too.
+    const double end_needs_m = p.back().z() - spec.envelope.clearance_m + kHeightTolM;
+    const bool end_under = behind.held_uncapped(along, p.size() - 1) > end_needs_m;
+    const bool end_mendable = end_under && behind.uncapped(along.back()) <= end_needs_m;
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
       const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i]);
       if (m.out_of_reach) feasible = false;
+      if (i + 2 == p.size() && end_under) {
+        feasible = false;
+        if (end_mendable && p.size() + splits.size() < max_points &&
+            std::hypot(p[i + 1].x() - p[i].x(), p[i + 1].y() - p[i].y()) >= kMinSplitM) {
+          splits.emplace_back(i, p[i] + kSplitMax * (p[i + 1] - p[i]));
+          continue;
+        }
+      }
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;
       // between the vertices the band asks both vertices to move by the miss;
@@ -368,10 +415,13 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
       p.insert(p.begin() + at, split->second);
       lo.insert(lo.begin() + at, 0.0);
       hi.insert(hi.begin() + at, 0.0);
-      const Vec3& from = p[split->first];
-      set_band(split->first + 1,
-               along[split->first] + std::hypot(split->second.x() - from.x(), split->second.y() - from.y()));
       changed = true;
+    }
+    // the new vertices' bands, between their neighbours after every split
+    // (a split only narrows the held stretches of the vertices beside it)
+    if (!splits.empty()) {
+      const std::vector<double> split_along = along_m(p);
+      for (std::size_t k = 0; k < splits.size(); ++k) set_band(splits[k].first + 1 + k, split_along);
     }
     // the arcs inside the corners: the corner (every vertex on its spot)
     // moves by the miss over the share of that move the arc's heights

@@ -236,7 +236,8 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // The clearance of an aircraft that takes each height up to the acceptance
   // radius early (track_ground.hpp): at each sample, over the highest ground
   // that far behind it and one sample step more (so that a path met at the
-  // samples is met between them).
+  // samples is met between them); on a segment no longer than the radius,
+  // no more than the lower of its two heights over its held stretch.
   const double early_m = e.acceptance_radius_m;
   std::optional<TrackGround> track;
   if (early_m > 0) track.emplace(terrain_, v, count);
@@ -252,6 +253,8 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     const double wanted = std::ceil(len / spec_.sample_step_m);
     const int m = wanted >= 1 ? static_cast<int>(std::min(wanted, double(kMaxSegmentSamples))) : 1;
     const double leg_m = track ? track->at_vertex_m(s + 1) - track->at_vertex_m(s) : 0.0;
+    const double held_m = track && leg_m <= early_m ? track->held_clearance_m(s, s + 1, a.z(), b.z(), early_m)
+                                                    : std::numeric_limits<double>::infinity();
     for (int k = 0; k <= m; ++k) {
       const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);
       // the segment's ends are the vertices themselves
@@ -262,7 +265,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
       sample(p, w, at_vertex);
       if (track) {
         const double at_m = track->at_vertex_m(s) + leg_m * (static_cast<double>(k) / m);
-        const double h = p.z() - track->highest_m(at_m - early_m - leg_m / m, at_m);
+        const double h = std::min(p.z() - track->highest_m(at_m - early_m - leg_m / m, at_m), held_m);
         early_lowest = std::min(early_lowest, h);
         early.add(h >= e.clearance_m - kHeightTolM, w);
       }

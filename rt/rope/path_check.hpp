@@ -16,7 +16,10 @@
 //   the clearance at the same samples over the highest terrain under the R
 //   metres of track behind each (and one sample step more), for their share
 //   of the length: the height an autopilot that takes each waypoint's
-//   height R early flies over the ground. Along the segments, not the arcs.
+//   height R early flies over the ground. On a segment no longer than R
+//   (PX4 steps to the next height there, from R before the segment's
+//   start), no more than the lower of its two heights over the highest
+//   terrain of its held stretch, exactly. Along the segments, not the arcs.
 // - Climb and descent: every segment's angle from the horizontal.
 // - Turn radius: the largest flyable fillet at every interior vertex
 //   (turn_radii_m below), weighted by half of each neighbouring segment.

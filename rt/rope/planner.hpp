@@ -269,7 +269,8 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   // A fitted path with the waypoints its shape does not need dropped (turns
   // near the least radius keep theirs).
   auto thinned_of = [&](const std::vector<Vec3>& fitted) {
-    return thin_for_vehicle(fitted, envelope.min_turn_radius_m, *request.thinning);
+    const LegTest held = held_legs(fitted, envelope, checker->terrain());
+    return thin_for_vehicle(fitted, envelope.min_turn_radius_m, *request.thinning, &held);
   };
   auto consider = [&](const Vec3* v, int count, const char* source) {
     EnvelopeFit f = fit_to_envelope(std::vector<Vec3>(v, v + count), fit, checker->terrain());

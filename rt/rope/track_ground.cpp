@@ -64,4 +64,20 @@ double TrackGround::highest_m(double from_m, double to_m) const {
   return std::max({ground_at(from), ground_at(to), highest_breakpoint(first, end)});
 }
 
+TrackGround::Stretch TrackGround::held_stretch(int first, int last, double radius_m) const {
+  const bool final_leg = last + 1 >= static_cast<int>(vertex_m_.size());
+  Stretch s;
+  s.to_m = std::min(final_leg ? at_vertex_m(last) : at_vertex_m(last) - radius_m, length_m());
+  s.from_m = std::max(at_vertex_m(first) - radius_m, 0.0);
+  return s;
+}
+
+double TrackGround::held_clearance_m(int first, int last, double first_z_m, double last_z_m, double radius_m) const {
+  const Stretch s = held_stretch(first, last, radius_m);
+  if (s.empty()) return std::numeric_limits<double>::infinity();
+  // a height that is not a number holds nothing (std::min would drop it)
+  if (std::isnan(first_z_m) || std::isnan(last_z_m)) return std::numeric_limits<double>::quiet_NaN();
+  return std::min(first_z_m, last_z_m) - highest_m(s.from_m, s.to_m);
+}
+
 }  // namespace visvol::rt

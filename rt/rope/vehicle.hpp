@@ -50,8 +50,9 @@ struct VehicleEnvelope {
   // How far before a waypoint the autopilot takes the next one, and with it
   // the next altitude: a fixed-wing's PX4 switches at its L1 distance (about
   // 95 m at 20 m/s), ArduPlane within WP_RADIUS (90 m). The path must then
-  // clear the highest ground this far behind each point (rt::TrackGround).
-  // 0: the vehicle reaches each waypoint.
+  // clear the highest ground this far behind each point, and a leg no longer
+  // than this, at its lower height, the ground from this far before its
+  // start (rt::TrackGround). 0: the vehicle reaches each waypoint.
   double acceptance_radius_m = 100.0;
   Autopilot autopilot = Autopilot::px4;
 };

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <utility>
 
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/track_ground.hpp"
 
 namespace visvol::rt {
 
@@ -39,7 +41,7 @@ std::vector<int> every_index(int n) {
 }  // namespace
 
 std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTolerance& tol,
-                                 const std::vector<bool>* kept) {
+                                 const std::vector<bool>* kept, const LegTest* leg_holds) {
   const int n = static_cast<int>(path.size());
   if (n <= 2) return every_index(n);
   std::vector<char> keep(static_cast<std::size_t>(n), 0);
@@ -76,6 +78,7 @@ std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTo
         farthest = k;
       }
     }
+    if (farthest < 0 && leg_holds != nullptr && !(*leg_holds)(first, last)) farthest = first + (last - first) / 2;
     if (farthest < 0) continue;
     keep[static_cast<std::size_t>(farthest)] = 1;
     if (farthest - first > 1) spans.emplace_back(first, farthest);
@@ -88,10 +91,24 @@ std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTo
 }
 
 std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTolerance& tol,
-                                 const std::vector<bool>* keep) {
+                                 const std::vector<bool>* keep, const LegTest* leg_holds) {
   std::vector<Vec3> out;
-  for (int i : thinned_indices(path, tol, keep)) out.push_back(path[static_cast<std::size_t>(i)]);
+  for (int i : thinned_indices(path, tol, keep, leg_holds)) out.push_back(path[static_cast<std::size_t>(i)]);
   return out;
+}
+
+LegTest held_legs(const std::vector<Vec3>& fitted, const VehicleEnvelope& envelope,
+                  const fields::Heightfield& terrain) {
+  const double radius_m = envelope.acceptance_radius_m;
+  if (!(radius_m > 0)) return [](int, int) { return true; };
+  auto track = std::make_shared<const TrackGround>(terrain, fitted.data(), static_cast<int>(fitted.size()));
+  const double needed_m = envelope.clearance_m + kThinnedHeldMarginM;
+  const Vec3* v = fitted.data();
+  return [track, needed_m, radius_m, v](int first, int last) {
+    // a leg longer than the radius is ramped, not held (track_ground.hpp)
+    if (std::hypot(v[last].x() - v[first].x(), v[last].y() - v[first].y()) > radius_m) return true;
+    return track->held_clearance_m(first, last, v[first].z(), v[last].z(), radius_m) >= needed_m;
+  };
 }
 
 std::vector<bool> turns_to_keep(const std::vector<Vec3>& path, double min_turn_radius_m) {
@@ -105,15 +122,16 @@ std::vector<bool> turns_to_keep(const std::vector<Vec3>& path, double min_turn_r
 }
 
 std::vector<Vec3> thin_for_vehicle(const std::vector<Vec3>& fitted, double min_turn_radius_m,
-                                   const ThinningTolerance& tol) {
+                                   const ThinningTolerance& tol, const LegTest* leg_holds) {
   const std::vector<bool> turns = turns_to_keep(fitted, min_turn_radius_m);
-  return thin_waypoints(fitted, tol, &turns);
+  return thin_waypoints(fitted, tol, &turns, leg_holds);
 }
 
 std::optional<ThinnedPath> thinned_as_good(const std::vector<Vec3>& fitted, const PathCheck& fitted_check,
                                            const PathChecker& checker, Objective objective,
                                            const ThinningTolerance& tol) {
-  std::vector<Vec3> thinned = thin_for_vehicle(fitted, checker.spec().envelope.min_turn_radius_m, tol);
+  const LegTest held = held_legs(fitted, checker.spec().envelope, checker.terrain());
+  std::vector<Vec3> thinned = thin_for_vehicle(fitted, checker.spec().envelope.min_turn_radius_m, tol, &held);
   if (thinned.size() >= fitted.size()) return std::nullopt;
   PathCheck c = checker.check(thinned);
   const double fc_cost = (objective == Objective::hide ? 1.0 : -1.0) * (c.fc - fitted_check.fc);

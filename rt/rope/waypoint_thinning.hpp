@@ -14,6 +14,7 @@
 // Offline: allocates.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -35,18 +36,35 @@ struct ThinningTolerance {
 // infinite where a coordinate is not finite.
 double thinning_deviation(const Vec3& a, const Vec3& b, const Vec3& p, const ThinningTolerance& tol);
 
+// Whether vertices `first` and `last` of a path may be joined by one leg
+// (the vertices between dropped) for more than the shape: the held heights
+// of an acceptance radius (held_legs below).
+using LegTest = std::function<bool(int first, int last)>;
+
 // The indices of `path` that the thinned path keeps, in order: the first and
 // the last, those `keep` marks (where given: one flag a vertex), and every
-// vertex the shape needs. Douglas-Peucker costs n log n on a path and up to
-// n^2 on a contrived one: past kMaxThinningWork deviations a vertex, nothing
-// is dropped (every index is returned).
+// vertex the shape needs; where `leg_holds` is given, a span it refuses
+// keeps its middle vertex too. Douglas-Peucker costs n log n on a path and
+// up to n^2 on a contrived one: past kMaxThinningWork deviations a vertex,
+// nothing is dropped (every index is returned).
 inline constexpr double kMaxThinningWork = 64.0;
 std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTolerance& tol,
-                                 const std::vector<bool>* keep = nullptr);
+                                 const std::vector<bool>* keep = nullptr, const LegTest* leg_holds = nullptr);
 
 // The thinned path itself.
 std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTolerance& tol,
-                                 const std::vector<bool>* keep = nullptr);
+                                 const std::vector<bool>* keep = nullptr, const LegTest* leg_holds = nullptr);
+
+// For a vehicle with an acceptance radius (track_ground.hpp): a leg joining
+// two vertices of `fitted` no farther apart than the radius holds where the
+// lower of their heights clears the highest ground of its held stretch on
+// the fitted track by the clearance and kThinnedHeldMarginM (PX4 steps to
+// the next height on such a leg from the radius before its start: the
+// longer the leg, the more ground it is held over). Always true for a longer
+// leg and without a radius. Keeps a pointer to `fitted`'s vertices, which
+// must outlive it.
+inline constexpr double kThinnedHeldMarginM = 1.0;
+LegTest held_legs(const std::vector<Vec3>& fitted, const VehicleEnvelope& envelope, const fields::Heightfield& terrain);
 
 // The vertices of a path to keep for a vehicle of least turn radius
 // `min_turn_radius_m` (0: none): where the path turns within
@@ -60,7 +78,7 @@ std::vector<bool> turns_to_keep(const std::vector<Vec3>& path, double min_turn_r
 // A fitted path thinned for a vehicle: its turns within kTurnKeptFactor of
 // `min_turn_radius_m` keep their vertices.
 std::vector<Vec3> thin_for_vehicle(const std::vector<Vec3>& fitted, double min_turn_radius_m,
-                                   const ThinningTolerance& tol);
+                                   const ThinningTolerance& tol, const LegTest* leg_holds = nullptr);
 
 // The share of F_c a path may lose to have its waypoints thinned (a
 // thousandth: the plan bench's answers lost a ten-thousandth at most).

@@ -285,6 +285,23 @@ TEST_F(FitEarlyDescent, TheHeightPastARidgeIsHeldForTheAcceptanceRadius) {
   EXPECT_FALSE(flown.envelope[6].met) << "worst " << flown.envelope[6].worst;
 }
 
+// A leg no longer than the acceptance radius is flown at the lower of its
+// two heights from the radius before its start (PX4 steps to its end
+// height there): the fit holds such a leg's end over that ground too.
+TEST_F(FitEarlyDescent, AShortLegsEndIsHeldOverTheGroundFromTheRadiusBeforeIt) {
+  // an 80 m leg down 20 m, begun 70 m past the ridge
+  const std::vector<Vec3> stepped = {at(2, 100), at(27, 100), at(35, 80), at(57, 80)};
+  const PathCheck before = judge(stepped);
+  ASSERT_FALSE(before.envelope[6].met);
+  EXPECT_NEAR(before.envelope[6].worst, 20.0, 1e-6);
+  EnvelopeFitSpec spec;
+  spec.envelope = fixed_wing;
+  const EnvelopeFit fit = fit_to_envelope(stepped, spec, t);
+  EXPECT_TRUE(fit.feasible);
+  const PathCheck c = judge(fit.path);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+}
+
 // An end the user put low just past the ridge: no path to it clears the
 // ridge flown that way, and the check says so; the fit holds everything
 // else and does not chase the floor the end puts out of reach.

@@ -325,6 +325,40 @@ TEST(PathCheck, ADescentJustPastARidgeIsFlownOverTheRidge) {
   EXPECT_TRUE(reached.all_met);
 }
 
+// PX4 ramps no altitude on a leg no longer than its acceptance radius: it
+// steps to the leg's end height where it takes that waypoint, the radius
+// before the leg's start. A leg of 80 m descending 20 m begins 70 m past a
+// ridge: every point of it clears the ridge from 100 m (the old rule, at
+// least 32.5 m), but its end height is flown from 120 m along, 30 m before
+// the ridge, and comes 20 m over it. The same descent on a 120 m leg is
+// ramped from the leg's start and clears it.
+TEST(PathCheck, AShortLegIsFlownAtItsLowerHeightFromTheRadiusBeforeItsStart) {
+  fields::Heightfield t = blank(60, 5, 10.0, 0.0f);
+  for (int j = 0; j < 5; ++j) t.at(17, j) = 60.0f;  // 150 m along the track
+  auto path_with_leg = [&](double end_i) {
+    return std::vector<Vec3>{{t.x_of(2), t.y_of(2), 100.0},
+                             {t.x_of(24), t.y_of(2), 100.0},
+                             {t.x_of(end_i), t.y_of(2), 80.0},
+                             {t.x_of(57), t.y_of(2), 80.0}};
+  };
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");
+  ASSERT_EQ(s.envelope.acceptance_radius_m, 100.0);
+  const auto checker = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const PathCheck stepped = checker->check(path_with_leg(32));
+  ASSERT_EQ(stepped.envelope.size(), 7u);
+  const LimitResult& flown = stepped.envelope[6];
+  ASSERT_EQ(flown.name, "early-descent");
+  EXPECT_TRUE(stepped.envelope[0].met);  // 40 m over the ridge as planned
+  EXPECT_TRUE(stepped.envelope[4].met);  // 14 deg
+  EXPECT_FALSE(flown.met);
+  EXPECT_NEAR(flown.worst, 80.0 - 60.0, 1e-6);
+  EXPECT_NEAR(flown.satisfied_fraction, 1.0 - 80.0 / 550.0, 0.02);  // the leg's samples
+  const PathCheck ramped = checker->check(path_with_leg(36));
+  EXPECT_TRUE(ramped.all_met) << ramped.envelope[6].worst;
+}
+
 TEST(PathCheck, AFixedWingsArcClimbsMoreSteeplyThanItsLegs) {
   const fields::Heightfield t = blank(60, 60, 10.0, 0.0f);
   // two 200 m legs climbing at 12 deg with a right angle between them: the

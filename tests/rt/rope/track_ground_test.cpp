@@ -88,5 +88,56 @@ TEST(TrackGround, LegsOfNoLengthAndOneVertexAreTracksOfNoLength) {
   EXPECT_TRUE(std::isinf(none) && none < 0) << none;  // no ground at all, never a height
 }
 
+// The held stretches of a path's legs (where an autopilot taking each
+// waypoint R early flies between two waypoints' heights) tile its track:
+// each from R before its leg's start to R before its end, the last to the
+// end of the track, those of legs within R of the start empty.
+TEST(TrackGround, HeldStretchesTileTheTrack) {
+  const fields::Heightfield t = fields::testing::fractal(64, 12, 30.0, 200.0);
+  std::mt19937 rng(40);
+  std::uniform_real_distribution<double> post(2, 61), radius(0, 400);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Vec3> track;
+    for (int k = 0; k < 7; ++k) track.emplace_back(t.x_of(post(rng)), t.y_of(post(rng)), 500.0);
+    const TrackGround g(t, track.data(), static_cast<int>(track.size()));
+    const double r = radius(rng);
+    double covered_to = 0;
+    for (int s = 0; s + 1 < static_cast<int>(track.size()); ++s) {
+      const TrackGround::Stretch h = g.held_stretch(s, s + 1, r);
+      const bool last = s + 2 == static_cast<int>(track.size());
+      EXPECT_DOUBLE_EQ(h.to_m, last ? g.length_m() : g.at_vertex_m(s + 1) - r);
+      if (h.empty()) {
+        EXPECT_LE(g.at_vertex_m(s + 1) - r, 0.0) << "leg " << s << " radius " << r;
+        continue;
+      }
+      EXPECT_NEAR(h.from_m, covered_to, 1e-9) << "leg " << s;
+      covered_to = h.to_m;
+      const double lower = std::min(track[static_cast<std::size_t>(s)].z(), track[static_cast<std::size_t>(s + 1)].z());
+      EXPECT_DOUBLE_EQ(g.held_clearance_m(s, s + 1, lower, lower + 7, r), lower - g.highest_m(h.from_m, h.to_m));
+    }
+    EXPECT_DOUBLE_EQ(covered_to, g.length_m());
+  }
+}
+
+// A leg joining vertices apart (the one a thinning makes) is held over the
+// stretch of the legs it replaces; a height that is not a number holds
+// nothing, and a stretch wholly before the start asks nothing.
+TEST(TrackGround, AHeldStretchSpansTheLegsItJoins) {
+  fields::Heightfield t = fields::testing::blank(40, 5, 10.0, 0.0f);
+  t.at(10, 2) = 40.0f;  // a mast at 90 m along
+  std::vector<Vec3> track;
+  for (int i = 1; i <= 38; i += 4) track.emplace_back(t.x_of(i), t.y_of(2), 80.0);  // 40 m legs
+  const TrackGround g(t, track.data(), static_cast<int>(track.size()));
+  const TrackGround::Stretch joined = g.held_stretch(3, 6, 50.0);
+  EXPECT_DOUBLE_EQ(joined.from_m, 70.0);
+  EXPECT_DOUBLE_EQ(joined.to_m, 190.0);
+  EXPECT_DOUBLE_EQ(g.held_clearance_m(3, 6, 80.0, 60.0, 50.0), 20.0);  // the lower height over the mast
+  EXPECT_DOUBLE_EQ(g.held_clearance_m(4, 6, 80.0, 60.0, 50.0), 60.0);  // from 110 m: past the mast
+  EXPECT_TRUE(std::isnan(g.held_clearance_m(3, 6, NAN, 60.0, 50.0)));
+  EXPECT_TRUE(std::isnan(g.held_clearance_m(3, 6, 80.0, NAN, 50.0)));
+  EXPECT_TRUE(g.held_stretch(0, 1, 50.0).empty());  // 40 m from the start: taken before it
+  EXPECT_TRUE(std::isinf(g.held_clearance_m(0, 1, -1e9, -1e9, 50.0)));
+}
+
 }  // namespace
 }  // namespace visvol::rt

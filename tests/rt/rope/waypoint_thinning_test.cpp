@@ -9,6 +9,7 @@
 
 #include "../../fields/terrains.hpp"
 #include "rt/rope/path_metrics.hpp"
+#include "rt/rope/track_ground.hpp"
 #include "rt/rope/vehicle.hpp"
 
 namespace visvol::rt {
@@ -152,6 +153,39 @@ TEST(WaypointThinning, AContrivedPathIsLeftAsItIs) {
   std::vector<Vec3> line;  // a long straight run is cheap: one span
   for (int i = 0; i < 100000; ++i) line.emplace_back(3.0 * i, 0.0, 100.0);
   EXPECT_EQ(thinned_indices(line, {}).size(), 2u);
+}
+
+// Thinning joins no vertices into a leg no longer than the acceptance radius
+// whose lower end would be held under the clearance over the ground from the
+// radius before it (PX4 steps to that height there): a straight descent past
+// a ridge keeps the vertices that hold it, and every leg it keeps holds.
+TEST(WaypointThinning, AShortLegHeldUnderTheClearanceIsNotJoined) {
+  fields::Heightfield t = fields::testing::blank(60, 5, 10.0, 0.0f);
+  for (int j = 0; j < 5; ++j) t.at(17, j) = 55.0f;  // 150 m along
+  std::vector<Vec3> path = {{t.x_of(2), t.y_of(2), 100.0}};
+  for (int i = 24; i <= 32; ++i) path.emplace_back(t.x_of(i), t.y_of(2), 100.0 - 2.5 * (i - 24));  // 14 deg down
+  path.emplace_back(t.x_of(57), t.y_of(2), 80.0);
+  const VehicleEnvelope e = *vehicle_preset("fixed-wing");  // 30 m, 100 m early
+  ASSERT_EQ(thin_waypoints(path, {}).size(), 4u);           // the shape alone: start, the leg's two ends, the end
+  const LegTest held = held_legs(path, e, t);
+  EXPECT_FALSE(held(1, 9));  // the leg down: 80 m, held 25 m over the ridge
+  for (int k = 0; k + 1 < static_cast<int>(path.size()); ++k) ASSERT_TRUE(held(k, k + 1)) << k;
+  const std::vector<int> kept = thinned_indices(path, {}, nullptr, &held);
+  expect_within_tolerance(path, kept, {});
+  EXPECT_GT(kept.size(), 4u);
+  const TrackGround g(t, path.data(), static_cast<int>(path.size()));
+  for (std::size_t q = 1; q < kept.size(); ++q) {
+    const int a = kept[q - 1], b = kept[q];
+    EXPECT_TRUE(held(a, b)) << a << "-" << b;
+    const double run = std::hypot(path[static_cast<std::size_t>(b)].x() - path[static_cast<std::size_t>(a)].x(), 0.0);
+    if (run <= e.acceptance_radius_m) {
+      EXPECT_GE(g.held_clearance_m(a, b, path[static_cast<std::size_t>(a)].z(), path[static_cast<std::size_t>(b)].z(),
+                                   e.acceptance_radius_m),
+                e.clearance_m + kThinnedHeldMarginM);
+    }
+  }
+  // a multirotor reaches each waypoint: nothing held
+  EXPECT_TRUE(held_legs(path, *vehicle_preset("multirotor"), t)(1, 9));
 }
 
 // The console's final path and the planner's answer are thinned only where

@@ -243,6 +243,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   if (early_m > 0) track.emplace(terrain_, v, count);
   Tally early;
   double early_lowest = std::numeric_limits<double>::infinity();
+  std::vector<double> segment_early(static_cast<std::size_t>(count), std::numeric_limits<double>::infinity());
 
   // samples along every segment, trapezoid weights by length
   for (int s = 0; s + 1 < count; ++s) {
@@ -267,6 +268,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
         const double at_m = track->at_vertex_m(s) + leg_m * (static_cast<double>(k) / m);
         const double h = std::min(p.z() - track->highest_m(at_m - early_m - leg_m / m, at_m), held_m);
         early_lowest = std::min(early_lowest, h);
+        segment_early[static_cast<std::size_t>(s)] = std::min(segment_early[static_cast<std::size_t>(s)], h);
         early.add(h >= e.clearance_m - kHeightTolM, w);
       }
     }
@@ -307,6 +309,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     vc.clearance_m = v[i].z() - vc.ground_m;
     vc.fp = field_ ? field_->visibility(v[i]) : 0.0;
     vc.turn_radius_m = std::numeric_limits<double>::infinity();
+    vc.early_m = segment_early[static_cast<std::size_t>(i)];
     if (i + 1 < count) {
       const Vec3 d = v[i + 1] - v[i];
       vc.climb_deg = d.norm() > 1e-9 ? std::atan2(d.z(), std::hypot(d.x(), d.y())) * kDegPerRad : 0.0;

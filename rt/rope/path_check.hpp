@@ -122,12 +122,16 @@ inline constexpr int kMaxWorstDecimals = 7;
 int worst_decimals(const LimitResult& l);
 
 struct VertexCheck {
-  double fp = 0;              // F_p of the field at the vertex (informative)
-  double ground_m = 0;        // finest terrain below it
-  double clearance_m = 0;     // height above it
-  double climb_deg = 0;       // of the segment to the next vertex (negative: descent; a fixed-wing's
-                              // arc by a corner may climb more steeply, and max-climb's worst counts it)
-  double turn_radius_m = 0;   // the largest flyable turn radius here (turn_radii_m; infinite: straight or an end)
+  double fp = 0;             // F_p of the field at the vertex (informative)
+  double ground_m = 0;       // finest terrain below it
+  double clearance_m = 0;    // height above it
+  double climb_deg = 0;      // of the segment to the next vertex (negative: descent; a fixed-wing's
+                             // arc by a corner may climb more steeply, and max-climb's worst counts it)
+  double turn_radius_m = 0;  // the largest flyable turn radius here (turn_radii_m; infinite: straight or an end)
+  // the lowest height over the ground flown early on the segment to the next
+  // vertex (early-descent's; infinite without an acceptance radius and at
+  // the last vertex)
+  double early_m = std::numeric_limits<double>::infinity();
   std::vector<bool> seen_by;  // per constraint: the observer sees this vertex (R3)
 };
 

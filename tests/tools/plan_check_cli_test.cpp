@@ -226,6 +226,12 @@ TEST_F(PlanCheck, EnvelopeLimitsHoldOnEverySegment) {
     EXPECT_LE(std::fabs(v["climb_deg"].get<double>()), 8.0 + 1e-6);
     EXPECT_LE(v["clearance_m"].get<double>(), 300.0 + 0.01);
     EXPECT_GE(v["clearance_m"].get<double>(), 30.0 - 0.01);
+    // the fixed-wing's early descent on the leg from it (none from the end)
+    if (&v == &j["per_vertex"].back()) {
+      EXPECT_TRUE(v["early_m"].is_null()) << v.dump();
+    } else {
+      EXPECT_GE(v["early_m"].get<double>(), 30.0 - 0.01) << v.dump();
+    }
   }
   // a tighter limit than the path was planned for: check says which, exit 1
   const Outcome tight = visvol("check " + *pack_ + " " + b + ".csv --max-agl 40");

@@ -56,6 +56,7 @@ nlohmann::json vertices_json(const rt::PathCheck& c, const std::vector<rt::Vec3>
                    {"fp", v.fp},
                    {"ground_m", v.ground_m},
                    {"clearance_m", v.clearance_m},
+                   {"early_m", rt::finite_or_null(v.early_m)},
                    {"climb_deg", v.climb_deg},
                    {"turn_radius_m", rt::finite_or_null(v.turn_radius_m)},
                    {"seen_by", seen}});

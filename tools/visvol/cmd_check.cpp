@@ -35,8 +35,8 @@ struct CheckOptions {
 
 // One row per point flown; '#' is the file's vertex, '~' a point of a loiter's circle.
 void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path, const std::vector<int>& vertex_of) {
-  std::printf("%5s %12s %12s %8s %8s %9s %7s %9s  %s\n", "#", "x_m", "y_m", "z_m", "F_p", "clear_m", "climb", "turn_m",
-              "seen by");
+  std::printf("%5s %12s %12s %8s %8s %9s %9s %7s %9s  %s\n", "#", "x_m", "y_m", "z_m", "F_p", "clear_m", "early_m",
+              "climb", "turn_m", "seen by");
   for (std::size_t i = 0; i < path.size(); ++i) {
     const std::string number = vertex_of[i] >= 0 ? std::to_string(vertex_of[i]) : "~";
     const rt::VertexCheck& v = c.per_vertex[i];
@@ -44,8 +44,10 @@ void print_vertices(const rt::PathCheck& c, const std::vector<rt::Vec3>& path, c
     for (std::size_t k = 0; k < v.seen_by.size(); ++k) {
       if (v.seen_by[k]) seen += (seen.empty() ? "" : ",") + std::to_string(k + 1);
     }
-    std::printf("%5s %12.1f %12.1f %8.1f %8.5f %9.1f %7.1f %9s  %s\n", number.c_str(), path[i].x(), path[i].y(),
-                path[i].z(), v.fp, v.clearance_m, v.climb_deg,
+    char early[32] = "-";
+    if (std::isfinite(v.early_m)) std::snprintf(early, sizeof early, "%.1f", v.early_m);
+    std::printf("%5s %12.1f %12.1f %8.1f %8.5f %9.1f %9s %7.1f %9s  %s\n", number.c_str(), path[i].x(), path[i].y(),
+                path[i].z(), v.fp, v.clearance_m, early, v.climb_deg,
                 std::isfinite(v.turn_radius_m) ? std::to_string(std::lround(v.turn_radius_m)).c_str() : "-",
                 seen.empty() ? "-" : seen.c_str());
   }

@@ -355,6 +355,12 @@ TEST(PathCheck, AShortLegIsFlownAtItsLowerHeightFromTheRadiusBeforeItsStart) {
   EXPECT_FALSE(flown.met);
   EXPECT_NEAR(flown.worst, 80.0 - 60.0, 1e-6);
   EXPECT_NEAR(flown.satisfied_fraction, 1.0 - 80.0 / 550.0, 0.02);  // the leg's samples
+  // where: on the leg from vertex 1, the others' clear
+  ASSERT_EQ(stepped.per_vertex.size(), 4u);
+  EXPECT_NEAR(stepped.per_vertex[1].early_m, 20.0, 1e-6);
+  EXPECT_GE(stepped.per_vertex[0].early_m, 30.0);
+  EXPECT_GE(stepped.per_vertex[2].early_m, 30.0);
+  EXPECT_TRUE(std::isinf(stepped.per_vertex[3].early_m));
   const PathCheck ramped = checker->check(path_with_leg(36));
   EXPECT_TRUE(ramped.all_met) << ramped.envelope[6].worst;
 }

@@ -125,8 +125,8 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
   c.add_option("--acceptance-radius", o.acceptance_radius_m,
                "How far before a waypoint the autopilot takes the next one and its altitude, m: the path clears "
-               "the ground this far behind each point, and a leg no longer than this at its lower end from this "
-               "far before its start (fixed-wing 100, multirotor 0)");
+               "the ground this far behind each point (a PX4 fixed-wing at least 80 m), and a leg no longer than "
+               "that at its lower end from this far before its start (fixed-wing 100, multirotor 0)");
   c.add_option("--autopilot", o.autopilot,
                "The vehicle's flight stack, px4 or ardupilot: a .plan mission's firmware (default: the vehicle's)");
 }

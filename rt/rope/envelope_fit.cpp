@@ -184,8 +184,9 @@ struct SegmentMiss {
 // to report, not the fit's to chase for its every pass.
 struct GroundBehind {
   const TrackGround* track = nullptr;
-  double reach_m = 0;   // the acceptance radius and two of the fit's sample steps
-  double radius_m = 0;  // the acceptance radius
+  double reach_m = 0;   // the altitude hold (rt::altitude_hold_m) and two of the fit's sample steps
+  double hold_m = 0;    // the altitude hold: a segment no longer than it is held
+  double radius_m = 0;  // the acceptance radius: where the next waypoint is taken
   double start_z = 0, end_z = 0, length_m = 0;
   double climb_per_m = 0, descent_per_m = 0;
   double above_m = 0;  // the clearance and the fit's margin
@@ -206,7 +207,7 @@ struct GroundBehind {
     return std::min(start_z + climb_per_m * along_m, end_z + descent_per_m * (length_m - along_m)) - above_m;
   }
 
-  // The held stretches of the segments no longer than the radius beside
+  // The held stretches of the segments no longer than the hold beside
   // vertex i of a path whose vertices lie `along` the track (a split point
   // lies on it): flown no lower than the lower of their two heights, so
   // vertex i's height must clear their ground (track_ground.hpp).
@@ -215,9 +216,8 @@ struct GroundBehind {
     const std::size_t n = along.size();
     double ground = kNoGround;
     auto stretch = [&](std::size_t first) {  // segment first..first+1
-      if (along[first + 1] - along[first] > radius_m) return;
-      const double from = std::max(along[first] - radius_m, 0.0);
-      const double to = first + 2 == n ? along[first + 1] : along[first + 1] - radius_m;
+      if (along[first + 1] - along[first] > hold_m) return;
+      const double from = std::max(along[first] - radius_m, 0.0), to = along[first + 1] - radius_m;
       if (to > from) ground = std::max(ground, track->highest_m(from, to));
     };
     if (i > 0) stretch(i - 1);
@@ -320,8 +320,10 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
   auto set_track = [&]() {
     if (!(spec.envelope.acceptance_radius_m > 0)) return;
     track.emplace(terrain, p.data(), static_cast<int>(p.size()));
+    const double hold_m = altitude_hold_m(spec.envelope);
     behind = {&*track,
-              spec.envelope.acceptance_radius_m + 2 * step,
+              hold_m + 2 * step,
+              hold_m,
               spec.envelope.acceptance_radius_m,
               p.front().z(),
               p.back().z(),
@@ -329,7 +331,7 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
               climb,
               descent,
               spec.envelope.clearance_m + spec.margin_m,
-              spec.envelope.acceptance_radius_m + step,
+              hold_m + step,
               spec.envelope.clearance_m};
   };
   std::vector<double> lo(p.size()), hi(p.size()), z;
@@ -361,23 +363,14 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     const std::vector<double> along = along_m(p);  // of the vertices before the splits
     for (std::size_t i = 1; i + 1 < p.size(); ++i)
       if (behind.held_out_of_reach(along, i, z[i])) feasible = false;
-    // The fixed end under its last segment's held stretch (a segment no
-    // longer than the radius): only a shorter segment mends it, down to the
-    // radius itself behind the end, so not where the end is under that too.
-    const double end_needs_m = p.back().z() - spec.envelope.clearance_m + kHeightTolM;
-    const bool end_under = behind.held_uncapped(along, p.size() - 1) > end_needs_m;
-    const bool end_mendable = end_under && behind.uncapped(along.back()) <= end_needs_m;
+    // the fixed end under its last segment's held stretch: the check's to
+    // report (nothing the fit moves mends it)
+    if (behind.held_uncapped(along, p.size() - 1) + spec.envelope.clearance_m - kHeightTolM > p.back().z()) {
+      feasible = false;
+    }
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
       const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i]);
       if (m.out_of_reach) feasible = false;
-      if (i + 2 == p.size() && end_under) {
-        feasible = false;
-        if (end_mendable && p.size() + splits.size() < max_points &&
-            std::hypot(p[i + 1].x() - p[i].x(), p[i + 1].y() - p[i].y()) >= kMinSplitM) {
-          splits.emplace_back(i, p[i] + kSplitMax * (p[i + 1] - p[i]));
-          continue;
-        }
-      }
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;
       // between the vertices the band asks both vertices to move by the miss;
@@ -417,11 +410,21 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
       hi.insert(hi.begin() + at, 0.0);
       changed = true;
     }
-    // the new vertices' bands, between their neighbours after every split
-    // (a split only narrows the held stretches of the vertices beside it)
+    // the new vertices' bands, between their neighbours after every split;
+    // a neighbour's floor only rises (a split may make a segment beside it
+    // short enough to be held)
     if (!splits.empty()) {
       const std::vector<double> split_along = along_m(p);
-      for (std::size_t k = 0; k < splits.size(); ++k) set_band(splits[k].first + 1 + k, split_along);
+      for (std::size_t k = 0; k < splits.size(); ++k) {
+        const std::size_t at = splits[k].first + 1 + k;
+        set_band(at, split_along);
+        for (std::size_t v : {at - 1, at + 1}) {
+          if (v == 0 || v + 1 >= p.size()) continue;
+          const double ground = behind.held(split_along, v);
+          const double floor = band_at(spec, terrain, p[v].x(), p[v].y(), ground).lo;
+          lo[v] = std::max(lo[v], std::min(floor, hi[v]));
+        }
+      }
     }
     // the arcs inside the corners: the corner (every vertex on its spot)
     // moves by the miss over the share of that move the arc's heights

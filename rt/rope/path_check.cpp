@@ -238,7 +238,8 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // that far behind it and one sample step more (so that a path met at the
   // samples is met between them); on a segment no longer than the radius,
   // no more than the lower of its two heights over its held stretch.
-  const double early_m = e.acceptance_radius_m;
+  const double early_m = altitude_hold_m(e);      // how early a height may be flown
+  const double switch_m = e.acceptance_radius_m;  // where the next waypoint is taken
   std::optional<TrackGround> track;
   if (early_m > 0) track.emplace(terrain_, v, count);
   Tally early;
@@ -254,7 +255,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     const double wanted = std::ceil(len / spec_.sample_step_m);
     const int m = wanted >= 1 ? static_cast<int>(std::min(wanted, double(kMaxSegmentSamples))) : 1;
     const double leg_m = track ? track->at_vertex_m(s + 1) - track->at_vertex_m(s) : 0.0;
-    const double held_m = track && leg_m <= early_m ? track->held_clearance_m(s, s + 1, a.z(), b.z(), early_m)
+    const double held_m = track && leg_m <= early_m ? track->held_clearance_m(s, s + 1, a.z(), b.z(), switch_m)
                                                     : std::numeric_limits<double>::infinity();
     for (int k = 0; k <= m; ++k) {
       const double w = len / m * ((k == 0 || k == m) ? 0.5 : 1.0);

@@ -65,9 +65,8 @@ double TrackGround::highest_m(double from_m, double to_m) const {
 }
 
 TrackGround::Stretch TrackGround::held_stretch(int first, int last, double radius_m) const {
-  const bool final_leg = last + 1 >= static_cast<int>(vertex_m_.size());
   Stretch s;
-  s.to_m = std::min(final_leg ? at_vertex_m(last) : at_vertex_m(last) - radius_m, length_m());
+  s.to_m = std::min(at_vertex_m(last) - radius_m, length_m());
   s.from_m = std::max(at_vertex_m(first) - radius_m, 0.0);
   return s;
 }

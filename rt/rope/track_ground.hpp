@@ -2,21 +2,21 @@
 // an aircraft that takes its heights early flies over.
 //
 // A fixed-wing's autopilot takes the next waypoint, and the height it climbs
-// or descends to, up to its acceptance radius R before the waypoint it flies
-// to (PX4's L1 or NPFG switch distance, about 95 m at 20 m/s; ArduPlane's
-// WP_RADIUS). PX4 ramps its altitude target over the leg less R (its
-// first-order hold), so it flies each planned height up to R early; on a
-// leg no longer than R it holds no ramp and steps to the next height at the
-// switch, R before the leg's start; ArduPlane ramps over the whole leg,
-// holding the height before until the leg begins. An independent
-// simulation of PX4 flying visvol's missions crossed a crest 14.8 m over it
-// where the plan had 31 m: the descent after the crest began a leg early. A
-// path keeps its clearance flown either way where the height at every point
-// clears the highest ground under the R metres of track behind it, and on
-// every leg no longer than R the lower of its two heights clears the
-// highest ground of the leg's held stretch (held_stretch below;
-// VehicleEnvelope::acceptance_radius_m; rt::PathChecker's "early-descent").
-// (PX4 before 1.14 with MIS_ALTMODE 0 steps on every leg: not modelled.)
+// or descends to, at its acceptance radius R before the waypoint it flies to
+// (PX4's L1 or NPFG switch distance, about 95 m at 20 m/s; ArduPlane's
+// WP_RADIUS). PX4 ramps its altitude target over the leg less H (its
+// first-order hold; H = rt::altitude_hold_m, R and at least its loiter
+// radius), so it flies each planned height up to H early; on a leg no
+// longer than H it holds no ramp and steps to the leg's end height where it
+// takes that waypoint, R before the leg's start. ArduPlane ramps over the
+// whole leg. An independent simulation of PX4 flying visvol's missions
+// crossed a crest 14.8 m over it where the plan had 31 m: the descent after
+// the crest began a leg early. A path keeps its clearance flown either way
+// where the height at every point clears the highest ground under the H
+// metres of track behind it, and on every leg no longer than H the lower of
+// its two heights clears the highest ground of the leg's held stretch
+// (held_stretch below; rt::PathChecker's "early-descent"). (PX4 before 1.14
+// with MIS_ALTMODE 0 steps on every leg: not modelled.)
 //
 // Positions along the track are horizontal distances from the first vertex,
 // m. The terrain is bilinear: along a straight leg it is one quadratic between
@@ -50,10 +50,10 @@ class TrackGround {
   // acceptance radius `radius_m` flies between the heights of vertices
   // `first` and `last` (a leg, or the leg a thinning makes of the vertices
   // between): from `radius_m` before `first`, where it takes `last` as its
-  // waypoint, to `radius_m` before `last`, where it takes the one after; to
-  // the end of the track on its last leg. The legs' stretches tile the
-  // track. Clamped to the track: empty (to_m <= from_m) where it lies wholly
-  // before the start.
+  // waypoint, to `radius_m` before `last`, where it takes the one after (on
+  // the last leg, the mission's next item: the end's own height). The legs'
+  // stretches tile the track up to `radius_m` before its end. Clamped to the
+  // track: empty (to_m <= from_m) where it lies wholly before the start.
   struct Stretch {
     double from_m = 0, to_m = 0;
     bool empty() const { return !(to_m > from_m); }

@@ -1,5 +1,6 @@
 #include "rt/rope/vehicle.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -73,6 +74,12 @@ Status validate(const VehicleEnvelope& v) {
     return bad("max-altitude", v.max_altitude_m, "is not a height in -100000..100000 m");
   }
   return Status::ok_status();
+}
+
+double altitude_hold_m(const VehicleEnvelope& e) {
+  if (!(e.acceptance_radius_m > 0)) return 0.0;
+  const bool px4_wing = e.type == VehicleType::fixed_wing && e.autopilot == Autopilot::px4;
+  return px4_wing ? std::max(e.acceptance_radius_m, kPx4LoiterRadiusM) : e.acceptance_radius_m;
 }
 
 }  // namespace visvol::rt

@@ -57,6 +57,18 @@ struct VehicleEnvelope {
   Autopilot autopilot = Autopilot::px4;
 };
 
+// PX4's fixed-wing controller ramps a leg's altitude (its first-order hold)
+// to the larger of its switch distance and the waypoint's loiter radius
+// before the waypoint, and on a leg no longer than that steps to the
+// waypoint's altitude instead; a plain mission waypoint's loiter radius is
+// NAV_LOITER_RAD, 80 m by default.
+inline constexpr double kPx4LoiterRadiusM = 80.0;
+
+// How far before a waypoint the vehicle may already fly at its height, m
+// (rt::TrackGround): the acceptance radius, and for a PX4 fixed-wing with
+// one, at least kPx4LoiterRadiusM. 0 where the vehicle reaches each waypoint.
+double altitude_hold_m(const VehicleEnvelope& e);
+
 // The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m
 // or wider, waypoints taken 100 m early) and "multirotor" (8 m/s, climb 60
 // deg, descent 45 deg, no turn limit, each waypoint reached). Errc::invalid_argument naming the value otherwise.

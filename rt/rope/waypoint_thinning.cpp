@@ -99,14 +99,14 @@ std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTo
 
 LegTest held_legs(const std::vector<Vec3>& fitted, const VehicleEnvelope& envelope,
                   const fields::Heightfield& terrain) {
-  const double radius_m = envelope.acceptance_radius_m;
+  const double radius_m = envelope.acceptance_radius_m, hold_m = altitude_hold_m(envelope);
   if (!(radius_m > 0)) return [](int, int) { return true; };
   auto track = std::make_shared<const TrackGround>(terrain, fitted.data(), static_cast<int>(fitted.size()));
   const double needed_m = envelope.clearance_m + kThinnedHeldMarginM;
   const Vec3* v = fitted.data();
-  return [track, needed_m, radius_m, v](int first, int last) {
-    // a leg longer than the radius is ramped, not held (track_ground.hpp)
-    if (std::hypot(v[last].x() - v[first].x(), v[last].y() - v[first].y()) > radius_m) return true;
+  return [track, needed_m, radius_m, hold_m, v](int first, int last) {
+    // a leg longer than the hold is ramped, not held (track_ground.hpp)
+    if (std::hypot(v[last].x() - v[first].x(), v[last].y() - v[first].y()) > hold_m) return true;
     return track->held_clearance_m(first, last, v[first].z(), v[last].z(), radius_m) >= needed_m;
   };
 }

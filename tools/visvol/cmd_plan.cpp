@@ -215,8 +215,8 @@ std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double s
   const auto early = std::find_if(check.envelope.begin(), check.envelope.end(),
                                   [](const rt::LimitResult& l) { return l.name == "early-descent"; });
   if (early == check.envelope.end() || early->met || path.size() < 2) return "";
-  double left_m = v.acceptance_radius_m + rt::kSightStepPosts * spacing_m + 1.0,
-         highest_m = -std::numeric_limits<double>::infinity();
+  const double hold_m = rt::altitude_hold_m(v);
+  double left_m = hold_m + rt::kSightStepPosts * spacing_m + 1.0, highest_m = -std::numeric_limits<double>::infinity();
   for (std::size_t k = path.size() - 1; k > 0 && left_m > 0; --k) {
     const rt::Vec3 &b = path[k], &a = path[k - 1];
     const double leg_m = std::hypot(b.x() - a.x(), b.y() - a.y());
@@ -233,7 +233,7 @@ std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double s
                 "early-descent: the end at %.1f m is taken %.0f m early, over ground up to %.1f m high on this "
                 "path's way to it: an end under %.0f m cannot clear that ground (a plan to a higher end may come "
                 "another way: check it again)",
-                path.back().z(), v.acceptance_radius_m, highest_m, needed_m);
+                path.back().z(), hold_m, highest_m, needed_m);
   return text;
 }
 

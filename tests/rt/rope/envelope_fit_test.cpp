@@ -302,6 +302,35 @@ TEST_F(FitEarlyDescent, AShortLegsEndIsHeldOverTheGroundFromTheRadiusBeforeIt) {
   for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
 }
 
+// An end whose last leg is held over the ridge (it is taken 100 m before
+// the leg's start, 70 m past the ridge, and the end is the lower): every
+// point clears the ridge 100 m behind it, but no fit moves the end, so the
+// path is not inside the envelope, as the check says.
+TEST_F(FitEarlyDescent, AnEndUnderItsLastLegsHeldStretchIsNotInsideTheEnvelope) {
+  const std::vector<Vec3> to_low_end = {at(2, 100), at(27, 100), at(35, 80)};  // the last leg 80 m
+  EnvelopeFitSpec spec;
+  spec.envelope = fixed_wing;
+  const EnvelopeFit fit = fit_to_envelope(to_low_end, spec, t);
+  EXPECT_FALSE(fit.feasible);
+  const PathCheck c = judge(fit.path);
+  for (std::size_t k = 0; k < 6; ++k) EXPECT_TRUE(c.envelope[k].met) << c.envelope[k].name;
+  EXPECT_FALSE(c.envelope[6].met);
+  EXPECT_EQ(fit.path.back(), to_low_end.back());
+}
+
+// A vertex just before a low end, on a short leg held over the ridge: the
+// end keeps it within a few metres of its own height, under the floor the
+// ridge asks for, so the path is not inside the envelope.
+TEST_F(FitEarlyDescent, AHeldFloorTheEndPutsOutOfReachIsNotInsideTheEnvelope) {
+  const std::vector<Vec3> near_the_end = {at(2, 100), at(27, 100), at(34.6, 80), at(35, 80)};
+  EnvelopeFitSpec spec;
+  spec.envelope = fixed_wing;
+  const EnvelopeFit fit = fit_to_envelope(near_the_end, spec, t);
+  EXPECT_FALSE(fit.feasible);
+  const PathCheck c = judge(fit.path);
+  EXPECT_FALSE(c.envelope[6].met);
+}
+
 // An end the user put low just past the ridge: no path to it clears the
 // ridge flown that way, and the check says so; the fit holds everything
 // else and does not chase the floor the end puts out of reach.

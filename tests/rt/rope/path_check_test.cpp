@@ -316,6 +316,18 @@ TEST(PathCheck, ADescentJustPastARidgeIsFlownOverTheRidge) {
   EXPECT_FALSE(early.all_met);
   const PathCheck held = checker->check(path_descending_from(31));
   EXPECT_TRUE(held.all_met) << held.envelope[6].worst;
+  // a radius of 45 m: PX4 still ramps to 80 m (its loiter radius) before a
+  // waypoint, ArduPlane to 45 m
+  s.envelope.acceptance_radius_m = 45;
+  const auto px4_45 = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(px4_45.ok());
+  EXPECT_NEAR(px4_45->check(path_descending_from(21)).envelope[6].worst, 30.0 - 70.0 * std::tan(14.0 * M_PI / 180.0),
+              0.5);
+  s.envelope.autopilot = Autopilot::ardupilot;
+  const auto ardupilot_45 = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(ardupilot_45.ok());
+  EXPECT_NEAR(ardupilot_45->check(path_descending_from(21)).envelope[6].worst,
+              30.0 - 35.0 * std::tan(14.0 * M_PI / 180.0), 0.5);
   s.envelope = *vehicle_preset("multirotor");
   s.envelope.clearance_m = 30;
   const auto multirotor = PathChecker::create(t, nullptr, s);

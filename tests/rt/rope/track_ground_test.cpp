@@ -89,9 +89,10 @@ TEST(TrackGround, LegsOfNoLengthAndOneVertexAreTracksOfNoLength) {
 }
 
 // The held stretches of a path's legs (where an autopilot taking each
-// waypoint R early flies between two waypoints' heights) tile its track:
-// each from R before its leg's start to R before its end, the last to the
-// end of the track, those of legs within R of the start empty.
+// waypoint R early flies between two waypoints' heights) tile its track up
+// to R before its end (the end's own height, and the mission's next item,
+// from there): each from R before its leg's start to R before its end, those
+// of legs within R of the start empty.
 TEST(TrackGround, HeldStretchesTileTheTrack) {
   const fields::Heightfield t = fields::testing::fractal(64, 12, 30.0, 200.0);
   std::mt19937 rng(40);
@@ -104,8 +105,7 @@ TEST(TrackGround, HeldStretchesTileTheTrack) {
     double covered_to = 0;
     for (int s = 0; s + 1 < static_cast<int>(track.size()); ++s) {
       const TrackGround::Stretch h = g.held_stretch(s, s + 1, r);
-      const bool last = s + 2 == static_cast<int>(track.size());
-      EXPECT_DOUBLE_EQ(h.to_m, last ? g.length_m() : g.at_vertex_m(s + 1) - r);
+      EXPECT_DOUBLE_EQ(h.to_m, g.at_vertex_m(s + 1) - r);
       if (h.empty()) {
         EXPECT_LE(g.at_vertex_m(s + 1) - r, 0.0) << "leg " << s << " radius " << r;
         continue;
@@ -115,7 +115,7 @@ TEST(TrackGround, HeldStretchesTileTheTrack) {
       const double lower = std::min(track[static_cast<std::size_t>(s)].z(), track[static_cast<std::size_t>(s + 1)].z());
       EXPECT_DOUBLE_EQ(g.held_clearance_m(s, s + 1, lower, lower + 7, r), lower - g.highest_m(h.from_m, h.to_m));
     }
-    EXPECT_DOUBLE_EQ(covered_to, g.length_m());
+    EXPECT_DOUBLE_EQ(covered_to, std::max(g.length_m() - r, 0.0));
   }
 }
 
@@ -137,6 +137,9 @@ TEST(TrackGround, AHeldStretchSpansTheLegsItJoins) {
   EXPECT_TRUE(std::isnan(g.held_clearance_m(3, 6, 80.0, NAN, 50.0)));
   EXPECT_TRUE(g.held_stretch(0, 1, 50.0).empty());  // 40 m from the start: taken before it
   EXPECT_TRUE(std::isinf(g.held_clearance_m(0, 1, -1e9, -1e9, 50.0)));
+  const TrackGround::Stretch last = g.held_stretch(8, 9, 50.0);  // to 50 m before the end
+  EXPECT_DOUBLE_EQ(last.from_m, 270.0);
+  EXPECT_DOUBLE_EQ(last.to_m, 310.0);
 }
 
 }  // namespace

@@ -51,5 +51,24 @@ TEST(Vehicle, BadValuesAreRefusedByKey) {
   refused([](VehicleEnvelope& v) { v.max_agl_m = 20; }, "max-agl");
 }
 
+// How early a height may be flown: PX4's fixed-wing ramps its altitude to no
+// nearer its waypoint than its loiter radius (80 m by default), whatever the
+// mission's acceptance radius; ArduPlane to its radius; a multirotor, or a
+// radius of 0, reaches each waypoint.
+TEST(Vehicle, TheAltitudeHoldIsAtLeastPx4sLoiterRadius) {
+  VehicleEnvelope v = *vehicle_preset("fixed-wing");
+  EXPECT_EQ(altitude_hold_m(v), 100.0);
+  v.acceptance_radius_m = 45;
+  EXPECT_EQ(altitude_hold_m(v), kPx4LoiterRadiusM);
+  v.autopilot = Autopilot::ardupilot;
+  EXPECT_EQ(altitude_hold_m(v), 45.0);
+  v.acceptance_radius_m = 0;
+  v.autopilot = Autopilot::px4;
+  EXPECT_EQ(altitude_hold_m(v), 0.0);
+  VehicleEnvelope m = *vehicle_preset("multirotor");
+  m.acceptance_radius_m = 45;
+  EXPECT_EQ(altitude_hold_m(m), 45.0);
+}
+
 }  // namespace
 }  // namespace visvol::rt

@@ -228,9 +228,14 @@ struct GroundBehind {
     const double ground = held_uncapped(along, i);
     return ground == kNoGround ? kNoGround : std::min(ground, reachable(along[i]));
   }
-  bool held_out_of_reach(const std::vector<double>& along, std::size_t i, double z_m) const {
-    const double ground = held_uncapped(along, i);
-    return ground != kNoGround && ground > held(along, i) && z_m < ground + clearance_m - kHeightTolM;
+  // Segment i (heights z_i to z_next) no longer than the hold, judged as
+  // the checker judges it (TrackGround::held_clearance_m, by position).
+  bool held_unmet(const std::vector<double>& along, std::size_t i, double z_i, double z_next) const {
+    if (track == nullptr || along[i + 1] - along[i] > hold_m) return false;
+    const bool descends = z_next < z_i;
+    const double from = std::max(along[i] - radius_m, 0.0);
+    const double to = descends ? along[i + 1] - radius_m : std::min(along[i + 1] - radius_m, along[i]);
+    return to > from && (descends ? z_next : z_i) < track->highest_m(from, to) + clearance_m - kHeightTolM;
   }
 };
 
@@ -361,13 +366,11 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     // needed hundreds, and left them over the band between their vertices).
     std::vector<std::pair<std::size_t, Vec3>> splits;
     const std::vector<double> along = along_m(p);  // of the vertices before the splits
-    for (std::size_t i = 1; i + 1 < p.size(); ++i)
-      if (behind.held_out_of_reach(along, i, z[i])) feasible = false;
-    // the fixed end under its last segment's held stretch: the check's to
-    // report (nothing the fit moves mends it)
-    if (behind.held_uncapped(along, p.size() - 1) + spec.envelope.clearance_m - kHeightTolM > p.back().z()) {
-      feasible = false;
-    }
+    // every segment no longer than the hold judged as the checker judges it:
+    // a floor the ends put out of reach, a fixed end under its segment's
+    // stretch or a floor under a lowered ceiling is the check's to report
+    for (std::size_t i = 0; i + 1 < p.size(); ++i)
+      if (behind.held_unmet(along, i, z[i], z[i + 1])) feasible = false;
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
       const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i]);
       if (m.out_of_reach) feasible = false;

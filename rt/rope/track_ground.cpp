@@ -72,11 +72,13 @@ TrackGround::Stretch TrackGround::held_stretch(int first, int last, double radiu
 }
 
 double TrackGround::held_clearance_m(int first, int last, double first_z_m, double last_z_m, double radius_m) const {
-  const Stretch s = held_stretch(first, last, radius_m);
-  if (s.empty()) return std::numeric_limits<double>::infinity();
-  // a height that is not a number holds nothing (std::min would drop it)
+  Stretch s = held_stretch(first, last, radius_m);
+  // a height that is not a number holds nothing
   if (std::isnan(first_z_m) || std::isnan(last_z_m)) return std::numeric_limits<double>::quiet_NaN();
-  return std::min(first_z_m, last_z_m) - highest_m(s.from_m, s.to_m);
+  const bool descends = last_z_m < first_z_m;
+  if (!descends) s.to_m = std::min(s.to_m, at_vertex_m(first));
+  if (s.empty()) return std::numeric_limits<double>::infinity();
+  return (descends ? last_z_m : first_z_m) - highest_m(s.from_m, s.to_m);
 }
 
 }  // namespace visvol::rt

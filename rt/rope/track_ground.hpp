@@ -60,9 +60,11 @@ class TrackGround {
     double length_m() const { return empty() ? 0.0 : to_m - from_m; }
   };
   Stretch held_stretch(int first, int last, double radius_m) const;
-  // The least height over the ground on that stretch of an aircraft held
-  // no lower than the lower of `first_z_m` and `last_z_m`: +infinity where
-  // the stretch is empty.
+  // The least height over the ground on that stretch of an aircraft going
+  // from `first_z_m` to `last_z_m`: descending, no lower than `last_z_m` on
+  // all of it; climbing (or level), no lower than `first_z_m` up to `first`
+  // (past it the plan's own heights, which it climbs to no later than
+  // planned, starting the radius early). +infinity where that is empty.
   double held_clearance_m(int first, int last, double first_z_m, double last_z_m, double radius_m) const;
 
  private:

@@ -102,12 +102,13 @@ LegTest held_legs(const std::vector<Vec3>& fitted, const VehicleEnvelope& envelo
   const double radius_m = envelope.acceptance_radius_m, hold_m = altitude_hold_m(envelope);
   if (!(radius_m > 0)) return [](int, int) { return true; };
   auto track = std::make_shared<const TrackGround>(terrain, fitted.data(), static_cast<int>(fitted.size()));
+  auto v = std::make_shared<const std::vector<Vec3>>(fitted);
   const double needed_m = envelope.clearance_m + kThinnedHeldMarginM;
-  const Vec3* v = fitted.data();
-  return [track, needed_m, radius_m, hold_m, v](int first, int last) {
+  return [track, v, needed_m, radius_m, hold_m](int first, int last) {
+    const Vec3 &a = (*v)[static_cast<std::size_t>(first)], &b = (*v)[static_cast<std::size_t>(last)];
     // a leg longer than the hold is ramped, not held (track_ground.hpp)
-    if (std::hypot(v[last].x() - v[first].x(), v[last].y() - v[first].y()) > hold_m) return true;
-    return track->held_clearance_m(first, last, v[first].z(), v[last].z(), radius_m) >= needed_m;
+    if (std::hypot(b.x() - a.x(), b.y() - a.y()) > hold_m) return true;
+    return track->held_clearance_m(first, last, a.z(), b.z(), radius_m) >= needed_m;
   };
 }
 

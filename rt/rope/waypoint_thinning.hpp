@@ -61,8 +61,8 @@ std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTo
 // the fitted track by the clearance and kThinnedHeldMarginM (PX4 steps to
 // the next height on such a leg from the radius before its start: the
 // longer the leg, the more ground it is held over). Always true for a longer
-// leg and without a radius. Keeps a pointer to `fitted`'s vertices, which
-// must outlive it.
+// leg and without a radius. Keeps a copy of `fitted` and a pointer to
+// `terrain`, which must outlive it.
 inline constexpr double kThinnedHeldMarginM = 1.0;
 LegTest held_legs(const std::vector<Vec3>& fitted, const VehicleEnvelope& envelope, const fields::Heightfield& terrain);
 

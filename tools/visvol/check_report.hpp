@@ -32,7 +32,8 @@ struct Holds {
 nlohmann::json check_json(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope, const Holds& holds = {},
                           const std::vector<std::string>& more_unmet = {});
 
-// Per vertex: x_m, y_m, z_m, fp, ground_m, clearance_m, climb_deg, turn_radius_m, seen_by.
+// Per vertex: x_m, y_m, z_m, fp, ground_m, clearance_m, early_m (null where none), climb_deg,
+// turn_radius_m, seen_by.
 // (climb_deg is the straight segment's to the next vertex; a fixed-wing's arc
 // by a corner may climb more steeply, and max-climb's worst includes it.)
 nlohmann::json vertices_json(const rt::PathCheck& check, const std::vector<rt::Vec3>& path);

@@ -205,11 +205,13 @@ double landing_loiter_clearance(const fields::FieldSampler<PackLevel>& finest, c
 }
 
 // The early descent unmet at the end: an autopilot takes the end's height
-// its acceptance radius early, over the ground behind the end, and no path
-// to this end clears that. The height that does, for the operator (the
-// terrain sampled every metre back along the path, a metre over it for what
-// lies between; as far back as the check looks, a sample step more than the
-// radius); "" where the end is not the reason.
+// up to its hold distance early (rt::altitude_hold_m), over the ground behind
+// the end, and no path to this end clears that. The height that does, for
+// the operator (the terrain sampled every metre back along the path, a metre
+// over it for what lies between; as far back as the check looks, a sample
+// step more than the hold); "" where the end is not the reason (a last leg's
+// held stretch is this path's, not every path's: its vertex's early_m says
+// where).
 std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double spacing_m, const rt::VehicleEnvelope& v,
                          const std::vector<rt::Vec3>& path, const rt::PathCheck& check) {
   const auto early = std::find_if(check.envelope.begin(), check.envelope.end(),

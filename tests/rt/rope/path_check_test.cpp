@@ -377,6 +377,33 @@ TEST(PathCheck, AShortLegIsFlownAtItsLowerHeightFromTheRadiusBeforeItsStart) {
   EXPECT_TRUE(ramped.all_met) << ramped.envelope[6].worst;
 }
 
+// A climb up a slope on legs between the acceptance radius (45 m) and PX4's
+// hold (80 m): a leg's held stretch runs past its start, where the aircraft
+// is already climbing to the leg's end; the start's height is held only up
+// to the start, so a climb 31 m over a 14 degree slope meets it.
+TEST(PathCheck, AClimbIsHeldAtItsStartsHeightOnlyUpToItsStart) {
+  fields::Heightfield t = blank(80, 5, 10.0, 0.0f);
+  const double slope = std::tan(14.0 * M_PI / 180.0);
+  for (int i = 0; i < 80; ++i)
+    for (int j = 0; j < 5; ++j) t.at(i, j) = static_cast<float>(10.0 * i * slope);
+  std::vector<Vec3> climb;
+  for (int i = 2; i <= 72; i += 7) climb.emplace_back(t.x_of(i), t.y_of(2), 10.0 * i * slope + 31.0);
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");
+  s.envelope.acceptance_radius_m = 45;
+  s.envelope.max_climb_deg = 15;
+  const auto checker = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const PathCheck c = checker->check(climb);
+  EXPECT_TRUE(c.all_met) << c.envelope[6].name << " worst " << c.envelope[6].worst;
+  // the same legs flown down the slope: each leg's lower end is held from
+  // 45 m before the leg's start, over ground 115 m of slope above its own
+  std::vector<Vec3> descent(climb.rbegin(), climb.rend());
+  const PathCheck d = checker->check(descent);
+  EXPECT_FALSE(d.envelope[6].met);
+  EXPECT_NEAR(d.envelope[6].worst, 31.0 - (45.0 + 70.0) * slope, 1e-4);  // float terrain
+}
+
 TEST(PathCheck, AFixedWingsArcClimbsMoreSteeplyThanItsLegs) {
   const fields::Heightfield t = blank(60, 60, 10.0, 0.0f);
   // two 200 m legs climbing at 12 deg with a right angle between them: the

@@ -113,7 +113,8 @@ TEST(TrackGround, HeldStretchesTileTheTrack) {
       EXPECT_NEAR(h.from_m, covered_to, 1e-9) << "leg " << s;
       covered_to = h.to_m;
       const double lower = std::min(track[static_cast<std::size_t>(s)].z(), track[static_cast<std::size_t>(s + 1)].z());
-      EXPECT_DOUBLE_EQ(g.held_clearance_m(s, s + 1, lower, lower + 7, r), lower - g.highest_m(h.from_m, h.to_m));
+      // descending: the lower height over all of it
+      EXPECT_DOUBLE_EQ(g.held_clearance_m(s, s + 1, lower + 7, lower, r), lower - g.highest_m(h.from_m, h.to_m));
     }
     EXPECT_DOUBLE_EQ(covered_to, std::max(g.length_m() - r, 0.0));
   }
@@ -133,6 +134,10 @@ TEST(TrackGround, AHeldStretchSpansTheLegsItJoins) {
   EXPECT_DOUBLE_EQ(joined.to_m, 190.0);
   EXPECT_DOUBLE_EQ(g.held_clearance_m(3, 6, 80.0, 60.0, 50.0), 20.0);  // the lower height over the mast
   EXPECT_DOUBLE_EQ(g.held_clearance_m(4, 6, 80.0, 60.0, 50.0), 60.0);  // from 110 m: past the mast
+  // climbing, the start's height only up to the start (then the plan's):
+  // from 10 m before a leg 10 m short of the mast, nothing of it
+  EXPECT_DOUBLE_EQ(g.held_clearance_m(2, 6, 80.0, 60.0, 10.0), 20.0);
+  EXPECT_DOUBLE_EQ(g.held_clearance_m(2, 6, 60.0, 80.0, 10.0), 60.0);
   EXPECT_TRUE(std::isnan(g.held_clearance_m(3, 6, NAN, 60.0, 50.0)));
   EXPECT_TRUE(std::isnan(g.held_clearance_m(3, 6, 80.0, NAN, 50.0)));
   EXPECT_TRUE(g.held_stretch(0, 1, 50.0).empty());  // 40 m from the start: taken before it

@@ -215,10 +215,10 @@ struct GroundBehind {
     if (track == nullptr || along.size() < 2) return kNoGround;
     const std::size_t n = along.size();
     double ground = kNoGround;
-    auto stretch = [&](std::size_t first) {  // segment first..first+1
+    auto stretch = [&](std::size_t first) {  // segment first..first+1, at its lower height either way
       if (along[first + 1] - along[first] > hold_m) return;
-      const double from = std::max(along[first] - radius_m, 0.0), to = along[first + 1] - radius_m;
-      if (to > from) ground = std::max(ground, track->highest_m(from, to));
+      const TrackGround::Stretch s = track->held_stretch_at(along[first], along[first + 1], radius_m);
+      if (!s.empty()) ground = std::max(ground, track->highest_m(s.from_m, s.to_m));
     };
     if (i > 0) stretch(i - 1);
     if (i + 1 < n) stretch(i);
@@ -232,10 +232,7 @@ struct GroundBehind {
   // the checker judges it (TrackGround::held_clearance_m, by position).
   bool held_unmet(const std::vector<double>& along, std::size_t i, double z_i, double z_next) const {
     if (track == nullptr || along[i + 1] - along[i] > hold_m) return false;
-    const bool descends = z_next < z_i;
-    const double from = std::max(along[i] - radius_m, 0.0);
-    const double to = descends ? along[i + 1] - radius_m : std::min(along[i + 1] - radius_m, along[i]);
-    return to > from && (descends ? z_next : z_i) < track->highest_m(from, to) + clearance_m - kHeightTolM;
+    return track->held_clearance_at_m(along[i], along[i + 1], z_i, z_next, radius_m) < clearance_m - kHeightTolM;
   }
 };
 

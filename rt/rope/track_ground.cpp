@@ -65,18 +65,27 @@ double TrackGround::highest_m(double from_m, double to_m) const {
 }
 
 TrackGround::Stretch TrackGround::held_stretch(int first, int last, double radius_m) const {
-  Stretch s;
-  s.to_m = std::min(at_vertex_m(last) - radius_m, length_m());
-  s.from_m = std::max(at_vertex_m(first) - radius_m, 0.0);
-  return s;
+  return held_stretch_at(at_vertex_m(first), at_vertex_m(last), radius_m);
 }
 
 double TrackGround::held_clearance_m(int first, int last, double first_z_m, double last_z_m, double radius_m) const {
-  Stretch s = held_stretch(first, last, radius_m);
+  return held_clearance_at_m(at_vertex_m(first), at_vertex_m(last), first_z_m, last_z_m, radius_m);
+}
+
+TrackGround::Stretch TrackGround::held_stretch_at(double first_m, double last_m, double radius_m) const {
+  Stretch s;
+  s.to_m = std::min(last_m - radius_m, length_m());
+  s.from_m = std::max(first_m - radius_m, 0.0);
+  return s;
+}
+
+double TrackGround::held_clearance_at_m(double first_m, double last_m, double first_z_m, double last_z_m,
+                                        double radius_m) const {
+  Stretch s = held_stretch_at(first_m, last_m, radius_m);
   // a height that is not a number holds nothing
   if (std::isnan(first_z_m) || std::isnan(last_z_m)) return std::numeric_limits<double>::quiet_NaN();
   const bool descends = last_z_m < first_z_m;
-  if (!descends) s.to_m = std::min(s.to_m, at_vertex_m(first));
+  if (!descends) s.to_m = std::min(s.to_m, first_m);
   if (s.empty()) return std::numeric_limits<double>::infinity();
   return (descends ? last_z_m : first_z_m) - highest_m(s.from_m, s.to_m);
 }

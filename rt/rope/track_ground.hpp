@@ -66,6 +66,10 @@ class TrackGround {
   // (past it the plan's own heights, which it climbs to no later than
   // planned, starting the radius early). +infinity where that is empty.
   double held_clearance_m(int first, int last, double first_z_m, double last_z_m, double radius_m) const;
+  // The same for a leg between two points `first_m` and `last_m` along the
+  // track (a point the envelope fit splits a leg at lies on it).
+  Stretch held_stretch_at(double first_m, double last_m, double radius_m) const;
+  double held_clearance_at_m(double first_m, double last_m, double first_z_m, double last_z_m, double radius_m) const;
 
  private:
   double ground_at(double along_m) const;

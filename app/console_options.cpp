@@ -34,7 +34,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& config_sect
       {"rope", {"from", "to", "objective", "model", "segments", "max-segments", "k1", "k2", "k3", "level"}},
       {"vehicle",
        {"vehicle", "speed", "max-climb", "max-descent", "min-turn-radius", "clearance", "max-agl", "max-altitude",
-        "acceptance-radius", "autopilot"}},
+        "acceptance-radius", "max-wind", "autopilot"}},
       {"observers", {"hidden-from", "visible-to", "eye-height", "max-observers"}},
       {"realtime",
        {"budget-mib", "period-us", "priority", "cpu", "no-lock", "overrun-limit", "inject-stall", "tile-margin"}},

@@ -61,7 +61,8 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
                  {"clearance", &rt::VehicleEnvelope::clearance_m},
                  {"max-agl", &rt::VehicleEnvelope::max_agl_m},
                  {"max-altitude", &rt::VehicleEnvelope::max_altitude_m},
-                 {"acceptance-radius", &rt::VehicleEnvelope::acceptance_radius_m}};
+                 {"acceptance-radius", &rt::VehicleEnvelope::acceptance_radius_m},
+                 {"max-wind", &rt::VehicleEnvelope::max_wind_m_per_s}};
   for (const auto& [key, node] : table) {
     const std::string k(key.str());
     if (k == "type") continue;
@@ -101,7 +102,7 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
     if (!known) {
       return invalid_argument(path + ": unknown key '" + k +
                               "' (known: name, type, autopilot, speed, max-climb, max-descent, min-turn-radius, "
-                              "clearance, max-agl, max-altitude, acceptance-radius)");
+                              "clearance, max-agl, max-altitude, acceptance-radius, max-wind)");
     }
   }
   const Status valid = rt::validate(*v);
@@ -111,7 +112,8 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
 
 void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--vehicle", o.vehicle,
-               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m, waypoints taken 100 m early), multirotor (8 "
+               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m, waypoints taken 100 m early in calm air, in "
+               "up to 5 m/s of wind), multirotor (8 "
                "m/s, climb 60 deg, "
                "descent 45 deg) or a TOML file of the keys below")
       ->capture_default_str();
@@ -127,6 +129,10 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
                "How far before a waypoint the autopilot takes the next one and its altitude, m: the path clears "
                "the ground this far behind each point (a PX4 fixed-wing at least 80 m), and a leg no longer than "
                "that at its lower end from this far before its start (fixed-wing 100, multirotor 0)");
+  c.add_option("--max-wind", o.max_wind_m_per_s,
+               "The strongest wind the mission is flown in, m/s (0..100): a fixed-wing takes each waypoint "
+               "(speed + wind) / speed times the acceptance radius early, as its autopilot's switch distance grows "
+               "with its ground speed (fixed-wing 5, multirotor 0)");
   c.add_option("--autopilot", o.autopilot,
                "The vehicle's flight stack, px4 or ardupilot: a .plan mission's firmware (default: the vehicle's)");
 }
@@ -156,7 +162,8 @@ Result<rt::VehicleEnvelope> resolve_envelope(const EnvelopeOptions& o) {
                    {o.clearance_m, &rt::VehicleEnvelope::clearance_m},
                    {o.max_agl_m, &rt::VehicleEnvelope::max_agl_m},
                    {o.max_altitude_m, &rt::VehicleEnvelope::max_altitude_m},
-                   {o.acceptance_radius_m, &rt::VehicleEnvelope::acceptance_radius_m}};
+                   {o.acceptance_radius_m, &rt::VehicleEnvelope::acceptance_radius_m},
+                   {o.max_wind_m_per_s, &rt::VehicleEnvelope::max_wind_m_per_s}};
   for (const auto& x : overrides) {
     if (x.value) (*v).*(x.field) = *x.value;
   }

@@ -13,6 +13,8 @@
 //   clearance = 50.0             # m above the terrain, at least
 //   max-agl = 400.0              # m above the terrain, at most
 //   max-altitude = 1500.0        # m above the datum, at most
+//   acceptance-radius = 100.0    # m: where the autopilot takes the next waypoint
+//   max-wind = 5.0               # m/s: the strongest wind the mission is flown in
 // Keys left out keep the type's preset; an unknown key, a wrong type or a
 // value out of range is an error naming the file and the key. The options
 // (--max-climb ...) override the vehicle's values.
@@ -35,7 +37,7 @@ namespace visvol::cli {
 struct EnvelopeOptions {
   std::string vehicle = "fixed-wing";
   std::optional<double> speed_m_per_s, max_climb_deg, max_descent_deg, min_turn_radius_m, clearance_m, max_agl_m,
-      acceptance_radius_m, max_altitude_m;
+      acceptance_radius_m, max_altitude_m, max_wind_m_per_s;
   std::optional<std::string> autopilot;  // px4, ardupilot
 };
 

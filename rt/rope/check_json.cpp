@@ -34,6 +34,8 @@ nlohmann::json vehicle_json(const VehicleEnvelope& v) {
           {"max_descent_deg", v.max_descent_deg},
           {"min_turn_radius_m", v.min_turn_radius_m},
           {"acceptance_radius_m", v.acceptance_radius_m},
+          {"max_wind_m_per_s", v.max_wind_m_per_s},
+          {"switch_distance_m", switch_distance_m(v)},
           {"clearance_m", v.clearance_m},
           {"max_agl_m", finite_or_null(v.max_agl_m)},
           {"max_altitude_m", finite_or_null(v.max_altitude_m)},

@@ -320,13 +320,13 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
   std::optional<TrackGround> track;
   GroundBehind behind;
   auto set_track = [&]() {
-    if (!(spec.envelope.acceptance_radius_m > 0)) return;
+    if (!(switch_distance_m(spec.envelope) > 0)) return;
     track.emplace(terrain, p.data(), static_cast<int>(p.size()));
     const double hold_m = altitude_hold_m(spec.envelope);
     behind = {&*track,
               hold_m + 2 * step,
               hold_m,
-              spec.envelope.acceptance_radius_m,
+              switch_distance_m(spec.envelope),
               p.front().z(),
               p.back().z(),
               track->length_m(),

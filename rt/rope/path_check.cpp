@@ -238,8 +238,8 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   // that far behind it and one sample step more (so that a path met at the
   // samples is met between them); on a segment no longer than the radius,
   // no more than the lower of its two heights over its held stretch.
-  const double early_m = altitude_hold_m(e);      // how early a height may be flown
-  const double switch_m = e.acceptance_radius_m;  // where the next waypoint is taken
+  const double early_m = altitude_hold_m(e);     // how early a height may be flown
+  const double switch_m = switch_distance_m(e);  // where the next waypoint is taken
   std::optional<TrackGround> track;
   if (early_m > 0) track.emplace(terrain_, v, count);
   Tally early;

@@ -22,7 +22,10 @@ bool parse_autopilot(const std::string& text, Autopilot& out) {
 
 Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
   VehicleEnvelope v;
-  if (name == "fixed-wing") return v;
+  if (name == "fixed-wing") {
+    v.max_wind_m_per_s = kFixedWingPresetWindMPerS;
+    return v;
+  }
   if (name == "multirotor") {
     v.name = name;
     v.type = VehicleType::multirotor;
@@ -57,6 +60,9 @@ Status validate(const VehicleEnvelope& v) {
   if (!(std::isfinite(v.acceptance_radius_m) && v.acceptance_radius_m >= 0 && v.acceptance_radius_m <= 1e4)) {
     return bad("acceptance-radius", v.acceptance_radius_m, "is outside [0, 10000] m");
   }
+  if (!(std::isfinite(v.max_wind_m_per_s) && v.max_wind_m_per_s >= 0 && v.max_wind_m_per_s <= 100)) {
+    return bad("max-wind", v.max_wind_m_per_s, "is outside [0, 100] m/s");
+  }
   if (!(std::isfinite(v.clearance_m) && v.clearance_m >= 0 && v.clearance_m <= 1e4)) {
     return bad("clearance", v.clearance_m, "is outside [0, 10000] m");
   }
@@ -76,10 +82,17 @@ Status validate(const VehicleEnvelope& v) {
   return Status::ok_status();
 }
 
-double altitude_hold_m(const VehicleEnvelope& e) {
+double switch_distance_m(const VehicleEnvelope& e) {
   if (!(e.acceptance_radius_m > 0)) return 0.0;
+  if (e.type != VehicleType::fixed_wing) return e.acceptance_radius_m;
+  return e.acceptance_radius_m * (e.speed_m_per_s + e.max_wind_m_per_s) / e.speed_m_per_s;
+}
+
+double altitude_hold_m(const VehicleEnvelope& e) {
+  const double switch_m = switch_distance_m(e);
+  if (!(switch_m > 0)) return 0.0;
   const bool px4_wing = e.type == VehicleType::fixed_wing && e.autopilot == Autopilot::px4;
-  return px4_wing ? std::max(e.acceptance_radius_m, kPx4LoiterRadiusM) : e.acceptance_radius_m;
+  return px4_wing ? std::max(switch_m, kPx4LoiterRadiusM) : switch_m;
 }
 
 }  // namespace visvol::rt

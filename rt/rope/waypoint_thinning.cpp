@@ -99,7 +99,7 @@ std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTo
 
 LegTest held_legs(const std::vector<Vec3>& fitted, const VehicleEnvelope& envelope,
                   const fields::Heightfield& terrain) {
-  const double radius_m = envelope.acceptance_radius_m, hold_m = altitude_hold_m(envelope);
+  const double radius_m = switch_distance_m(envelope), hold_m = altitude_hold_m(envelope);
   if (!(radius_m > 0)) return [](int, int) { return true; };
   auto track = std::make_shared<const TrackGround>(terrain, fitted.data(), static_cast<int>(fitted.size()));
   auto v = std::make_shared<const std::vector<Vec3>>(fitted);

@@ -195,6 +195,7 @@ TEST_F(Console, EnvelopeAndObserverOptionsAreValidated) {
       {"--max-descent 91", "max-descent 91"},
       {"--min-turn-radius -1", "min-turn-radius -1"},
       {"--acceptance-radius -5", "acceptance-radius -5"},
+      {"--max-wind 101", "max-wind 101"},
       {"--speed nan", "speed nan"},
   };
   for (const auto& [args, reason] : cases) {

@@ -461,6 +461,8 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
       {kEnds + " --vehicle " + escape, "name must be at most 128 bytes, none of them a control character"},
       {kEnds + " --acceptance-radius nan", "acceptance-radius nan"},
       {kEnds + " --acceptance-radius -3", "acceptance-radius -3 is outside [0, 10000] m"},
+      {kEnds + " --max-wind -1", "max-wind -1 is outside [0, 100] m/s"},
+      {kEnds + " --max-wind nan", "max-wind nan"},
   };
   for (const Case& c : cases) {
     const Outcome r = visvol("plan " + *pack_ + c.args + " --objective hide --max-seconds 1 -o " + b);
@@ -514,8 +516,9 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
   EXPECT_LT(reached.status, 2) << reached.err;
   EXPECT_EQ(early_line(reached.out), "(none)") << reached.out;
   // a fixed-wing that takes its waypoints later than PX4's guidance does: said
+  // (at the preset's 20 m/s and 5 m/s of wind behind it)
   EXPECT_NE(reached.out.find("reaches each waypoint (acceptance radius 0); PX4's fixed-wing L1 guidance (up to "
-                             "1.13) switches 95 m early at 20 m/s"),
+                             "1.13) switches 119 m early at 25 m/s over the ground"),
             std::string::npos)
       << reached.out;
   EXPECT_EQ(raised.out.find("L1 guidance"), std::string::npos) << raised.out;  // 100 m: no earlier than that
@@ -636,7 +639,7 @@ TEST_F(PlanCheck, AnInitPathOnTheBoundsEdgeAndOneOfItsOwnOutputs) {
 TEST_F(PlanCheck, TheMissionIsWrittenForTheVehiclesAutopilot) {
   const std::string vehicle = ::testing::TempDir() + "/vehicle_apm_" + std::to_string(getpid()) + ".toml";
   std::ofstream(vehicle) << "name = \"survey quad\"\ntype = \"multirotor\"\nautopilot = \"ardupilot\"\n"
-                            "acceptance-radius = 2\n";
+                            "acceptance-radius = 2\nmax-wind = 3\n";
   const struct {
     std::string args;
     int firmware;
@@ -657,6 +660,9 @@ TEST_F(PlanCheck, TheMissionIsWrittenForTheVehiclesAutopilot) {
     // the file's acceptance radius (the preset's multirotor reaches each waypoint)
     const bool file = c.args.find(vehicle) != std::string::npos;
     EXPECT_EQ(s["vehicle"]["acceptance_radius_m"].get<double>(), file ? 2.0 : 0.0) << c.args;
+    // the file's wind; a multirotor reaches its radius whatever the wind
+    EXPECT_EQ(s["vehicle"]["max_wind_m_per_s"].get<double>(), file ? 3.0 : 0.0) << c.args;
+    EXPECT_EQ(s["vehicle"]["switch_distance_m"].get<double>(), file ? 2.0 : 0.0) << c.args;
     remove_outputs(b);
   }
   std::remove(vehicle.c_str());

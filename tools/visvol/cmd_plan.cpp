@@ -246,23 +246,26 @@ std::string low_end_note(const fields::FieldSampler<PackLevel>& finest, double s
 // mission's radius (param 2).
 constexpr double kL1SwitchS = 20.0 * 0.75 / 3.14159265358979323846;
 std::string early_switch_note(const rt::VehicleEnvelope& v) {
-  const double l1_m = kL1SwitchS * v.speed_m_per_s;
-  if (v.type != rt::VehicleType::fixed_wing || v.autopilot != rt::Autopilot::px4 || !(v.acceptance_radius_m < l1_m)) {
+  const double ground_m_per_s = v.speed_m_per_s + v.max_wind_m_per_s;  // the fastest, with the wind behind
+  const double l1_m = kL1SwitchS * ground_m_per_s;
+  const double switch_m = rt::switch_distance_m(v);
+  if (v.type != rt::VehicleType::fixed_wing || v.autopilot != rt::Autopilot::px4 || !(switch_m < l1_m)) {
     return "";
   }
-  char asked[96];
-  if (v.acceptance_radius_m > 0) {
-    std::snprintf(asked, sizeof asked, "takes each waypoint %.0f m early (param 2 asks for that)",
-                  v.acceptance_radius_m);
+  char asked[160];
+  if (switch_m > 0) {
+    std::snprintf(asked, sizeof asked,
+                  "takes each waypoint %.0f m early (param 2 asks for %.0f m, at %.0f m/s over the ground)", switch_m,
+                  v.acceptance_radius_m, ground_m_per_s);
   } else {
     std::snprintf(asked, sizeof asked, "reaches each waypoint (acceptance radius 0)");
   }
-  char text[400];
+  char text[480];
   std::snprintf(text, sizeof text,
                 "the path is checked for an autopilot that %s; PX4's fixed-wing L1 guidance (up to 1.13) switches "
                 "%.0f m early at %.0f m/s over the ground by default, more with a tailwind: give "
-                "--acceptance-radius the distance yours does",
-                asked, l1_m, v.speed_m_per_s);
+                "--acceptance-radius the distance yours does at cruise speed and --max-wind the strongest wind",
+                asked, l1_m, ground_m_per_s);
   return text;
 }
 

@@ -300,6 +300,7 @@ TEST(PathCheck, ADescentJustPastARidgeIsFlownOverTheRidge) {
   };
   PathCheckSpec s;
   s.envelope = *vehicle_preset("fixed-wing");
+  s.envelope.max_wind_m_per_s = 0;  // calm: the radius as given
   ASSERT_EQ(s.envelope.acceptance_radius_m, 100.0);
   const auto checker = PathChecker::create(t, nullptr, s);
   ASSERT_TRUE(checker.ok()) << checker.status().message();
@@ -356,6 +357,7 @@ TEST(PathCheck, AShortLegIsFlownAtItsLowerHeightFromTheRadiusBeforeItsStart) {
   PathCheckSpec s;
   s.envelope = *vehicle_preset("fixed-wing");
   ASSERT_EQ(s.envelope.acceptance_radius_m, 100.0);
+  s.envelope.max_wind_m_per_s = 0;  // calm: the preset's radius, 100 m
   const auto checker = PathChecker::create(t, nullptr, s);
   ASSERT_TRUE(checker.ok()) << checker.status().message();
   const PathCheck stepped = checker->check(path_with_leg(32));
@@ -375,6 +377,16 @@ TEST(PathCheck, AShortLegIsFlownAtItsLowerHeightFromTheRadiusBeforeItsStart) {
   EXPECT_TRUE(std::isinf(stepped.per_vertex[3].early_m));
   const PathCheck ramped = checker->check(path_with_leg(36));
   EXPECT_TRUE(ramped.all_met) << ramped.envelope[6].worst;
+  // With 5 m/s of tailwind the autopilot switches 125 m out: the 120 m leg
+  // is no longer ramped but stepped, its lower height over the ridge.
+  PathCheckSpec windy = s;
+  windy.envelope.max_wind_m_per_s = 5;
+  const auto in_wind = PathChecker::create(t, nullptr, windy);
+  ASSERT_TRUE(in_wind.ok()) << in_wind.status().message();
+  const PathCheck stepped_in_wind = in_wind->check(path_with_leg(36));
+  EXPECT_FALSE(stepped_in_wind.envelope[6].met);
+  EXPECT_NEAR(stepped_in_wind.envelope[6].worst, 80.0 - 60.0, 1e-6);
+  EXPECT_NEAR(stepped_in_wind.per_vertex[1].early_m, 20.0, 1e-6);
 }
 
 // A climb up a slope on legs between the acceptance radius (45 m) and PX4's
@@ -390,6 +402,7 @@ TEST(PathCheck, AClimbIsHeldAtItsStartsHeightOnlyUpToItsStart) {
   for (int i = 2; i <= 72; i += 7) climb.emplace_back(t.x_of(i), t.y_of(2), 10.0 * i * slope + 31.0);
   PathCheckSpec s;
   s.envelope = *vehicle_preset("fixed-wing");
+  s.envelope.max_wind_m_per_s = 0;  // calm: the radius as given
   s.envelope.acceptance_radius_m = 45;
   s.envelope.max_climb_deg = 15;
   const auto checker = PathChecker::create(t, nullptr, s);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace visvol::rt {
 namespace {
@@ -57,6 +58,7 @@ TEST(Vehicle, BadValuesAreRefusedByKey) {
 // radius of 0, reaches each waypoint.
 TEST(Vehicle, TheAltitudeHoldIsAtLeastPx4sLoiterRadius) {
   VehicleEnvelope v = *vehicle_preset("fixed-wing");
+  v.max_wind_m_per_s = 0;
   EXPECT_EQ(altitude_hold_m(v), 100.0);
   v.acceptance_radius_m = 45;
   EXPECT_EQ(altitude_hold_m(v), kPx4LoiterRadiusM);
@@ -68,6 +70,38 @@ TEST(Vehicle, TheAltitudeHoldIsAtLeastPx4sLoiterRadius) {
   VehicleEnvelope m = *vehicle_preset("multirotor");
   m.acceptance_radius_m = 45;
   EXPECT_EQ(altitude_hold_m(m), 45.0);
+}
+
+// A fixed-wing's autopilot switches waypoints farther out the faster it goes
+// over the ground: with the strongest wind behind it, (speed + wind) / speed
+// times the radius (PX4 at 20 m/s with 5 m/s of tailwind: 125 m), and holds
+// its heights that far early. A multirotor's radius is a distance it reaches.
+TEST(Vehicle, AFixedWingTakesItsWaypointsFartherOutInAWind) {
+  VehicleEnvelope v = *vehicle_preset("fixed-wing");
+  EXPECT_EQ(v.max_wind_m_per_s, kFixedWingPresetWindMPerS);  // 5 m/s
+  EXPECT_DOUBLE_EQ(switch_distance_m(v), 125.0);
+  v.max_wind_m_per_s = 0;
+  EXPECT_EQ(switch_distance_m(v), 100.0);
+  v.max_wind_m_per_s = 5;
+  EXPECT_DOUBLE_EQ(altitude_hold_m(v), 125.0);
+  v.acceptance_radius_m = 40;  // under PX4's loiter radius, even with the wind
+  EXPECT_DOUBLE_EQ(switch_distance_m(v), 50.0);
+  EXPECT_EQ(altitude_hold_m(v), kPx4LoiterRadiusM);
+  v.autopilot = Autopilot::ardupilot;
+  EXPECT_DOUBLE_EQ(altitude_hold_m(v), 50.0);
+  v.acceptance_radius_m = 0;
+  EXPECT_EQ(switch_distance_m(v), 0.0);
+  VehicleEnvelope m = *vehicle_preset("multirotor");
+  m.acceptance_radius_m = 10;
+  m.max_wind_m_per_s = 5;
+  EXPECT_EQ(switch_distance_m(m), 10.0);
+  for (double bad : {-1.0, 100.5, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    VehicleEnvelope w = *vehicle_preset("fixed-wing");
+    w.max_wind_m_per_s = bad;
+    const Status s = validate(w);
+    EXPECT_FALSE(s.ok()) << bad;
+    EXPECT_NE(s.message().find("max-wind"), std::string::npos) << s.message();
+  }
 }
 
 }  // namespace

@@ -112,8 +112,8 @@ Result<rt::VehicleEnvelope> read_vehicle_file(const std::string& path) {
 
 void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
   c.add_option("--vehicle", o.vehicle,
-               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m, waypoints taken 100 m early in calm air, in "
-               "up to 5 m/s of wind), multirotor (8 "
+               "fixed-wing (20 m/s, climb and descent 15 deg, turns 80 m, waypoints taken 100 m early, planned "
+               "for up to 5 m/s of wind: 125 m), multirotor (8 "
                "m/s, climb 60 deg, "
                "descent 45 deg) or a TOML file of the keys below")
       ->capture_default_str();
@@ -126,13 +126,14 @@ void add_envelope_options(CLI::App& c, EnvelopeOptions& o) {
                "Highest height above the terrain, m (default none; a planned path stays under the field's top)");
   c.add_option("--max-altitude", o.max_altitude_m, "Highest height above the DEM's datum, m");
   c.add_option("--acceptance-radius", o.acceptance_radius_m,
-               "How far before a waypoint the autopilot takes the next one and its altitude, m: the path clears "
-               "the ground this far behind each point (a PX4 fixed-wing at least 80 m), and a leg no longer than "
-               "that at its lower end from this far before its start (fixed-wing 100, multirotor 0)");
+               "How far before a waypoint the autopilot takes the next one and its altitude at cruise speed, m: "
+               "the path clears the ground this far behind each point (a PX4 fixed-wing: grown by --max-wind, "
+               "and at least 80 m), and a leg no longer than that at its lower end from this far before its start "
+               "(fixed-wing 100, multirotor 0)");
   c.add_option("--max-wind", o.max_wind_m_per_s,
-               "The strongest wind the mission is flown in, m/s (0..100): a fixed-wing takes each waypoint "
-               "(speed + wind) / speed times the acceptance radius early, as its autopilot's switch distance grows "
-               "with its ground speed (fixed-wing 5, multirotor 0)");
+               "The strongest wind the mission is flown in, m/s (0..100): a PX4 fixed-wing takes each waypoint "
+               "(speed + wind) / speed times the acceptance radius early, as its switch distance grows with its "
+               "ground speed; ArduPlane switches at the mission's radius (fixed-wing 5, multirotor 0)");
   c.add_option("--autopilot", o.autopilot,
                "The vehicle's flight stack, px4 or ardupilot: a .plan mission's firmware (default: the vehicle's)");
 }

@@ -22,10 +22,7 @@ bool parse_autopilot(const std::string& text, Autopilot& out) {
 
 Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
   VehicleEnvelope v;
-  if (name == "fixed-wing") {
-    v.max_wind_m_per_s = kFixedWingPresetWindMPerS;
-    return v;
-  }
+  if (name == "fixed-wing") return v;
   if (name == "multirotor") {
     v.name = name;
     v.type = VehicleType::multirotor;
@@ -34,6 +31,7 @@ Result<VehicleEnvelope> vehicle_preset(const std::string& name) {
     v.max_descent_deg = 45.0;
     v.min_turn_radius_m = 0.0;
     v.acceptance_radius_m = 0.0;
+    v.max_wind_m_per_s = 0.0;  // it reaches each waypoint
     return v;
   }
   return invalid_argument("vehicle: '" + name + "' is neither fixed-wing, multirotor nor a file");
@@ -84,7 +82,7 @@ Status validate(const VehicleEnvelope& v) {
 
 double switch_distance_m(const VehicleEnvelope& e) {
   if (!(e.acceptance_radius_m > 0)) return 0.0;
-  if (e.type != VehicleType::fixed_wing) return e.acceptance_radius_m;
+  if (e.type != VehicleType::fixed_wing || e.autopilot != Autopilot::px4) return e.acceptance_radius_m;
   return e.acceptance_radius_m * (e.speed_m_per_s + e.max_wind_m_per_s) / e.speed_m_per_s;
 }
 

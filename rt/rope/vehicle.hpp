@@ -33,6 +33,12 @@ const char* to_string(Autopilot autopilot);  // "px4", "ardupilot"
 // "px4" or "ardupilot"; false for anything else.
 bool parse_autopilot(const std::string& text, Autopilot& out);
 
+// The fixed-wing preset's wind: a mission planned for calm air had legs just
+// over the hold distance ramped, and 1 m/s of tailwind had them stepped
+// (stop 41: 30.5 m judged at 0 m/s, 10.8 m at 1 m/s); planned for 5 m/s, the
+// same missions cost 0 to 1% more F_c.
+inline constexpr double kFixedWingPresetWindMPerS = 5.0;
+
 struct VehicleEnvelope {
   static constexpr double kNone = std::numeric_limits<double>::infinity();
   // A max-altitude, when there is one, lies within this of the datum, m.
@@ -40,7 +46,7 @@ struct VehicleEnvelope {
 
   std::string name = "fixed-wing";  // preset or file it came from
   VehicleType type = VehicleType::fixed_wing;
-  double speed_m_per_s = 20.0;      // cruise ground speed (exposure time, .plan speeds)
+  double speed_m_per_s = 20.0;      // cruise speed, m/s: over the ground in still air (exposure time, .plan speeds)
   double max_climb_deg = 15.0;      // steepest climb of a segment
   double max_descent_deg = 15.0;    // steepest descent of a segment (positive)
   double min_turn_radius_m = 80.0;  // tightest fillet at a waypoint, 0 for none
@@ -54,11 +60,11 @@ struct VehicleEnvelope {
   // than this, at its lower height, the ground from this far before its
   // start (rt::TrackGround). 0: the vehicle reaches each waypoint.
   double acceptance_radius_m = 100.0;
-  // The strongest wind the mission is flown in, m/s. A fixed-wing's
-  // autopilot switches waypoints farther out the faster it goes over the
-  // ground (PX4's L1 distance is 4.8 s of flight): a tailwind takes the
-  // heights earlier than the radius says (switch_distance_m).
-  double max_wind_m_per_s = 0.0;
+  // The strongest wind the mission is flown in, m/s. A PX4 fixed-wing
+  // switches waypoints farther out the faster it goes over the ground (its
+  // L1 distance is 4.8 s of flight): a tailwind takes the heights earlier
+  // than the radius says (switch_distance_m). The fixed-wing preset's.
+  double max_wind_m_per_s = kFixedWingPresetWindMPerS;
   Autopilot autopilot = Autopilot::px4;
 };
 
@@ -70,10 +76,12 @@ struct VehicleEnvelope {
 inline constexpr double kPx4LoiterRadiusM = 80.0;
 
 // How far before a waypoint the vehicle takes the next one, m: the
-// acceptance radius, for a fixed-wing grown with its ground speed in the
+// acceptance radius, for a PX4 fixed-wing grown with its ground speed in the
 // strongest wind, (speed + max wind) / speed times (the radius is the
-// switch distance at cruise speed: PX4's L1 and NPFG switch distances and
-// ArduPlane's turn anticipation grow with ground speed). An independent
+// switch distance at cruise speed: PX4's L1 and NPFG switch distances grow
+// with ground speed; where the mission's param 2 is the larger, PX4 keeps
+// it, and this is conservative). ArduPlane switches at the mission's param
+// 2, a distance whatever the wind (visvol writes it). An independent
 // simulation of PX4 1.13's L1 guidance flew a mission planned for 100 m at
 // 22 m/s over the ground, switching at 105 m: legs of 104 m planned as ramps
 // were stepped and flown 22 m under the plan (stop 41).
@@ -83,12 +91,6 @@ double switch_distance_m(const VehicleEnvelope& e);
 // (rt::TrackGround): the switch distance, and for a PX4 fixed-wing with
 // one, at least kPx4LoiterRadiusM. 0 where the vehicle reaches each waypoint.
 double altitude_hold_m(const VehicleEnvelope& e);
-
-// The fixed-wing preset's wind: a mission planned for calm air had legs just
-// over the hold distance ramped, and 1 m/s of tailwind had them stepped
-// (stop 41: 30.5 m judged at 0 m/s, 10.8 m at 1 m/s); planned for 5 m/s, the
-// same missions cost 0 to 1% more F_c.
-inline constexpr double kFixedWingPresetWindMPerS = 5.0;
 
 // The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m
 // or wider, waypoints taken 100 m early in up to 5 m/s of wind) and "multirotor" (8 m/s, climb 60

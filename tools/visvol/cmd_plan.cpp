@@ -263,7 +263,7 @@ std::string early_switch_note(const rt::VehicleEnvelope& v) {
   char text[480];
   std::snprintf(text, sizeof text,
                 "the path is checked for an autopilot that %s; PX4's fixed-wing L1 guidance (up to 1.13) switches "
-                "%.0f m early at %.0f m/s over the ground by default, more with a tailwind: give "
+                "%.0f m early at %.0f m/s over the ground by default: give "
                 "--acceptance-radius the distance yours does at cruise speed and --max-wind the strongest wind",
                 asked, l1_m, ground_m_per_s);
   return text;

@@ -87,8 +87,9 @@ TEST(Vehicle, AFixedWingTakesItsWaypointsFartherOutInAWind) {
   v.acceptance_radius_m = 40;  // under PX4's loiter radius, even with the wind
   EXPECT_DOUBLE_EQ(switch_distance_m(v), 50.0);
   EXPECT_EQ(altitude_hold_m(v), kPx4LoiterRadiusM);
-  v.autopilot = Autopilot::ardupilot;
-  EXPECT_DOUBLE_EQ(altitude_hold_m(v), 50.0);
+  v.autopilot = Autopilot::ardupilot;  // the mission's param 2, a distance
+  EXPECT_DOUBLE_EQ(switch_distance_m(v), 40.0);
+  EXPECT_DOUBLE_EQ(altitude_hold_m(v), 40.0);
   v.acceptance_radius_m = 0;
   EXPECT_EQ(switch_distance_m(v), 0.0);
   VehicleEnvelope m = *vehicle_preset("multirotor");

@@ -187,6 +187,14 @@ TEST(WaypointThinning, AShortLegHeldUnderTheClearanceIsNotJoined) {
   }
   // a multirotor reaches each waypoint: nothing held
   EXPECT_TRUE(held_legs(path, *vehicle_preset("multirotor"), t)(1, 9));
+  // In the preset's 5 m/s of wind PX4 switches 125 m out: a 110 m leg down
+  // past the ridge, ramped in calm air, is held at its lower end over it.
+  const std::vector<Vec3> longer = {{t.x_of(2), t.y_of(2), 100.0},
+                                    {t.x_of(24), t.y_of(2), 100.0},
+                                    {t.x_of(35), t.y_of(2), 80.0},
+                                    {t.x_of(57), t.y_of(2), 80.0}};
+  EXPECT_TRUE(held_legs(longer, e, t)(1, 2));
+  EXPECT_FALSE(held_legs(longer, *vehicle_preset("fixed-wing"), t)(1, 2));
 }
 
 // The console's final path and the planner's answer are thinned only where

@@ -114,6 +114,7 @@ TEST_F(Console, ABadConfigurationNamesTheKeyAndTheFile) {
       {"[rope]\nnode = 3\n", "key 'node' belongs in [device], not [rope]"},
       {"[dds]\nfrobnicate = 1\n", "unknown key 'frobnicate' in [dds]"},
       {"[rope]\nsegments = 1\n", "--segments: 1 must be in 2.."},
+      {"[vehicle]\nmax-wind = 101\n", "max-wind 101 is outside [0, 100] m/s"},
       {"segments = \"many\"\n", "--segments: 'many' is not a whole number in decimal digits"},
       {"segments = 1\n", "--segments: 1 must be in 2.."},
       // numbers are decimal: CLI11 alone read 0x10 as sixteen, 010 as octal eight

@@ -488,6 +488,11 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
   const Outcome low = plan("93");
   EXPECT_EQ(low.status, 1) << low.err;
   EXPECT_NE(low.out.find("early-descent 30.0 m: worst"), std::string::npos) << low.out;
+  // what it was judged for: the preset's 100 m at 20 m/s in 5 m/s of wind
+  EXPECT_NE(low.out.find("judged for waypoints taken 125 m out (acceptance radius 100 m at 20.0 m/s, 5.0 m/s of "
+                         "wind), heights up to 125 m early"),
+            std::string::npos)
+      << low.out;
   EXPECT_NE(low.out.find("NOT MET"), std::string::npos) << low.out;
   // the height named: over the ground under this path's last 100 m (64 m)
   // and the clearance

@@ -89,6 +89,12 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Hol
     std::printf("envelope   %s %.*f %s: worst %.*f %s, holds on %.3f of the length %s\n", l.name.c_str(), decimals,
                 l.limit, l.unit.c_str(), decimals, l.worst, l.unit.c_str(), rt::fraction_shown(l.satisfied_fraction),
                 l.met ? "met" : "NOT MET");
+    if (l.name == "early-descent") {  // what it was judged for: the wind moves it
+      std::printf(
+          "           judged for waypoints taken %.0f m out (acceptance radius %.0f m at %.1f m/s, %.1f m/s of "
+          "wind), heights up to %.0f m early\n",
+          rt::switch_distance_m(e), e.acceptance_radius_m, e.speed_m_per_s, e.max_wind_m_per_s, rt::altitude_hold_m(e));
+    }
   }
   std::printf("bounds     %.3f of the length inside the planning bounds %s\n",
               rt::fraction_shown(c.inside_bounds_fraction), c.inside_planning_bounds ? "met" : "NOT MET");

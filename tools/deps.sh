@@ -6,7 +6,7 @@ set -euo pipefail
 
 build_packages=(
   cmake g++ make ninja-build pkg-config
-  lld                    # the linker (CMakeLists.txt: VISVOL_LINKER), five times GNU ld's speed on the tests
+  lld                    # the linker (CMakeLists.txt: VISVOL_LINKER), a fifth of GNU ld's time on the tests
   libeigen3-dev          # vectors and matrices (rope, sampler, servo)
   libgdal-dev            # DEM import and GeoTIFF output (offline tools only)
   libproj-dev proj-data  # path files: DEM (EGM96) heights to WGS84 ellipsoidal ones for GeoJSON (the EGM96 grid)

@@ -186,7 +186,7 @@ struct GroundBehind {
   const TrackGround* track = nullptr;
   double reach_m = 0;   // the altitude hold (rt::altitude_hold_m) and two of the fit's sample steps
   double hold_m = 0;    // the altitude hold: a segment no longer than it is held
-  double radius_m = 0;  // the acceptance radius: where the next waypoint is taken
+  double radius_m = 0;  // the switch distance (rt::switch_distance_m): where the next waypoint is taken
   double start_z = 0, end_z = 0, length_m = 0;
   double climb_per_m = 0, descent_per_m = 0;
   double above_m = 0;  // the clearance and the fit's margin

@@ -233,11 +233,13 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     agl.probe(h <= e.max_agl_m + kHeightTolM);
   };
 
-  // The clearance of an aircraft that takes each height up to the acceptance
-  // radius early (track_ground.hpp): at each sample, over the highest ground
+  // The clearance of an aircraft that takes each height up to its hold
+  // early (track_ground.hpp; the hold and the switch distance grow with the
+  // wind: rt::switch_distance_m): at each sample, over the highest ground
   // that far behind it and one sample step more (so that a path met at the
-  // samples is met between them); on a segment no longer than the radius,
-  // no more than the lower of its two heights over its held stretch.
+  // samples is met between them); on a segment no longer than the hold, no
+  // more than the lower of its two heights over its held stretch, which
+  // begins the switch distance before the segment's start.
   const double early_m = altitude_hold_m(e);     // how early a height may be flown
   const double switch_m = switch_distance_m(e);  // where the next waypoint is taken
   std::optional<TrackGround> track;

@@ -12,7 +12,9 @@
 //   segment exactly (at every grid line crossed and the extreme between,
 //   where the bilinear terrain is a quadratic along the segment), so a peak
 //   between samples is never missed.
-// - Early descent (a vehicle with an acceptance radius R, rt/rope/track_ground.hpp):
+// - Early descent (a vehicle with an acceptance radius; R below is its
+//   switch distance in the strongest wind, rt::switch_distance_m, and its
+//   hold rt::altitude_hold_m; rt/rope/track_ground.hpp):
 //   the clearance at the same samples over the highest terrain under the R
 //   metres of track behind each (and one sample step more), for their share
 //   of the length: the height an autopilot that takes each waypoint's

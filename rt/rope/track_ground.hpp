@@ -2,9 +2,9 @@
 // an aircraft that takes its heights early flies over.
 //
 // A fixed-wing's autopilot takes the next waypoint, and the height it climbs
-// or descends to, at its acceptance radius R before the waypoint it flies to
-// (PX4's L1 or NPFG switch distance, about 95 m at 20 m/s; ArduPlane's
-// WP_RADIUS). PX4 ramps its altitude target over the leg less H (its
+// or descends to, at its switch distance R before the waypoint it flies to
+// (PX4's L1 or NPFG switch distance, about 95 m at 20 m/s and more in a
+// tailwind: rt::switch_distance_m; ArduPlane's WP_RADIUS). PX4 ramps its altitude target over the leg less H (its
 // first-order hold; H = rt::altitude_hold_m, R and at least its loiter
 // radius), so it flies each planned height up to H early; on a leg no
 // longer than H it holds no ramp and steps to the leg's end height where it

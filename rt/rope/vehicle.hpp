@@ -55,10 +55,11 @@ struct VehicleEnvelope {
   double max_altitude_m = kNone;    // highest height above the datum
   // How far before a waypoint the autopilot takes the next one, and with it
   // the next altitude: a fixed-wing's PX4 switches at its L1 distance (about
-  // 95 m at 20 m/s), ArduPlane within WP_RADIUS (90 m). The path must then
-  // clear the highest ground this far behind each point, and a leg no longer
-  // than this, at its lower height, the ground from this far before its
-  // start (rt::TrackGround). 0: the vehicle reaches each waypoint.
+  // 95 m at 20 m/s), ArduPlane within WP_RADIUS (90 m); at cruise speed (a
+  // PX4 fixed-wing's grows with the wind: switch_distance_m). The path must
+  // then clear the highest ground that far behind each point, and a leg no
+  // longer than the hold, at its lower height, the ground from that far
+  // before its start (rt::TrackGround). 0: the vehicle reaches each waypoint.
   double acceptance_radius_m = 100.0;
   // The strongest wind the mission is flown in, m/s. A PX4 fixed-wing
   // switches waypoints farther out the faster it goes over the ground (its
@@ -93,7 +94,8 @@ double switch_distance_m(const VehicleEnvelope& e);
 double altitude_hold_m(const VehicleEnvelope& e);
 
 // The presets: "fixed-wing" (20 m/s, climb and descent 15 deg, turns of 80 m
-// or wider, waypoints taken 100 m early in up to 5 m/s of wind) and "multirotor" (8 m/s, climb 60
+// or wider, a 100 m acceptance radius at cruise speed, 125 m in its 5 m/s of
+// wind) and "multirotor" (8 m/s, climb 60
 // deg, descent 45 deg, no turn limit, each waypoint reached). Errc::invalid_argument naming the value otherwise.
 Result<VehicleEnvelope> vehicle_preset(const std::string& name);
 

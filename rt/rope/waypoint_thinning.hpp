@@ -55,8 +55,9 @@ std::vector<int> thinned_indices(const std::vector<Vec3>& path, const ThinningTo
 std::vector<Vec3> thin_waypoints(const std::vector<Vec3>& path, const ThinningTolerance& tol,
                                  const std::vector<bool>* keep = nullptr, const LegTest* leg_holds = nullptr);
 
-// For a vehicle with an acceptance radius (track_ground.hpp): a leg joining
-// two vertices of `fitted` no farther apart than the radius holds where the
+// For a vehicle with an acceptance radius (track_ground.hpp; its switch
+// distance and hold grow with the wind, rt::switch_distance_m): a leg
+// joining two vertices of `fitted` no farther apart than the hold holds where the
 // lower of their heights clears the highest ground of its held stretch on
 // the fitted track by the clearance and kThinnedHeldMarginM (PX4 steps to
 // the next height on such a leg from the radius before its start: the

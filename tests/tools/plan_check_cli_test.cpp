@@ -476,7 +476,7 @@ TEST_F(PlanCheck, BadMissionInputIsRefusedByName) {
 }
 
 // An end 32 m over a slope falling to it: a fixed-wing that takes the end's
-// height 100 m early comes within 30 m of the slope on the way; the plan
+// height 125 m early (100 m in 5 m/s of wind) comes within 30 m of the slope on the way; the plan
 // says so, writes no mission and names the height an end there needs, which
 // meets it. An autopilot that reaches each waypoint has no such limit.
 TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
@@ -494,7 +494,7 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
             std::string::npos)
       << low.out;
   EXPECT_NE(low.out.find("NOT MET"), std::string::npos) << low.out;
-  // the height named: over the ground under this path's last 100 m (64 m)
+  // the height named: over the ground under this path's last 125 m (64 m)
   // and the clearance
   const std::string named = "an end under ";
   const std::size_t named_at = low.out.find(named);

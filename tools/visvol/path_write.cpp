@@ -185,8 +185,9 @@ nlohmann::json qgc_plan(const PathReport& r, const std::vector<Vec3>& geo) {
   const double takeoff_pitch_deg = fixed_wing ? r.vehicle.max_climb_deg : 0.0;
   items.push_back(mission_item(id++, kCmdNavTakeoff, kFrameGlobal,
                                {takeoff_pitch_deg, 0, 0, no_yaw, start.y(), start.x(), start.z()}, true));
-  // param 2, the acceptance radius: where the check assumed the autopilot
-  // takes each waypoint (0, a multirotor's: the autopilot's own)
+  // param 2, the acceptance radius at cruise speed, as the user gave it (the
+  // check takes a PX4 fixed-wing's that much farther out in --max-wind:
+  // rt::switch_distance_m; 0, a multirotor's: the autopilot's own)
   const double accept_m = r.vehicle.acceptance_radius_m;
   for (const Vec3& g : geo) {
     items.push_back(

@@ -320,21 +320,13 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
   std::optional<TrackGround> track;
   GroundBehind behind;
   auto set_track = [&]() {
-    if (!(switch_distance_m(spec.envelope) > 0)) return;
+    const double switch_m = switch_distance_m(spec.envelope);
+    if (!(switch_m > 0)) return;
     track.emplace(terrain, p.data(), static_cast<int>(p.size()));
     const double hold_m = altitude_hold_m(spec.envelope);
-    behind = {&*track,
-              hold_m + 2 * step,
-              hold_m,
-              switch_distance_m(spec.envelope),
-              p.front().z(),
-              p.back().z(),
-              track->length_m(),
-              climb,
-              descent,
-              spec.envelope.clearance_m + spec.margin_m,
-              hold_m + step,
-              spec.envelope.clearance_m};
+    behind = {&*track,       hold_m + 2 * step,        hold_m, switch_m, p.front().z(),
+              p.back().z(),  track->length_m(),        climb,  descent,  spec.envelope.clearance_m + spec.margin_m,
+              hold_m + step, spec.envelope.clearance_m};
   };
   std::vector<double> lo(p.size()), hi(p.size()), z;
   auto set_band = [&](std::size_t i, const std::vector<double>& along) {

@@ -82,15 +82,14 @@ Status validate(const VehicleEnvelope& v) {
 
 double switch_distance_m(const VehicleEnvelope& e) {
   if (!(e.acceptance_radius_m > 0)) return 0.0;
-  if (e.type != VehicleType::fixed_wing || e.autopilot != Autopilot::px4) return e.acceptance_radius_m;
+  if (!is_px4_fixed_wing(e)) return e.acceptance_radius_m;
   return e.acceptance_radius_m * (e.speed_m_per_s + e.max_wind_m_per_s) / e.speed_m_per_s;
 }
 
 double altitude_hold_m(const VehicleEnvelope& e) {
   const double switch_m = switch_distance_m(e);
   if (!(switch_m > 0)) return 0.0;
-  const bool px4_wing = e.type == VehicleType::fixed_wing && e.autopilot == Autopilot::px4;
-  return px4_wing ? std::max(switch_m, kPx4LoiterRadiusM) : switch_m;
+  return is_px4_fixed_wing(e) ? std::max(switch_m, kPx4LoiterRadiusM) : switch_m;
 }
 
 }  // namespace visvol::rt

@@ -76,6 +76,12 @@ struct VehicleEnvelope {
 // NAV_LOITER_RAD, 80 m by default.
 inline constexpr double kPx4LoiterRadiusM = 80.0;
 
+// A fixed-wing flown by PX4: its switch distance grows with the wind, and it
+// holds its heights at least its loiter radius early.
+inline bool is_px4_fixed_wing(const VehicleEnvelope& e) {
+  return e.type == VehicleType::fixed_wing && e.autopilot == Autopilot::px4;
+}
+
 // How far before a waypoint the vehicle takes the next one, m: the
 // acceptance radius, for a PX4 fixed-wing grown with its ground speed in the
 // strongest wind, (speed + max wind) / speed times (the radius is the

@@ -249,7 +249,7 @@ std::string early_switch_note(const rt::VehicleEnvelope& v) {
   const double ground_m_per_s = v.speed_m_per_s + v.max_wind_m_per_s;  // the fastest, with the wind behind
   const double l1_m = kL1SwitchS * ground_m_per_s;
   const double switch_m = rt::switch_distance_m(v);
-  if (v.type != rt::VehicleType::fixed_wing || v.autopilot != rt::Autopilot::px4 || !(switch_m < l1_m)) {
+  if (!rt::is_px4_fixed_wing(v) || !(switch_m < l1_m)) {
     return "";
   }
   char asked[160];

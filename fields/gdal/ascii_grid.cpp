@@ -94,6 +94,21 @@ class Words {
 // The GRASS form "north:216990" or "north:" and the ESRI form "ncols": the keyword part.
 std::string key_of(const std::string& word) { return word.substr(0, word.find(':')); }
 
+// The header's nodata value: a number (NaN too, as GDAL writes a float
+// grid's), or GRASS's null marker "*". GDAL reads any other word as 0, so
+// that every post of 0 m (sea level, a lake) would be taken for a hole.
+Status check_nodata_token(const std::string& path, const std::string& token) {
+  if (token.empty() || token == "*" || is_number(token)) return Status::ok_status();
+  char* end = nullptr;
+  if (token.size() <= kMaxCellChars && std::isnan(std::strtod(token.c_str(), &end)) &&
+      end == token.c_str() + token.size()) {
+    return Status::ok_status();
+  }
+  return invalid_argument(path + ": its nodata value '" +
+                          (token.size() > kMaxCellChars ? token.substr(0, kMaxCellChars) + "..." : token) +
+                          "' is not a number; GDAL would read it as 0 and take every post of 0 m for nodata");
+}
+
 }  // namespace
 
 bool is_ascii_grid_driver(const std::string& driver) { return driver == "AAIGrid" || driver == "GRASSASCIIGrid"; }
@@ -117,6 +132,10 @@ Status check_ascii_grid_cells(const std::string& path, int nx, int ny) {
       }
       take_nodata = starts_line && is_nodata_key(key_of(word));
       continue;
+    }
+    if (n == 0) {
+      const Status nodata = check_nodata_token(path, nodata_token);
+      if (!nodata.ok()) return nodata;
     }
     if (n < cells && !is_number(word) && word != nodata_token) {
       std::ostringstream msg;

@@ -77,6 +77,30 @@ TEST(AsciiGrid, GrassNullTokenIsNodataNotABadCell) {
   std::remove(path.c_str());
 }
 
+TEST(AsciiGrid, ANonNumericNodataValueIsRefusedNamingIt) {
+  // GDAL reads a nodata value of "abc" as 0 and takes every post of 0 m (sea
+  // level, a lake) for a hole; a cell of "abc" is then a hole too.
+  for (const std::string bad : {"abc", "-99x", "1.2.3"}) {
+    std::string text = asc_text(12, "30", "500000", "0");
+    text.replace(text.find("-9999"), 5, bad);
+    const std::string path = write_text("bad_nodata", ".asc", text);
+    const Result<Heightfield> hf = read_heightfield(path);
+    ASSERT_FALSE(hf.ok()) << bad;
+    EXPECT_EQ(hf.status().code(), Errc::invalid_argument);
+    EXPECT_TRUE(mentions(hf.status(), path)) << hf.status().message();
+    EXPECT_TRUE(mentions(hf.status(), "nodata value '" + bad + "' is not a number")) << hf.status().message();
+    std::remove(path.c_str());
+  }
+  // A number stays accepted (GRASS's own null marker too: the case below).
+  std::string text = asc_text(12, "30", "500000", "0");
+  text.replace(text.find("-9999"), 5, "-32768.5");
+  const std::string path = write_text("good_nodata", ".asc", text);
+  const Result<Heightfield> hf = read_heightfield(path);
+  ASSERT_TRUE(hf.ok()) << hf.status().message();
+  EXPECT_EQ(hf.value().at(5, 3), 0.0f);  // the post of 0 m is a height, not a hole
+  std::remove(path.c_str());
+}
+
 TEST(AsciiGrid, TheSharedRealGridsPass) {
   const std::string dir = std::string(VISVOL_SHARED_DATA) + "/dem/";
   const std::string esri = dir + "boulder_srtm3_404x404.asc";

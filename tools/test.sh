@@ -91,6 +91,8 @@ late_install=""
 late_log=$(mktemp)
 fuzz_build=""  # the fuzzers' build beside the optimised tests (its pid, its log)
 fuzz_build_log=""
+tsan_build=""  # the TSan tree's build beside the ASan+UBSan tests (its pid, its log)
+tsan_build_log=""
 wait_for_late_packages() {
   local rc=0
   if [[ -n "$late_install" ]]; then
@@ -115,9 +117,39 @@ finish() {
     wait "$fuzz_build" || true
   fi
   [[ -z "$fuzz_build_log" ]] || rm -f "$fuzz_build_log"
+  if [[ -n "$tsan_build" ]]; then
+    echo "== waiting for the TSan build beside the tests"
+    wait "$tsan_build" || true
+  fi
+  [[ -z "$tsan_build_log" ]] || rm -f "$tsan_build_log"
   report_times_of "$status"
 }
 trap finish EXIT
+
+# A build beside a test stage, at the lowest CPU and I/O priority (the
+# tests keep the cores they use; the build takes what they leave idle).
+# Its output goes to LOG; its pid to beside_pid (a child of this shell, so
+# that it can be waited for).
+beside_pid=""
+build_beside() {  # build_beside LOG COMMAND...
+  local log=$1
+  shift
+  (
+    renice -n 19 -p "$BASHPID" >/dev/null
+    ionice -c 3 -p "$BASHPID"
+    "$@"
+  ) >"$log" 2>&1 &
+  beside_pid=$!
+}
+
+# The TSan stage's build: the one begun beside the ASan+UBSan tests, its log.
+tsan_build_stage() {
+  local rc=0
+  wait "$tsan_build" || rc=$?
+  tsan_build=""
+  cat "$tsan_build_log"
+  return "$rc"
+}
 
 # The fuzzing stage: the build begun beside the optimised tests, then the runs.
 fuzz_stage() {
@@ -152,8 +184,8 @@ stage "install: VM + fuzz packages" wait_for_late_packages
 # and leave about half the cores idle (their stage: 84 s of wall time, 83 s of
 # CPU on 2 cores). Its log is printed in the fuzzing stage.
 fuzz_build_log=$(mktemp)
-VISVOL_FUZZ_BUILD_ONLY=1 nice -n 19 ionice -c 3 tools/fuzz.sh >"$fuzz_build_log" 2>&1 &
-fuzz_build=$!
+build_beside "$fuzz_build_log" env VISVOL_FUZZ_BUILD_ONLY=1 tools/fuzz.sh
+fuzz_build=$beside_pid
 stage "lint: format" tools/check_format.sh
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 # With clang (installed with the fuzzers' packages): 211 s against GCC's
@@ -162,6 +194,13 @@ stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
 # compilers' warnings hold.
 stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
+# The threaded tests' TSan tree builds beside the ASan+UBSan tests, which
+# leave a fifth of the 2 cores idle (stop 42: 275 s of wall time, 441 s of
+# CPU): its stage below waits for what is left of it.
+tsan_build_log=$(mktemp)
+build_beside "$tsan_build_log" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
+  -- visvol_threaded_tests
+tsan_build=$beside_pid
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --test-dir build-asan --output-on-failure -j "$jobs" \
   -LE numeric
@@ -169,8 +208,7 @@ stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 # real threads sharing state (hand-offs, the loop, the executive, the hull
 # builder, the tile pager, the DDS publisher and intake, the renderer and the
 # flyable-path threads), under ThreadSanitizer.
-stage "build: TSan (threaded tests)" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
-  -- visvol_threaded_tests
+stage "build: TSan (threaded tests; its rest)" tsan_build_stage
 stage "tests: TSan" env TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp" \
   ctest --test-dir build-tsan -L threaded -LE numeric --output-on-failure -j "$jobs"
 # (the build started beside the optimised tests: finished by now, or finishing)

@@ -2,11 +2,12 @@
 
 #include <cmath>
 
+#include "base/angles.hpp"
+
 namespace visvol::render::detail {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kDiscSegments = 20;
 
 struct Glyph {

@@ -6,11 +6,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "base/angles.hpp"
+
 namespace visvol::render::detail {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kFitFraction = 0.94;  // of the viewport's half-size the fitted box may span
 
 Mat4 look_at(const Vec3& eye, const Vec3& target, const Vec3& up) {

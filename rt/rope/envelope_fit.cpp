@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/angles.hpp"
 #include "base/tolerances.hpp"
 #include "rt/rope/fillet.hpp"
 #include "rt/rope/path_check.hpp"
@@ -13,7 +14,6 @@ namespace visvol::rt {
 
 namespace {
 
-constexpr double kRadPerDeg = 0.017453292519943295;
 constexpr int kTurnPasses = 400;
 constexpr int kHeightPasses = 60;
 // Rounds of turns then heights: a vertex the heights insert shortens the

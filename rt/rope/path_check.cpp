@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 
+#include "base/angles.hpp"
 #include "base/tolerances.hpp"
 #include "fields/exact_visibility.hpp"
 #include "rt/rope/fillet.hpp"
@@ -18,7 +19,6 @@ namespace visvol::rt {
 
 namespace {
 
-constexpr double kDegPerRad = 57.29577951308232;
 constexpr double kAngleTolDeg = 1e-6;
 
 // A length for a message: metres to the centimetre.

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <limits>
 
+#include "base/angles.hpp"
+
 namespace visvol::rt {
 
 namespace {
-
-constexpr double kDegPerRad = 57.29577951308232;
 
 double polyline_length(const Vec3* v, int count) {
   double total = 0;

@@ -4,10 +4,11 @@
 #include <cmath>
 #include <string>
 
+#include "base/angles.hpp"
+
 namespace visvol::servo {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMmPerM = 1000.0;
 
 bool finite(double v) { return std::isfinite(v); }

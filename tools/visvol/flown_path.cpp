@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "base/angles.hpp"
 #include "path_io_detail.hpp"
 #include "rt/rope/fillet.hpp"
 
@@ -12,8 +13,7 @@ namespace visvol::cli {
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
-constexpr double kRadPerDeg = kTwoPi / 360.0;
+constexpr double kTwoPi = 2.0 * kPi;
 // Points closer than this horizontally are one spot.
 constexpr double kSpotM = rt::kSameSpotM;
 // A turn radius the path's geometry decides (rt::turn_radii_m).

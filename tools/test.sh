@@ -126,16 +126,18 @@ finish() {
 }
 trap finish EXIT
 
-# A build beside a test stage, at the lowest CPU and I/O priority (the
-# tests keep the cores they use; the build takes what they leave idle).
-# Its output goes to LOG; its pid to beside_pid (a child of this shell, so
-# that it can be waited for).
+# A build beside a test stage, at a low CPU priority and the idle I/O class
+# (the tests keep the cores they use; the build takes what they leave idle):
+# NICE 19 for the fuzzers, needed last; 10 for the TSan tree, needed before
+# them, so that of the two it takes most of what the tests leave. Its output
+# goes to LOG; its pid to beside_pid (a child of this shell, so that it can
+# be waited for).
 beside_pid=""
-build_beside() {  # build_beside LOG COMMAND...
-  local log=$1
-  shift
+build_beside() {  # build_beside NICE LOG COMMAND...
+  local nice=$1 log=$2
+  shift 2
   (
-    renice -n 19 -p "$BASHPID" >/dev/null
+    renice -n "$nice" -p "$BASHPID" >/dev/null
     ionice -c 3 -p "$BASHPID"
     "$@"
   ) >"$log" 2>&1 &
@@ -184,7 +186,7 @@ stage "install: VM + fuzz packages" wait_for_late_packages
 # and leave about half the cores idle (their stage: 84 s of wall time, 83 s of
 # CPU on 2 cores). Its log is printed in the fuzzing stage.
 fuzz_build_log=$(mktemp)
-build_beside "$fuzz_build_log" env VISVOL_FUZZ_BUILD_ONLY=1 tools/fuzz.sh
+build_beside 19 "$fuzz_build_log" env VISVOL_FUZZ_BUILD_ONLY=1 tools/fuzz.sh
 fuzz_build=$beside_pid
 stage "lint: format" tools/check_format.sh
 stage "tests: optimised" ctest --test-dir build --output-on-failure -j "$jobs"
@@ -196,9 +198,9 @@ stage "build: ASan+UBSan" build_tree build-asan -DVISVOL_SANITIZE=ON -DVISVOL_BU
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
 # The threaded tests' TSan tree builds beside the ASan+UBSan tests, which
 # leave a fifth of the 2 cores idle (stop 42: 275 s of wall time, 441 s of
-# CPU): its stage below waits for what is left of it.
+# CPU): its stage below waits for what is left of it (121 s of its 204).
 tsan_build_log=$(mktemp)
-build_beside "$tsan_build_log" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
+build_beside 10 "$tsan_build_log" build_tree build-tsan -DVISVOL_TSAN=ON -DVISVOL_BUILD_BENCHMARKS=OFF \
   -- visvol_threaded_tests
 tsan_build=$beside_pid
 stage "tests: ASan+UBSan" env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \

@@ -6,6 +6,7 @@
 #include "base/angles.hpp"
 #include "base/tolerances.hpp"
 #include "rt/rope/fillet.hpp"
+#include "rt/rope/l1_track.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/terrain_probe.hpp"
 #include "rt/rope/track_ground.hpp"
@@ -295,6 +296,40 @@ SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, con
   return m;
 }
 
+// Where a PX4 fixed-wing's flights (rt::px4_flights) come under the
+// clearance cutting the corners: the legs they fly there are raised by the
+// deficit and the margin, each vertex by that over its share of the flown
+// point's height (beside a fixed end, as segments' misses are), where the
+// share is at least half (a point nearer a fixed end than the vertex is the
+// end's: the check reports it). True when a bound moved; `short_of` true
+// when some deficit is left.
+bool raise_for_flights(const EnvelopeFitSpec& spec, const fields::Heightfield& t, const std::vector<Vec3>& fitted,
+                       const std::vector<double>& z, std::vector<double>& lo, const std::vector<double>& hi,
+                       bool& short_of) {
+  bool moved = false;
+  const std::size_t n = fitted.size();
+  for (const L1Flight& flight : px4_flights(spec.envelope)) {
+    for (const FlownPoint& q : fly_l1(fitted, flight).points) {
+      const double ground = fields::bilinear_height(t, t.i_of(q.p_m.x()), t.j_of(q.p_m.y()));
+      const double deficit = ground + spec.envelope.clearance_m - q.p_m.z();
+      if (deficit <= 0.5 * kHeightTolM) continue;
+      short_of = true;
+      const auto a = static_cast<std::size_t>(q.leg);
+      const Eigen::Vector2d ab(fitted[a + 1].x() - fitted[a].x(), fitted[a + 1].y() - fitted[a].y());
+      const Eigen::Vector2d aq(q.p_m.x() - fitted[a].x(), q.p_m.y() - fitted[a].y());
+      const double u = ab.squaredNorm() > 0 ? std::clamp(aq.dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+      for (std::size_t v : {a, a + 1}) {
+        if (v == 0 || v + 1 == n) continue;
+        const double share = v == a ? (a + 2 == n ? 1.0 - u : 1.0) : (a == 0 ? u : 1.0);
+        if (share < 0.5) continue;
+        const double raised = std::min(z[v] + (deficit + spec.margin_m) / share, hi[v]);
+        if (raised > lo[v] + 1e-9) lo[v] = raised, moved = true;
+      }
+    }
+  }
+  return moved;
+}
+
 EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec, const fields::Heightfield& terrain) {
   EnvelopeFit out;
   std::vector<Vec3> p = without_repeats(path, 0.05 * terrain.spacing_m);
@@ -440,6 +475,11 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
           if (lowered < hi[j] - 1e-9) hi[j] = lowered, changed = true;
         }
       }
+    }
+    if (!changed) {
+      bool short_of = false;
+      changed = raise_for_flights(spec, terrain, fitted, z, lo, hi, short_of);
+      if (short_of) feasible = false;
     }
     if (!changed) {
       for (std::size_t i = 0; i < p.size(); ++i) p[i].z() = z[i];

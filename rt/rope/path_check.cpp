@@ -52,6 +52,62 @@ int fillet_samples(const Fillet& f, double step_m) {
   return wanted >= 1 ? static_cast<int>(std::min(wanted, double(PathChecker::kMaxSegmentSamples))) : 1;
 }
 
+// The horizontal distance from p to the nearest point of the path's legs.
+double off_path_m(const std::vector<Vec3>& path, const Vec3& p) {
+  double best = std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d q(p.x(), p.y());
+  for (std::size_t s = 0; s + 1 < path.size(); ++s) {
+    const Eigen::Vector2d a(path[s].x(), path[s].y()), ab = Eigen::Vector2d(path[s + 1].x(), path[s + 1].y()) - a;
+    const double l2 = ab.squaredNorm();
+    const double t = l2 > 0 ? std::clamp((q - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (q - a - t * ab).norm());
+  }
+  return best;
+}
+
+// One flight of a finite path (PathChecker::fly): a sample every sample
+// step of the track, standing for the track since the last. The sight
+// lines and the distance off the legs only where `report` (check() takes
+// the clearance alone, into `clearance_out`).
+FlownCheck fly_once(const PathChecker& checker, const std::vector<Vec3>& path, const L1Flight& flight, bool report,
+                    Tally* clearance_out) {
+  FlownCheck out;
+  out.ground_speed_m_per_s = flight.ground_speed_m_per_s;
+  out.switch_distance_m = flight.switch_distance_m;
+  const FlownTrack track = fly_l1(path, flight);
+  out.reached_end = track.reached_end;
+  const PathCheckSpec& spec = checker.spec();
+  const std::size_t nc = report ? spec.constraints.size() : 0;
+  std::vector<Tally> constraint_tally(nc);
+  Tally clearance;
+  auto sample = [&](const Vec3& p, double w) {
+    const double h = p.z() - checker.ground_m(p.x(), p.y());
+    if (h < out.least_clearance_m) out.least_clearance_m = h, out.least_at_m = p;
+    const bool clear = h >= spec.envelope.clearance_m - kHeightTolM;
+    clearance.add(clear, w);
+    if (clearance_out) clearance_out->add(clear, w);
+    if (report) out.max_off_path_m = std::max(out.max_off_path_m, off_path_m(path, p));
+    for (std::size_t c = 0; c < nc; ++c) {
+      const bool seen = checker.sees(spec.constraints[c], p);
+      constraint_tally[c].add(seen == (spec.constraints[c].kind == ConstraintKind::visible_to), w);
+    }
+  };
+  double since_m = 0;
+  for (std::size_t i = 0; i < track.points.size(); ++i) {
+    const Vec3& p = track.points[i].p_m;
+    const double step_m = i > 0 ? (p - track.points[i - 1].p_m).head<2>().norm() : 0.0;
+    out.length_m += step_m;
+    since_m += step_m;
+    if (i == 0 || since_m >= spec.sample_step_m || i + 1 == track.points.size()) {
+      sample(p, since_m);
+      since_m = 0;
+    }
+  }
+  out.clearance_fraction = clearance.fraction();
+  for (const Tally& t : constraint_tally) out.constraint_fractions.push_back(t.fraction());
+  return out;
+}
+
 LimitResult limit(const char* name, const char* unit, double limit_value, double worst, const Tally& t,
                   bool lower = false) {
   LimitResult r;
@@ -96,7 +152,7 @@ std::vector<std::string> PathCheck::unmet() const {
     s.precision(1);
     s << std::fixed << std::setprecision(worst_decimals(l)) << l.name << " " << l.limit << " " << l.unit << ": worst "
       << l.worst << " " << l.unit << ", holds on " << std::setprecision(3) << fraction_shown(l.satisfied_fraction)
-      << " of the length";
+      << (l.name == kFlownClearance ? " of the flown length" : " of the length");
     out.push_back(s.str());
   }
   if (!inside_planning_bounds) {
@@ -304,6 +360,25 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     descent.probe(-angle <= e.max_descent_deg + kAngleTolDeg);
   }
 
+  // A PX4 fixed-wing cuts each corner deeper than the arc, across several
+  // where the legs are shorter than its switch distance: the clearance along
+  // its flights (px4_flights, fly_l1), at the planned height of the leg it
+  // flies, over the flown track's own length. Not where the caller gives
+  // turn radii (a loiter's circle, which PX4 flies by another controller).
+  Tally flown;
+  double flown_lowest = std::numeric_limits<double>::infinity();
+  bool flies = true;
+  for (int i = 0; i < count; ++i) {
+    if (!v[i].allFinite() || (turn_radius_m != nullptr && !std::isnan(turn_radius_m[i]))) flies = false;
+  }
+  const std::vector<L1Flight> flights = flies ? px4_flights(e) : std::vector<L1Flight>();
+  if (!flights.empty()) {
+    const std::vector<Vec3> path(v, v + count);
+    for (const L1Flight& f : flights) {
+      flown_lowest = std::min(flown_lowest, fly_once(*this, path, f, false, &flown).least_clearance_m);
+    }
+  }
+
   out.per_vertex.resize(static_cast<std::size_t>(count));
   const std::vector<double> radii = turn_radii_m(v, count);
   for (int i = 0; i < count; ++i) {
@@ -344,6 +419,9 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   out.envelope.push_back(limit("max-descent", "deg", e.max_descent_deg, steepest_descent, descent));
   out.envelope.push_back(limit("min-turn-radius", "m", e.min_turn_radius_m, tightest, turn, true));
   if (track) out.envelope.push_back(limit("early-descent", "m", e.clearance_m, early_lowest, early, true));
+  if (!flights.empty()) {
+    out.envelope.push_back(limit(kFlownClearance, "m", e.clearance_m, flown_lowest, flown, true));
+  }
   out.inside_bounds_fraction = bounds.fraction();
   out.inside_planning_bounds = !bounds.failed;
 
@@ -360,6 +438,31 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   for (const ConstraintResult& r : out.constraints) count_violation(r.met, r.satisfied_fraction, false);
   for (const LimitResult& l : out.envelope) count_violation(l.met, l.satisfied_fraction, true);
   count_violation(out.inside_planning_bounds, out.inside_bounds_fraction, true);
+  return out;
+}
+
+std::vector<FlownCheck> PathChecker::fly(const std::vector<Vec3>& path) const {
+  std::vector<FlownCheck> out;
+  for (const Vec3& p : path) {
+    if (!p.allFinite()) return out;
+  }
+  for (const L1Flight& f : px4_flights(spec_.envelope)) out.push_back(fly_once(*this, path, f, true, nullptr));
+  return out;
+}
+
+std::vector<L1Flight> px4_flights(const VehicleEnvelope& e) {
+  std::vector<L1Flight> out;
+  if (!is_px4_fixed_wing(e) || !(e.acceptance_radius_m > 0) || !(e.speed_m_per_s > 0)) return out;
+  L1Flight calm;
+  calm.ground_speed_m_per_s = e.speed_m_per_s;
+  calm.switch_distance_m = e.acceptance_radius_m;
+  out.push_back(calm);
+  if (e.max_wind_m_per_s > 0) {
+    L1Flight tailwind = calm;
+    tailwind.ground_speed_m_per_s = e.speed_m_per_s + e.max_wind_m_per_s;
+    tailwind.switch_distance_m = switch_distance_m(e);
+    out.push_back(tailwind);
+  }
   return out;
 }
 

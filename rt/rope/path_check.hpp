@@ -33,6 +33,13 @@
 //   exactly along its chords), at no share of the length, so a failure only
 //   there reads "holds on 0.999 of the length", NOT MET. Climb and turn
 //   are judged on the segments and vertices only.
+// - Flown clearance (a PX4 fixed-wing with an acceptance radius; not where
+//   the caller gives turn radii, a loiter's circle): the track its L1
+//   guidance flies (rt/rope/l1_track.hpp), which cuts a corner deeper than
+//   the arc and several at once where the legs are shorter than the switch
+//   distance, in still air and with the strongest wind behind it
+//   (rt::px4_flights), sampled as the path is, at the planned height of the
+//   leg flown, for their share of the flown length: "flown-clearance".
 // - Planning bounds: the samples inside the trusted region.
 // A requirement is met when every sample, segment or vertex satisfies it
 // (satisfied_fraction == 1).
@@ -43,6 +50,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +58,7 @@
 #include "base/tolerances.hpp"
 #include "fields/heightfield.hpp"
 #include "fields/volume.hpp"
+#include "rt/rope/l1_track.hpp"
 #include "rt/rope/path_metrics.hpp"
 #include "rt/rope/vehicle.hpp"
 
@@ -104,9 +113,14 @@ struct ConstraintResult {
   bool met = false;
 };
 
+// The name of the clearance along a PX4 fixed-wing's flights (a share of
+// the flown length, not of the path's).
+inline constexpr const char* kFlownClearance = "flown-clearance";
+
 struct LimitResult {
-  // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius", and
-  // "early-descent" (last, for a vehicle with an acceptance radius)
+  // "clearance", "max-agl", "max-altitude", "max-climb", "max-descent", "min-turn-radius",
+  // "early-descent" (for a vehicle with an acceptance radius) and
+  // "flown-clearance" (last, for a PX4 fixed-wing with one)
   std::string name;
   std::string unit;               // "m", "deg"
   double limit = 0;               // as asked
@@ -163,6 +177,31 @@ struct PathCheck {
   std::vector<std::string> unmet() const;
 };
 
+// How a PX4 fixed-wing flies the path laterally (rt/rope/l1_track.hpp: its
+// L1 guidance, switching early and cutting towards the next leg), at one
+// speed over the ground (rt::PathChecker::fly): its clearance is the
+// "flown-clearance" requirement; the rest is a report.
+struct FlownCheck {
+  double ground_speed_m_per_s = 0;
+  double switch_distance_m = 0;  // the next waypoint taken within this (or the L1 distance, the larger)
+  double length_m = 0;           // of the flown track
+  // The least height over the finest terrain along the flown track, at the
+  // planned height of the nearest point of the leg flown, and where.
+  double least_clearance_m = std::numeric_limits<double>::infinity();
+  Vec3 least_at_m = Vec3::Zero();
+  double clearance_fraction = 1;             // of the flown length at or above the clearance
+  double max_off_path_m = 0;                 // the farthest the track goes from the planned legs, horizontally
+  std::vector<double> constraint_fractions;  // per constraint: of the flown length that satisfies it
+  bool reached_end = false;
+};
+
+// The flights PathChecker::fly and the "flown-clearance" requirement fly,
+// and rt::fit_to_envelope fits the heights to: a PX4 fixed-wing with an
+// acceptance radius in still air at its cruise speed, switching at the
+// radius, and with the strongest wind behind it (cruise plus wind over the
+// ground, switching at rt::switch_distance_m). None for another vehicle.
+std::vector<L1Flight> px4_flights(const VehicleEnvelope& envelope);
+
 class PathChecker {
  public:
   // `terrain` is the finest level's terrain; `field` gives F_p (may be null:
@@ -188,6 +227,12 @@ class PathChecker {
   // The samples a check of the path takes (infinite for a vertex that is
   // not finite): compare with kMaxSamples before checking outside input.
   double sample_count(const std::vector<Vec3>& path) const;
+  // A PX4 fixed-wing's flights of the path (FlownCheck, rt::px4_flights):
+  // sampled as check() samples, each sample's sight line to every
+  // constraint point. None for another vehicle, one that reaches each
+  // waypoint, or a path with a vertex that is not finite. Costs about as
+  // much as check() per flight.
+  std::vector<FlownCheck> fly(const std::vector<Vec3>& path) const;
 
   const PathCheckSpec& spec() const { return spec_; }
   const fields::Heightfield& terrain() const { return terrain_; }

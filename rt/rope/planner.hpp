@@ -106,6 +106,9 @@ struct PlanRequest {
   // Waypoints of each fitted path dropped where the path stays within this of
   // them (none: every fitted vertex kept).
   std::optional<ThinningTolerance> thinning = ThinningTolerance{};
+  // Fly the answer as a PX4 fixed-wing would (PathChecker::fly, a report in
+  // PlanResult::final_flown): about a check's work for each flight.
+  bool report_flights = false;
 };
 
 Status validate(const PlanRequest& request);
@@ -123,6 +126,7 @@ struct PlanResult {
   std::vector<Vec3> initial_path, final_path, global_path;
   PathMetrics initial, final_metrics, global;  // all on the finest level
   PathCheck initial_check, final_check;        // exact, on the finest terrain
+  std::vector<FlownCheck> final_flown;         // the answer flown (PlanRequest::report_flights)
   bool has_global = false;
   int global_level = -1;     // the level the kept global search ran on
   int first_level = -1;      // the level the rope settled on first (then every finer one)
@@ -449,6 +453,7 @@ Result<PlanResult> plan(const std::vector<const Level*>& levels, const PlanReque
   }
   result.final_path = best;
   result.final_check = std::move(best_check);
+  if (request.report_flights) result.final_flown = checker->fly(result.final_path);
   result.fitted_waypoints = best_fitted;
   result.final_metrics = path_metrics(result.final_path.data(), static_cast<int>(result.final_path.size()), judge,
                                       request.fc_samples, finest.geometry().spacing_m / 2);

@@ -250,10 +250,12 @@ TEST_F(Console, ObserversAndCeilingFromTheCommandLineAreCheckedAtTheEnd) {
   EXPECT_EQ(c["constraints"][0]["kind"], "hidden-from");
   EXPECT_EQ(c["constraints"][3]["kind"], "visible-to");
   EXPECT_NEAR(c["constraints"][0]["eye_m"][2].get<double>(), h1[2] + 1.5, 1e-3);
-  // the fixed-wing preset's climb, descent and turn limits too, and its
-  // clearance over the ground behind (it takes each height 100 m early)
-  ASSERT_EQ(c["envelope"].size(), 7u);
+  // the fixed-wing preset's climb, descent and turn limits too, its
+  // clearance over the ground behind (it takes each height 100 m early) and
+  // along PX4's flights
+  ASSERT_EQ(c["envelope"].size(), 8u);
   EXPECT_EQ(c["envelope"][6]["name"], "early-descent");
+  EXPECT_EQ(c["envelope"][7]["name"], "flown-clearance");
   EXPECT_EQ(s["vehicle"]["acceptance_radius_m"].get<double>(), 100.0);
   EXPECT_EQ(c["envelope"][0]["name"], "clearance");
   EXPECT_EQ(c["envelope"][1]["name"], "max-agl");

@@ -85,11 +85,28 @@ TEST_F(PlanCheck, AFixedWingsFilesReadBackItsWorstValues) {
   const nlohmann::json gj = nlohmann::json::parse(geojson_file);
   EXPECT_NEAR(gj["features"][0]["properties"]["min_clearance_m"].get<double>(), s["envelope"][0]["worst"].get<double>(),
               1e-6);
+  // PX4 flies it in still air and in the preset's tailwind (a report)
+  ASSERT_EQ(s["flown"].size(), 2u) << s["flown"].dump();
+  EXPECT_EQ(s["flown"][0]["ground_speed_m_per_s"], 20.0);
+  EXPECT_EQ(s["flown"][1]["switch_distance_m"], 125.0);
+  for (const nlohmann::json& f : s["flown"]) {
+    EXPECT_TRUE(f["reached_end"].get<bool>()) << f.dump();
+    EXPECT_TRUE(f["least_clearance_m"].is_number()) << f.dump();
+    EXPECT_GT(f["length_m"].get<double>(), 0.5 * s["length_m"].get<double>()) << f.dump();
+  }
   for (const char* ext : {".plan", ".geojson", ".csv"}) {
     const Outcome c = visvol("check " + *pack_ + " " + b + ext + " --json");
     ASSERT_NE(c.status, 2) << ext << ": " << c.err;
     const nlohmann::json j = nlohmann::json::parse(c.out);
     EXPECT_EQ(j["all_met"], s["all_met"]) << ext;
+    if (std::string(ext) != ".plan") {  // the same flights of the same waypoints
+      ASSERT_EQ(j["flown"].size(), 2u) << ext;
+      for (std::size_t k = 0; k < 2; ++k) {
+        EXPECT_NEAR(j["flown"][k]["least_clearance_m"].get<double>(), s["flown"][k]["least_clearance_m"].get<double>(),
+                    0.05)
+            << ext;
+      }
+    }
     if (std::string(ext) == ".plan") {  // its landing's approach circle: said, and judged for the clearance
       ASSERT_FALSE(j["notes"].empty());
       EXPECT_NE(j["notes"].back().get<std::string>().find("the landing's approach: "), std::string::npos)
@@ -526,8 +543,15 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
                              "1.13) switches 119 m early at 25 m/s over the ground"),
             std::string::npos)
       << reached.out;
-  EXPECT_EQ(raised.out.find("L1 guidance"), std::string::npos) << raised.out;  // 100 m: no earlier than that
+  EXPECT_EQ(raised.out.find("L1 guidance ("), std::string::npos) << raised.out;  // 100 m: no earlier than that
   EXPECT_EQ(reached.out.find("early-descent"), std::string::npos) << reached.out;
+  // the flights reported: the preset's two; none for a vehicle that reaches each waypoint
+  for (const char* flight : {"flown      PX4 L1 guidance at 20.0 m/s over the ground, waypoints taken 100 m out",
+                             "flown      PX4 L1 guidance at 25.0 m/s over the ground, waypoints taken 125 m out"}) {
+    EXPECT_NE(low.out.find(flight), std::string::npos) << low.out;
+  }
+  EXPECT_NE(low.out.find("m at most off the planned legs"), std::string::npos) << low.out;
+  EXPECT_EQ(reached.out.find("flown      "), std::string::npos) << reached.out;
   remove_outputs(b);
 }
 

@@ -86,9 +86,9 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Hol
       continue;
     }
     const int decimals = rt::worst_decimals(l);  // the limit's too: the worst reads past it
-    std::printf("envelope   %s %.*f %s: worst %.*f %s, holds on %.3f of the length %s\n", l.name.c_str(), decimals,
+    std::printf("envelope   %s %.*f %s: worst %.*f %s, holds on %.3f of the %slength %s\n", l.name.c_str(), decimals,
                 l.limit, l.unit.c_str(), decimals, l.worst, l.unit.c_str(), rt::fraction_shown(l.satisfied_fraction),
-                l.met ? "met" : "NOT MET");
+                l.name == rt::kFlownClearance ? "flown " : "", l.met ? "met" : "NOT MET");
     if (l.name == "early-descent") {  // what it was judged for: the wind moves it
       std::printf(
           "           judged for waypoints taken %.0f m out (acceptance radius %.0f m at %.1f m/s, %.1f m/s of "
@@ -106,6 +106,41 @@ void print_check(const rt::PathCheck& c, const rt::VehicleEnvelope& e, const Hol
   std::printf("requirements NOT MET:\n");
   for (const std::string& u : c.unmet()) std::printf("  %s\n", u.c_str());
   for (const std::string& u : more_unmet) std::printf("  %s\n", u.c_str());
+}
+
+nlohmann::json flown_json(const std::vector<rt::FlownCheck>& flights) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const rt::FlownCheck& f : flights) {
+    out.push_back({{"ground_speed_m_per_s", f.ground_speed_m_per_s},
+                   {"switch_distance_m", f.switch_distance_m},
+                   {"length_m", f.length_m},
+                   {"least_clearance_m", rt::finite_or_null(f.least_clearance_m)},
+                   {"least_at", rt::point_json(f.least_at_m)},
+                   {"clearance_fraction", f.clearance_fraction},
+                   {"max_off_path_m", f.max_off_path_m},
+                   {"constraint_fractions", f.constraint_fractions},
+                   {"reached_end", f.reached_end}});
+  }
+  return out;
+}
+
+void print_flown(const std::vector<rt::FlownCheck>& flights, const rt::PathCheck& check, const rt::VehicleEnvelope& e) {
+  for (const rt::FlownCheck& f : flights) {
+    std::printf("flown      PX4 L1 guidance at %.1f m/s over the ground, waypoints taken %.0f m out%s\n",
+                f.ground_speed_m_per_s, f.switch_distance_m, f.reached_end ? "" : ", NOT at the end in time");
+    const bool low = f.clearance_fraction < 1;
+    std::printf("           least clearance %.1f m at (%.1f, %.1f), %.3f of the flown %.0f m at or above %.0f m%s\n",
+                f.least_clearance_m, f.least_at_m.x(), f.least_at_m.y(), rt::fraction_shown(f.clearance_fraction),
+                f.length_m, e.clearance_m, low ? ": BELOW it (flown-clearance)" : "");
+    std::printf("           %.1f m at most off the planned legs\n", f.max_off_path_m);
+    for (std::size_t k = 0; k < f.constraint_fractions.size() && k < check.constraints.size(); ++k) {
+      const rt::ConstraintResult& r = check.constraints[k];
+      const rt::Vec3& p = r.constraint.point_m;
+      std::printf("           constraint %s (%.1f, %.1f, %.1f): holds on %.3f of the flown length (a report)%s\n",
+                  rt::to_string(r.constraint.kind), p.x(), p.y(), p.z(), rt::fraction_shown(f.constraint_fractions[k]),
+                  f.constraint_fractions[k] < r.satisfied_fraction ? " (less than on the legs)" : "");
+    }
+  }
 }
 
 double circle_clearance_m(const std::function<double(double, double)>& ground_m, const fields::VolumeGeometry& g,

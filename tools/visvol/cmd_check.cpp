@@ -291,6 +291,14 @@ int run_check(const CheckOptions& o) {
     return fail("check", invalid_argument(o.path + text));
   }
   const rt::PathCheck c = checker->check(path.data(), static_cast<int>(path.size()), flown->turn_radius_m.data());
+  // the autopilot's lateral track: waypoint legs only (PX4's loiter
+  // controller is not modelled)
+  std::vector<rt::FlownCheck> flights;
+  if (flown->loiters.empty()) {
+    flights = checker->fly(path);
+  } else if (rt::is_px4_fixed_wing(*envelope) && envelope->acceptance_radius_m > 0) {
+    notes.push_back("the PX4 L1 flight is not reported: the mission loiters, which it does not model");
+  }
   Holds holds;
   holds.in_sight_s.assign(c.constraints.size(), 0.0);
   for (std::size_t i = 0; i < path.size() && i < c.per_vertex.size(); ++i) {
@@ -311,6 +319,7 @@ int run_check(const CheckOptions& o) {
       j["per_vertex"][i]["file_vertex"] = v >= 0 ? nlohmann::json(v) : nlohmann::json();
     }
     j["loiters"] = flown->loiters;
+    j["flown"] = flown_json(flights);
     j["notes"] = notes;
     // the keys plan's summary has: a path checked had no rope run, so both
     // are its own F_c
@@ -328,6 +337,7 @@ int run_check(const CheckOptions& o) {
     std::printf("F_c        %.5f (the field of %s)\n", c.fc, o.pack.c_str());
     print_vertices(c, path, flown->vertex_of);
     print_check(c, *envelope, holds, approach.unmet);
+    print_flown(flights, c, *envelope);
   }
   return c.all_met && approach.unmet.empty() ? kExitOk : kExitFailure;
 }

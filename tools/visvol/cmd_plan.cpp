@@ -146,6 +146,7 @@ Result<rt::PlanRequest> plan_request(const PlanOptions& o, const PlanningPack& p
   Result<rt::VehicleEnvelope> envelope = resolve_envelope(o.envelope);
   if (!envelope.ok()) return envelope.status();
   r.envelope = *envelope;
+  r.report_flights = true;  // the answer flown as PX4 would, in the summary
   Result<std::vector<rt::ConstraintPoint>> observers = constraint_points(o.constraints);
   if (!observers.ok()) return observers.status();
   r.constraints = std::move(*observers);
@@ -385,6 +386,7 @@ int run_plan(const PlanOptions& o) {
                         {"outputs", written},
                         {"notes", notes}};
     j.update(check_json(check, r.envelope));
+    j["flown"] = flown_json(res->final_flown);
     const fields::Bounds2D& box = planning.bounds;
     j["planning_bounds"] = {
         {"xmin_m", box.xmin_m}, {"ymin_m", box.ymin_m}, {"xmax_m", box.xmax_m}, {"ymax_m", box.ymax_m}};
@@ -422,6 +424,7 @@ int run_plan(const PlanOptions& o) {
                                  : "NOT at equilibrium (time limit)",
                 res->equilibrium_s, res->simulated_s, res->first_level + 1, res->wall_s);
     print_check(check, r.envelope);
+    print_flown(res->final_flown, check, r.envelope);
     for (const std::string& f : written) std::printf("written    %s\n", f.c_str());
     for (const std::string& n : notes) std::printf("note       %s\n", n.c_str());
     if (publisher) {

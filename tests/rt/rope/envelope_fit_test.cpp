@@ -77,6 +77,40 @@ TEST(FitArcs, TheCornerRisesUntilItsArcClearsTheTerrain) {
   EXPECT_FALSE(pinned.feasible && !checker->check(pinned.path).all_met);
 }
 
+// A rock inside a corner where neither the legs nor the 80 m arc pass but
+// PX4 cuts the corner over it (path_check_test's RockInsideACorner): the
+// fit raises the legs flown there until both flights clear it, and the
+// checker agrees; nothing else about the path changes.
+TEST(FitFlights, TheLegsRiseUntilThePx4FlightsClearARockInsideTheCorner) {
+  fields::Heightfield t = blank(200, 200, 5.0, 100.0f);
+  for (int j = 46; j <= 48; ++j) {
+    for (int i = 26; i <= 28; ++i) t.at(i, j) = 140.0f;
+  }
+  const std::vector<Vec3> path = {
+      {t.x_of(20), t.y_of(180), 135.0}, {t.x_of(20), t.y_of(40), 135.0}, {t.x_of(180), t.y_of(40), 135.0}};
+  EnvelopeFitSpec spec;
+  spec.envelope = *vehicle_preset("fixed-wing");  // 100 m, 5 m/s of wind
+  PathCheckSpec check_spec;
+  check_spec.envelope = spec.envelope;
+  const auto checker = PathChecker::create(t, nullptr, check_spec);
+  ASSERT_TRUE(checker.ok());
+  const PathCheck before = checker->check(path);
+  ASSERT_EQ(before.envelope.back().name, "flown-clearance");
+  ASSERT_FALSE(before.envelope.back().met);
+  const EnvelopeFit fit = fit_to_envelope(path, spec, t);
+  const PathCheck c = checker->check(fit.path);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  ASSERT_TRUE(fit.feasible);
+  EXPECT_GE(c.envelope.back().worst, spec.envelope.clearance_m);
+  // over the rock's 140 m and the clearance, not far over it
+  double highest = 0;
+  for (const Vec3& p : fit.path) highest = std::max(highest, p.z());
+  EXPECT_GE(highest, 140.0 + spec.envelope.clearance_m);
+  EXPECT_LT(highest, 140.0 + spec.envelope.clearance_m + 5.0);
+  EXPECT_EQ(fit.path.front(), path.front());
+  EXPECT_EQ(fit.path.back(), path.back());
+}
+
 TEST_F(FitOnRelief, AStraightLineThroughTheHillsBecomesFlyable) {
   const std::vector<Vec3> straight = {at(5, 5, 60), at(90, 88, 60)};
   ASSERT_FALSE(judge(straight, envelope()).all_met);  // it cuts through the relief
@@ -276,7 +310,7 @@ TEST_F(FitEarlyDescent, TheHeightPastARidgeIsHeldForTheAcceptanceRadius) {
   const EnvelopeFit fit = fit_to_envelope(straight, spec, t);
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path);
-  ASSERT_EQ(c.envelope.size(), 7u);
+  ASSERT_EQ(c.envelope.size(), 8u);  // early-descent, then flown-clearance
   for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
   spec.envelope.acceptance_radius_m = 0;
   const EnvelopeFit reaching = fit_to_envelope(straight, spec, t);

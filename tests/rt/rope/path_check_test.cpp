@@ -128,7 +128,7 @@ TEST(PathCheckReport, AFractionUnderOneIsNeverShownAsOne) {
   l.satisfied_fraction = 0.9999;
   l.met = false;
   c.envelope.push_back(l);
-  ASSERT_EQ(c.unmet().size(), 1u);
+  ASSERT_EQ(c.unmet().size(), 1u) << c.unmet()[0] << " / " << c.unmet().back();
   EXPECT_NE(c.unmet()[0].find("holds on 0.999 of the length"), std::string::npos) << c.unmet()[0];
 }
 
@@ -305,7 +305,7 @@ TEST(PathCheck, ADescentJustPastARidgeIsFlownOverTheRidge) {
   const auto checker = PathChecker::create(t, nullptr, s);
   ASSERT_TRUE(checker.ok()) << checker.status().message();
   const PathCheck early = checker->check(path_descending_from(21));
-  ASSERT_EQ(early.envelope.size(), 7u);
+  ASSERT_EQ(early.envelope.size(), 8u);  // and flown-clearance last
   const LimitResult& clearance = early.envelope[0];
   const LimitResult& flown = early.envelope[6];
   EXPECT_TRUE(clearance.met) << clearance.worst;  // 30 m over the ridge itself
@@ -361,7 +361,7 @@ TEST(PathCheck, AShortLegIsFlownAtItsLowerHeightFromTheRadiusBeforeItsStart) {
   const auto checker = PathChecker::create(t, nullptr, s);
   ASSERT_TRUE(checker.ok()) << checker.status().message();
   const PathCheck stepped = checker->check(path_with_leg(32));
-  ASSERT_EQ(stepped.envelope.size(), 7u);
+  ASSERT_EQ(stepped.envelope.size(), 8u);  // and flown-clearance last
   const LimitResult& flown = stepped.envelope[6];
   ASSERT_EQ(flown.name, "early-descent");
   EXPECT_TRUE(stepped.envelope[0].met);  // 40 m over the ridge as planned
@@ -545,6 +545,91 @@ TEST_F(WallTerrain, APathOnTheBoundsEdgeIsInsideAsWrittenAndReadBack) {
   const PathCheck out = along_the_edge(0.02);
   EXPECT_FALSE(out.inside_planning_bounds);
   EXPECT_LT(out.inside_bounds_fraction, 0.9);
+}
+
+// A plain at 100 m (5 m posts) and a right-angle corner 30 m over it, legs of
+// 700 and 800 m; a rock 40 m high (posts 6 to 8 inside the corner, 42 m from
+// it along the bisector at the nearest) where the legs and the 80 m arc do
+// not pass, and PX4 flies.
+class RockInsideACorner : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    terrain = fields::testing::blank(200, 200, 5.0, 100.0f);
+    for (int j = 46; j <= 48; ++j) {
+      for (int i = 26; i <= 28; ++i) terrain.at(i, j) = 140.0f;
+    }
+  }
+  Vec3 post(double i, double j, double z) const { return {terrain.x_of(i), terrain.y_of(j), z}; }
+  std::vector<Vec3> corner() const { return {post(20, 180, 130), post(20, 40, 130), post(180, 40, 130)}; }
+  fields::Heightfield terrain;
+};
+
+TEST_F(RockInsideACorner, ThePx4FlightCutsTheCornerOverTheRockTheArcMisses) {
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");  // 20 m/s, 100 m radius, 5 m/s of wind: 125 m
+  s.constraints = {{ConstraintKind::hidden_from, post(190, 190, 100), 2.0}};
+  const auto checker = PathChecker::create(terrain, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const PathCheck c = checker->check(corner());
+  ASSERT_EQ(c.envelope.size(), 8u);
+  EXPECT_EQ(c.envelope[0].name, "clearance");
+  EXPECT_TRUE(c.envelope[0].met) << "the legs and the arc clear the rock";
+  const LimitResult& flown = c.envelope[7];
+  EXPECT_EQ(flown.name, "flown-clearance");
+  EXPECT_FALSE(flown.met);
+  EXPECT_LT(flown.worst, 0.0);
+  EXPECT_FALSE(c.all_met);
+  // (the observer across the plain sees it all: the report's constraint)
+  ASSERT_EQ(c.unmet().size(), 2u);
+  EXPECT_NE(c.unmet()[1].find("flown-clearance 30.0 m: worst -10.0 m, holds on 0.98"), std::string::npos)
+      << c.unmet()[1];
+  EXPECT_NE(c.unmet()[1].find("of the flown length"), std::string::npos) << c.unmet()[1];
+  // the same path 50 m higher clears the rock however it is flown
+  std::vector<Vec3> high = corner();
+  for (Vec3& p : high) p.z() += 50;
+  const PathCheck above = checker->check(high);
+  EXPECT_TRUE(above.envelope[7].met) << above.envelope[7].worst;
+  EXPECT_NEAR(above.envelope[7].worst, 40.0, 1e-3);  // over the rock's top
+  const std::vector<FlownCheck> flights = checker->fly(corner());
+  ASSERT_EQ(flights.size(), 2u);
+  EXPECT_DOUBLE_EQ(flights[0].ground_speed_m_per_s, 20.0);
+  EXPECT_DOUBLE_EQ(flights[0].switch_distance_m, 100.0);
+  EXPECT_DOUBLE_EQ(flights[1].ground_speed_m_per_s, 25.0);
+  EXPECT_DOUBLE_EQ(flights[1].switch_distance_m, 125.0);
+  for (const FlownCheck& f : flights) {
+    EXPECT_TRUE(f.reached_end);
+    EXPECT_LT(f.least_clearance_m, 0.0) << "into the rock";
+    EXPECT_LT(f.clearance_fraction, 1.0);
+    EXPECT_GT(f.clearance_fraction, 0.9);
+    // the rock is where it flies low
+    EXPECT_LT((f.least_at_m - post(27, 47, 0)).head<2>().norm(), 15.0);
+    ASSERT_EQ(f.constraint_fractions.size(), 1u);
+    // shorter than the legs' 1500 m by the cut corner and the switch distance at the end
+    EXPECT_GT(f.length_m, 1500.0 - f.switch_distance_m - 100.0);
+    EXPECT_LT(f.length_m, 1500.0 - f.switch_distance_m);
+  }
+  // 31.6 m off the legs at the deepest in still air (the independent
+  // simulation of l1_track_test), farther in the tailwind
+  EXPECT_NEAR(flights[0].max_off_path_m, 31.6, 1.0);
+  EXPECT_GT(flights[1].max_off_path_m, flights[0].max_off_path_m + 5.0);
+}
+
+TEST_F(RockInsideACorner, OnlyAPx4FixedWingThatSwitchesEarlyIsFlown) {
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");
+  s.envelope.max_wind_m_per_s = 0;  // still air only
+  EXPECT_EQ(PathChecker::create(terrain, nullptr, s)->fly(corner()).size(), 1u);
+  s.envelope.acceptance_radius_m = 0;  // every waypoint reached
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s)->fly(corner()).empty());
+  s.envelope = *vehicle_preset("fixed-wing");
+  s.envelope.autopilot = Autopilot::ardupilot;
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s)->fly(corner()).empty());
+  s.envelope = *vehicle_preset("multirotor");
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s)->fly(corner()).empty());
+  s.envelope = *vehicle_preset("fixed-wing");
+  std::vector<Vec3> bad = corner();
+  bad[1].x() = std::nan("");
+  EXPECT_TRUE(PathChecker::create(terrain, nullptr, s)->fly(bad).empty());
 }
 
 }  // namespace

@@ -1,0 +1,115 @@
+#include "rt/rope/l1_track.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "base/angles.hpp"
+#include "rt/rope/path_metrics.hpp"
+
+namespace visvol::rt {
+
+namespace {
+
+constexpr double kGravityMPerS2 = 9.80665;
+// PX4's line tracking aims at most 45 degrees off the line (sin 0.7071), and
+// flies straight to the leg's start while more than 45 degrees behind it.
+constexpr double kSinMaxEta1 = 0.7071;
+// Past the leg's end (its bearing from the end within 100 degrees of the
+// leg's direction): back to the end.
+constexpr double kCosPastEnd = -0.17364817766693033;  // cos 100 degrees
+
+using Vec2 = Eigen::Vector2d;
+
+Vec2 xy(const Vec3& p) { return {p.x(), p.y()}; }
+double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// sin(eta) for a heading error eta towards `direction`, eta clamped to 90
+// degrees either way (a direction behind turns at the full 90).
+double sin_eta_towards(const Vec2& velocity, const Vec2& direction) {
+  const double norms = velocity.norm() * direction.norm();
+  if (!(norms > 0)) return 0.0;
+  const double c = cross(velocity, direction);
+  if (velocity.dot(direction) < 0) return c < 0 ? -1.0 : 1.0;
+  return c / norms;
+}
+
+// The lateral acceleration PX4 1.13 commands to fly from `a` to `b`, m/s^2
+// (positive turns left, counter-clockwise).
+double l1_lateral_accel(const Vec2& a, const Vec2& b, const Vec2& pos, const Vec2& velocity, double l1_m, double gain) {
+  Vec2 ab = b - a;
+  if (ab.norm() < 1e-3) ab = b - pos;
+  ab.normalize();
+  const Vec2 a_to_p = pos - a;
+  const double distance_a = a_to_p.norm();
+  const double along = a_to_p.dot(ab);
+  Vec2 b_to_p = pos - b;
+  if (b_to_p.norm() > 0) b_to_p.normalize();
+  double sin_eta = 0;
+  if (distance_a > l1_m && along / std::max(distance_a, 1.0) < -kSinMaxEta1) {
+    sin_eta = sin_eta_towards(velocity, -a_to_p);  // far behind the start: to it
+  } else if (b_to_p.dot(ab) > kCosPastEnd) {
+    sin_eta = sin_eta_towards(velocity, -b_to_p);  // past the end: back to it
+  } else {
+    const double sine_eta1 = std::clamp(cross(a_to_p, ab) / std::max(l1_m, 0.1), -kSinMaxEta1, kSinMaxEta1);
+    const double eta2 = std::atan2(cross(velocity, ab), velocity.dot(ab));
+    sin_eta = std::sin(std::clamp(std::asin(sine_eta1) + eta2, -0.5 * kPi, 0.5 * kPi));
+  }
+  const double v = velocity.norm();
+  return gain * v * v / l1_m * sin_eta;
+}
+
+// The planned height at the point of leg a-b nearest `pos`.
+double leg_height_m(const Vec3& a, const Vec3& b, const Vec2& pos) {
+  const Vec2 ab = xy(b) - xy(a);
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((pos - xy(a)).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return a.z() + t * (b.z() - a.z());
+}
+
+double horizontal_length_m(const std::vector<Vec3>& path) {
+  double total = 0;
+  for (std::size_t i = 1; i < path.size(); ++i) total += (xy(path[i]) - xy(path[i - 1])).norm();
+  return total;
+}
+
+}  // namespace
+
+double L1Flight::l1_distance_m() const { return damping * period_s * ground_speed_m_per_s / kPi; }
+
+FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
+  FlownTrack out;
+  const int n = static_cast<int>(path.size());
+  const double v = flight.ground_speed_m_per_s, dt = flight.step_s;
+  if (n < 2 || !(v > 0) || !(dt > 0) || (xy(path[1]) - xy(path[0])).norm() < kSameSpotM) return out;
+  const double l1_m = flight.l1_distance_m();
+  const double gain = 4.0 * flight.damping * flight.damping;
+  const double accept_m = std::max(flight.switch_distance_m, l1_m);
+  const double max_accel = kGravityMPerS2 * std::tan(flight.max_roll_deg * kRadPerDeg);
+  const double max_time_s = 3.0 * horizontal_length_m(path) / v + 120.0;
+  Vec2 pos = xy(path[0]);
+  Vec2 heading = (xy(path[1]) - xy(path[0])).normalized();  // unit
+  int from = 0;
+  out.points.reserve(static_cast<std::size_t>(max_time_s / dt / 3.0) + 2);
+  out.points.push_back({path[0], 0});
+  for (double t = 0; t < max_time_s; t += dt) {
+    if ((xy(path[static_cast<std::size_t>(from + 1)]) - pos).norm() <= accept_m) {
+      if (from + 2 == n) {
+        out.reached_end = true;
+        break;
+      }
+      ++from;  // one waypoint a step
+    }
+    const Vec3& a = path[static_cast<std::size_t>(from)];
+    const Vec3& b = path[static_cast<std::size_t>(from + 1)];
+    const Vec2 velocity = v * heading;
+    const double accel = std::clamp(l1_lateral_accel(xy(a), xy(b), pos, velocity, l1_m, gain), -max_accel, max_accel);
+    pos += velocity * dt;
+    // turned by accel / v dt (a hundredth of a radian a step at most): along
+    // its left normal, then back to unit length
+    heading = (heading + Vec2(-heading.y(), heading.x()) * (accel / v * dt)).normalized();
+    out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
+  }
+  return out;
+}
+
+}  // namespace visvol::rt

@@ -1,0 +1,53 @@
+// The ground track a PX4 fixed-wing flies along a path's legs: PX4 1.13's
+// L1 guidance (ECL_L1_Pos_Controller::navigate_waypoints: fly to the leg's
+// start while far behind it, back to its end once past it, else track the
+// line through both with the L1 point at most 45 degrees off; lateral
+// acceleration 4 damping^2 V^2 / L1 sin(eta), eta within 90 degrees, bank
+// within the roll limit) at a constant speed over the ground, taking the
+// next waypoint within its switch distance (or its L1 distance, the larger),
+// one a step, as the navigator does. The arc by a corner (rt/rope/fillet.hpp)
+// is the track of a vehicle that turns at its radius; this is where an
+// autopilot that switches early and cuts towards the next leg flies: deeper
+// inside the corner, and across several corners where the legs are shorter
+// than the switch distance.
+//
+// Heights: the planned height at the nearest point of the leg being flown
+// (the vertical early switch is judged apart: rt::TrackGround).
+//
+// Offline: allocates the track. Thread-compatible.
+#pragma once
+
+#include <vector>
+
+#include "rt/rope/rope.hpp"
+
+namespace visvol::rt {
+
+struct L1Flight {
+  double ground_speed_m_per_s = 20.0;
+  double switch_distance_m = 100.0;  // the next waypoint is taken within this (horizontal)
+  double period_s = 20.0;            // PX4's FW_L1_PERIOD default
+  double damping = 0.75;             // FW_L1_DAMPING default
+  double max_roll_deg = 50.0;        // FW_R_LIM default
+  double step_s = 0.02;              // the controller's rate, 50 Hz
+  // L1 distance, m: damping period V / pi (95.5 m at 20 m/s)
+  double l1_distance_m() const;
+};
+
+struct FlownPoint {
+  Vec3 p_m = Vec3::Zero();
+  int leg = 0;  // flying from waypoint `leg` to `leg + 1`
+};
+
+struct FlownTrack {
+  std::vector<FlownPoint> points;  // one a step, from the first waypoint
+  bool reached_end = false;        // within the switch distance of the last waypoint in time
+};
+
+// Flies `path` (at least two waypoints 1 cm apart horizontally, or nothing
+// is flown) from its first waypoint, heading along the first leg, until
+// within the switch distance of the last one, or for three times the
+// path's length at the speed and two minutes more (not reached_end).
+FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight);
+
+}  // namespace visvol::rt

@@ -137,8 +137,9 @@ build_beside() {  # build_beside NICE LOG COMMAND...
   local nice=$1 log=$2
   shift 2
   (
-    renice -n "$nice" -p "$BASHPID" >/dev/null
-    ionice -c 3 -p "$BASHPID"
+    # best effort: a priority the shell may not take is no reason to stop
+    renice -n "$nice" -p "$BASHPID" >/dev/null 2>&1 || true
+    ionice -c 3 -p "$BASHPID" 2>/dev/null || true
     "$@"
   ) >"$log" 2>&1 &
   beside_pid=$!

@@ -94,9 +94,10 @@ class Words {
 // The GRASS form "north:216990" or "north:" and the ESRI form "ncols": the keyword part.
 std::string key_of(const std::string& word) { return word.substr(0, word.find(':')); }
 
-// The header's nodata value: a number (NaN too, as GDAL writes a float
-// grid's), or GRASS's null marker "*". GDAL reads any other word as 0, so
-// that every post of 0 m (sea level, a lake) would be taken for a hole.
+// The header's nodata value: a finite number (NaN too, as GDAL writes a
+// float grid's), or GRASS's null marker "*". GDAL reads a word that is no
+// number as 0, so that every post of 0 m (sea level, a lake) would be taken
+// for a hole; an infinite one is no height either.
 Status check_nodata_token(const std::string& path, const std::string& token) {
   if (token.empty() || token == "*" || is_number(token)) return Status::ok_status();
   char* end = nullptr;
@@ -106,7 +107,7 @@ Status check_nodata_token(const std::string& path, const std::string& token) {
   }
   return invalid_argument(path + ": its nodata value '" +
                           (token.size() > kMaxCellChars ? token.substr(0, kMaxCellChars) + "..." : token) +
-                          "' is not a number; GDAL would read it as 0 and take every post of 0 m for nodata");
+                          "' is not a finite number (a word GDAL reads as 0, taking every post of 0 m for nodata)");
 }
 
 }  // namespace

@@ -301,14 +301,16 @@ SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, con
 // deficit and the margin, each vertex by that over its share of the flown
 // point's height (beside a fixed end, as segments' misses are), where the
 // share is at least half (a point nearer a fixed end than the vertex is the
-// end's: the check reports it). True when a bound moved; `short_of` true
-// when some deficit is left.
+// end's: the check reports it). The track sampled as the check samples it. True
+// when a bound moved; `short_of` true when a flight came under the
+// clearance at all (raised or not).
 bool raise_for_flights(const EnvelopeFitSpec& spec, const fields::Heightfield& t, const std::vector<Vec3>& fitted,
                        const std::vector<double>& z, std::vector<double>& lo, const std::vector<double>& hi,
                        bool& short_of) {
   bool moved = false;
   const std::size_t n = fitted.size();
-  for (const L1Flight& flight : px4_flights(spec.envelope)) {
+  for (L1Flight flight : px4_flights(spec.envelope)) {
+    flight.record_every_m = kSightStepPosts * t.spacing_m;  // as the check samples it
     for (const FlownPoint& q : fly_l1(fitted, flight).points) {
       const double ground = fields::bilinear_height(t, t.i_of(q.p_m.x()), t.j_of(q.p_m.y()));
       const double deficit = ground + spec.envelope.clearance_m - q.p_m.z();

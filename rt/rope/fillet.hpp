@@ -1,5 +1,7 @@
-// The arc a fixed-wing flies by a vertex on: what rt::PathChecker samples
-// inside each corner and rt::fit_to_envelope holds its band along.
+// The arc of a fixed-wing that turns at its radius by a vertex: what
+// rt::PathChecker samples inside each corner and rt::fit_to_envelope holds
+// its band along (an autopilot that switches early cuts deeper:
+// rt/rope/l1_track.hpp).
 #pragma once
 
 #include <Eigen/Core>

@@ -80,18 +80,26 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   FlownTrack out;
   const int n = static_cast<int>(path.size());
   const double v = flight.ground_speed_m_per_s, dt = flight.step_s;
-  if (n < 2 || !(v > 0) || !(dt > 0) || (xy(path[1]) - xy(path[0])).norm() < kSameSpotM) return out;
+  if (n < 2 || !(v > 0) || !(dt > 0)) return out;
+  // the first waypoint off the start's spot sets the heading (a climb on the spot first)
+  int first_off = 1;
+  while (first_off < n && (xy(path[static_cast<std::size_t>(first_off)]) - xy(path[0])).norm() < kSameSpotM) {
+    ++first_off;
+  }
+  if (first_off == n) return out;
   const double l1_m = flight.l1_distance_m();
   const double gain = 4.0 * flight.damping * flight.damping;
   const double accept_m = std::max(flight.switch_distance_m, l1_m);
   const double max_accel = kGravityMPerS2 * std::tan(flight.max_roll_deg * kRadPerDeg);
   const double max_time_s = 3.0 * horizontal_length_m(path) / v + 120.0;
+  const double max_steps = std::min(max_time_s / dt, kMaxL1Steps);
+  const double record_m = std::max(flight.record_every_m, 0.0);
   Vec2 pos = xy(path[0]);
-  Vec2 heading = (xy(path[1]) - xy(path[0])).normalized();  // unit
+  Vec2 heading = (xy(path[static_cast<std::size_t>(first_off)]) - pos).normalized();  // unit
   int from = 0;
-  out.points.reserve(static_cast<std::size_t>(max_time_s / dt / 3.0) + 2);
   out.points.push_back({path[0], 0});
-  for (double t = 0; t < max_time_s; t += dt) {
+  Vec2 recorded = pos;
+  for (double step = 0; step < max_steps; ++step) {
     if ((xy(path[static_cast<std::size_t>(from + 1)]) - pos).norm() <= accept_m) {
       if (from + 2 == n) {
         out.reached_end = true;
@@ -107,6 +115,15 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
     // turned by accel / v dt (a hundredth of a radian a step at most): along
     // its left normal, then back to unit length
     heading = (heading + Vec2(-heading.y(), heading.x()) * (accel / v * dt)).normalized();
+    if ((pos - recorded).norm() >= record_m) {
+      out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
+      recorded = pos;
+    }
+  }
+  const FlownPoint& last = out.points.back();
+  if ((last.p_m.head<2>() - pos).norm() > 0) {  // where it stopped, recorded or not
+    const Vec3& a = path[static_cast<std::size_t>(from)];
+    const Vec3& b = path[static_cast<std::size_t>(from + 1)];
     out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
   }
   return out;

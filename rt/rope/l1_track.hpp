@@ -5,7 +5,9 @@
 // acceleration 4 damping^2 V^2 / L1 sin(eta), eta within 90 degrees, bank
 // within the roll limit) at a constant speed over the ground, taking the
 // next waypoint within its switch distance (or its L1 distance, the larger),
-// one a step, as the navigator does. The arc by a corner (rt/rope/fillet.hpp)
+// one a step, as the navigator does (not modelled: its altitude gate,
+// NAV_FW_ALT_RAD, and a wind's drift in the turns: a tailwind is flown as a
+// faster ground speed). The arc by a corner (rt/rope/fillet.hpp)
 // is the track of a vehicle that turns at its radius; this is where an
 // autopilot that switches early and cuts towards the next leg flies: deeper
 // inside the corner, and across several corners where the legs are shorter
@@ -30,6 +32,10 @@ struct L1Flight {
   double damping = 0.75;             // FW_L1_DAMPING default
   double max_roll_deg = 50.0;        // FW_R_LIM default
   double step_s = 0.02;              // the controller's rate, 50 Hz
+  // A point is kept where the aircraft has flown this far from the last
+  // kept (0: every step; the check keeps its sample step): the track's
+  // memory is its length over this, not its duration.
+  double record_every_m = 0.0;
   // L1 distance, m: damping period V / pi (95.5 m at 20 m/s)
   double l1_distance_m() const;
 };
@@ -39,15 +45,21 @@ struct FlownPoint {
   int leg = 0;  // flying from waypoint `leg` to `leg + 1`
 };
 
+// The steps a flight takes at most (a day of flight at 50 Hz): a slow
+// vehicle on a long path stops there, short of the end.
+inline constexpr double kMaxL1Steps = 4.32e6;
+
 struct FlownTrack {
-  std::vector<FlownPoint> points;  // one a step, from the first waypoint
-  bool reached_end = false;        // within the switch distance of the last waypoint in time
+  // from the first waypoint, a step (or L1Flight::record_every_m) apart,
+  // and the last position flown
+  std::vector<FlownPoint> points;
+  bool reached_end = false;  // within the switch distance of the last waypoint in time
 };
 
-// Flies `path` (at least two waypoints 1 cm apart horizontally, or nothing
-// is flown) from its first waypoint, heading along the first leg, until
-// within the switch distance of the last one, or for three times the
-// path's length at the speed and two minutes more (not reached_end).
+// Flies `path` from its first waypoint, heading for the first waypoint off
+// its spot (none 1 cm away horizontally: nothing is flown), until within
+// the switch distance of the last one, or for three times the path's length
+// at the speed and two minutes more, or kMaxL1Steps (not reached_end).
 FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight);
 
 }  // namespace visvol::rt

@@ -52,11 +52,16 @@ int fillet_samples(const Fillet& f, double step_m) {
   return wanted >= 1 ? static_cast<int>(std::min(wanted, double(PathChecker::kMaxSegmentSamples))) : 1;
 }
 
-// The horizontal distance from p to the nearest point of the path's legs.
-double off_path_m(const std::vector<Vec3>& path, const Vec3& p) {
+// The horizontal distance from p to the nearest point of the legs around
+// the one it flies (two either way: a corner cut across legs shorter than
+// the switch distance), not the whole path's (quadratic on a long one).
+double off_path_m(const std::vector<Vec3>& path, const FlownPoint& flown) {
   double best = std::numeric_limits<double>::infinity();
+  const Vec3& p = flown.p_m;
   const Eigen::Vector2d q(p.x(), p.y());
-  for (std::size_t s = 0; s + 1 < path.size(); ++s) {
+  const std::size_t leg = static_cast<std::size_t>(flown.leg);
+  const std::size_t first = leg >= 2 ? leg - 2 : 0, last = std::min(leg + 3, path.size() - 1);
+  for (std::size_t s = first; s < last; ++s) {
     const Eigen::Vector2d a(path[s].x(), path[s].y()), ab = Eigen::Vector2d(path[s + 1].x(), path[s + 1].y()) - a;
     const double l2 = ab.squaredNorm();
     const double t = l2 > 0 ? std::clamp((q - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
@@ -66,27 +71,31 @@ double off_path_m(const std::vector<Vec3>& path, const Vec3& p) {
 }
 
 // One flight of a finite path (PathChecker::fly): a sample every sample
-// step of the track, standing for the track since the last. The sight
-// lines and the distance off the legs only where `report` (check() takes
-// the clearance alone, into `clearance_out`).
+// step of the track (or a controller step, the longer: 0.4 m at 20 m/s),
+// standing for the track since the last. The sight lines and the distance
+// off the legs only where `report` (check() takes the clearance alone, into
+// `clearance_out`).
 FlownCheck fly_once(const PathChecker& checker, const std::vector<Vec3>& path, const L1Flight& flight, bool report,
                     Tally* clearance_out) {
   FlownCheck out;
   out.ground_speed_m_per_s = flight.ground_speed_m_per_s;
   out.switch_distance_m = flight.switch_distance_m;
-  const FlownTrack track = fly_l1(path, flight);
+  L1Flight sampled = flight;
+  sampled.record_every_m = checker.spec().sample_step_m;
+  const FlownTrack track = fly_l1(path, sampled);
   out.reached_end = track.reached_end;
   const PathCheckSpec& spec = checker.spec();
   const std::size_t nc = report ? spec.constraints.size() : 0;
   std::vector<Tally> constraint_tally(nc);
   Tally clearance;
-  auto sample = [&](const Vec3& p, double w) {
+  auto sample = [&](const FlownPoint& flown, double w) {
+    const Vec3& p = flown.p_m;
     const double h = p.z() - checker.ground_m(p.x(), p.y());
     if (h < out.least_clearance_m) out.least_clearance_m = h, out.least_at_m = p;
     const bool clear = h >= spec.envelope.clearance_m - kHeightTolM;
     clearance.add(clear, w);
     if (clearance_out) clearance_out->add(clear, w);
-    if (report) out.max_off_path_m = std::max(out.max_off_path_m, off_path_m(path, p));
+    if (report) out.max_off_path_m = std::max(out.max_off_path_m, off_path_m(path, flown));
     for (std::size_t c = 0; c < nc; ++c) {
       const bool seen = checker.sees(spec.constraints[c], p);
       constraint_tally[c].add(seen == (spec.constraints[c].kind == ConstraintKind::visible_to), w);
@@ -99,7 +108,7 @@ FlownCheck fly_once(const PathChecker& checker, const std::vector<Vec3>& path, c
     out.length_m += step_m;
     since_m += step_m;
     if (i == 0 || since_m >= spec.sample_step_m || i + 1 == track.points.size()) {
-      sample(p, since_m);
+      sample(track.points[i], since_m);
       since_m = 0;
     }
   }
@@ -372,10 +381,14 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
     if (!v[i].allFinite() || (turn_radius_m != nullptr && !std::isnan(turn_radius_m[i]))) flies = false;
   }
   const std::vector<L1Flight> flights = flies ? px4_flights(e) : std::vector<L1Flight>();
+  bool any_flown = false;  // a path on one spot is not flown (its climb fails)
   if (!flights.empty()) {
     const std::vector<Vec3> path(v, v + count);
     for (const L1Flight& f : flights) {
-      flown_lowest = std::min(flown_lowest, fly_once(*this, path, f, false, &flown).least_clearance_m);
+      const FlownCheck flight = fly_once(*this, path, f, false, &flown);
+      flown_lowest = std::min(flown_lowest, flight.least_clearance_m);
+      any_flown = any_flown || flight.length_m > 0;
+      if (!flight.reached_end) flown.probe(false);  // the legs it did not reach are not judged
     }
   }
 
@@ -419,9 +432,7 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
   out.envelope.push_back(limit("max-descent", "deg", e.max_descent_deg, steepest_descent, descent));
   out.envelope.push_back(limit("min-turn-radius", "m", e.min_turn_radius_m, tightest, turn, true));
   if (track) out.envelope.push_back(limit("early-descent", "m", e.clearance_m, early_lowest, early, true));
-  if (!flights.empty()) {
-    out.envelope.push_back(limit(kFlownClearance, "m", e.clearance_m, flown_lowest, flown, true));
-  }
+  if (any_flown) out.envelope.push_back(limit(kFlownClearance, "m", e.clearance_m, flown_lowest, flown, true));
   out.inside_bounds_fraction = bounds.fraction();
   out.inside_planning_bounds = !bounds.failed;
 

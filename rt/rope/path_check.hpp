@@ -189,8 +189,10 @@ struct FlownCheck {
   // planned height of the nearest point of the leg flown, and where.
   double least_clearance_m = std::numeric_limits<double>::infinity();
   Vec3 least_at_m = Vec3::Zero();
-  double clearance_fraction = 1;             // of the flown length at or above the clearance
-  double max_off_path_m = 0;                 // the farthest the track goes from the planned legs, horizontally
+  double clearance_fraction = 1;  // of the flown length at or above the clearance
+  // the farthest the track goes from the legs about the one it flies (two
+  // either way), horizontally
+  double max_off_path_m = 0;
   std::vector<double> constraint_fractions;  // per constraint: of the flown length that satisfies it
   bool reached_end = false;
 };
@@ -225,7 +227,9 @@ class PathChecker {
   PathCheck check(const Vec3* vertices, int count, const double* turn_radius_m) const;
   PathCheck check(const std::vector<Vec3>& path) const { return check(path.data(), static_cast<int>(path.size())); }
   // The samples a check of the path takes (infinite for a vertex that is
-  // not finite): compare with kMaxSamples before checking outside input.
+  // not finite), less a PX4 fixed-wing's flights (their clearance alone, no
+  // sight line: about a ground height a sample): compare with kMaxSamples
+  // before checking outside input.
   double sample_count(const std::vector<Vec3>& path) const;
   // A PX4 fixed-wing's flights of the path (FlownCheck, rt::px4_flights):
   // sampled as check() samples, each sample's sight line to every

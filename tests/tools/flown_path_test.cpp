@@ -4,10 +4,10 @@
 
 #include <cmath>
 
+#include "base/angles.hpp"
+
 namespace visvol::cli {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 rt::VehicleEnvelope fixed_wing() { return *rt::vehicle_preset("fixed-wing"); }
 

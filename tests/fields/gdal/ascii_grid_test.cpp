@@ -80,7 +80,7 @@ TEST(AsciiGrid, GrassNullTokenIsNodataNotABadCell) {
 TEST(AsciiGrid, ANonNumericNodataValueIsRefusedNamingIt) {
   // GDAL reads a nodata value of "abc" as 0 and takes every post of 0 m (sea
   // level, a lake) for a hole; a cell of "abc" is then a hole too.
-  for (const std::string bad : {"abc", "-99x", "1.2.3"}) {
+  for (const std::string bad : {"abc", "-99x", "1.2.3", "inf"}) {
     std::string text = asc_text(12, "30", "500000", "0");
     text.replace(text.find("-9999"), 5, bad);
     const std::string path = write_text("bad_nodata", ".asc", text);
@@ -88,7 +88,7 @@ TEST(AsciiGrid, ANonNumericNodataValueIsRefusedNamingIt) {
     ASSERT_FALSE(hf.ok()) << bad;
     EXPECT_EQ(hf.status().code(), Errc::invalid_argument);
     EXPECT_TRUE(mentions(hf.status(), path)) << hf.status().message();
-    EXPECT_TRUE(mentions(hf.status(), "nodata value '" + bad + "' is not a number")) << hf.status().message();
+    EXPECT_TRUE(mentions(hf.status(), "nodata value '" + bad + "' is not a finite number")) << hf.status().message();
     std::remove(path.c_str());
   }
   // A number stays accepted (GRASS's own null marker too: the case below).

@@ -106,6 +106,39 @@ TEST(L1Track, NothingIsFlownWithoutTwoWaypointsApart) {
   EXPECT_TRUE(fly_l1(corner_path(), stopped).points.empty());
 }
 
+TEST(L1Track, AnAircraftThatCannotTurnStopsShortOfTheEndInBoundedTime) {
+  // a 1 degree bank cannot make the corner: it flies on and circles back
+  // far out, and stops at three times the path's flight time and 2 min more
+  L1Flight stiff;
+  stiff.max_roll_deg = 1;
+  const FlownTrack t = fly_l1(corner_path(), stiff);
+  EXPECT_FALSE(t.reached_end);
+  const double steps = (3.0 * 2000.0 / 20.0 + 120.0) / stiff.step_s;
+  EXPECT_LE(t.points.size(), static_cast<std::size_t>(steps) + 2);
+  for (const FlownPoint& p : t.points) EXPECT_TRUE(p.p_m.allFinite());
+}
+
+TEST(L1Track, PointsAreKeptAsFarApartAsAsked) {
+  L1Flight sparse;
+  sparse.record_every_m = 5;
+  const FlownTrack every = fly_l1(corner_path(), L1Flight{}), t = fly_l1(corner_path(), sparse);
+  ASSERT_TRUE(t.reached_end);
+  EXPECT_LT(t.points.size(), every.points.size() / 10);
+  for (std::size_t i = 1; i + 1 < t.points.size(); ++i) {
+    EXPECT_GE((t.points[i].p_m - t.points[i - 1].p_m).head<2>().norm(), 5.0 - 1e-9);
+  }
+  // the same flight: it stops where the dense one does
+  EXPECT_LT((t.points.back().p_m - every.points.back().p_m).norm(), 1e-9);
+}
+
+TEST(L1Track, AClimbOnTheStartsSpotIsFlownFromTheFirstWaypointOffIt) {
+  std::vector<Vec3> path = corner_path();
+  path.insert(path.begin() + 1, Vec3(0, 0, 150));  // up 50 m before leaving
+  const FlownTrack t = fly_l1(path, L1Flight{});
+  ASSERT_TRUE(t.reached_end);
+  EXPECT_NEAR(nearest_to(t, Vec3(0, 1000, 0)), 45.5, 1.0);  // the corner flown as without the climb
+}
+
 TEST(L1Track, ItAlwaysStopsAndStaysFinite) {
   // a path that doubles back on itself within the switch distance
   const std::vector<Vec3> path = {Vec3(0, 0, 100), Vec3(0, 50, 100), Vec3(0, 0, 100), Vec3(0, 50, 100)};

@@ -38,8 +38,11 @@
 //   guidance flies (rt/rope/l1_track.hpp), which cuts a corner deeper than
 //   the arc and several at once where the legs are shorter than the switch
 //   distance, in still air and with the strongest wind behind it
-//   (rt::px4_flights), sampled as the path is, at the planned height of the
-//   leg flown, for their share of the flown length: "flown-clearance".
+//   (rt::px4_flights), sampled as the path is (or a controller step apart,
+//   the longer: 0.4 m at 20 m/s), at the planned height of the leg flown,
+//   for their share of the flown length: "flown-clearance". Unmet where a
+//   flight does not reach the end in time (three times the path's flight
+//   time and two minutes more, at most a day).
 // - Planning bounds: the samples inside the trusted region.
 // A requirement is met when every sample, segment or vertex satisfies it
 // (satisfied_fraction == 1).

@@ -317,9 +317,7 @@ bool raise_for_flights(const EnvelopeFitSpec& spec, const fields::Heightfield& t
       if (deficit <= 0.5 * kHeightTolM) continue;
       short_of = true;
       const auto a = static_cast<std::size_t>(q.leg);
-      const Eigen::Vector2d ab(fitted[a + 1].x() - fitted[a].x(), fitted[a + 1].y() - fitted[a].y());
-      const Eigen::Vector2d aq(q.p_m.x() - fitted[a].x(), q.p_m.y() - fitted[a].y());
-      const double u = ab.squaredNorm() > 0 ? std::clamp(aq.dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+      const double u = leg_fraction(fitted[a], fitted[a + 1], q.p_m.x(), q.p_m.y());
       for (std::size_t v : {a, a + 1}) {
         if (v == 0 || v + 1 == n) continue;
         const double share = v == a ? (a + 2 == n ? 1.0 - u : 1.0) : (a == 0 ? u : 1.0);

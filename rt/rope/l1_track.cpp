@@ -60,10 +60,7 @@ double l1_lateral_accel(const Vec2& a, const Vec2& b, const Vec2& pos, const Vec
 
 // The planned height at the point of leg a-b nearest `pos`.
 double leg_height_m(const Vec3& a, const Vec3& b, const Vec2& pos) {
-  const Vec2 ab = xy(b) - xy(a);
-  const double l2 = ab.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((pos - xy(a)).dot(ab) / l2, 0.0, 1.0) : 0.0;
-  return a.z() + t * (b.z() - a.z());
+  return a.z() + leg_fraction(a, b, pos.x(), pos.y()) * (b.z() - a.z());
 }
 
 double horizontal_length_m(const std::vector<Vec3>& path) {
@@ -73,6 +70,12 @@ double horizontal_length_m(const std::vector<Vec3>& path) {
 }
 
 }  // namespace
+
+double leg_fraction(const Vec3& a, const Vec3& b, double x, double y) {
+  const Vec2 ab = xy(b) - xy(a);
+  const double l2 = ab.squaredNorm();
+  return l2 > 0 ? std::clamp((Vec2(x, y) - xy(a)).dot(ab) / l2, 0.0, 1.0) : 0.0;
+}
 
 double L1Flight::l1_distance_m() const { return damping * period_s * ground_speed_m_per_s / kPi; }
 
@@ -99,6 +102,12 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   int from = 0;
   out.points.push_back({path[0], 0});
   Vec2 recorded = pos;
+  auto record = [&]() {
+    const Vec3& a = path[static_cast<std::size_t>(from)];
+    const Vec3& b = path[static_cast<std::size_t>(from + 1)];
+    out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
+    recorded = pos;
+  };
   for (double step = 0; step < max_steps; ++step) {
     if ((xy(path[static_cast<std::size_t>(from + 1)]) - pos).norm() <= accept_m) {
       if (from + 2 == n) {
@@ -115,17 +124,9 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
     // turned by accel / v dt (a hundredth of a radian a step at most): along
     // its left normal, then back to unit length
     heading = (heading + Vec2(-heading.y(), heading.x()) * (accel / v * dt)).normalized();
-    if ((pos - recorded).norm() >= record_m) {
-      out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
-      recorded = pos;
-    }
+    if ((pos - recorded).norm() >= record_m) record();
   }
-  const FlownPoint& last = out.points.back();
-  if ((last.p_m.head<2>() - pos).norm() > 0) {  // where it stopped, recorded or not
-    const Vec3& a = path[static_cast<std::size_t>(from)];
-    const Vec3& b = path[static_cast<std::size_t>(from + 1)];
-    out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
-  }
+  if ((pos - recorded).norm() > 0) record();  // where it stopped, recorded or not
   return out;
 }
 

@@ -56,6 +56,10 @@ struct FlownTrack {
   bool reached_end = false;  // within the switch distance of the last waypoint in time
 };
 
+// The fraction (0 to 1) along leg a-b of its point nearest (x, y),
+// horizontally (0 for a leg on one spot).
+double leg_fraction(const Vec3& a, const Vec3& b, double x, double y);
+
 // Flies `path` from its first waypoint, heading for the first waypoint off
 // its spot (none 1 cm away horizontally: nothing is flown), until within
 // the switch distance of the last one, or for three times the path's length

@@ -63,9 +63,7 @@ double off_path_m(const std::vector<Vec3>& path, const FlownPoint& flown) {
   const std::size_t first = leg >= 2 ? leg - 2 : 0, last = std::min(leg + 3, path.size() - 1);
   for (std::size_t s = first; s < last; ++s) {
     const Eigen::Vector2d a(path[s].x(), path[s].y()), ab = Eigen::Vector2d(path[s + 1].x(), path[s + 1].y()) - a;
-    const double l2 = ab.squaredNorm();
-    const double t = l2 > 0 ? std::clamp((q - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
-    best = std::min(best, (q - a - t * ab).norm());
+    best = std::min(best, (q - a - leg_fraction(path[s], path[s + 1], q.x(), q.y()) * ab).norm());
   }
   return best;
 }
@@ -101,16 +99,11 @@ FlownCheck fly_once(const PathChecker& checker, const std::vector<Vec3>& path, c
       constraint_tally[c].add(seen == (spec.constraints[c].kind == ConstraintKind::visible_to), w);
     }
   };
-  double since_m = 0;
+  // the track keeps its points a sample step apart: each is a sample
   for (std::size_t i = 0; i < track.points.size(); ++i) {
-    const Vec3& p = track.points[i].p_m;
-    const double step_m = i > 0 ? (p - track.points[i - 1].p_m).head<2>().norm() : 0.0;
+    const double step_m = i > 0 ? (track.points[i].p_m - track.points[i - 1].p_m).head<2>().norm() : 0.0;
     out.length_m += step_m;
-    since_m += step_m;
-    if (i == 0 || since_m >= spec.sample_step_m || i + 1 == track.points.size()) {
-      sample(track.points[i], since_m);
-      since_m = 0;
-    }
+    sample(track.points[i], step_m);
   }
   out.clearance_fraction = clearance.fraction();
   for (const Tally& t : constraint_tally) out.constraint_fractions.push_back(t.fraction());

@@ -30,6 +30,8 @@ Eigen::Matrix3d cross_times(const Vec3& r, const Eigen::Matrix3d& m);
 Eigen::Matrix3d times_cross(const Eigen::Matrix3d& m, const Vec3& r);
 // The unit quaternion of rotation vector w (series for small angles).
 Eigen::Quaterniond exp_map(const Vec3& w);
+// The shortest rotation taking body z onto dir (not zero).
+Eigen::Quaterniond from_body_z(const Vec3& dir);
 }  // namespace detail
 
 class ArticulatedRope final : public Rope {

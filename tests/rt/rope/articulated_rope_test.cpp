@@ -94,5 +94,25 @@ TEST(ArticulatedRope, ExponentialMapSeriesMatchesAngleAxis) {
   EXPECT_EQ(detail::exp_map(Vec3::Zero()).coeffs(), Eigen::Quaterniond::Identity().coeffs());
 }
 
+// A capsule laid along a segment: its body z turned onto the segment by the
+// shortest rotation (the axis across both), a unit quaternion, for any
+// direction and length, straight down (a half turn) and straight up included.
+TEST(ArticulatedRope, BodyZTurnsOntoTheSegmentTheShortestWay) {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Vec3> dirs = {Vec3::UnitZ(), -Vec3::UnitZ(), Vec3::UnitX() * 1e-9, Vec3(1e-13, 0, -1), Vec3(0, 3, -4)};
+  for (int n = 0; n < 200; ++n) dirs.push_back(Vec3(unit(rng), unit(rng), unit(rng)) * std::pow(10.0, 4 * unit(rng)));
+  for (const Vec3& dir : dirs) {
+    const Eigen::Quaterniond q = detail::from_body_z(dir);
+    ASSERT_NEAR(q.norm(), 1.0, 1e-15) << dir.transpose();
+    ASSERT_LT((q * Vec3::UnitZ() - dir.normalized()).norm(), 1e-12) << dir.transpose();
+    const Vec3 axis = q.vec();
+    ASSERT_LT(std::abs(axis.z()), 1e-15) << dir.transpose();                    // across z
+    ASSERT_LT(std::abs(axis.dot(dir.normalized())), 1e-12) << dir.transpose();  // and across dir
+    ASSERT_GE(q.w(), 0.0) << dir.transpose();                                   // at most a half turn
+  }
+  EXPECT_EQ(detail::from_body_z(Vec3(0, 0, 5)).coeffs(), Eigen::Quaterniond::Identity().coeffs());
+}
+
 }  // namespace
 }  // namespace visvol::rt

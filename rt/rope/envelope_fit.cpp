@@ -41,16 +41,19 @@ constexpr double kNoGround = -std::numeric_limits<double>::infinity();
 // yield to it (clearance before a hidden-from hull, the ceiling before a
 // visible-to hull). `behind_m`: the highest ground under the track behind
 // the point that a vehicle taking its heights early may be over at this
-// height (track_ground.hpp).
-Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, double y, double behind_m = kNoGround) {
+// height (track_ground.hpp). `margins`: false for the limits themselves,
+// without the fit's margins inside them.
+Band band_at(const EnvelopeFitSpec& s, const fields::Heightfield& t, double x, double y, double behind_m = kNoGround,
+             bool margins = true) {
   const VehicleEnvelope& e = s.envelope;
   const double g = fields::bilinear_height(t, t.i_of(x), t.j_of(y));  // clamped to the grid
+  const double margin_m = margins ? s.margin_m : 0.0, hull_margin_m = margins ? s.hull_margin_m : 0.0;
   Band b;
-  b.lo = std::max(g, behind_m) + e.clearance_m + s.margin_m;
-  b.hi = std::min({g + e.max_agl_m - s.margin_m, e.max_altitude_m - s.margin_m, s.top_m});
+  b.lo = std::max(g, behind_m) + e.clearance_m + margin_m;
+  b.hi = std::min({g + e.max_agl_m - margin_m, e.max_altitude_m - margin_m, s.top_m});
   double lo = b.lo, hi = b.hi;
-  for (const PointHull* h : s.above) lo = std::max(lo, h->at(x, y) + s.hull_margin_m);
-  for (const PointHull* h : s.below) hi = std::min(hi, h->at(x, y) - s.hull_margin_m);
+  for (const PointHull* h : s.above) lo = std::max(lo, h->at(x, y) + hull_margin_m);
+  for (const PointHull* h : s.below) hi = std::min(hi, h->at(x, y) - hull_margin_m);
   b.hi = std::max(b.lo, std::min(b.hi, hi));
   b.lo = std::min(b.hi, std::max(b.lo, lo));
   return b;
@@ -247,8 +250,28 @@ std::vector<double> along_m(const std::vector<Vec3>& p) {
 }
 
 // Segment a-b starts `a_m` along the track.
+// What a fixed end lacks of its band: the segment beside it is asked for
+// that much less at the end, tapering to nothing at its other vertex (a
+// sample beside the end cannot be mended by moving the other vertex: it
+// was asked for the miss over the sample's share of its height,
+// kMinEndShare, pass after pass; a path 130 m over a 100 m plain, its ends
+// exactly at the clearance, had its corner raised to 282 m and no fit).
+// `outside`: the end lacks more than the fit's margins, so the path is not
+// inside the envelope (the check reports the end).
+struct EndRelief {
+  double lo_m = 0, hi_m = 0;  // under the band's floor, over its ceiling
+  bool outside = false;
+};
+EndRelief end_relief(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& end, double behind_m) {
+  const Band with = band_at(s, t, end.x(), end.y(), behind_m);
+  const Band without = band_at(s, t, end.x(), end.y(), behind_m, false);
+  return {std::max(0.0, with.lo - end.z()), std::max(0.0, end.z() - with.hi),
+          end.z() < without.lo - kHeightTolM || end.z() > without.hi + kHeightTolM};
+}
+
 SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& a, const Vec3& b,
-                         double step_m, const GroundBehind& behind, double a_m) {
+                         double step_m, const GroundBehind& behind, double a_m, const EndRelief& relief_a = {},
+                         const EndRelief& relief_b = {}) {
   SegmentMiss m;
   const double len = std::hypot(b.x() - a.x(), b.y() - a.y());
   const int k = std::max(2, static_cast<int>(std::ceil(len / step_m)));
@@ -256,7 +279,8 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   auto judge = [&](const Vec3& p, double f) {
     const double at_m = a_m + f * len, ground_behind_m = behind(at_m);
     const Band band = band_at(s, t, p.x(), p.y(), ground_behind_m);
-    const double d = band.lo - p.z(), e = p.z() - band.hi;
+    const double d = band.lo - p.z() - ((1 - f) * relief_a.lo_m + f * relief_b.lo_m);
+    const double e = p.z() - band.hi - ((1 - f) * relief_a.hi_m + f * relief_b.hi_m);
     if (d > m.deficit) m.deficit = d, m.deficit_t = f;
     if (e > m.excess) m.excess = e, m.excess_t = f;
     if (behind.out_of_reach(at_m, p.z())) m.out_of_reach = true;
@@ -390,13 +414,19 @@ EnvelopeFit fit_once(const std::vector<Vec3>& path, const EnvelopeFitSpec& spec,
     // needed hundreds, and left them over the band between their vertices).
     std::vector<std::pair<std::size_t, Vec3>> splits;
     const std::vector<double> along = along_m(p);  // of the vertices before the splits
+    const EndRelief relief_start = end_relief(spec, terrain, p.front(), behind(along.front()));
+    const EndRelief relief_end = end_relief(spec, terrain, p.back(), behind(along.back()));
+    if (relief_start.outside || relief_end.outside) feasible = false;
     // every segment no longer than the hold judged as the checker judges it:
     // a floor the ends put out of reach, a fixed end under its segment's
     // stretch or a floor under a lowered ceiling is the check's to report
     for (std::size_t i = 0; i + 1 < p.size(); ++i)
       if (behind.held_unmet(along, i, z[i], z[i + 1])) feasible = false;
     for (std::size_t i = 0; i + 1 < p.size(); ++i) {
-      const SegmentMiss m = segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i]);
+      const EndRelief relief_a = i == 0 ? relief_start : EndRelief{};
+      const EndRelief relief_b = i + 2 == p.size() ? relief_end : EndRelief{};
+      const SegmentMiss m =
+          segment_miss(spec, terrain, fitted[i], fitted[i + 1], step, behind, along[i], relief_a, relief_b);
       if (m.out_of_reach) feasible = false;
       if (m.deficit <= 1e-6 && m.excess <= 1e-6) continue;
       feasible = false;

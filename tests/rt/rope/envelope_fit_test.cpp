@@ -111,6 +111,64 @@ TEST(FitFlights, TheLegsRiseUntilThePx4FlightsClearARockInsideTheCorner) {
   EXPECT_EQ(fit.path.back(), path.back());
 }
 
+// Ends exactly at the clearance over a plain (a user's take-off and landing
+// heights): the fit asks the legs beside them for only what the ends have
+// of its margin, so the corner stays where it was. It was raised pass after
+// pass, to 282 m, and the fit said no path held the envelope.
+TEST(FitEnds, AnEndExactlyAtTheClearanceAsksNoMarginBesideIt) {
+  for (const char* vehicle : {"fixed-wing", "multirotor"}) {
+    SCOPED_TRACE(vehicle);
+    const fields::Heightfield t = blank(200, 200, 5.0, 100.0f);
+    EnvelopeFitSpec spec;
+    spec.envelope = *vehicle_preset(vehicle);
+    const double z = 100.0 + spec.envelope.clearance_m;
+    for (const double below_m : {0.0, 0.3}) {  // the ends short of the fit's 0.5 m margin, or of the clearance
+      const std::vector<Vec3> path = {
+          {t.x_of(20), t.y_of(180), z - below_m}, {t.x_of(20), t.y_of(40), z}, {t.x_of(180), t.y_of(40), z - below_m}};
+      const EnvelopeFit fit = fit_to_envelope(path, spec, t);
+      double highest = 0;
+      for (const Vec3& p : fit.path) highest = std::max(highest, p.z());
+      EXPECT_EQ(fit.path.front(), path.front());
+      EXPECT_EQ(fit.path.back(), path.back());
+      EXPECT_LT(highest, z + 2 * spec.margin_m) << "below " << below_m;  // was 282 m
+      if (below_m == 0.0) {
+        EXPECT_TRUE(fit.feasible);
+        PathCheckSpec check_spec;
+        check_spec.envelope = spec.envelope;
+        const auto checker = PathChecker::create(t, nullptr, check_spec);
+        ASSERT_TRUE(checker.ok());
+        const PathCheck c = checker->check(fit.path);
+        for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+      } else {
+        EXPECT_FALSE(fit.feasible);  // the ends under the clearance: the check's to report
+      }
+    }
+  }
+}
+
+// And ends exactly at a ceiling (showing under --max-agl): the legs beside
+// them are not pushed down after the margin the ends do not keep.
+TEST(FitEnds, AnEndExactlyAtTheCeilingAsksNoMarginBesideIt) {
+  const fields::Heightfield t = blank(200, 200, 5.0, 100.0f);
+  EnvelopeFitSpec spec;
+  spec.envelope = *vehicle_preset("fixed-wing");
+  spec.envelope.max_agl_m = 150.0;
+  const double z = 100.0 + spec.envelope.max_agl_m;
+  const std::vector<Vec3> path = {
+      {t.x_of(20), t.y_of(180), z}, {t.x_of(20), t.y_of(40), z}, {t.x_of(180), t.y_of(40), z}};
+  const EnvelopeFit fit = fit_to_envelope(path, spec, t);
+  EXPECT_TRUE(fit.feasible);
+  double lowest = 1e9;
+  for (const Vec3& p : fit.path) lowest = std::min(lowest, p.z());
+  EXPECT_GT(lowest, z - 2 * spec.margin_m);
+  PathCheckSpec check_spec;
+  check_spec.envelope = spec.envelope;
+  const auto checker = PathChecker::create(t, nullptr, check_spec);
+  ASSERT_TRUE(checker.ok());
+  const PathCheck c = checker->check(fit.path);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+}
+
 TEST_F(FitOnRelief, AStraightLineThroughTheHillsBecomesFlyable) {
   const std::vector<Vec3> straight = {at(5, 5, 60), at(90, 88, 60)};
   ASSERT_FALSE(judge(straight, envelope()).all_met);  // it cuts through the relief

@@ -39,8 +39,9 @@ Eigen::Quaterniond exp_map(const Vec3& w) {
 // FromTwoVectors with its one case written out. Eigen finds the axis of a
 // half turn with a JacobiSVD, whose instantiation was most of this file's
 // compile time (alone: 25 s -> 10 s at -O3, 57 s -> 23 s under clang's
-// ASan+UBSan); a capsule is symmetric about its axis, so any axis across z
-// serves there.
+// ASan+UBSan). Straight down, any axis across z turns z onto it; x is taken
+// (the twist the joint springs then see between such a capsule and its
+// neighbours follows from that choice, as it did from Eigen's).
 Eigen::Quaterniond from_body_z(const Vec3& dir) {
   const Vec3 d = dir.normalized();
   const double c = d.z();                                // cos of the angle between z and dir
@@ -48,8 +49,8 @@ Eigen::Quaterniond from_body_z(const Vec3& dir) {
   // 1 + c, from 1 - c^2 = sin^2 where dir points nearly down (1 + c would
   // cancel there; elsewhere Eigen's sums, to the bit)
   const double one_plus_c = c >= -0.9 ? 1.0 + c : across2 / (1.0 - c);
-  if (one_plus_c < 1e-24) return Eigen::Quaterniond(0.0, 1.0, 0.0, 0.0);  // a half turn about x
-  const double s = std::sqrt(one_plus_c * 2.0);                           // |(1 + c, z x d)|
+  if (!(one_plus_c > 0)) return Eigen::Quaterniond(0.0, 1.0, 0.0, 0.0);  // straight down: a half turn about x
+  const double s = std::sqrt(one_plus_c * 2.0);                          // |(1 + c, z x d)|
   const double inv_s = 1.0 / s;
   return Eigen::Quaterniond(s * 0.5, -d.y() * inv_s, d.x() * inv_s, 0.0);
 }

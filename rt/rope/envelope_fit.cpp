@@ -249,26 +249,36 @@ std::vector<double> along_m(const std::vector<Vec3>& p) {
   return out;
 }
 
-// Segment a-b starts `a_m` along the track.
 // What a fixed end lacks of its band: the segment beside it is asked for
 // that much less at the end, tapering to nothing at its other vertex (a
 // sample beside the end cannot be mended by moving the other vertex: it
 // was asked for the miss over the sample's share of its height,
 // kMinEndShare, pass after pass; a path 130 m over a 100 m plain, its ends
 // exactly at the clearance, had its corner raised to 282 m and no fit).
-// `outside`: the end lacks more than the fit's margins, so the path is not
-// inside the envelope (the check reports the end).
+// Never below the limits themselves but by what the end lacks of them
+// (`bare_*`): a hull's 5 m margin at the end is no licence to pass under
+// the clearance over a knoll beside it. `outside`: the end lacks some of
+// the limits, so the path is not inside the envelope.
 struct EndRelief {
-  double lo_m = 0, hi_m = 0;  // under the band's floor, over its ceiling
+  double lo_m = 0, hi_m = 0;            // under the band's floor, over its ceiling
+  double bare_lo_m = 0, bare_hi_m = 0;  // the same without the fit's margins
   bool outside = false;
+  bool any() const { return lo_m > 0 || hi_m > 0; }
 };
 EndRelief end_relief(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& end, double behind_m) {
   const Band with = band_at(s, t, end.x(), end.y(), behind_m);
-  const Band without = band_at(s, t, end.x(), end.y(), behind_m, false);
-  return {std::max(0.0, with.lo - end.z()), std::max(0.0, end.z() - with.hi),
-          end.z() < without.lo - kHeightTolM || end.z() > without.hi + kHeightTolM};
+  const Band bare = band_at(s, t, end.x(), end.y(), behind_m, false);
+  EndRelief r;
+  r.lo_m = std::max(0.0, with.lo - end.z());
+  r.hi_m = std::max(0.0, end.z() - with.hi);
+  r.bare_lo_m = std::max(0.0, bare.lo - end.z());
+  r.bare_hi_m = std::max(0.0, end.z() - bare.hi);
+  r.outside = r.bare_lo_m > kHeightTolM || r.bare_hi_m > kHeightTolM;
+  return r;
 }
 
+// Segment a-b starts `a_m` along the track (GroundBehind); relief_a and
+// relief_b: what its ends lack of their bands where they are fixed ends.
 SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, const Vec3& a, const Vec3& b,
                          double step_m, const GroundBehind& behind, double a_m, const EndRelief& relief_a = {},
                          const EndRelief& relief_b = {}) {
@@ -279,8 +289,14 @@ SegmentMiss segment_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t,
   auto judge = [&](const Vec3& p, double f) {
     const double at_m = a_m + f * len, ground_behind_m = behind(at_m);
     const Band band = band_at(s, t, p.x(), p.y(), ground_behind_m);
-    const double d = band.lo - p.z() - ((1 - f) * relief_a.lo_m + f * relief_b.lo_m);
-    const double e = p.z() - band.hi - ((1 - f) * relief_a.hi_m + f * relief_b.hi_m);
+    double floor_m = band.lo - ((1 - f) * relief_a.lo_m + f * relief_b.lo_m);
+    double ceiling_m = band.hi + ((1 - f) * relief_a.hi_m + f * relief_b.hi_m);
+    if (relief_a.any() || relief_b.any()) {
+      const Band bare = band_at(s, t, p.x(), p.y(), ground_behind_m, false);
+      floor_m = std::max(floor_m, bare.lo - ((1 - f) * relief_a.bare_lo_m + f * relief_b.bare_lo_m));
+      ceiling_m = std::min(ceiling_m, bare.hi + ((1 - f) * relief_a.bare_hi_m + f * relief_b.bare_hi_m));
+    }
+    const double d = floor_m - p.z(), e = p.z() - ceiling_m;
     if (d > m.deficit) m.deficit = d, m.deficit_t = f;
     if (e > m.excess) m.excess = e, m.excess_t = f;
     if (behind.out_of_reach(at_m, p.z())) m.out_of_reach = true;

@@ -146,6 +146,37 @@ TEST(FitEnds, AnEndExactlyAtTheClearanceAsksNoMarginBesideIt) {
   }
 }
 
+// An end that lacks only a hull's 5 m margin (a visible-to point's hull at
+// 128 m over a 100 m plain, the end at the 30 m clearance) is no licence to
+// pass under the clearance over a knoll beside it: the leg clears the knoll
+// (a skeptic's case; the fit had called a path 2 m under it feasible).
+TEST(FitEnds, AHullsMarginAnEndLacksNeverTakesTheLegUnderTheClearance) {
+  fields::Heightfield t = blank(200, 200, 5.0, 100.0f);
+  for (int j = 160; j <= 168; ++j) {
+    for (int i = 16; i <= 24; ++i) t.at(i, j) = 104.0f;  // 70 m along the first leg
+  }
+  PointHull hull;  // seen from everywhere above 128 m
+  hull.nx = hull.ny = 2;
+  hull.origin_x = t.x_of(0);
+  hull.origin_y = t.y_of(0);
+  hull.spacing_m = 199 * t.spacing_m;
+  hull.height_m.assign(4, 128.0f);
+  EnvelopeFitSpec spec;
+  spec.envelope = *vehicle_preset("multirotor");
+  spec.above = {&hull};
+  const double z = 100.0 + spec.envelope.clearance_m;
+  const std::vector<Vec3> path = {
+      {t.x_of(20), t.y_of(180), z}, {t.x_of(20), t.y_of(40), 134.0}, {t.x_of(180), t.y_of(40), 134.0}};
+  const EnvelopeFit fit = fit_to_envelope(path, spec, t);
+  EXPECT_TRUE(fit.feasible);
+  PathCheckSpec check_spec;
+  check_spec.envelope = spec.envelope;
+  const auto checker = PathChecker::create(t, nullptr, check_spec);
+  ASSERT_TRUE(checker.ok());
+  const PathCheck c = checker->check(fit.path);
+  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+}
+
 // And ends exactly at a ceiling (showing under --max-agl): the legs beside
 // them are not pushed down after the margin the ends do not keep.
 TEST(FitEnds, AnEndExactlyAtTheCeilingAsksNoMarginBesideIt) {

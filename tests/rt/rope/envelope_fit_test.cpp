@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "../../fields/terrains.hpp"
 #include "rt/rope/path_check.hpp"
@@ -14,6 +15,26 @@ namespace visvol::rt {
 namespace {
 
 using namespace visvol::fields::testing;
+
+// The checker's judgement of a path on terrain t for envelope e (sight
+// lines and limits on the terrain), not the fit's own flag.
+PathCheck judge_on(const fields::Heightfield& t, const VehicleEnvelope& e, const std::vector<Vec3>& path) {
+  PathCheckSpec s;
+  s.envelope = e;
+  const auto checker = PathChecker::create(t, nullptr, s);
+  EXPECT_TRUE(checker.ok()) << checker.status().message();
+  return checker.ok() ? checker->check(path) : PathCheck{};
+}
+
+// Every envelope limit of c met; else the unmet ones and their worst values.
+::testing::AssertionResult every_limit_met(const PathCheck& c) {
+  std::string unmet;
+  for (const LimitResult& l : c.envelope) {
+    if (!l.met) unmet += " " + l.name + " worst " + std::to_string(l.worst);
+  }
+  if (unmet.empty()) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "unmet:" << unmet;
+}
 
 // The fitted paths are judged by the checker (sight lines and limits on the
 // terrain), not by the fit's own flag.
@@ -37,13 +58,7 @@ class FitOnRelief : public ::testing::Test {
     s.envelope = e;
     return s;
   }
-  PathCheck judge(const std::vector<Vec3>& path, const VehicleEnvelope& e) const {
-    PathCheckSpec s;
-    s.envelope = e;
-    auto checker = PathChecker::create(terrain, nullptr, s);
-    EXPECT_TRUE(checker.ok());
-    return checker->check(path);
-  }
+  PathCheck judge(const std::vector<Vec3>& path, const VehicleEnvelope& e) const { return judge_on(terrain, e, path); }
 };
 
 // A block inside a corner, under the 80 m arc a fixed-wing flies by it on
@@ -69,7 +84,7 @@ TEST(FitArcs, TheCornerRisesUntilItsArcClearsTheTerrain) {
   const EnvelopeFit fit = fit_to_envelope(path, spec, t);
   ASSERT_TRUE(fit.feasible);
   const PathCheck c = checker->check(fit.path);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
   EXPECT_GE(c.envelope[0].worst, e.clearance_m);
   // 100 m legs: the 80 m arc's heights follow the fixed ends, not the corner
   const std::vector<Vec3> short_legs = {corner + Vec3(-100, 0, 0), corner, corner + Vec3(0, -100, 0)};
@@ -90,16 +105,12 @@ TEST(FitFlights, TheLegsRiseUntilThePx4FlightsClearARockInsideTheCorner) {
       {t.x_of(20), t.y_of(180), 135.0}, {t.x_of(20), t.y_of(40), 135.0}, {t.x_of(180), t.y_of(40), 135.0}};
   EnvelopeFitSpec spec;
   spec.envelope = *vehicle_preset("fixed-wing");  // 100 m, 5 m/s of wind
-  PathCheckSpec check_spec;
-  check_spec.envelope = spec.envelope;
-  const auto checker = PathChecker::create(t, nullptr, check_spec);
-  ASSERT_TRUE(checker.ok());
-  const PathCheck before = checker->check(path);
+  const PathCheck before = judge_on(t, spec.envelope, path);
   ASSERT_EQ(before.envelope.back().name, "flown-clearance");
   ASSERT_FALSE(before.envelope.back().met);
   const EnvelopeFit fit = fit_to_envelope(path, spec, t);
-  const PathCheck c = checker->check(fit.path);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  const PathCheck c = judge_on(t, spec.envelope, fit.path);
+  EXPECT_TRUE(every_limit_met(c));
   ASSERT_TRUE(fit.feasible);
   EXPECT_GE(c.envelope.back().worst, spec.envelope.clearance_m);
   // over the rock's 140 m and the clearance, not far over it
@@ -133,12 +144,7 @@ TEST(FitEnds, AnEndExactlyAtTheClearanceAsksNoMarginBesideIt) {
       EXPECT_LT(highest, z + 2 * spec.margin_m) << "below " << below_m;  // was 282 m
       if (below_m == 0.0) {
         EXPECT_TRUE(fit.feasible);
-        PathCheckSpec check_spec;
-        check_spec.envelope = spec.envelope;
-        const auto checker = PathChecker::create(t, nullptr, check_spec);
-        ASSERT_TRUE(checker.ok());
-        const PathCheck c = checker->check(fit.path);
-        for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+        EXPECT_TRUE(every_limit_met(judge_on(t, spec.envelope, fit.path)));
       } else {
         EXPECT_FALSE(fit.feasible);  // the ends under the clearance: the check's to report
       }
@@ -169,12 +175,7 @@ TEST(FitEnds, AHullsMarginAnEndLacksNeverTakesTheLegUnderTheClearance) {
       {t.x_of(20), t.y_of(180), z}, {t.x_of(20), t.y_of(40), 134.0}, {t.x_of(180), t.y_of(40), 134.0}};
   const EnvelopeFit fit = fit_to_envelope(path, spec, t);
   EXPECT_TRUE(fit.feasible);
-  PathCheckSpec check_spec;
-  check_spec.envelope = spec.envelope;
-  const auto checker = PathChecker::create(t, nullptr, check_spec);
-  ASSERT_TRUE(checker.ok());
-  const PathCheck c = checker->check(fit.path);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(judge_on(t, spec.envelope, fit.path)));
 }
 
 // And ends exactly at a ceiling (showing under --max-agl): the legs beside
@@ -192,12 +193,7 @@ TEST(FitEnds, AnEndExactlyAtTheCeilingAsksNoMarginBesideIt) {
   double lowest = 1e9;
   for (const Vec3& p : fit.path) lowest = std::min(lowest, p.z());
   EXPECT_GT(lowest, z - 2 * spec.margin_m);
-  PathCheckSpec check_spec;
-  check_spec.envelope = spec.envelope;
-  const auto checker = PathChecker::create(t, nullptr, check_spec);
-  ASSERT_TRUE(checker.ok());
-  const PathCheck c = checker->check(fit.path);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(judge_on(t, spec.envelope, fit.path)));
 }
 
 TEST_F(FitOnRelief, AStraightLineThroughTheHillsBecomesFlyable) {
@@ -206,7 +202,7 @@ TEST_F(FitOnRelief, AStraightLineThroughTheHillsBecomesFlyable) {
   const EnvelopeFit fit = fit_to_envelope(straight, spec_of(envelope()), terrain);
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path, envelope());
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
   EXPECT_EQ(fit.path.front(), straight.front());
   EXPECT_EQ(fit.path.back(), straight.back());
 }
@@ -259,7 +255,7 @@ TEST_F(FitOnRelief, TightTurnsAreOpenedUp) {
   const EnvelopeFit fit = fit_to_envelope(zig, spec_of(e), terrain);
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path, e);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
 }
 
 // A narrow band of heights over rough terrain makes the fit split segments
@@ -343,7 +339,7 @@ TEST_F(FitOnRelief, HundredsOfSplitsFitInItsPasses) {
   EXPECT_GT(fit.path.size(), 250u) << "the band needs hundreds of vertices";
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path, e);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
 }
 
 // An observer's hull is a wish, the envelope a limit: a visible-to hull far
@@ -366,7 +362,7 @@ TEST_F(FitOnRelief, TheEnvelopeHoldsWhereAnObserversHullCannot) {
   const EnvelopeFit fit = fit_to_envelope(path, spec, terrain);
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path, e);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
   EXPECT_EQ(fit.path.back(), path.back());
 }
 
@@ -381,13 +377,7 @@ class FitEarlyDescent : public ::testing::Test {
     for (int j = 0; j < 5; ++j) t.at(20, j) = 60.0f;  // a ridge across the track
   }
   Vec3 at(double i, double z) const { return {t.x_of(i), t.y_of(2), z}; }
-  PathCheck judge(const std::vector<Vec3>& path) const {
-    PathCheckSpec s;
-    s.envelope = fixed_wing;
-    const auto checker = PathChecker::create(t, nullptr, s);
-    EXPECT_TRUE(checker.ok());
-    return checker->check(path);
-  }
+  PathCheck judge(const std::vector<Vec3>& path) const { return judge_on(t, fixed_wing, path); }
   fields::Heightfield t = blank(60, 5, 10.0, 0.0f);
   VehicleEnvelope fixed_wing = *vehicle_preset("fixed-wing");  // 15 deg, clearance 30 m, acceptance 100 m
 };
@@ -400,7 +390,7 @@ TEST_F(FitEarlyDescent, TheHeightPastARidgeIsHeldForTheAcceptanceRadius) {
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path);
   ASSERT_EQ(c.envelope.size(), 8u);  // early-descent, then flown-clearance
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
   spec.envelope.acceptance_radius_m = 0;
   const EnvelopeFit reaching = fit_to_envelope(straight, spec, t);
   const PathCheck flown = judge(reaching.path);
@@ -422,7 +412,7 @@ TEST_F(FitEarlyDescent, AShortLegsEndIsHeldOverTheGroundFromTheRadiusBeforeIt) {
   const EnvelopeFit fit = fit_to_envelope(stepped, spec, t);
   EXPECT_TRUE(fit.feasible);
   const PathCheck c = judge(fit.path);
-  for (const LimitResult& l : c.envelope) EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+  EXPECT_TRUE(every_limit_met(c));
 }
 
 // An end whose last leg is held over the ridge (it is taken 100 m before

@@ -63,6 +63,37 @@ double leg_height_m(const Vec3& a, const Vec3& b, const Vec2& pos) {
   return a.z() + leg_fraction(a, b, pos.x(), pos.y()) * (b.z() - a.z());
 }
 
+// PX4 1.14's first-order hold of a leg's height (l1_track.hpp), and the
+// aircraft's height following it within its climb and sink rates.
+class HeightHold {
+ public:
+  HeightHold(const L1Flight& flight, double hold_m, double start_height_m)
+      : hold_m_(hold_m),
+        climb_m_per_s_(flight.max_climb_m_per_s),
+        sink_m_per_s_(flight.max_sink_m_per_s),
+        z_m_(start_height_m) {}
+  bool on() const { return hold_m_ > 0; }
+  double height_m() const { return z_m_; }
+  // PX4 keeps the least distance to the current waypoint since it was taken
+  void next_leg() { nearest_m_ = std::numeric_limits<double>::infinity(); }
+  // one controller step of dt_s on leg a-b at pos
+  void step(const Vec3& a, const Vec3& b, const Vec2& pos, double dt_s) {
+    if (!on()) return;
+    const double leg_m = (xy(b) - xy(a)).norm();
+    nearest_m_ = std::min({nearest_m_, (xy(b) - pos).norm(), leg_m});
+    const double setpoint_m = leg_m > hold_m_ && nearest_m_ > hold_m_
+                                  ? a.z() + (b.z() - a.z()) * (leg_m - nearest_m_) / (leg_m - hold_m_)
+                                  : b.z();
+    z_m_ += std::clamp(setpoint_m - z_m_, -sink_m_per_s_ * dt_s, climb_m_per_s_ * dt_s);
+  }
+
+ private:
+  double hold_m_;
+  double climb_m_per_s_, sink_m_per_s_;
+  double z_m_;
+  double nearest_m_ = std::numeric_limits<double>::infinity();
+};
+
 double horizontal_length_m(const std::vector<Vec3>& path) {
   double total = 0;
   for (std::size_t i = 1; i < path.size(); ++i) total += (xy(path[i]) - xy(path[i - 1])).norm();
@@ -100,12 +131,13 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   Vec2 pos = xy(path[0]);
   Vec2 heading = (xy(path[static_cast<std::size_t>(first_off)]) - pos).normalized();  // unit
   int from = 0;
+  HeightHold hold(flight, std::max(flight.altitude_hold_m, 0.0), path[0].z());
   out.points.push_back({path[0], 0});
   Vec2 recorded = pos;
   auto record = [&]() {
     const Vec3& a = path[static_cast<std::size_t>(from)];
     const Vec3& b = path[static_cast<std::size_t>(from + 1)];
-    out.points.push_back({Vec3(pos.x(), pos.y(), leg_height_m(a, b, pos)), from});
+    out.points.push_back({Vec3(pos.x(), pos.y(), hold.on() ? hold.height_m() : leg_height_m(a, b, pos)), from});
     recorded = pos;
   };
   for (double step = 0; step < max_steps; ++step) {
@@ -115,9 +147,11 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
         break;
       }
       ++from;  // one waypoint a step
+      hold.next_leg();
     }
     const Vec3& a = path[static_cast<std::size_t>(from)];
     const Vec3& b = path[static_cast<std::size_t>(from + 1)];
+    hold.step(a, b, pos, dt);
     const Vec2 velocity = v * heading;
     const double accel = std::clamp(l1_lateral_accel(xy(a), xy(b), pos, velocity, l1_m, gain), -max_accel, max_accel);
     pos += velocity * dt;

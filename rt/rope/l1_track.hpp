@@ -13,12 +13,19 @@
 // inside the corner, and across several corners where the legs are shorter
 // than the switch distance.
 //
-// Heights: the planned height at the nearest point of the leg being flown
-// (the vertical early switch is judged apart: rt::TrackGround).
+// Heights: with a hold (altitude_hold_m > 0), PX4 1.14's first-order hold
+// (FixedwingPositionControl::control_auto_position): the height setpoint
+// ramps from the leg's start height to its end height, reached the hold
+// distance before the end (measured by the least distance to the end so
+// far); on a leg no longer than the hold it is the end height at once. The
+// aircraft follows the setpoint at no more than its climb and sink rates, so
+// a steep climb at a fast ground speed falls behind the plan. Without a
+// hold: the planned height at the nearest point of the leg being flown.
 //
 // Offline: allocates the track. Thread-compatible.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "rt/rope/rope.hpp"
@@ -36,6 +43,12 @@ struct L1Flight {
   // kept (0: every step; the check keeps its sample step): the track's
   // memory is its length over this, not its duration.
   double record_every_m = 0.0;
+  // How far before a leg's end its height is reached, m (PX4: the L1
+  // distance at this ground speed or the loiter radius NAV_LOITER_RAD, the
+  // larger); 0: no hold. Climb and sink rates, m/s, with a hold.
+  double altitude_hold_m = 0.0;
+  double max_climb_m_per_s = std::numeric_limits<double>::infinity();
+  double max_sink_m_per_s = std::numeric_limits<double>::infinity();
   // L1 distance, m: damping period V / pi (95.5 m at 20 m/s)
   double l1_distance_m() const;
 };

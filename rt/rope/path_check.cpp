@@ -77,7 +77,8 @@ FlownCheck fly_once(const PathChecker& checker, const std::vector<Vec3>& path, c
                     Tally* clearance_out) {
   FlownCheck out;
   out.ground_speed_m_per_s = flight.ground_speed_m_per_s;
-  out.switch_distance_m = flight.switch_distance_m;
+  out.switch_distance_m = std::max(flight.switch_distance_m, flight.l1_distance_m());  // as fly_l1 takes it
+  out.altitude_hold_m = flight.altitude_hold_m;
   L1Flight sampled = flight;
   sampled.record_every_m = checker.spec().sample_step_m;
   const FlownTrack track = fly_l1(path, sampled);
@@ -457,16 +458,23 @@ std::vector<FlownCheck> PathChecker::fly(const std::vector<Vec3>& path) const {
 std::vector<L1Flight> px4_flights(const VehicleEnvelope& e) {
   std::vector<L1Flight> out;
   if (!is_px4_fixed_wing(e) || !(e.acceptance_radius_m > 0) || !(e.speed_m_per_s > 0)) return out;
-  L1Flight calm;
-  calm.ground_speed_m_per_s = e.speed_m_per_s;
-  calm.switch_distance_m = e.acceptance_radius_m;
-  out.push_back(calm);
-  if (e.max_wind_m_per_s > 0) {
-    L1Flight tailwind = calm;
-    tailwind.ground_speed_m_per_s = e.speed_m_per_s + e.max_wind_m_per_s;
-    tailwind.switch_distance_m = switch_distance_m(e);
-    out.push_back(tailwind);
-  }
+  // PX4 1.14 at its ground speed: the next waypoint within the mission's
+  // radius or the L1 distance, the larger (fly_l1 takes the larger); the
+  // height held the L1 distance or the loiter radius early, the larger
+  // (FixedwingPositionControl::control_auto_position); climb and sink at the
+  // envelope's angles at cruise airspeed, whatever the wind, so that a
+  // tailwind climbs less a metre flown.
+  auto at = [&e](double ground_speed_m_per_s) {
+    L1Flight f;
+    f.ground_speed_m_per_s = ground_speed_m_per_s;
+    f.switch_distance_m = e.acceptance_radius_m;
+    f.altitude_hold_m = std::max(f.l1_distance_m(), kPx4LoiterRadiusM);
+    f.max_climb_m_per_s = e.speed_m_per_s * std::tan(e.max_climb_deg * kRadPerDeg);
+    f.max_sink_m_per_s = e.speed_m_per_s * std::tan(e.max_descent_deg * kRadPerDeg);
+    return f;
+  };
+  out.push_back(at(e.speed_m_per_s));
+  if (e.max_wind_m_per_s > 0) out.push_back(at(e.speed_m_per_s + e.max_wind_m_per_s));
   return out;
 }
 

@@ -39,8 +39,10 @@
 //   the arc and several at once where the legs are shorter than the switch
 //   distance, in still air and with the strongest wind behind it
 //   (rt::px4_flights), sampled as the path is (or a controller step apart,
-//   the longer: 0.4 m at 20 m/s), at the planned height of the leg flown,
-//   for their share of the flown length: "flown-clearance". Unmet where a
+//   the longer: 0.4 m at 20 m/s), at the height flown (PX4 1.14's
+//   first-order hold of each leg's heights, followed at the airframe's climb
+//   and sink rates: rt::fly_l1), for their share of the flown length:
+//   "flown-clearance". Unmet where a
 //   flight does not reach the end in time (three times the path's flight
 //   time and two minutes more, at most a day).
 // - Planning bounds: the samples inside the trusted region.
@@ -186,10 +188,11 @@ struct PathCheck {
 // "flown-clearance" requirement; the rest is a report.
 struct FlownCheck {
   double ground_speed_m_per_s = 0;
-  double switch_distance_m = 0;  // the next waypoint taken within this (or the L1 distance, the larger)
+  double switch_distance_m = 0;  // the next waypoint taken within this (the radius or the L1 distance)
+  double altitude_hold_m = 0;    // a leg's end height reached this far before it (rt::L1Flight)
   double length_m = 0;           // of the flown track
   // The least height over the finest terrain along the flown track, at the
-  // planned height of the nearest point of the leg flown, and where.
+  // height flown (rt::fly_l1), and where.
   double least_clearance_m = std::numeric_limits<double>::infinity();
   Vec3 least_at_m = Vec3::Zero();
   double clearance_fraction = 1;  // of the flown length at or above the clearance
@@ -202,9 +205,12 @@ struct FlownCheck {
 
 // The flights PathChecker::fly and the "flown-clearance" requirement fly,
 // and rt::fit_to_envelope fits the heights to: a PX4 fixed-wing with an
-// acceptance radius in still air at its cruise speed, switching at the
-// radius, and with the strongest wind behind it (cruise plus wind over the
-// ground, switching at rt::switch_distance_m). None for another vehicle.
+// acceptance radius in still air at its cruise speed and with the strongest
+// wind behind it (cruise plus wind over the ground), each as PX4 1.14 flies
+// at that ground speed: waypoints taken at the radius or the L1 distance,
+// heights held the L1 distance or NAV_LOITER_RAD early, the larger, climb
+// and sink at the envelope's angles at cruise airspeed (rt::L1Flight). None
+// for another vehicle.
 std::vector<L1Flight> px4_flights(const VehicleEnvelope& envelope);
 
 class PathChecker {

@@ -88,7 +88,9 @@ TEST_F(PlanCheck, AFixedWingsFilesReadBackItsWorstValues) {
   // PX4 flies it in still air and in the preset's tailwind (a report)
   ASSERT_EQ(s["flown"].size(), 2u) << s["flown"].dump();
   EXPECT_EQ(s["flown"][0]["ground_speed_m_per_s"], 20.0);
-  EXPECT_EQ(s["flown"][1]["switch_distance_m"], 125.0);
+  // PX4's L1 distance at 25 m/s, 119.4 m: where it takes waypoints and holds heights
+  EXPECT_NEAR(s["flown"][1]["switch_distance_m"].get<double>(), 119.37, 0.01);
+  EXPECT_NEAR(s["flown"][1]["altitude_hold_m"].get<double>(), 119.37, 0.01);
   for (const nlohmann::json& f : s["flown"]) {
     EXPECT_TRUE(f["reached_end"].get<bool>()) << f.dump();
     EXPECT_TRUE(f["least_clearance_m"].is_number()) << f.dump();
@@ -546,8 +548,10 @@ TEST_F(PlanCheck, AnEndTooLowForItsApproachIsNamedWithTheHeightItNeeds) {
   EXPECT_EQ(raised.out.find("L1 guidance ("), std::string::npos) << raised.out;  // 100 m: no earlier than that
   EXPECT_EQ(reached.out.find("early-descent"), std::string::npos) << reached.out;
   // the flights reported: the preset's two; none for a vehicle that reaches each waypoint
-  for (const char* flight : {"flown      PX4 L1 guidance at 20.0 m/s over the ground, waypoints taken 100 m out",
-                             "flown      PX4 L1 guidance at 25.0 m/s over the ground, waypoints taken 125 m out"}) {
+  for (const char* flight : {"flown      PX4 L1 guidance at 20.0 m/s over the ground, waypoints taken 100 m out, "
+                             "heights held 95 m early",
+                             "flown      PX4 L1 guidance at 25.0 m/s over the ground, waypoints taken 119 m out, "
+                             "heights held 119 m early"}) {
     EXPECT_NE(low.out.find(flight), std::string::npos) << low.out;
   }
   EXPECT_NE(low.out.find("m at most off the planned legs"), std::string::npos) << low.out;

@@ -113,6 +113,7 @@ nlohmann::json flown_json(const std::vector<rt::FlownCheck>& flights) {
   for (const rt::FlownCheck& f : flights) {
     out.push_back({{"ground_speed_m_per_s", f.ground_speed_m_per_s},
                    {"switch_distance_m", f.switch_distance_m},
+                   {"altitude_hold_m", f.altitude_hold_m},
                    {"length_m", f.length_m},
                    {"least_clearance_m", rt::finite_or_null(f.least_clearance_m)},
                    {"least_at", rt::point_json(f.least_at_m)},
@@ -126,8 +127,11 @@ nlohmann::json flown_json(const std::vector<rt::FlownCheck>& flights) {
 
 void print_flown(const std::vector<rt::FlownCheck>& flights, const rt::PathCheck& check, const rt::VehicleEnvelope& e) {
   for (const rt::FlownCheck& f : flights) {
-    std::printf("flown      PX4 L1 guidance at %.1f m/s over the ground, waypoints taken %.0f m out%s\n",
-                f.ground_speed_m_per_s, f.switch_distance_m, f.reached_end ? "" : ", NOT at the end in time");
+    std::printf(
+        "flown      PX4 L1 guidance at %.1f m/s over the ground, waypoints taken %.0f m out, heights held %.0f m "
+        "early%s\n",
+        f.ground_speed_m_per_s, f.switch_distance_m, f.altitude_hold_m,
+        f.reached_end ? "" : ", NOT at the end in time");
     const bool low = f.clearance_fraction < 1;
     std::printf("           least clearance %.1f m at (%.1f, %.1f), %.3f of the flown %.0f m at or above %.0f m%s\n",
                 f.least_clearance_m, f.least_at_m.x(), f.least_at_m.y(), rt::fraction_shown(f.clearance_fraction),

@@ -462,5 +462,25 @@ TEST_F(FitEarlyDescent, AnEndLowJustPastARidgeIsLeftForTheCheckToReport) {
   EXPECT_NEAR(c.envelope[6].worst, 80.0 - 60.0, 0.5);  // at the end itself
 }
 
+// A climb inside the limit that PX4 cannot follow with the wind behind it
+// (path_check_test, ClimbInATailwind: 17 m over the slope's top at 25 m/s
+// over the ground): the fit raises it where that flight comes under the
+// clearance, and the fitted path meets every limit, flown in both winds.
+TEST(FitFlights, AClimbATailwindFallsBehindIsRaisedUntilItIsFlownClear) {
+  fields::Heightfield t = blank(400, 40, 5.0, 100.0f);
+  for (int j = 0; j < 40; ++j) {
+    for (int i = 0; i < 400; ++i)
+      t.at(i, j) = static_cast<float>(100.0 + std::clamp((i - 104) * 5.0, 0.0, 380.0) * 0.26);
+  }
+  auto post = [&](double i, double z) { return Vec3(t.x_of(i), t.y_of(20), z); };
+  const std::vector<Vec3> climb = {post(20, 130), post(100, 130), post(180, 234), post(380, 234)};
+  EnvelopeFitSpec spec;
+  spec.envelope = *vehicle_preset("fixed-wing");
+  ASSERT_FALSE(every_limit_met(judge_on(t, spec.envelope, climb)));  // flown-clearance
+  const EnvelopeFit fit = fit_to_envelope(climb, spec, t);
+  EXPECT_TRUE(fit.feasible);
+  EXPECT_TRUE(every_limit_met(judge_on(t, spec.envelope, fit.path)));
+}
+
 }  // namespace
 }  // namespace visvol::rt

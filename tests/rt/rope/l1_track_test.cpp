@@ -147,5 +147,68 @@ TEST(L1Track, ItAlwaysStopsAndStaysFinite) {
   for (const FlownPoint& p : t.points) EXPECT_TRUE(p.p_m.allFinite());
 }
 
+// The height flown at x along a path flown due east (the first point at or past x).
+double height_at(const FlownTrack& t, double x) {
+  for (const FlownPoint& q : t.points) {
+    if (q.p_m.x() >= x) return q.p_m.z();
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+constexpr double kPi = 3.14159265358979323846;
+
+// PX4 1.14's first-order hold: a long leg's setpoint reaches its end height
+// H before the end (H = 100 m here), so a descent is flown that much early;
+// a leg no longer than H steps to its end height when the aircraft takes its
+// start, and is flown down at the sink rate. By hand: a 100 m descent over
+// 1000 m ramps over 900 m.
+TEST(L1Track, HeightsFollowPx4sFirstOrderHoldAtTheVehiclesRates) {
+  L1Flight f;  // 20 m/s, switch distance 100 m
+  f.altitude_hold_m = 100.0;
+  f.max_climb_m_per_s = f.max_sink_m_per_s = 20.0 * std::tan(15.0 * kPi / 180.0);  // 5.36 m/s
+  f.step_s = 0.001;                                                                // to the centimetre
+  const std::vector<Vec3> ramp = {Vec3(0, 0, 200), Vec3(1000, 0, 100), Vec3(2000, 0, 100)};
+  const FlownTrack r = fly_l1(ramp, f);
+  ASSERT_TRUE(r.reached_end);
+  EXPECT_NEAR(height_at(r, 450.0), 200.0 - 100.0 * 450.0 / 900.0, 0.1);  // the leg would be 155
+  EXPECT_NEAR(height_at(r, 900.0), 100.0, 0.1);                          // the leg would be 110
+  EXPECT_NEAR(height_at(r, 1500.0), 100.0, 1e-9);
+  // a leg of 80 m: its 40 m descent begins where its start is taken, 100 m
+  // before it, at 5.36 m/s (0.268 m a metre), and is done 149 m later
+  const std::vector<Vec3> step = {Vec3(0, 0, 100), Vec3(1000, 0, 100), Vec3(1080, 0, 60), Vec3(3000, 0, 60)};
+  const FlownTrack s = fly_l1(step, f);
+  ASSERT_TRUE(s.reached_end);
+  EXPECT_NEAR(height_at(s, 890.0), 100.0, 1e-9);
+  EXPECT_NEAR(height_at(s, 1000.0), 100.0 - 0.268 * 100.0, 0.1);  // the leg would be 100
+  EXPECT_NEAR(height_at(s, 1100.0), 60.0, 1e-9);
+  // a climb within the climb rate is flown as early, never under the leg
+  const std::vector<Vec3> climb = {Vec3(0, 0, 100), Vec3(1000, 0, 200), Vec3(2000, 0, 200)};
+  const FlownTrack c = fly_l1(climb, f);
+  for (const FlownPoint& q : c.points) EXPECT_GE(q.p_m.z(), std::min(200.0, 100.0 + 0.1 * q.p_m.x()) - 0.01);
+  // without a hold, the leg's own heights (the default)
+  EXPECT_NEAR(height_at(fly_l1(ramp, L1Flight{}), 900.0), 110.0, 0.1);
+}
+
+// The climb rate is the airframe's: with 5 m/s of wind behind it a
+// fixed-wing flies 25 m/s over the ground and climbs 5.36 m/s, 0.214 m a
+// metre, so a climb planned at its 15 deg (0.268 m a metre) falls behind:
+// by hand, 1000 m of it begins at the leg's start (the hold's ramp asks more
+// than the rate from there) and is 54 m short at the leg's end.
+TEST(L1Track, ATailwindClimbsLessAMetreThanTheLegAsks) {
+  L1Flight f;
+  f.ground_speed_m_per_s = 25.0;
+  f.altitude_hold_m = f.l1_distance_m();  // 119.4 m
+  f.max_climb_m_per_s = f.max_sink_m_per_s = 20.0 * std::tan(15.0 * kPi / 180.0);
+  f.step_s = 0.001;
+  const double slope = std::tan(15.0 * kPi / 180.0);
+  const std::vector<Vec3> climb = {Vec3(0, 0, 100), Vec3(1000, 0, 100 + 1000 * slope),
+                                   Vec3(3000, 0, 100 + 1000 * slope)};
+  const FlownTrack c = fly_l1(climb, f);
+  ASSERT_TRUE(c.reached_end);
+  EXPECT_NEAR(height_at(c, 500.0), 100.0 + 500.0 * 0.8 * slope, 0.1);
+  EXPECT_NEAR(height_at(c, 1000.0), 100.0 + 1000.0 * 0.8 * slope, 0.1);  // 53.6 m under the waypoint
+  EXPECT_NEAR(height_at(c, 1300.0), 100.0 + 1000.0 * slope, 1e-9);
+}
+
 }  // namespace
 }  // namespace visvol::rt

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "../../fields/terrains.hpp"
 #include "fields/exact_visibility.hpp"
@@ -566,7 +568,7 @@ class RockInsideACorner : public ::testing::Test {
 
 TEST_F(RockInsideACorner, ThePx4FlightCutsTheCornerOverTheRockTheArcMisses) {
   PathCheckSpec s;
-  s.envelope = *vehicle_preset("fixed-wing");  // 20 m/s, 100 m radius, 5 m/s of wind: 125 m
+  s.envelope = *vehicle_preset("fixed-wing");  // 20 m/s, 100 m radius, 5 m/s of wind
   s.constraints = {{ConstraintKind::hidden_from, post(190, 190, 100), 2.0}};
   const auto checker = PathChecker::create(terrain, nullptr, s);
   ASSERT_TRUE(checker.ok()) << checker.status().message();
@@ -593,9 +595,13 @@ TEST_F(RockInsideACorner, ThePx4FlightCutsTheCornerOverTheRockTheArcMisses) {
   const std::vector<FlownCheck> flights = checker->fly(corner());
   ASSERT_EQ(flights.size(), 2u);
   EXPECT_DOUBLE_EQ(flights[0].ground_speed_m_per_s, 20.0);
-  EXPECT_DOUBLE_EQ(flights[0].switch_distance_m, 100.0);
+  EXPECT_DOUBLE_EQ(flights[0].switch_distance_m, 100.0);  // the radius
+  // PX4's L1 distance (0.75 x 20 s x V / pi) where it is the larger: 95.5 m
+  // at 20 m/s, 119.4 m at 25
+  EXPECT_NEAR(flights[0].altitude_hold_m, 95.49, 0.01);
   EXPECT_DOUBLE_EQ(flights[1].ground_speed_m_per_s, 25.0);
-  EXPECT_DOUBLE_EQ(flights[1].switch_distance_m, 125.0);
+  EXPECT_NEAR(flights[1].switch_distance_m, 119.37, 0.01);
+  EXPECT_NEAR(flights[1].altitude_hold_m, 119.37, 0.01);
   for (const FlownCheck& f : flights) {
     EXPECT_TRUE(f.reached_end);
     EXPECT_LT(f.least_clearance_m, 0.0) << "into the rock";
@@ -630,6 +636,40 @@ TEST_F(RockInsideACorner, OnlyAPx4FixedWingThatSwitchesEarlyIsFlown) {
   std::vector<Vec3> bad = corner();
   bad[1].x() = std::nan("");
   EXPECT_TRUE(PathChecker::create(terrain, nullptr, s)->fly(bad).empty());
+}
+
+// A climb of 104 m over 400 m (14.6 deg, inside the preset's 15) up a slope
+// that follows it 20 m behind, 35.2 m under the legs. PX4 climbs at its
+// airspeed's rate, 5.36 m/s: 0.268 m a metre in still air, and it follows
+// the legs; 0.214 m a metre at 25 m/s over the ground with the wind behind
+// it, so it reaches the top 18.2 m low, 17.0 m over the ground (by hand;
+// the planned heights alone read 35.2 m there).
+TEST(ClimbInATailwind, PX4FallsBehindAClimbTheLegsMakeWithinTheLimit) {
+  fields::Heightfield t = fields::testing::blank(400, 40, 5.0, 100.0f);
+  for (int j = 0; j < 40; ++j) {
+    for (int i = 0; i < 400; ++i)
+      t.at(i, j) = static_cast<float>(100.0 + std::clamp((i - 104) * 5.0, 0.0, 380.0) * 0.26);
+  }
+  auto post = [&](double i, double z) { return Vec3(t.x_of(i), t.y_of(20), z); };
+  const std::vector<Vec3> climb = {post(20, 130), post(100, 130), post(180, 234), post(380, 234)};
+  PathCheckSpec s;
+  s.envelope = *vehicle_preset("fixed-wing");  // 20 m/s, 15 deg, 5 m/s of wind
+  const auto checker = PathChecker::create(t, nullptr, s);
+  ASSERT_TRUE(checker.ok()) << checker.status().message();
+  const PathCheck c = checker->check(climb);
+  for (const LimitResult& l : c.envelope) {
+    if (l.name == kFlownClearance) {
+      EXPECT_FALSE(l.met);
+      EXPECT_NEAR(l.worst, 17.0, 0.5);
+    } else {
+      EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
+    }
+  }
+  const std::vector<FlownCheck> flights = checker->fly(climb);
+  ASSERT_EQ(flights.size(), 2u);
+  EXPECT_GE(flights[0].least_clearance_m, 30.0);  // still air: at the legs or above
+  EXPECT_NEAR(flights[1].least_clearance_m, 17.0, 0.5);
+  EXPECT_NEAR(flights[1].least_at_m.x(), t.x_of(180), 10.0);  // at the top of the climb
 }
 
 }  // namespace

@@ -337,7 +337,7 @@ SegmentMiss arc_miss(const EnvelopeFitSpec& s, const fields::Heightfield& t, con
 }
 
 // Where a PX4 fixed-wing's flights (rt::px4_flights) come under the
-// clearance cutting the corners: the legs they fly there are raised by the
+// clearance, cutting the corners or climbing behind the legs: the legs they fly there are raised by the
 // deficit and the margin, each vertex by that over its share of the flown
 // point's height (beside a fixed end, as segments' misses are), where the
 // share is at least half (a point nearer a fixed end than the vertex is the

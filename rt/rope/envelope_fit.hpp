@@ -25,9 +25,10 @@
 // 4. A split shortens the segments beside it, and with them the fillets of
 //    the turns there: where a turn no longer fits, steps 2 and 3 run again
 //    (a few rounds). Splits fall in the middle half of a segment.
-// 5. A PX4 fixed-wing (rt::px4_flights): where its flights cut a corner
-//    under the clearance, the legs it flies there get a higher floor, and
-//    step 3 runs again (the check's "flown-clearance").
+// 5. A PX4 fixed-wing (rt::px4_flights): where its flights come under the
+//    clearance (cutting a corner, or climbing behind the legs at its climb
+//    rate), the legs it flies there get a higher floor, and step 3 runs
+//    again (the check's "flown-clearance").
 //
 // The fit is exact for the envelope where the band allows it (`feasible`);
 // constraint hulls come from the field's hull kernel, so hidden-from and

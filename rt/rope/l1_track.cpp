@@ -63,7 +63,7 @@ double leg_height_m(const Vec3& a, const Vec3& b, const Vec2& pos) {
   return a.z() + leg_fraction(a, b, pos.x(), pos.y()) * (b.z() - a.z());
 }
 
-// PX4 1.14's first-order hold of a leg's height (l1_track.hpp), and the
+// PX4 1.13's first-order hold of a leg's height (l1_track.hpp), and the
 // aircraft's height following it within its climb and sink rates.
 class HeightHold {
  public:
@@ -74,6 +74,9 @@ class HeightHold {
         z_m_(start_height_m) {}
   bool on() const { return hold_m_ > 0; }
   double height_m() const { return z_m_; }
+  // PX4's navigator takes a waypoint only within its altitude acceptance
+  // (NAV_FW_ALT_RAD) of its height
+  bool within(double gate_m, const Vec3& waypoint) const { return !on() || std::abs(z_m_ - waypoint.z()) <= gate_m; }
   // PX4 keeps the least distance to the current waypoint since it was taken
   void next_leg() { nearest_m_ = std::numeric_limits<double>::infinity(); }
   // one controller step of dt_s on leg a-b at pos
@@ -141,7 +144,8 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
     recorded = pos;
   };
   for (double step = 0; step < max_steps; ++step) {
-    if ((xy(path[static_cast<std::size_t>(from + 1)]) - pos).norm() <= accept_m) {
+    const Vec3& next = path[static_cast<std::size_t>(from + 1)];
+    if ((xy(next) - pos).norm() <= accept_m && hold.within(flight.altitude_gate_m, next)) {
       if (from + 2 == n) {
         out.reached_end = true;
         break;

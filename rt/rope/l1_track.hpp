@@ -5,22 +5,23 @@
 // acceleration 4 damping^2 V^2 / L1 sin(eta), eta within 90 degrees, bank
 // within the roll limit) at a constant speed over the ground, taking the
 // next waypoint within its switch distance (or its L1 distance, the larger),
-// one a step, as the navigator does (not modelled: its altitude gate,
-// NAV_FW_ALT_RAD, and a wind's drift in the turns: a tailwind is flown as a
-// faster ground speed). The arc by a corner (rt/rope/fillet.hpp)
+// one a step, as the navigator does (with a hold, only within its altitude
+// gate, NAV_FW_ALT_RAD; not modelled: a wind's drift in the turns: a
+// tailwind is flown as a faster ground speed). The arc by a corner (rt/rope/fillet.hpp)
 // is the track of a vehicle that turns at its radius; this is where an
 // autopilot that switches early and cuts towards the next leg flies: deeper
 // inside the corner, and across several corners where the legs are shorter
 // than the switch distance.
 //
-// Heights: with a hold (altitude_hold_m > 0), PX4 1.14's first-order hold
+// Heights: with a hold (altitude_hold_m > 0), PX4 1.13's first-order hold
 // (FixedwingPositionControl::control_auto_position): the height setpoint
 // ramps from the leg's start height to its end height, reached the hold
 // distance before the end (measured by the least distance to the end so
 // far); on a leg no longer than the hold it is the end height at once. The
 // aircraft follows the setpoint at no more than its climb and sink rates, so
-// a steep climb at a fast ground speed falls behind the plan. Without a
-// hold: the planned height at the nearest point of the leg being flown.
+// a steep climb at a fast ground speed falls behind the plan (no lag of
+// the altitude controller is modelled: the clearance is the margin for it).
+// Without a hold: the planned height at the nearest point of the leg flown.
 //
 // Offline: allocates the track. Thread-compatible.
 #pragma once
@@ -49,6 +50,10 @@ struct L1Flight {
   double altitude_hold_m = 0.0;
   double max_climb_m_per_s = std::numeric_limits<double>::infinity();
   double max_sink_m_per_s = std::numeric_limits<double>::infinity();
+  // With a hold, a waypoint is taken only within this of its height, m
+  // (PX4's NAV_FW_ALT_RAD): until then the aircraft flies on to it, and past
+  // it L1 guidance turns it back (PX4's loiter there is not modelled).
+  double altitude_gate_m = std::numeric_limits<double>::infinity();
   // L1 distance, m: damping period V / pi (95.5 m at 20 m/s)
   double l1_distance_m() const;
 };

@@ -365,8 +365,9 @@ PathCheck PathChecker::check(const Vec3* v, int count, const double* turn_radius
 
   // A PX4 fixed-wing cuts each corner deeper than the arc, across several
   // where the legs are shorter than its switch distance: the clearance along
-  // its flights (px4_flights, fly_l1), at the planned height of the leg it
-  // flies, over the flown track's own length. Not where the caller gives
+  // its flights (px4_flights, fly_l1), at the height it flies (the
+  // first-order hold at its climb and sink rates), over the flown track's
+  // own length. Not where the caller gives
   // turn radii (a loiter's circle, which PX4 flies by another controller).
   Tally flown;
   double flown_lowest = std::numeric_limits<double>::infinity();
@@ -458,12 +459,13 @@ std::vector<FlownCheck> PathChecker::fly(const std::vector<Vec3>& path) const {
 std::vector<L1Flight> px4_flights(const VehicleEnvelope& e) {
   std::vector<L1Flight> out;
   if (!is_px4_fixed_wing(e) || !(e.acceptance_radius_m > 0) || !(e.speed_m_per_s > 0)) return out;
-  // PX4 1.14 at its ground speed: the next waypoint within the mission's
+  // PX4 1.13 (L1) at its ground speed: the next waypoint within the mission's
   // radius or the L1 distance, the larger (fly_l1 takes the larger); the
   // height held the L1 distance or the loiter radius early, the larger
   // (FixedwingPositionControl::control_auto_position); climb and sink at the
   // envelope's angles at cruise airspeed, whatever the wind, so that a
-  // tailwind climbs less a metre flown.
+  // tailwind climbs less a metre flown; a waypoint taken only within
+  // NAV_FW_ALT_RAD of its height.
   auto at = [&e](double ground_speed_m_per_s) {
     L1Flight f;
     f.ground_speed_m_per_s = ground_speed_m_per_s;
@@ -471,6 +473,7 @@ std::vector<L1Flight> px4_flights(const VehicleEnvelope& e) {
     f.altitude_hold_m = std::max(f.l1_distance_m(), kPx4LoiterRadiusM);
     f.max_climb_m_per_s = e.speed_m_per_s * std::tan(e.max_climb_deg * kRadPerDeg);
     f.max_sink_m_per_s = e.speed_m_per_s * std::tan(e.max_descent_deg * kRadPerDeg);
+    f.altitude_gate_m = kPx4AltitudeAcceptanceM;
     return f;
   };
   out.push_back(at(e.speed_m_per_s));

@@ -39,7 +39,7 @@
 //   the arc and several at once where the legs are shorter than the switch
 //   distance, in still air and with the strongest wind behind it
 //   (rt::px4_flights), sampled as the path is (or a controller step apart,
-//   the longer: 0.4 m at 20 m/s), at the height flown (PX4 1.14's
+//   the longer: 0.4 m at 20 m/s), at the height flown (PX4 1.13's
 //   first-order hold of each leg's heights, followed at the airframe's climb
 //   and sink rates: rt::fly_l1), for their share of the flown length:
 //   "flown-clearance". Unmet where a
@@ -206,11 +206,12 @@ struct FlownCheck {
 // The flights PathChecker::fly and the "flown-clearance" requirement fly,
 // and rt::fit_to_envelope fits the heights to: a PX4 fixed-wing with an
 // acceptance radius in still air at its cruise speed and with the strongest
-// wind behind it (cruise plus wind over the ground), each as PX4 1.14 flies
+// wind behind it (cruise plus wind over the ground), each as PX4 1.13 flies
 // at that ground speed: waypoints taken at the radius or the L1 distance,
 // heights held the L1 distance or NAV_LOITER_RAD early, the larger, climb
-// and sink at the envelope's angles at cruise airspeed (rt::L1Flight). None
-// for another vehicle.
+// and sink at the envelope's angles at cruise airspeed, a waypoint taken
+// only within NAV_FW_ALT_RAD of its height (rt::L1Flight). None for another
+// vehicle.
 std::vector<L1Flight> px4_flights(const VehicleEnvelope& envelope);
 
 class PathChecker {

@@ -76,6 +76,10 @@ struct VehicleEnvelope {
 // NAV_LOITER_RAD, 80 m by default.
 inline constexpr double kPx4LoiterRadiusM = 80.0;
 
+// PX4's navigator takes a fixed-wing's waypoint only within this of its
+// height, m (NAV_FW_ALT_RAD, 10 m by default).
+inline constexpr double kPx4AltitudeAcceptanceM = 10.0;
+
 // A fixed-wing flown by PX4: its switch distance grows with the wind, and it
 // holds its heights at least its loiter radius early.
 inline bool is_px4_fixed_wing(const VehicleEnvelope& e) {

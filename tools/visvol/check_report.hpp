@@ -45,12 +45,13 @@ void print_check(const rt::PathCheck& check, const rt::VehicleEnvelope& envelope
                  const std::vector<std::string>& more_unmet = {});
 
 // The flights of a PX4 fixed-wing (rt::PathChecker::fly): [{ground_speed_m_per_s,
-// switch_distance_m, length_m, least_clearance_m, least_at: {x_m, y_m, z_m},
-// clearance_fraction, max_off_path_m, constraint_fractions: [...], reached_end}].
+// switch_distance_m, altitude_hold_m, length_m, least_clearance_m, least_at:
+// {x_m, y_m, z_m}, clearance_fraction, max_off_path_m, constraint_fractions:
+// [...], reached_end}].
 nlohmann::json flown_json(const std::vector<rt::FlownCheck>& flights);
 
-// Lines "flown      PX4 L1 at 25.0 m/s over the ground, waypoints taken
-// 125 m out: ..." under print_check's: the least clearance and where, how
+// Lines "flown      PX4 L1 guidance at 25.0 m/s over the ground, waypoints
+// taken 119 m out, heights held 119 m early" under print_check's: the least clearance and where, how
 // far off the legs (the clearance is the "flown-clearance" requirement),
 // each constraint's share of the flown length (a report).
 void print_flown(const std::vector<rt::FlownCheck>& flights, const rt::PathCheck& check,

@@ -463,7 +463,7 @@ TEST_F(FitEarlyDescent, AnEndLowJustPastARidgeIsLeftForTheCheckToReport) {
 }
 
 // A climb inside the limit that PX4 cannot follow with the wind behind it
-// (path_check_test, ClimbInATailwind: 17 m over the slope's top at 25 m/s
+// (path_check_test, ClimbInATailwind: 16.9 m over the slope's top at 25 m/s
 // over the ground): the fit raises it where that flight comes under the
 // clearance, and the fitted path meets every limit, flown in both winds.
 TEST(FitFlights, AClimbATailwindFallsBehindIsRaisedUntilItIsFlownClear) {

@@ -157,7 +157,7 @@ double height_at(const FlownTrack& t, double x) {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// PX4 1.14's first-order hold: a long leg's setpoint reaches its end height
+// PX4 1.13's first-order hold: a long leg's setpoint reaches its end height
 // H before the end (H = 100 m here), so a descent is flown that much early;
 // a leg no longer than H steps to its end height when the aircraft takes its
 // start, and is flown down at the sink rate. By hand: a 100 m descent over
@@ -208,6 +208,50 @@ TEST(L1Track, ATailwindClimbsLessAMetreThanTheLegAsks) {
   EXPECT_NEAR(height_at(c, 500.0), 100.0 + 500.0 * 0.8 * slope, 0.1);
   EXPECT_NEAR(height_at(c, 1000.0), 100.0 + 1000.0 * 0.8 * slope, 0.1);  // 53.6 m under the waypoint
   EXPECT_NEAR(height_at(c, 1300.0), 100.0 + 1000.0 * slope, 1e-9);
+}
+
+// PX4 keeps the least distance to the waypoint since it took it, anew for
+// each waypoint: the second of two climbs of 100 m over 1000 m ramps from
+// its start height again (at 1500 m, 500 m from its end: 200 + 100 x 500 /
+// 900), not from the first's least distance (which would ask for 300 m at
+// once).
+TEST(L1Track, EachLegsHoldStartsAgainFromItsOwnStart) {
+  L1Flight f;
+  f.altitude_hold_m = 100.0;
+  f.max_climb_m_per_s = f.max_sink_m_per_s = 20.0 * std::tan(15.0 * kPi / 180.0);
+  f.altitude_gate_m = 10.0;
+  f.step_s = 0.001;
+  const std::vector<Vec3> climbs = {Vec3(0, 0, 100), Vec3(1000, 0, 200), Vec3(2000, 0, 300), Vec3(3000, 0, 300)};
+  const FlownTrack c = fly_l1(climbs, f);
+  ASSERT_TRUE(c.reached_end);
+  EXPECT_NEAR(height_at(c, 900.0), 200.0, 0.1);
+  EXPECT_NEAR(height_at(c, 1500.0), 200.0 + 100.0 * 500.0 / 900.0, 0.1);
+  EXPECT_NEAR(height_at(c, 1900.0), 300.0, 0.1);
+}
+
+// PX4's navigator takes a waypoint only within NAV_FW_ALT_RAD (10 m) of its
+// height: a 15 deg climb to the end flown at 25 m/s over the ground is 79 m
+// low where it is 119.4 m out, so the aircraft flies on, is turned back
+// round the end by its guidance and takes it 10 m under it, after 69 m more
+// of climb at 5.36 m/s (323 m more of flight).
+TEST(L1Track, AWaypointIsTakenOnlyWithinTheAltitudeGate) {
+  L1Flight f;
+  f.ground_speed_m_per_s = 25.0;
+  f.altitude_hold_m = f.l1_distance_m();
+  f.max_climb_m_per_s = f.max_sink_m_per_s = 20.0 * std::tan(15.0 * kPi / 180.0);
+  f.altitude_gate_m = 10.0;
+  const double top = 100.0 + 1000.0 * std::tan(15.0 * kPi / 180.0);
+  const std::vector<Vec3> climb = {Vec3(0, 0, 100), Vec3(1000, 0, top)};
+  const FlownTrack gated = fly_l1(climb, f);
+  ASSERT_TRUE(gated.reached_end);
+  EXPECT_NEAR(gated.points.back().p_m.z(), top - 10.0, 0.2);
+  double flown_m = 0;
+  for (std::size_t k = 1; k < gated.points.size(); ++k) {
+    flown_m += (gated.points[k].p_m - gated.points[k - 1].p_m).head<2>().norm();
+  }
+  EXPECT_NEAR(flown_m, (1000.0 - f.l1_distance_m()) + (top - 10.0 - 100.0 - 0.8 * 0.268 * 880.6) / 0.2144, 5.0);
+  f.altitude_gate_m = std::numeric_limits<double>::infinity();  // no gate: taken 79 m low
+  EXPECT_NEAR(fly_l1(climb, f).points.back().p_m.z(), 100.0 + 0.2144 * (1000.0 - f.l1_distance_m()), 0.5);
 }
 
 }  // namespace

@@ -600,19 +600,19 @@ TEST_F(PlanCheck, CheckRefusesAPathItCouldNotCheckInSeconds) {
   const Outcome r = visvol("check " + *pack_ + " " + path + " --json");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("samples"), std::string::npos) << r.err;
-  // a four-hundredth of that path (0.43 M samples of 1.9 m), checkable alone,
-  // is refused with 25 observers
+  // a sixteen-hundredth of that path (0.11 M samples of 1.9 m), checkable
+  // alone, is refused with 100 observers (short, as each check flies it)
   {
     std::ofstream f(path);
-    for (int k = 0; k < 1000; ++k) f << (k % 2 ? "550300 4182450 400\n" : "550850 4181850 400\n");
+    for (int k = 0; k < 250; ++k) f << (k % 2 ? "550300 4182450 400\n" : "550850 4181850 400\n");
   }
   const Outcome alone = visvol("check " + *pack_ + " " + path);
   EXPECT_NE(alone.status, 2) << alone.err;
   std::string observers;
-  for (int k = 0; k < 25; ++k) observers += " --hidden-from 550500 4182200 330";
+  for (int k = 0; k < 100; ++k) observers += " --hidden-from 550500 4182200 330";
   const Outcome many = visvol("check " + *pack_ + " " + path + observers);
   EXPECT_EQ(many.status, 2) << many.err;
-  EXPECT_NE(many.err.find("times 25 observers"), std::string::npos) << many.err;
+  EXPECT_NE(many.err.find("times 100 observers"), std::string::npos) << many.err;
   std::remove(path.c_str());
 }
 

@@ -30,12 +30,14 @@ constexpr std::uint64_t kMiB = 1024 * 1024;
 
 inline std::string pack_path(const std::string& stem) { return stem + "_" + std::to_string(::getpid()) + ".vvp"; }
 
-inline std::string build(const std::string& stem, int posts, std::uint32_t seed) {
+// A pack of posts x posts fractal terrain (30 m posts, 32 levels, three
+// levels of detail) at a cube range of range_posts.
+inline std::string build(const std::string& stem, int posts, std::uint32_t seed, int range_posts = 8) {
   const fields::Heightfield hf = fields::testing::fractal(posts, seed);
   storage::PackBuildParams p;
   p.field.nz = 32;
   p.field.ceiling_m = 200;
-  p.field.range_posts = 8;
+  p.field.range_posts = range_posts;
   p.lod_levels = 3;
   p.tff.band_offset_m = 60;
   p.tff.band_levels = 8;

@@ -71,7 +71,9 @@ struct FlownTrack {
   // from the first waypoint, a step (or L1Flight::record_every_m) apart,
   // and the last position flown
   std::vector<FlownPoint> points;
-  bool reached_end = false;  // within the switch distance of the last waypoint in time
+  // the last waypoint taken in time (within the switch distance, and with a
+  // hold within the altitude gate of its height)
+  bool reached_end = false;
 };
 
 // The fraction (0 to 1) along leg a-b of its point nearest (x, y),
@@ -79,9 +81,10 @@ struct FlownTrack {
 double leg_fraction(const Vec3& a, const Vec3& b, double x, double y);
 
 // Flies `path` from its first waypoint, heading for the first waypoint off
-// its spot (none 1 cm away horizontally: nothing is flown), until within
-// the switch distance of the last one, or for three times the path's length
-// at the speed and two minutes more, or kMaxL1Steps (not reached_end).
+// its spot (none 1 cm away horizontally: nothing is flown), until it takes
+// the last one (within the switch distance, and with a hold within the
+// altitude gate of its height), or for three times the path's length at the
+// speed and two minutes more, or kMaxL1Steps (not reached_end).
 FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight);
 
 }  // namespace visvol::rt

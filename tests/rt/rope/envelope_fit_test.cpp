@@ -8,6 +8,7 @@
 #include <string>
 
 #include "../../fields/terrains.hpp"
+#include "climb_slope.hpp"
 #include "rt/rope/path_check.hpp"
 #include "rt/rope/point_hull.hpp"
 
@@ -467,13 +468,9 @@ TEST_F(FitEarlyDescent, AnEndLowJustPastARidgeIsLeftForTheCheckToReport) {
 // over the ground): the fit raises it where that flight comes under the
 // clearance, and the fitted path meets every limit, flown in both winds.
 TEST(FitFlights, AClimbATailwindFallsBehindIsRaisedUntilItIsFlownClear) {
-  fields::Heightfield t = blank(400, 40, 5.0, 100.0f);
-  for (int j = 0; j < 40; ++j) {
-    for (int i = 0; i < 400; ++i)
-      t.at(i, j) = static_cast<float>(100.0 + std::clamp((i - 104) * 5.0, 0.0, 380.0) * 0.26);
-  }
-  auto post = [&](double i, double z) { return Vec3(t.x_of(i), t.y_of(20), z); };
-  const std::vector<Vec3> climb = {post(20, 130), post(100, 130), post(180, 234), post(380, 234)};
+  const testing::ClimbSlope slope;
+  const fields::Heightfield& t = slope.terrain;
+  const std::vector<Vec3>& climb = slope.path;
   EnvelopeFitSpec spec;
   spec.envelope = *vehicle_preset("fixed-wing");
   ASSERT_FALSE(every_limit_met(judge_on(t, spec.envelope, climb)));  // flown-clearance

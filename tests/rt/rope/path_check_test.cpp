@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "../../fields/terrains.hpp"
+#include "climb_slope.hpp"
 #include "fields/exact_visibility.hpp"
 
 namespace visvol::rt {
@@ -645,13 +646,9 @@ TEST_F(RockInsideACorner, OnlyAPx4FixedWingThatSwitchesEarlyIsFlown) {
 // it, so it reaches the top 18.4 m low, 16.9 m over the ground (by hand, at
 // the check's 50 Hz; the planned heights alone read 35.2 m there).
 TEST(ClimbInATailwind, PX4FallsBehindAClimbTheLegsMakeWithinTheLimit) {
-  fields::Heightfield t = fields::testing::blank(400, 40, 5.0, 100.0f);
-  for (int j = 0; j < 40; ++j) {
-    for (int i = 0; i < 400; ++i)
-      t.at(i, j) = static_cast<float>(100.0 + std::clamp((i - 104) * 5.0, 0.0, 380.0) * 0.26);
-  }
-  auto post = [&](double i, double z) { return Vec3(t.x_of(i), t.y_of(20), z); };
-  const std::vector<Vec3> climb = {post(20, 130), post(100, 130), post(180, 234), post(380, 234)};
+  const testing::ClimbSlope slope;
+  const fields::Heightfield& t = slope.terrain;
+  const std::vector<Vec3>& climb = slope.path;
   PathCheckSpec s;
   s.envelope = *vehicle_preset("fixed-wing");  // 20 m/s, 15 deg, 5 m/s of wind
   const auto checker = PathChecker::create(t, nullptr, s);

@@ -113,6 +113,8 @@ double leg_fraction(const Vec3& a, const Vec3& b, double x, double y) {
 
 double L1Flight::l1_distance_m() const { return damping * period_s * ground_speed_m_per_s / kPi; }
 
+double L1Flight::accept_distance_m() const { return std::max(switch_distance_m, l1_distance_m()); }
+
 FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   FlownTrack out;
   const int n = static_cast<int>(path.size());
@@ -126,7 +128,7 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   if (first_off == n) return out;
   const double l1_m = flight.l1_distance_m();
   const double gain = 4.0 * flight.damping * flight.damping;
-  const double accept_m = std::max(flight.switch_distance_m, l1_m);
+  const double accept_m = flight.accept_distance_m();
   const double max_accel = kGravityMPerS2 * std::tan(flight.max_roll_deg * kRadPerDeg);
   const double max_time_s = 3.0 * horizontal_length_m(path) / v + 120.0;
   const double max_steps = std::min(max_time_s / dt, kMaxL1Steps);

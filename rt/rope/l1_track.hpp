@@ -56,6 +56,9 @@ struct L1Flight {
   double altitude_gate_m = std::numeric_limits<double>::infinity();
   // L1 distance, m: damping period V / pi (95.5 m at 20 m/s)
   double l1_distance_m() const;
+  // Where the next waypoint is taken, m: the switch distance or the L1
+  // distance, the larger (PX4's navigator)
+  double accept_distance_m() const;
 };
 
 struct FlownPoint {

@@ -77,7 +77,7 @@ FlownCheck fly_once(const PathChecker& checker, const std::vector<Vec3>& path, c
                     Tally* clearance_out) {
   FlownCheck out;
   out.ground_speed_m_per_s = flight.ground_speed_m_per_s;
-  out.switch_distance_m = std::max(flight.switch_distance_m, flight.l1_distance_m());  // as fly_l1 takes it
+  out.switch_distance_m = flight.accept_distance_m();
   out.altitude_hold_m = flight.altitude_hold_m;
   L1Flight sampled = flight;
   sampled.record_every_m = checker.spec().sample_step_m;

@@ -235,7 +235,7 @@ using simd::Lanes;
 
 template <class V, class T>
 VISVOL_SIMD_INLINE void load(V& v, const T* p) {
-  std::memcpy(&v, p, sizeof v);
+  simd::load_unaligned(v, p);
 }
 template <class V>
 VISVOL_SIMD_INLINE void max_into(V& a, const V& b) {
@@ -285,8 +285,26 @@ VISVOL_SIMD_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typen
 // preconditions), so a byte holds each. The 16 bytes of a 16-lane pass are
 // narrowed in a register and stored whole: narrowing straight to memory
 // (vpmovdb to memory on AVX-512) is slow.
+#if defined(__x86_64__)
+// GCC 12 narrows 8 lanes for AVX2 lane by lane in scalar code; one shuffle
+// picking the low byte of each lane (little-endian) gives the same bytes.
+VISVOL_SIMD_INLINE void store_levels_8(const Lanes<8>::I& k, std::uint8_t* dst) {
+  typedef std::uint8_t Wide __attribute__((vector_size(32)));
+  typedef std::uint8_t Bytes __attribute__((vector_size(8)));
+  const Wide w = reinterpret_cast<const Wide&>(k);
+  const Bytes b = __builtin_shufflevector(w, w, 0, 4, 8, 12, 16, 20, 24, 28);
+  simd::store_unaligned(dst, b);
+}
+#endif
+
 template <int W>
 VISVOL_SIMD_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst) {
+#if defined(__x86_64__)
+  if constexpr (W == 8) {
+    store_levels_8(k, dst);
+    return;
+  }
+#endif
   typedef std::uint8_t Bytes __attribute__((vector_size(W)));
   Bytes b = __builtin_convertvector(k, Bytes);
 #if defined(__x86_64__)
@@ -407,7 +425,7 @@ VISVOL_SIMD_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& t
     VecF own[N];
     own_slope(own, e);
     float* dst = slot(prev, ring_index(e.dx, e.dy, 1));
-    for (int r = 0; r < R; ++r) std::memcpy(dst + r * W, &own[r], sizeof own[r]);
+    for (int r = 0; r < R; ++r) simd::store_unaligned(dst + r * W, own[r]);
   }
   for (int m = 2; m <= last_ring; ++m) {
     const HullEntry* ring = table.ring(m);
@@ -450,7 +468,7 @@ VISVOL_SIMD_INLINE void hull_pass(const HullTable& table, const PaddedTerrain& t
       float* dst = slot(cur, n);
       for (int r = 0; r < R; ++r) {
         max_into(next[r], h[r]);
-        std::memcpy(dst + r * W, &next[r], sizeof next[r]);
+        simd::store_unaligned(dst + r * W, next[r]);
       }
       // Lowest visible height over the target.
       VecI k[N], lowest[N];

@@ -103,6 +103,20 @@ double horizontal_length_m(const std::vector<Vec3>& path) {
   return total;
 }
 
+// The longest a flight may take, s: three times what it takes to fly the
+// path's horizontal length at the ground speed and, with a hold, to climb and
+// sink its heights at the vehicle's rates (an aircraft that reaches a
+// waypoint low circles until it is within the gate), and two minutes more.
+double flight_time_bound_s(const std::vector<Vec3>& path, const L1Flight& flight, bool hold) {
+  double t_s = horizontal_length_m(path) / flight.ground_speed_m_per_s;
+  for (std::size_t i = 1; hold && i < path.size(); ++i) {
+    const double dz_m = path[i].z() - path[i - 1].z();
+    if (dz_m > 0) t_s += dz_m / flight.max_climb_m_per_s;
+    if (dz_m < 0) t_s += -dz_m / flight.max_sink_m_per_s;
+  }
+  return 3.0 * t_s + 120.0;
+}
+
 }  // namespace
 
 double leg_fraction(const Vec3& a, const Vec3& b, double x, double y) {
@@ -130,13 +144,14 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   const double gain = 4.0 * flight.damping * flight.damping;
   const double accept_m = flight.accept_distance_m();
   const double max_accel = kGravityMPerS2 * std::tan(flight.max_roll_deg * kRadPerDeg);
-  const double max_time_s = 3.0 * horizontal_length_m(path) / v + 120.0;
-  const double max_steps = std::min(max_time_s / dt, kMaxL1Steps);
+  const double hold_m = std::max(flight.altitude_hold_m, 0.0);
+  // fmin: a rate of 0 (an infinite time) or NaN flies kMaxL1Steps
+  const double max_steps = std::fmin(flight_time_bound_s(path, flight, hold_m > 0) / dt, kMaxL1Steps);
   const double record_m = std::max(flight.record_every_m, 0.0);
   Vec2 pos = xy(path[0]);
   Vec2 heading = (xy(path[static_cast<std::size_t>(first_off)]) - pos).normalized();  // unit
   int from = 0;
-  HeightHold hold(flight, std::max(flight.altitude_hold_m, 0.0), path[0].z());
+  HeightHold hold(flight, hold_m, path[0].z());
   out.points.push_back({path[0], 0});
   Vec2 recorded = pos;
   auto record = [&]() {

@@ -86,8 +86,9 @@ double leg_fraction(const Vec3& a, const Vec3& b, double x, double y);
 // Flies `path` from its first waypoint, heading for the first waypoint off
 // its spot (none 1 cm away horizontally: nothing is flown), until it takes
 // the last one (within the switch distance, and with a hold within the
-// altitude gate of its height), or for three times the path's length at the
-// speed and two minutes more, or kMaxL1Steps (not reached_end).
+// altitude gate of its height), or for three times the time its length takes
+// at the speed (with a hold, and its climbs and descents at the rates) and
+// two minutes more, or kMaxL1Steps (not reached_end).
 FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight);
 
 }  // namespace visvol::rt

@@ -254,5 +254,20 @@ TEST(L1Track, AWaypointIsTakenOnlyWithinTheAltitudeGate) {
   EXPECT_NEAR(fly_l1(climb, f).points.back().p_m.z(), 100.0 + 0.2144 * (1000.0 - f.l1_distance_m()), 0.5);
 }
 
+TEST(L1Track, AClimbLongerThanTheLegsIsGivenTheTimeItsRateNeeds) {
+  // 1300 m up over 800 m at 5 m/s takes at least 260 s, more than three
+  // times the 40 s of the legs and two minutes (240 s): the aircraft circles
+  // round the end climbing until it is within the gate, and takes it
+  L1Flight f;
+  f.altitude_hold_m = f.l1_distance_m();
+  f.max_climb_m_per_s = f.max_sink_m_per_s = 5.0;
+  f.altitude_gate_m = 10.0;
+  const std::vector<Vec3> climb = {Vec3(0, 0, 100), Vec3(800, 0, 1400)};
+  const FlownTrack t = fly_l1(climb, f);
+  ASSERT_TRUE(t.reached_end);
+  EXPECT_GE(t.points.back().p_m.z(), 1390.0 - 1e-9);
+  EXPECT_GT(static_cast<double>(t.points.size()) * f.step_s, 240.0);
+}
+
 }  // namespace
 }  // namespace visvol::rt

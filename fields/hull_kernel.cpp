@@ -285,10 +285,13 @@ VISVOL_SIMD_INLINE void level_at_or_above(typename Lanes<W>::I& out, const typen
 // preconditions), so a byte holds each. The 16 bytes of a 16-lane pass are
 // narrowed in a register and stored whole: narrowing straight to memory
 // (vpmovdb to memory on AVX-512) is slow.
-#if defined(__x86_64__)
-// GCC 12 narrows 8 lanes for AVX2 lane by lane in scalar code; one shuffle
-// picking the low byte of each lane (little-endian) gives the same bytes.
-VISVOL_SIMD_INLINE void store_levels_8(const Lanes<8>::I& k, std::uint8_t* dst) {
+#if defined(VISVOL_SIMD_DISPATCH) && __GNUC__ >= 12
+#define VISVOL_SHUFFLE_LEVELS_8 1
+// GCC 12 narrows 8 lanes for AVX2 lane by lane in scalar code; a shuffle
+// picking the low byte of each lane (little-endian; the narrowing wraps
+// modulo 256 too) gives the same bytes in four vector instructions. Only
+// GCC's AVX2 kernel has 8 lanes.
+[[maybe_unused]] VISVOL_SIMD_INLINE void store_levels_8(const Lanes<8>::I& k, std::uint8_t* dst) {
   typedef std::uint8_t Wide __attribute__((vector_size(32)));
   typedef std::uint8_t Bytes __attribute__((vector_size(8)));
   const Wide w = reinterpret_cast<const Wide&>(k);
@@ -299,7 +302,7 @@ VISVOL_SIMD_INLINE void store_levels_8(const Lanes<8>::I& k, std::uint8_t* dst) 
 
 template <int W>
 VISVOL_SIMD_INLINE void store_levels(const typename Lanes<W>::I& k, std::uint8_t* dst) {
-#if defined(__x86_64__)
+#ifdef VISVOL_SHUFFLE_LEVELS_8
   if constexpr (W == 8) {
     store_levels_8(k, dst);
     return;
@@ -566,10 +569,23 @@ int hull_kernel_width() {
 #endif
 }
 
-void hull_levels_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
-                                const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
-                                float* ring_b, std::uint8_t* out) {
+bool hull_levels_chunk_at_width(int width, const HullTable& table, const PaddedTerrain& terrain,
+                                const LevelRowLayout& layout, const LevelMap& levels, RangeShape shape,
+                                const ObserverChunk& chunk, float* ring_a, float* ring_b, std::uint8_t* out) {
+#ifdef VISVOL_SIMD_DISPATCH
+  __builtin_cpu_init();
+  if (width == 16 && __builtin_cpu_supports("x86-64-v4")) {
+    hull_chunk_v4(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+    return true;
+  }
+  if (width == kAvx2Width && __builtin_cpu_supports("x86-64-v3")) {
+    hull_chunk_v3(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+    return true;
+  }
+#endif
+  if (width != kBaselineWidth) return false;
   hull_chunk_baseline(table, terrain, layout, levels, shape, chunk, ring_a, ring_b, out);
+  return true;
 }
 
 void observer_horizon(const PaddedTerrain& terrain, int radius, int exact_rings, double spacing_m,

@@ -201,13 +201,14 @@ void hull_levels_chunk(const HullTable& table, const PaddedTerrain& terrain, con
                        float* ring_b, std::uint8_t* out);
 
 // The vector width hull_levels_chunk runs at on this CPU (16 lanes with
-// AVX-512, 8 with AVX2, 4 otherwise; 16 in the sanitizer builds), and the
-// kernel at the baseline's width whatever the CPU: tests hold the two to the
-// same bytes.
+// AVX-512, 8 with AVX2, 4 otherwise; 16 in the sanitizer builds).
 int hull_kernel_width();
-void hull_levels_chunk_baseline(const HullTable& table, const PaddedTerrain& terrain, const LevelRowLayout& layout,
-                                const LevelMap& levels, RangeShape shape, const ObserverChunk& chunk, float* ring_a,
-                                float* ring_b, std::uint8_t* out);
+// The build of the kernel at `width` lanes, where this build and CPU have
+// it (an AVX-512 CPU runs the AVX2 and baseline builds too): false, and
+// nothing written, where not. Tests hold every width to the same bytes.
+bool hull_levels_chunk_at_width(int width, const HullTable& table, const PaddedTerrain& terrain,
+                                const LevelRowLayout& layout, const LevelMap& levels, RangeShape shape,
+                                const ObserverChunk& chunk, float* ring_a, float* ring_b, std::uint8_t* out);
 
 // The horizon slope H of every target around one observer (scalar; for
 // viewsheds, point hulls and tests), by the same rules as the kernel.

@@ -8,6 +8,21 @@
 
 namespace visvol::rt {
 
+// Without the three trigonometric calls of the formula (l1_track.hpp): they
+// were the longest chain of a flight's step. |eta1| is at most 45 degrees,
+// so where the sum passes 90 degrees (its cosine negative) it does so on
+// eta2's side.
+double l1_sin_eta(double sin_eta1, double cross_v, double dot_v) {
+  const double r = std::sqrt(cross_v * cross_v + dot_v * dot_v);  // speeds: no overflow
+  if (!(r > 0)) return sin_eta1;                                  // atan2(0, 0) = 0
+  const double cos_eta1 = std::sqrt(1.0 - sin_eta1 * sin_eta1);
+  const double sin_eta2 = cross_v / r, cos_eta2 = dot_v / r;
+  if (cos_eta1 * cos_eta2 - sin_eta1 * sin_eta2 < 0) {
+    return cross_v > 0 || (cross_v == 0 && !std::signbit(cross_v)) ? 1.0 : -1.0;
+  }
+  return sin_eta1 * cos_eta2 + cos_eta1 * sin_eta2;
+}
+
 namespace {
 
 constexpr double kGravityMPerS2 = 9.80665;
@@ -35,27 +50,39 @@ double sin_eta_towards(const Vec2& velocity, const Vec2& direction) {
 
 // The lateral acceleration PX4 1.13 commands to fly from `a` to `b`, m/s^2
 // (positive turns left, counter-clockwise).
-double l1_lateral_accel(const Vec2& a, const Vec2& b, const Vec2& pos, const Vec2& velocity, double l1_m, double gain) {
-  Vec2 ab = b - a;
-  if (ab.norm() < 1e-3) ab = b - pos;
-  ab.normalize();
+// `leg_unit` is the leg's direction (leg_direction), and
+// `accel_per_sin_m_per_s2` the gain times V^2 / L1 at the flight's constant
+// speed (|velocity|): both the same for every step of a leg.
+double l1_lateral_accel(const Vec2& a, const Vec2& b, const Vec2& leg_unit, const Vec2& pos, const Vec2& velocity,
+                        double l1_m, double accel_per_sin_m_per_s2) {
+  Vec2 ab = leg_unit;
+  if (ab.isZero()) {  // a leg under a millimetre: towards its end
+    ab = b - pos;
+    ab.normalize();
+  }
   const Vec2 a_to_p = pos - a;
   const double distance_a = a_to_p.norm();
   const double along = a_to_p.dot(ab);
-  Vec2 b_to_p = pos - b;
-  if (b_to_p.norm() > 0) b_to_p.normalize();
+  const Vec2 b_to_p = pos - b;
+  const double distance_b = b_to_p.norm();
+  // past the end: within 100 degrees of the leg's direction seen from it
+  const bool past_end = !(distance_b > 0) || b_to_p.dot(ab) > kCosPastEnd * distance_b;
   double sin_eta = 0;
   if (distance_a > l1_m && along / std::max(distance_a, 1.0) < -kSinMaxEta1) {
     sin_eta = sin_eta_towards(velocity, -a_to_p);  // far behind the start: to it
-  } else if (b_to_p.dot(ab) > kCosPastEnd) {
+  } else if (past_end) {
     sin_eta = sin_eta_towards(velocity, -b_to_p);  // past the end: back to it
   } else {
     const double sine_eta1 = std::clamp(cross(a_to_p, ab) / std::max(l1_m, 0.1), -kSinMaxEta1, kSinMaxEta1);
-    const double eta2 = std::atan2(cross(velocity, ab), velocity.dot(ab));
-    sin_eta = std::sin(std::clamp(std::asin(sine_eta1) + eta2, -0.5 * kPi, 0.5 * kPi));
+    sin_eta = l1_sin_eta(sine_eta1, cross(velocity, ab), velocity.dot(ab));
   }
-  const double v = velocity.norm();
-  return gain * v * v / l1_m * sin_eta;
+  return accel_per_sin_m_per_s2 * sin_eta;
+}
+
+// A leg's direction, a unit vector; zero for a leg under a millimetre.
+Vec2 leg_direction(const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  return ab.norm() < 1e-3 ? Vec2::Zero() : Vec2(ab.normalized());
 }
 
 // The planned height at the point of leg a-b nearest `pos`.
@@ -142,6 +169,10 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
   if (first_off == n) return out;
   const double l1_m = flight.l1_distance_m();
   const double gain = 4.0 * flight.damping * flight.damping;
+  // PX4's 4 damping^2 V^2 / L1 sin(eta); the heading turns accel / V a second
+  const double accel_per_sin = gain * v * v / l1_m, dt_per_v = dt / v;
+  Vec2 leg_unit = Vec2::Zero();  // of leg leg_of_unit
+  int leg_of_unit = -1;
   const double accept_m = flight.accept_distance_m();
   const double max_accel = kGravityMPerS2 * std::tan(flight.max_roll_deg * kRadPerDeg);
   const double hold_m = std::max(flight.altitude_hold_m, 0.0);
@@ -174,11 +205,13 @@ FlownTrack fly_l1(const std::vector<Vec3>& path, const L1Flight& flight) {
     const Vec3& b = path[static_cast<std::size_t>(from + 1)];
     hold.step(a, b, pos, dt);
     const Vec2 velocity = v * heading;
-    const double accel = std::clamp(l1_lateral_accel(xy(a), xy(b), pos, velocity, l1_m, gain), -max_accel, max_accel);
+    if (leg_of_unit != from) leg_unit = leg_direction(xy(a), xy(b)), leg_of_unit = from;
+    const double accel =
+        std::clamp(l1_lateral_accel(xy(a), xy(b), leg_unit, pos, velocity, l1_m, accel_per_sin), -max_accel, max_accel);
     pos += velocity * dt;
     // turned by accel / v dt (a hundredth of a radian a step at most): along
     // its left normal, then back to unit length
-    heading = (heading + Vec2(-heading.y(), heading.x()) * (accel / v * dt)).normalized();
+    heading = (heading + Vec2(-heading.y(), heading.x()) * (accel * dt_per_v)).normalized();
     if ((pos - recorded).norm() >= record_m) record();
   }
   if ((pos - recorded).norm() > 0) record();  // where it stopped, recorded or not

@@ -79,6 +79,12 @@ struct FlownTrack {
   bool reached_end = false;
 };
 
+// PX4 1.13's sin(eta) on a leg's line: eta = asin(sin_eta1) + atan2(cross_v,
+// dot_v) clamped to 90 degrees either way (sin_eta1 within +-0.7071, the
+// cross-track angle's sine; cross_v and dot_v the velocity across and along
+// the leg), computed without trigonometric calls.
+double l1_sin_eta(double sin_eta1, double cross_v, double dot_v);
+
 // The fraction (0 to 1) along leg a-b of its point nearest (x, y),
 // horizontally (0 for a leg on one spot).
 double leg_fraction(const Vec3& a, const Vec3& b, double x, double y);

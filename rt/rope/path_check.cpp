@@ -452,7 +452,19 @@ std::vector<FlownCheck> PathChecker::fly(const std::vector<Vec3>& path) const {
   for (const Vec3& p : path) {
     if (!p.allFinite()) return out;
   }
-  for (const L1Flight& f : px4_flights(spec_.envelope)) out.push_back(fly_once(*this, path, f, true, nullptr));
+  const std::vector<L1Flight> flights = px4_flights(spec_.envelope);
+  if (flights.empty()) return out;
+  // the lowest flight found without sight lines, then reported with them
+  std::size_t lowest = 0;
+  double lowest_m = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < flights.size(); ++i) {
+    const double least_m = fly_once(*this, path, flights[i], false, nullptr).least_clearance_m;
+    if (least_m < lowest_m) lowest_m = least_m, lowest = i;
+  }
+  for (std::size_t i = 0; i < flights.size(); ++i) {
+    if (i == 0 || i + 1 == flights.size() || i == lowest)
+      out.push_back(fly_once(*this, path, flights[i], true, nullptr));
+  }
   return out;
 }
 
@@ -476,8 +488,11 @@ std::vector<L1Flight> px4_flights(const VehicleEnvelope& e) {
     f.altitude_gate_m = kPx4AltitudeAcceptanceM;
     return f;
   };
-  out.push_back(at(e.speed_m_per_s));
-  if (e.max_wind_m_per_s > 0) out.push_back(at(e.speed_m_per_s + e.max_wind_m_per_s));
+  const int steps =
+      e.max_wind_m_per_s > 0
+          ? static_cast<int>(std::ceil(std::min(e.max_wind_m_per_s / kPx4GroundSpeedStepMPerS, kMaxPx4Flights - 1.0)))
+          : 0;
+  for (int i = 0; i <= steps; ++i) out.push_back(at(e.speed_m_per_s + e.max_wind_m_per_s * i / std::max(steps, 1)));
   return out;
 }
 

@@ -126,6 +126,14 @@ nlohmann::json flown_json(const std::vector<rt::FlownCheck>& flights) {
 }
 
 void print_flown(const std::vector<rt::FlownCheck>& flights, const rt::PathCheck& check, const rt::VehicleEnvelope& e) {
+  const std::vector<rt::L1Flight> flown = rt::px4_flights(e);
+  if (flown.size() > 2 && !flights.empty()) {
+    std::printf(
+        "flown      at %zu ground speeds, %.1f to %.1f m/s (%.2f m/s apart); shown: still air, the strongest "
+        "tailwind and the least clearance\n",
+        flown.size(), flown.front().ground_speed_m_per_s, flown.back().ground_speed_m_per_s,
+        flown[1].ground_speed_m_per_s - flown[0].ground_speed_m_per_s);
+  }
   for (const rt::FlownCheck& f : flights) {
     std::printf(
         "flown      PX4 L1 guidance at %.1f m/s over the ground, waypoints taken %.0f m out, heights held %.0f m "

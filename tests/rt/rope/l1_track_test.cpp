@@ -7,6 +7,8 @@
 #include <limits>
 #include <vector>
 
+#include "base/angles.hpp"
+
 namespace visvol::rt {
 namespace {
 
@@ -18,6 +20,28 @@ double nearest_to(const FlownTrack& t, const Vec3& p) {
 
 // A right-angle corner between two legs of 1000 m, north then east.
 std::vector<Vec3> corner_path() { return {Vec3(0, 0, 100), Vec3(0, 1000, 100), Vec3(1000, 1000, 100)}; }
+
+TEST(L1Track, SinEtaIsTheTrigonometricFormulasEverywhere) {
+  // sin(clamp(asin(s1) + atan2(c, d), -90, 90 degrees)), as PX4 writes it,
+  // over cross-track sines within +-0.7071 and every heading, the clamp's
+  // edges and a velocity of 0 included
+  auto formula = [](double s1, double c, double d) {
+    return std::sin(std::clamp(std::asin(s1) + std::atan2(c, d), -0.5 * kPi, 0.5 * kPi));
+  };
+  double worst = 0;
+  for (int i = -20; i <= 20; ++i) {
+    const double s1 = 0.7071 * i / 20.0;
+    for (int k = 0; k < 720; ++k) {
+      const double heading = 2.0 * kPi * k / 720.0, v = 17.5;
+      const double c = v * std::sin(heading), d = v * std::cos(heading);
+      worst = std::max(worst, std::abs(l1_sin_eta(s1, c, d) - formula(s1, c, d)));
+    }
+    EXPECT_DOUBLE_EQ(l1_sin_eta(s1, 0.0, 0.0), formula(s1, 0.0, 0.0));
+    EXPECT_DOUBLE_EQ(l1_sin_eta(s1, 0.0, -3.0), formula(s1, 0.0, -3.0));
+    EXPECT_DOUBLE_EQ(l1_sin_eta(s1, -0.0, -3.0), formula(s1, -0.0, -3.0));
+  }
+  EXPECT_LT(worst, 1e-12);
+}
 
 TEST(L1Track, AStraightPathIsFlownOnItsLineToItsEnd) {
   const std::vector<Vec3> path = {Vec3(0, 0, 100), Vec3(3000, 0, 160), Vec3(6000, 0, 100)};
@@ -154,8 +178,6 @@ double height_at(const FlownTrack& t, double x) {
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
-
-constexpr double kPi = 3.14159265358979323846;
 
 // PX4 1.13's first-order hold: a long leg's setpoint reaches its end height
 // H before the end (H = 100 m here), so a descent is flown that much early;

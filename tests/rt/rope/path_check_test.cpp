@@ -662,13 +662,41 @@ TEST(ClimbInATailwind, PX4FallsBehindAClimbTheLegsMakeWithinTheLimit) {
       EXPECT_TRUE(l.met) << l.name << " worst " << l.worst;
     }
   }
+  // reported: still air and the strongest tailwind, the lowest of the 11
+  // (the faster over the ground, the less height a metre)
   const std::vector<FlownCheck> flights = checker->fly(climb);
   ASSERT_EQ(flights.size(), 2u);
+  EXPECT_EQ(flights[0].ground_speed_m_per_s, 20.0);
+  EXPECT_EQ(flights[1].ground_speed_m_per_s, 25.0);
   // still air: at the legs or above (30 m at the start, 35.2 m along the climb)
   EXPECT_GE(flights[0].least_clearance_m, 30.0 - 1e-6);
   EXPECT_GE(flights[0].clearance_fraction, 1.0);
   EXPECT_NEAR(flights[1].least_clearance_m, 16.9, 0.3);
   EXPECT_NEAR(flights[1].least_at_m.x(), t.x_of(180), 10.0);  // at the top of the climb
+}
+
+TEST(Px4Flights, EveryHalfMetreASecondFromStillAirToTheStrongestTailwind) {
+  // the least clearance is not always at either end: an independent
+  // simulation flew a SF North mission 30.57 m over the ground at 20 m/s and
+  // 30.28 m at 25, and 29.92 m at 22.5
+  VehicleEnvelope e = *vehicle_preset("fixed-wing");  // 20 m/s, 5 m/s of wind
+  std::vector<L1Flight> f = px4_flights(e);
+  ASSERT_EQ(f.size(), 11u);
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    EXPECT_DOUBLE_EQ(f[i].ground_speed_m_per_s, 20.0 + 0.5 * static_cast<double>(i));
+    // PX4 at that ground speed: the hold the L1 distance or 80 m, the larger
+    EXPECT_DOUBLE_EQ(f[i].altitude_hold_m, std::max(f[i].l1_distance_m(), kPx4LoiterRadiusM));
+    EXPECT_DOUBLE_EQ(f[i].max_climb_m_per_s, f[0].max_climb_m_per_s);  // at cruise airspeed
+  }
+  EXPECT_NEAR(f[5].altitude_hold_m, 107.4, 0.05);  // 22.5 m/s
+  e.max_wind_m_per_s = 1.2;                        // 3 steps of 0.4 m/s
+  f = px4_flights(e);
+  ASSERT_EQ(f.size(), 4u);
+  EXPECT_DOUBLE_EQ(f[3].ground_speed_m_per_s, 21.2);
+  e.max_wind_m_per_s = 100;  // at most kMaxPx4Flights
+  EXPECT_EQ(px4_flights(e).size(), static_cast<std::size_t>(kMaxPx4Flights));
+  e.max_wind_m_per_s = 0;  // still air only
+  EXPECT_EQ(px4_flights(e).size(), 1u);
 }
 
 }  // namespace

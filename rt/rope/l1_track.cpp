@@ -14,7 +14,10 @@ namespace visvol::rt {
 // eta2's side.
 double l1_sin_eta(double sin_eta1, double cross_v, double dot_v) {
   const double r = std::sqrt(cross_v * cross_v + dot_v * dot_v);  // speeds: no overflow
-  if (!(r > 0)) return sin_eta1;                                  // atan2(0, 0) = 0
+  if (!(r > 0)) {  // atan2(+-0, +0) = +-0; atan2(+-0, -0) = +-pi: clamped to +-1
+    if (!std::signbit(dot_v)) return sin_eta1;
+    return std::signbit(cross_v) ? -1.0 : 1.0;
+  }
   const double cos_eta1 = std::sqrt(1.0 - sin_eta1 * sin_eta1);
   const double sin_eta2 = cross_v / r, cos_eta2 = dot_v / r;
   if (cos_eta1 * cos_eta2 - sin_eta1 * sin_eta2 < 0) {

@@ -454,16 +454,20 @@ std::vector<FlownCheck> PathChecker::fly(const std::vector<Vec3>& path) const {
   }
   const std::vector<L1Flight> flights = px4_flights(spec_.envelope);
   if (flights.empty()) return out;
-  // the lowest flight found without sight lines, then reported with them
+  // the lowest flight found without sight lines (one that stops short of
+  // the end first: that fails the check too), then reported with them
   std::size_t lowest = 0;
-  double lowest_m = std::numeric_limits<double>::infinity();
+  std::pair<bool, double> lowest_key(true, std::numeric_limits<double>::infinity());
   for (std::size_t i = 0; i < flights.size(); ++i) {
-    const double least_m = fly_once(*this, path, flights[i], false, nullptr).least_clearance_m;
-    if (least_m < lowest_m) lowest_m = least_m, lowest = i;
+    const FlownCheck f = fly_once(*this, path, flights[i], false, nullptr);
+    const std::pair<bool, double> key(f.reached_end, f.least_clearance_m);
+    if (key < lowest_key) lowest_key = key, lowest = i;
   }
   for (std::size_t i = 0; i < flights.size(); ++i) {
-    if (i == 0 || i + 1 == flights.size() || i == lowest)
-      out.push_back(fly_once(*this, path, flights[i], true, nullptr));
+    if (i != 0 && i + 1 != flights.size() && i != lowest) continue;
+    out.push_back(fly_once(*this, path, flights[i], true, nullptr));
+    out.back().lowest = i == lowest;
+    out.back().flights_flown = static_cast<int>(flights.size());
   }
   return out;
 }

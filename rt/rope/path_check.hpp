@@ -37,8 +37,8 @@
 //   the caller gives turn radii, a loiter's circle): the track its L1
 //   guidance flies (rt/rope/l1_track.hpp), which cuts a corner deeper than
 //   the arc and several at once where the legs are shorter than the switch
-//   distance, in still air, with the strongest wind behind it and at the
-//   ground speeds between (rt::px4_flights), sampled as the path is (or a controller step apart,
+//   distance, in still air, with the strongest wind behind it and at
+//   ground speeds 0.5 m/s apart between (rt::px4_flights), sampled as the path is (or a controller step apart,
 //   the longer: 0.4 m at 20 m/s), at the height flown (PX4 1.13's
 //   first-order hold of each leg's heights, followed at the airframe's climb
 //   and sink rates: rt::fly_l1), for their share of the flown length:
@@ -201,14 +201,18 @@ struct FlownCheck {
   double max_off_path_m = 0;
   std::vector<double> constraint_fractions;  // per constraint: of the flown length that satisfies it
   bool reached_end = false;
+  // PathChecker::fly: the flight it reports as the lowest of all it flew
+  // (one that stops short first, then the least clearance)
+  bool lowest = false;
+  int flights_flown = 0;  // PathChecker::fly: how many flights it flew (rt::px4_flights)
 };
 
 // The flights the "flown-clearance" requirement flies, and
 // rt::fit_to_envelope fits the heights to: a PX4 fixed-wing with an
 // acceptance radius in still air at its cruise speed, with the strongest
 // wind behind it (cruise plus wind over the ground), and at ground speeds
-// between them kPx4GroundSpeedStepMPerS apart at most (at most
-// kMaxPx4Flights in all), each as PX4 1.13 flies
+// between them kPx4GroundSpeedStepMPerS apart (at most kMaxPx4Flights in
+// all: farther apart over 20 m/s of wind), each as PX4 1.13 flies
 // at that ground speed: waypoints taken at the radius or the L1 distance,
 // heights held the L1 distance or NAV_LOITER_RAD early, the larger, climb
 // and sink at the envelope's angles at cruise airspeed, a waypoint taken
@@ -246,11 +250,12 @@ class PathChecker {
   double sample_count(const std::vector<Vec3>& path) const;
   // A PX4 fixed-wing's flights of the path (FlownCheck, rt::px4_flights)
   // for a report: the one in still air, the one with the strongest
-  // tailwind, and the one of least clearance where that is neither, in
+  // tailwind, and the lowest where that is neither (FlownCheck::lowest), in
   // order of ground speed; sampled as check() samples, each sample's sight
   // line to every constraint point. None for another vehicle, one that
   // reaches each waypoint, or a path with a vertex that is not finite. Costs
-  // about as much as check() per flight reported.
+  // every flight's clearance and about as much as check() per flight
+  // reported.
   std::vector<FlownCheck> fly(const std::vector<Vec3>& path) const;
 
   const PathCheckSpec& spec() const { return spec_; }

@@ -107,7 +107,8 @@ struct PlanRequest {
   // them (none: every fitted vertex kept).
   std::optional<ThinningTolerance> thinning = ThinningTolerance{};
   // Fly the answer as a PX4 fixed-wing would (PathChecker::fly, a report in
-  // PlanResult::final_flown): about a check's work for each flight.
+  // PlanResult::final_flown): every flight's clearance, and about a check's
+  // work for each flight reported.
   bool report_flights = false;
 };
 

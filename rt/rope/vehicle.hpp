@@ -81,9 +81,11 @@ inline constexpr double kPx4LoiterRadiusM = 80.0;
 inline constexpr double kPx4AltitudeAcceptanceM = 10.0;
 
 // A PX4 fixed-wing's flights are flown at ground speeds from calm air to the
-// strongest tailwind at most this far apart, m/s: the least clearance is not
-// at either end of the range (a SF North mission flown by an independent
-// simulation: 30.57 m at 20 m/s and 30.28 m at 25, 29.92 m at 22.5).
+// strongest tailwind this far apart, m/s (up to 20 m/s of wind: at most
+// kMaxPx4Flights flights, rt::px4_flights): the least clearance is not
+// always at either end of the range (a SF North mission flown by an
+// independent simulation: 30.57 m at 20 m/s and 30.28 m at 25, 29.92 m at
+// 22.5). A sampling: nothing is flown between.
 inline constexpr double kPx4GroundSpeedStepMPerS = 0.5;
 
 // A fixed-wing flown by PX4: its switch distance grows with the wind, and it

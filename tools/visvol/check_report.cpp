@@ -120,7 +120,9 @@ nlohmann::json flown_json(const std::vector<rt::FlownCheck>& flights) {
                    {"clearance_fraction", f.clearance_fraction},
                    {"max_off_path_m", f.max_off_path_m},
                    {"constraint_fractions", f.constraint_fractions},
-                   {"reached_end", f.reached_end}});
+                   {"reached_end", f.reached_end},
+                   {"lowest", f.lowest},
+                   {"flights_flown", f.flights_flown}});
   }
   return out;
 }
@@ -130,7 +132,7 @@ void print_flown(const std::vector<rt::FlownCheck>& flights, const rt::PathCheck
   if (flown.size() > 2 && !flights.empty()) {
     std::printf(
         "flown      at %zu ground speeds, %.1f to %.1f m/s (%.2f m/s apart); shown: still air, the strongest "
-        "tailwind and the least clearance\n",
+        "tailwind and the lowest\n",
         flown.size(), flown.front().ground_speed_m_per_s, flown.back().ground_speed_m_per_s,
         flown[1].ground_speed_m_per_s - flown[0].ground_speed_m_per_s);
   }

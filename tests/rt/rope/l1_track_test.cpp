@@ -23,8 +23,8 @@ std::vector<Vec3> corner_path() { return {Vec3(0, 0, 100), Vec3(0, 1000, 100), V
 
 TEST(L1Track, SinEtaIsTheTrigonometricFormulasEverywhere) {
   // sin(clamp(asin(s1) + atan2(c, d), -90, 90 degrees)), as PX4 writes it,
-  // over cross-track sines within +-0.7071 and every heading, the clamp's
-  // edges and a velocity of 0 included
+  // over cross-track sines within +-0.7071 and headings half a degree apart,
+  // the clamp's edges and a velocity of 0 (either zero's sign) included
   auto formula = [](double s1, double c, double d) {
     return std::sin(std::clamp(std::asin(s1) + std::atan2(c, d), -0.5 * kPi, 0.5 * kPi));
   };
@@ -39,6 +39,8 @@ TEST(L1Track, SinEtaIsTheTrigonometricFormulasEverywhere) {
     EXPECT_DOUBLE_EQ(l1_sin_eta(s1, 0.0, 0.0), formula(s1, 0.0, 0.0));
     EXPECT_DOUBLE_EQ(l1_sin_eta(s1, 0.0, -3.0), formula(s1, 0.0, -3.0));
     EXPECT_DOUBLE_EQ(l1_sin_eta(s1, -0.0, -3.0), formula(s1, -0.0, -3.0));
+    EXPECT_DOUBLE_EQ(l1_sin_eta(s1, 0.0, -0.0), formula(s1, 0.0, -0.0));
+    EXPECT_DOUBLE_EQ(l1_sin_eta(s1, -0.0, -0.0), formula(s1, -0.0, -0.0));
   }
   EXPECT_LT(worst, 1e-12);
 }

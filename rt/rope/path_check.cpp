@@ -492,10 +492,10 @@ std::vector<L1Flight> px4_flights(const VehicleEnvelope& e) {
     f.altitude_gate_m = kPx4AltitudeAcceptanceM;
     return f;
   };
-  const int steps =
-      e.max_wind_m_per_s > 0
-          ? static_cast<int>(std::ceil(std::min(e.max_wind_m_per_s / kPx4GroundSpeedStepMPerS, kMaxPx4Flights - 1.0)))
-          : 0;
+  const int steps = e.max_wind_m_per_s > 0
+                        ? static_cast<int>(std::ceil(std::min(e.max_wind_m_per_s / kPx4GroundSpeedStepMPerS,
+                                                              static_cast<double>(kMaxPx4Flights - 1))))
+                        : 0;
   for (int i = 0; i <= steps; ++i) out.push_back(at(e.speed_m_per_s + e.max_wind_m_per_s * i / std::max(steps, 1)));
   return out;
 }

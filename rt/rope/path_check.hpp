@@ -38,13 +38,13 @@
 //   guidance flies (rt/rope/l1_track.hpp), which cuts a corner deeper than
 //   the arc and several at once where the legs are shorter than the switch
 //   distance, in still air, with the strongest wind behind it and at
-//   ground speeds 0.5 m/s apart between (rt::px4_flights), sampled as the path is (or a controller step apart,
-//   the longer: 0.4 m at 20 m/s), at the height flown (PX4 1.13's
-//   first-order hold of each leg's heights, followed at the airframe's climb
-//   and sink rates: rt::fly_l1), for their share of the flown length:
-//   "flown-clearance". Unmet where a
-//   flight does not reach the end in time (three times the path's flight
-//   time and two minutes more, at most a day).
+//   ground speeds 0.5 m/s apart between (rt::px4_flights), sampled as the
+//   path is (or a controller step apart, the longer: 0.4 m at 20 m/s), at
+//   the height flown (PX4 1.13's first-order hold of each leg's heights,
+//   followed at the airframe's climb and sink rates: rt::fly_l1), for their
+//   share of the flown length: "flown-clearance". Unmet where a flight
+//   does not reach the end in time (three times what its legs and their
+//   climbs take, and two minutes more, at most a day: rt::fly_l1).
 // - Planning bounds: the samples inside the trusted region.
 // A requirement is met when every sample, segment or vertex satisfies it
 // (satisfied_fraction == 1).
@@ -218,7 +218,7 @@ struct FlownCheck {
 // and sink at the envelope's angles at cruise airspeed, a waypoint taken
 // only within NAV_FW_ALT_RAD of its height (rt::L1Flight). None for another
 // vehicle.
-inline constexpr double kMaxPx4Flights = 41;
+inline constexpr int kMaxPx4Flights = 41;
 std::vector<L1Flight> px4_flights(const VehicleEnvelope& envelope);
 
 class PathChecker {
